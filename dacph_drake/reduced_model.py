@@ -1,0 +1,238 @@
+"""Reduced-order port-Hamiltonian model of a free-floating arm (SPEC section 2, the
+paper's section "Modeling").
+
+With the base unactuated and the system at zero momentum, the momentum rows of the
+full dynamics give the base velocity from the joint rates,
+
+    qdot0 = -H_bb^-1 H_bm qdot                         (paper: qdot0 = -H_q0^-1 H_q qdot)
+
+and the arm's kinetic energy is (1/2) qdot^T M(q) qdot with the Schur complement
+
+    M(q) = H_mm - H_bm^T H_bb^-1 H_bm                  (paper: M(q), reduced mass matrix)
+
+where H is the full mass matrix of the (controller's own) MultibodyPlant with
+velocities ordered (base: vx, vy, omega0; joints: qdot). M does not depend on the
+base pose.
+
+Derivatives are exact. For a planar chain of revolute joints every entry of H (base
+pose at zero) is a linear combination of 1, cos(s_r) and sin(s_r), where s_r = q_a + ...
++ q_b runs over the n (n + 1) / 2 consecutive ranges r = [a, b] of joint angles (each
+entry is a sum of m l_a l_b cos of angle differences between bodies). The constructor
+finds these coefficients from the MultibodyPlant's own CalcMassMatrix by least squares
+on random configurations and refuses the plant unless the representation reproduces
+CalcMassMatrix to round-off on fresh configurations and its derivative matches Drake's
+AutoDiffXd: H(q) and dH/dq are then closed-form trigonometric sums, one matrix
+product each, with no finite differences.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.autodiffutils import ExtractGradient, InitializeAutoDiff
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import JacobianWrtVariable
+
+from dacph_drake.plant import ArmCoordinates, END_EFFECTOR, link_name
+
+@dataclass(slots=True)
+class ReducedDynamics:
+    """The reduced model at one state (q, qdot), paper symbols:
+
+    M        M(q), n x n, symmetric positive definite
+    Mdot     dM/dt = sum_k dM/dq_k qdot_k
+    dM       dM[k] = dM/dq_k, shape (n, n, n)
+    C        C'(q, p) in Christoffel form, C_ij = sum_k Gamma_ijk qdot_k with
+             Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2, so that
+             Mdot - 2 C' is skew-symmetric
+    dH_dq    dH/dq at fixed p = -(Mdot - C') qdot = -(1/2) qdot^T (dM/dq_i) qdot
+    D        task Jacobian D(q), 1 x n as a vector: alpha_dot = D qdot
+    dD       dD[k] = dD/dq_k, shape (n, n)
+    base_velocity_map   -H_bb^-1 H_bm, 3 x n: (vx, vy, omega0) = map @ qdot, at theta0 = 0
+    """
+    M: np.ndarray
+    Mdot: np.ndarray
+    dM: np.ndarray
+    C: np.ndarray
+    dH_dq: np.ndarray
+    D: np.ndarray
+    dD: np.ndarray
+    base_velocity_map: np.ndarray
+
+
+class ReducedOrderModel:
+    """Evaluates the reduced model of ``plant``, an arm built by plant.py.
+
+    One scratch context is made here and reused by every evaluation.
+    """
+
+    def __init__(self, plant: MultibodyPlant):
+        self._plant = plant
+        self._context = plant.CreateDefaultContext()
+        self._coords = ArmCoordinates.FromPlant(plant)
+        n = self._coords.num_joints
+        if not (np.array_equal(self._coords.base_v, np.arange(3))
+                and np.array_equal(self._coords.joint_v, np.arange(3, 3 + n))):
+            raise ValueError("ReducedOrderModel needs the base joint's velocities "
+                             "first and the arm joints after them (plant.py's layout)")
+        self._num_joints = n
+        self._q_full = np.zeros(plant.num_positions())
+        self._ones = np.ones(n)
+        self._W = np.vstack([np.zeros((3, n)), np.eye(n)])
+        self._ee_frame = plant.GetFrameByName(END_EFFECTOR)
+        self._link_bodies = [plant.GetBodyByName(link_name(k)) for k in range(n)]
+        self._FitTrigonometricCoefficients()
+
+    @property
+    def plant(self) -> MultibodyPlant:
+        return self._plant
+
+    @property
+    def num_joints(self) -> int:
+        return self._num_joints
+
+    @property
+    def coordinates(self) -> ArmCoordinates:
+        return self._coords
+
+    def _FullMassMatrix(self, q_full: np.ndarray) -> np.ndarray:
+        self._plant.SetPositions(self._context, q_full)
+        return self._plant.CalcMassMatrix(self._context)
+
+    def _Basis(self, q: np.ndarray) -> np.ndarray:
+        """Columns [psi(q), dpsi/dq_1, ..., dpsi/dq_n] of the trigonometric basis
+        psi = (1, cos s_r, sin s_r), shape (1 + 2 R, 1 + n). One sine call gives
+        (cos s, sin s, -sin s, cos s) through phase offsets."""
+        trig = np.sin(self._phase_ranges @ q + self._phase_offsets)
+        basis = self._basis_buffer
+        half = len(trig) // 2
+        basis[1:, 0] = trig[:half]
+        basis[1:, 1:] = trig[half:, None] * self._derivative_mask
+        return basis
+
+    def _MassMatrixAndDerivatives(self, q: np.ndarray):
+        """H(q) and dH/dq_k (closed form) with the base pose at zero:
+        returns an array of shape (1 + n, N, N): [H, dH/dq_1, ..., dH/dq_n]."""
+        N = self._num_joints + 3
+        return (self._coefficients @ self._Basis(q)).T.reshape(-1, N, N)
+
+    def _FitTrigonometricCoefficients(self) -> None:
+        n = self._num_joints
+        self._ranges = np.array([[1.0 if a <= k <= b else 0.0 for k in range(n)]
+                                 for a in range(n) for b in range(a, n)])
+        R = len(self._ranges)
+        self._phase_ranges = np.vstack([self._ranges] * 4)
+        self._phase_offsets = np.repeat([np.pi / 2, 0.0, np.pi, np.pi / 2], R)
+        self._derivative_mask = np.vstack([self._ranges] * 2)
+        self._basis_buffer = np.zeros((1 + 2 * R, 1 + n))
+        self._basis_buffer[0, 0] = 1.0
+        rng = np.random.default_rng(0)
+        samples = rng.uniform(-np.pi, np.pi, (4 * (1 + 2 * R) + 8, n))
+        fit, check = samples[:-8], samples[-8:]
+
+        def full_mass_matrix(q):
+            self._q_full[3:] = q
+            return self._FullMassMatrix(self._q_full).reshape(-1)
+
+        Psi = np.array([self._Basis(q)[:, 0].copy() for q in fit])
+        H = np.array([full_mass_matrix(q) for q in fit])
+        self._coefficients = np.linalg.lstsq(Psi, H, rcond=None)[0].T  # (N*N, 1+2R)
+        scale = np.max(np.abs(H))
+        error = max(np.max(np.abs(self._MassMatrixAndDerivatives(q)[0].reshape(-1)
+                                  - full_mass_matrix(q))) for q in check)
+        error = max(error, self._DerivativeErrorAgainstAutoDiff(check[0]))
+        if error > 1e-10 * scale:
+            raise ValueError(
+                "the plant's mass matrix is not a trigonometric sum over consecutive "
+                f"joint-angle ranges (error {error:.2e}); ReducedOrderModel supports "
+                "planar chains of revolute joints only")
+
+    def _DerivativeErrorAgainstAutoDiff(self, q: np.ndarray) -> float:
+        ad_plant = self._plant.ToAutoDiffXd()
+        ad_context = ad_plant.CreateDefaultContext()
+        q_full = np.zeros(self._plant.num_positions())
+        q_full[3:] = q
+        ad_plant.SetPositions(ad_context, InitializeAutoDiff(q_full))
+        H_ad = ad_plant.CalcMassMatrix(ad_context)
+        N = H_ad.shape[0]
+        dH_ad = ExtractGradient(H_ad.reshape(-1))[:, 3:].T.reshape(-1, N, N)
+        return float(np.max(np.abs(self._MassMatrixAndDerivatives(q)[1:] - dH_ad)))
+
+    def MassMatrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm."""
+        H = self._MassMatrixAndDerivatives(q)[0]
+        return H[3:, 3:] - H[:3, 3:].T @ np.linalg.solve(H[:3, :3], H[:3, 3:])
+
+    def Evaluate(self, q: np.ndarray, qdot: np.ndarray) -> ReducedDynamics:
+        """M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base velocity map at (q, qdot)."""
+        n = self._num_joints
+        H_and_dH = self._MassMatrixAndDerivatives(q)
+        H = H_and_dH[0]
+        Hbb_inv = np.linalg.inv(H[:3, :3])
+        A = Hbb_inv @ H[:3, 3:]
+        # With W = [-A; I]: M = W^T H W and dM/dq_k = W^T (dH/dq_k) W (the derivative
+        # of the Schur complement); dA/dq_k = H_bb^-1 [dH_bb/dq_k, dH_bm/dq_k] W.
+        W = self._W
+        W[:3] = -A
+        HW = H_and_dH @ W
+        M_and_dM = W.T @ HW
+        M, dM = M_and_dM[0], M_and_dM[1:]
+        dA_omega = Hbb_inv[2] @ HW[1:, :3, :]          # d(row omega0 of A)/dq_k
+        # G[i, j] = sum_k dM_jk/dq_i qdot_k
+        G = dM @ qdot
+        Mdot = (qdot @ dM.reshape(n, n * n)).reshape(n, n)
+        C = 0.5 * (Mdot + G.T - G)
+        return ReducedDynamics(M=M, Mdot=Mdot, dM=dM, C=C, dH_dq=-0.5 * G @ qdot,
+                               D=self._ones - A[2], dD=-dA_omega,
+                               base_velocity_map=-A)
+
+    def BaseVelocity(self, q_full: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """(vx, vy, omega0) in the world frame implied by zero momentum:
+        qdot0 = -H_bb^-1 H_bm qdot at the full configuration (base pose included)."""
+        H = self._FullMassMatrix(q_full)
+        return -np.linalg.solve(H[:3, :3], H[:3, 3:] @ qdot)
+
+    def GeneralizedJacobian(self, q_full: np.ndarray, frame, p_FoP_F=np.zeros(3)
+                            ) -> np.ndarray:
+        """Generalized Jacobian J_bar = J_k - H_k H_q0^-1 H_q (6 x n) of point P fixed
+        in ``frame``: [omega; v] of P in the world (Drake's order) = J_bar qdot."""
+        H = self._FullMassMatrix(q_full)
+        J = self._plant.CalcJacobianSpatialVelocity(
+            self._context, JacobianWrtVariable.kV, frame, p_FoP_F,
+            self._plant.world_frame(), self._plant.world_frame())
+        return J[:, 3:] - J[:, :3] @ np.linalg.solve(H[:3, :3], H[:3, 3:])
+
+    def EndEffectorJacobian(self, q_full: np.ndarray) -> np.ndarray:
+        """GJM of the end effector (6 x n); its omega_z row is D(q)."""
+        return self.GeneralizedJacobian(q_full, self._ee_frame)
+
+    def LinkJacobians(self, q_full: np.ndarray) -> list:
+        """GJM of each link's centre of mass, [J_bar_1, ..., J_bar_n]."""
+        return [self.GeneralizedJacobian(q_full, body.body_frame(),
+                                         body.default_com())
+                for body in self._link_bodies]
+
+    @staticmethod
+    def EndEffectorAngle(q_full: np.ndarray) -> float:
+        """alpha = theta0 + q1 + ... + qn (unwrapped absolute angle in the plane)."""
+        return float(q_full[2] + np.sum(q_full[3:]))
+
+    def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """p = M(q) qdot."""
+        return self.MassMatrix(q) @ qdot
+
+    def Hamiltonian(self, q: np.ndarray, p: np.ndarray) -> float:
+        """H(q, p) = p^T M^-1(q) p / 2."""
+        return 0.5 * float(p @ np.linalg.solve(self.MassMatrix(q), p))
+
+
+def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
+                       ) -> "tuple[float, float]":
+    """(inf_q lambda_min(M), sup_q lambda_max(M)) over a uniform grid of joint angles
+    in [-pi, pi)^n: the paper's lambda_min_min(M) and lambda_max_max(M)."""
+    n = model.num_joints
+    axes = [np.linspace(-np.pi, np.pi, samples_per_joint, endpoint=False)] * n
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)
+    lo, hi = np.inf, 0.0
+    for q in grid:
+        eig = np.linalg.eigvalsh(model.MassMatrix(q))
+        lo, hi = min(lo, eig[0]), max(hi, eig[-1])
+    return float(lo), float(hi)

@@ -1,0 +1,110 @@
+"""Description of a planar free-floating arm: a base on a free planar joint and a
+serial chain of n revolute links, all moving in the x-y plane, zero gravity.
+
+The paper's robot (SPEC section 1) is the default: base (m, a, I) = (2 kg, 0.245 m
+square, 0.02 kg m^2) with the shoulder 0.1225 m from its centre on the base x
+axis; two uniform links (1 kg, 0.3464 m, 0.01 kg m^2), centre of mass mid-link.
+
+Each link's frame sits at its proximal joint with x along the link; its centre of
+mass lies ``com`` metres along x; the next joint (or the end effector) sits at
+``length``. Descriptions load from YAML with ``pydrake.common.yaml``.
+"""
+from dataclasses import dataclass, field
+from typing import List
+
+from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
+
+from dacph_drake.errors import ConfigError, require_in_range, require_positive
+
+
+@dataclass
+class BaseParams:
+    """The spacecraft base: a uniform-thickness square plate of side ``size``."""
+    mass: float = 2.0               # [kg]
+    inertia: float = 0.02           # about its centre of mass, z axis [kg m^2]
+    size: float = 0.245             # side of the square [m]
+    shoulder_offset: float = 0.1225  # base centre to shoulder joint, base x axis [m]
+
+
+@dataclass
+class LinkParams:
+    """One link: a slender lamina of ``length`` x ``width`` in the plane."""
+    mass: float = 1.0               # [kg]
+    length: float = 0.3464          # joint to next joint (or end effector) [m]
+    inertia: float = 0.01           # about its centre of mass, z axis [kg m^2]
+    com: float = 0.1732             # proximal joint to centre of mass, along x [m]
+    width: float = 0.04             # extent across the link (geometry, inertia bound) [m]
+
+
+def _paper_links() -> List[LinkParams]:
+    return [LinkParams(), LinkParams()]
+
+
+@dataclass
+class RobotParams:
+    """A planar free-floating arm with ``len(links)`` revolute joints."""
+    base: BaseParams = field(default_factory=BaseParams)
+    links: List[LinkParams] = field(default_factory=_paper_links)
+
+    @property
+    def num_links(self) -> int:
+        return len(self.links)
+
+    def Validate(self, name: str = "robot") -> None:
+        """Raises ConfigError naming the first invalid field and its allowed range.
+
+        Inertia bounds (mass confined to the body's outline, SPEC section 1):
+          link:  0 < I <= m (c (l - c) + w^2 / 4)   ("rod bound": the along-link part
+                 m c (l - c) is the largest inertia of mass on [0, l] with centre c, the
+                 across part m w^2 / 4 the largest over the width);
+          base:  0 < I <= m a^2 / 2                 (all mass in the square's corners).
+        The 3D lamina tensor built from these satisfies the triangle inequality
+        Ixx + Iyy >= Izz (see plant.py) exactly because of the bound.
+        """
+        b = self.base
+        require_positive(f"{name}.base.mass", b.mass, "kg")
+        require_positive(f"{name}.base.size", b.size, "m")
+        require_in_range(f"{name}.base.inertia", b.inertia, 1e-12,
+                         b.mass * b.size**2 / 2, "kg m^2 (0 < I <= m a^2 / 2)")
+        require_in_range(f"{name}.base.shoulder_offset", b.shoulder_offset,
+                         b.size / 2, 100.0 * b.size,
+                         "m (the shoulder sits on or outside the base's side)")
+        if len(self.links) == 0:
+            raise ConfigError(
+                f"{name}.links is empty; allowed: at least 1 link")
+        for k, link in enumerate(self.links):
+            where = f"{name}.links[{k}]"
+            require_positive(f"{where}.mass", link.mass, "kg")
+            require_positive(f"{where}.length", link.length, "m")
+            require_positive(f"{where}.width", link.width, "m")
+            require_in_range(f"{where}.com", link.com, 0.0, link.length,
+                             "m (0 <= com <= length)")
+            require_in_range(
+                f"{where}.inertia", link.inertia, 1e-12, link_inertia_bound(link),
+                "kg m^2 (rod bound 0 < I <= m (c (l - c) + w^2 / 4))")
+
+
+def link_inertia_bound(link: LinkParams) -> float:
+    """Largest central inertia of mass confined to the link's l x w rectangle with
+    its centre of mass at ``com``: m (c (l - c) + w^2 / 4)."""
+    return link.mass * (link.com * (link.length - link.com) + link.width**2 / 4)
+
+
+def load_robot(path: str) -> RobotParams:
+    """Loads and validates a RobotParams YAML file."""
+    robot = load_yaml_dataclass(path, RobotParams)
+    robot.Validate()
+    return robot
+
+
+def save_robot(robot: RobotParams, path: str) -> None:
+    with open(path, "w") as f:
+        f.write(yaml_dump_typed(robot))
+
+
+def load_yaml_dataclass(path: str, schema):
+    """yaml_load_typed with errors that name the file (unknown keys, wrong types)."""
+    try:
+        return yaml_load_typed(schema=schema, filename=str(path))
+    except (RuntimeError, ValueError, TypeError) as e:
+        raise ConfigError(f"{path}: {e}") from e

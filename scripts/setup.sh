@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs everything dacph-drake needs into ./.venv: system tools (graphviz's dot),
+# the CPU build of torch (pinned here; the project itself only asks for a range),
+# and the package with its test extra. Safe to run again.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if ! command -v dot >/dev/null; then
+    SUDO=$([ "$(id -u)" = 0 ] && echo "" || echo sudo)
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y -qq graphviz >/dev/null
+fi
+[ -x .venv/bin/python ] || python3 -m venv .venv
+.venv/bin/pip install -q --upgrade pip
+.venv/bin/pip install -q torch==2.13.0
+.venv/bin/pip install -q -e ".[test]"

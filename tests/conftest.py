@@ -1,0 +1,36 @@
+import numpy as np
+import pytest
+
+from dacph_drake.robot import LinkParams, RobotParams
+
+
+def three_link_robot() -> RobotParams:
+    """A 3-link arm with unequal, off-centre links (nothing tied to two links)."""
+    return RobotParams(links=[
+        LinkParams(mass=1.2, length=0.30, inertia=0.008, com=0.12),
+        LinkParams(mass=0.8, length=0.25, inertia=0.004, com=0.14),
+        LinkParams(mass=0.5, length=0.20, inertia=0.002, com=0.09)])
+
+
+@pytest.fixture(params=["paper_2link", "3link"])
+def robot(request) -> RobotParams:
+    return RobotParams() if request.param == "paper_2link" else three_link_robot()
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)
+
+
+def pytest_addoption(parser):
+    parser.addoption("--long", action="store_true",
+                     help="also run the long tests (full paper scenario, big sweeps)")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--long"):
+        return
+    skip = pytest.mark.skip(reason="long run: use --long")
+    for item in items:
+        if "long" in item.keywords:
+            item.add_marker(skip)
