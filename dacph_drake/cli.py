@@ -24,6 +24,38 @@ def _free_flight(args) -> int:
     return 0
 
 
+def _simulate(args) -> int:
+    from dacph_drake.metrics import run_metrics
+    from dacph_drake.run import simulate
+    from dacph_drake.scenario import load_scenario
+    scenario = load_scenario(args.scenario)
+    result = simulate(scenario, args.controller, duration=args.duration,
+                      out_dir=args.out, progress=True)
+    print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
+          f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
+    if result.final_time > scenario.phases.linear_start:
+        for name, value in run_metrics(result.logs, scenario).items():
+            print(f"  {name:32s} {value:.6g}")
+    print(f"saved to {args.out}")
+    return 0 if result.status == "ok" else 1
+
+
+def _diagram(args) -> int:
+    from pathlib import Path
+    from dacph_drake.diagrams import BUILDERS
+    from dacph_drake.graph import render_diagram
+    from dacph_drake.scenario import load_scenario
+    scenario = load_scenario(args.scenario)
+    out = Path(args.out) if args.out else Path(args.scenario).parent
+    controllers = [args.controller] if args.controller else list(BUILDERS)
+    for controller in controllers:
+        loop = BUILDERS[controller](scenario)
+        stem = out / f"{Path(args.scenario).stem}_{controller.replace('-', '_')}"
+        for path in render_diagram(loop.diagram, stem):
+            print(path)
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -33,6 +65,19 @@ def main(argv=None) -> int:
     free.add_argument("--robot", help="robot YAML (default: the paper's robot)")
     free.add_argument("--duration", type=float, default=10.0, help="[s]")
     free.set_defaults(run=_free_flight)
+    sim = commands.add_parser("simulate", help="simulate a closed loop and save its logs")
+    sim.add_argument("scenario", help="scenario YAML (e.g. diagrams/short.yaml)")
+    sim.add_argument("--out", required=True, help="output directory")
+    sim.add_argument("--controller", choices=["dac", "model-based"], default="dac")
+    sim.add_argument("--duration", type=float, default=None,
+                     help="[s] (default: the scenario's phases)")
+    sim.set_defaults(run=_simulate)
+    graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
+    graph.add_argument("scenario")
+    graph.add_argument("--controller", choices=["dac", "model-based"], default=None,
+                       help="default: both")
+    graph.add_argument("--out", default=None, help="default: the scenario's folder")
+    graph.set_defaults(run=_diagram)
     args = parser.parse_args(argv)
     try:
         return args.run(args)

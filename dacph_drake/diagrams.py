@@ -1,0 +1,148 @@
+"""Closed-loop diagrams: ``build_dac_diagram(scenario)`` and
+``build_model_based_diagram(scenario)``, each returning a ClosedLoop (the Diagram and
+the handles a user needs)."""
+from dataclasses import dataclass, field
+from typing import Dict
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
+
+from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
+from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
+from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.reference import OrientationReference
+from dacph_drake.scenario import Scenario
+from dacph_drake.systems.disturbance import DisturbanceSource
+from dacph_drake.systems.learner import RhsLearner
+from dacph_drake.systems.lhs_controller import LhsController
+from dacph_drake.systems.model_based_inverter import ModelBasedInverter
+from dacph_drake.systems.port_observer import PortObserver
+from dacph_drake.systems.rhs_integrator import RhsIntegrator
+from dacph_drake.systems.true_rhs import TrueRhs
+
+
+@dataclass
+class ClosedLoop:
+    diagram: Diagram
+    plant: object                   # the ground-truth MultibodyPlant
+    scene_graph: object
+    model: ReducedOrderModel        # the controller's (nominal) reduced model
+    potential: BaseRepulsionPotential
+    lambda_min_M: float             # inf_q lambda_min(M) of the nominal robot
+    lambda_max_M: float
+    c_min_nominal: float            # eq. (48) with beta_hat = 1
+    loggers: Dict[str, VectorLogSink] = field(default_factory=dict)
+    systems: Dict[str, object] = field(default_factory=dict)
+
+
+def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float):
+    """Plant, true RHS, disturbance and LHS controller; loggers shared by both loops."""
+    scenario.Validate()
+    plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
+    plant.set_name("plant")
+    nq = plant.num_positions()
+    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    lambda_min, lambda_max = mass_matrix_bounds(model)
+    c_min = c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0)
+    check_rhs_period(scenario.periods, (1 + scenario.rhs.c_margin) * c_min)
+    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
+    alpha0 = float(np.sum(scenario.q0))               # base at theta0 = 0
+    reference = OrientationReference(scenario.reference, alpha0)
+
+    truth = builder.AddNamedSystem("true_rhs", TrueRhs(scenario))
+    disturbance = builder.AddNamedSystem(
+        "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
+    lhs = builder.AddNamedSystem("lhs_controller", LhsController(
+        model, potential, reference, scenario.lhs, scenario.periods.lhs, nq, fixed_chi))
+    builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
+    builder.Connect(disturbance.get_output_port(), truth.GetInputPort("disturbance"))
+    builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
+    builder.Connect(plant.get_state_output_port(), lhs.GetInputPort("state"))
+
+    loop = ClosedLoop(diagram=None, plant=plant, scene_graph=scene_graph, model=model,
+                      potential=potential, lambda_min_M=lambda_min,
+                      lambda_max_M=lambda_max, c_min_nominal=c_min,
+                      systems={"true_rhs": truth, "disturbance": disturbance,
+                               "lhs_controller": lhs})
+    period = scenario.periods.log
+    for name, port in [("state", plant.get_state_output_port()),
+                       ("tau", truth.GetOutputPort("tau")),
+                       ("true_matrices", truth.GetOutputPort("true_matrices")),
+                       ("disturbance", disturbance.get_output_port()),
+                       ("tau_request", lhs.GetOutputPort("tau_request")),
+                       ("lhs_log", lhs.GetOutputPort("lhs_log"))]:
+        loop.loggers[name] = LogVectorOutput(port, builder, period)
+        loop.loggers[name].set_name(f"log_{name}")
+    return loop
+
+
+def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
+    """Plant + true RHS + disturbance, closed by the DAC-pH controller: the LHS
+    sliding-mode controller (chi from the RHS loop), the port observer, the RHS
+    integrator and the learner."""
+    builder = DiagramBuilder()
+    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial)
+    plant, lhs = loop.plant, loop.systems["lhs_controller"]
+    nq = plant.num_positions()
+    periods = scenario.periods
+    observer = builder.AddNamedSystem("port_observer", PortObserver(
+        loop.model, nq, periods.rhs, periods.lhs, scenario.rhs.observer_noise,
+        scenario.seed))
+    learner = builder.AddNamedSystem("learner", RhsLearner(
+        loop.model, scenario.learner, periods.learner, periods.learner_sample, nq,
+        scenario.uncertainty.B0, scenario.uncertainty.D0,
+        scenario.learner.momentum_scale, scenario.seed))
+    rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
+        loop.model, learner.exported, scenario.rhs, scenario.lhs.Kd, loop.lambda_min_M,
+        periods.rhs, periods.lhs, nq, learner.initial_weights))
+    builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
+    builder.Connect(plant.get_generalized_acceleration_output_port(),
+                    observer.GetInputPort("acceleration"))
+    for port in ("state", "tau_observed"):
+        source = (plant.get_state_output_port() if port == "state"
+                  else observer.GetOutputPort("tau_observed"))
+        builder.Connect(source, rhs.GetInputPort(port))
+        builder.Connect(source, learner.GetInputPort(port))
+    builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
+    builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
+    builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
+    builder.Connect(rhs.GetOutputPort("chi"), lhs.GetInputPort("chi"))
+    builder.Connect(rhs.GetOutputPort("u"), learner.GetInputPort("u"))
+    builder.Connect(rhs.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
+    loop.systems.update(port_observer=observer, learner=learner, rhs_integrator=rhs)
+    for name, port in [("u", rhs.GetOutputPort("u")),
+                       ("tau_observed", observer.GetOutputPort("tau_observed")),
+                       ("rhs_log", rhs.GetOutputPort("rhs_log")),
+                       ("learner_log", learner.GetOutputPort("learner_log")),
+                       ("estimates", learner.GetOutputPort("estimates"))]:
+        loop.loggers[name] = LogVectorOutput(port, builder, periods.log)
+        loop.loggers[name].set_name(f"log_{name}")
+    loop.diagram = builder.Build()
+    loop.diagram.set_name("dac_closed_loop")
+    return loop
+
+
+def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
+    """The baseline (SPEC section 7): the same LHS controller with the fixed
+    chi = lhs.chi_model_based and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
+    no integrator, no learning."""
+    builder = DiagramBuilder()
+    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.lhs.chi_model_based)
+    plant, lhs = loop.plant, loop.systems["lhs_controller"]
+    inverter = builder.AddNamedSystem("model_based_inverter",
+                                      ModelBasedInverter(scenario, plant.num_positions()))
+    builder.Connect(lhs.GetOutputPort("tau_request"), inverter.GetInputPort("tau_request"))
+    builder.Connect(plant.get_state_output_port(), inverter.GetInputPort("state"))
+    builder.Connect(inverter.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
+    loop.systems["model_based_inverter"] = inverter
+    loop.loggers["u"] = LogVectorOutput(inverter.GetOutputPort("u"), builder,
+                                        scenario.periods.log)
+    loop.loggers["u"].set_name("log_u")
+    loop.diagram = builder.Build()
+    loop.diagram.set_name("model_based_closed_loop")
+    return loop
+
+
+BUILDERS = {"dac": build_dac_diagram, "model-based": build_model_based_diagram}

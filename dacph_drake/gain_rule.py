@@ -1,0 +1,67 @@
+"""The RHS gain rule (paper eqs. 46-48, SPEC sections 5 and 8) and its discrete-time
+realizability check."""
+import numpy as np
+
+from dacph_drake.errors import ConfigError
+
+# With the observer's one-sample delay the discrete RHS loop per mode is
+# z^2 - z + g = 0, g = h k_p lambda_p; its roots are real (well damped) for g <= 1/4.
+WELL_DAMPED_LOOP_GAIN = 0.25
+
+
+def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float) -> float:
+    """Eq. (48): c > 2 Td^2 lambda_max(K_d) / inf_q lambda_min(M) (1 + ln(beta_hat) / 5)."""
+    return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(max(beta_hat, 1.0)) / 5)
+
+
+def integral_gains(B_hat: np.ndarray, c: float):
+    """k_p = c / Re(lambda_hat_p) and the DIC check.
+
+    The eigenvalue paired with channel p is the one nearest B_hat[p, p] (for the
+    near-diagonal B of a decentralized arm the modes are the channels).
+    Returns (k, eigenvalues, dic_ok): dic_ok is det(B_hat) != 0 and Re(lambda_p) > 0.
+    """
+    eigenvalues = np.linalg.eigvals(B_hat)
+    remaining = list(eigenvalues)
+    paired = []
+    for p in range(B_hat.shape[0]):
+        i = int(np.argmin([abs(lam - B_hat[p, p]) for lam in remaining]))
+        paired.append(remaining.pop(i))
+    paired = np.array(paired)
+    det = np.prod(eigenvalues).real
+    dic_ok = bool(abs(det) > 1e-9 and np.all(paired.real > 0))
+    k = c / paired.real if dic_ok else np.full(B_hat.shape[0], np.nan)
+    return k, paired, dic_ok
+
+
+def discrete_loop_gain(rhs_period: float, c: float) -> float:
+    """g = h c: the per-sample loop gain of every mode when k_p lambda_p = c."""
+    return rhs_period * c
+
+
+def check_period_order(periods) -> None:
+    """Refuses periods that break the time-scale separation (RHS faster than LHS,
+    LHS no slower than the learner's sampling, sampling no slower than training)."""
+    order = [("rhs", periods.rhs), ("lhs", periods.lhs),
+             ("learner_sample", periods.learner_sample), ("learner", periods.learner)]
+    for (fast, h_fast), (slow, h_slow) in zip(order, order[1:]):
+        if not h_fast <= h_slow:
+            raise ConfigError(
+                f"periods.{fast} = {h_fast:g} s must not exceed periods.{slow} = "
+                f"{h_slow:g} s (time-scale separation: RHS faster than LHS faster "
+                "than the learner)")
+    if periods.lhs == periods.rhs:
+        raise ConfigError(f"periods.rhs = {periods.rhs:g} s must be shorter than "
+                          f"periods.lhs = {periods.lhs:g} s")
+
+
+def check_rhs_period(periods, c_required: float) -> None:
+    """Refuses an RHS period that cannot realize the decay rate ``c_required`` [1/s]
+    with a well-damped discrete loop (g = h c <= 1/4, see WELL_DAMPED_LOOP_GAIN)."""
+    bound = WELL_DAMPED_LOOP_GAIN / c_required
+    if periods.rhs > bound:
+        raise ConfigError(
+            f"periods.rhs = {periods.rhs:g} s cannot realize the RHS decay rate "
+            f"c = {c_required:.1f} 1/s required by the gain rule (eq. 48) with a "
+            f"well-damped discrete loop; allowed: periods.rhs <= 1 / (4 c) = "
+            f"{bound:.3g} s")

@@ -1,0 +1,42 @@
+"""Rendering a diagram's graph with Drake's Graphviz export and the ``dot`` program."""
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+_ID = re.compile(r"(digraph _|cluster|\bs)(\d+)")
+
+
+def diagram_graphviz(diagram, max_depth: int = 1) -> str:
+    """Drake's Graphviz source of ``diagram`` with its process-specific system ids
+    renumbered in order of appearance and its edges sorted (Drake lists them in no
+    fixed order), so equal diagrams give equal text."""
+    ids = {}
+
+    def renumber(match):
+        ids.setdefault(match.group(2), str(len(ids)))
+        return match.group(1) + ids[match.group(2)]
+
+    lines = _ID.sub(renumber, diagram.GetGraphvizString(max_depth=max_depth)).split("\n")
+    edge_rows = [i for i, line in enumerate(lines) if " -> " in line]
+    for i, line in zip(edge_rows, sorted(lines[i] for i in edge_rows)):
+        lines[i] = line
+    return "\n".join(lines)
+
+
+def render_diagram(diagram, stem) -> list:
+    """Writes stem.dot, stem.svg and stem.png; returns their paths."""
+    dot = shutil.which("dot")
+    if dot is None:
+        raise RuntimeError("graphviz's 'dot' program is not installed; run "
+                           "scripts/setup.sh (it installs graphviz)")
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    source = stem.with_suffix(".dot")
+    source.write_text(diagram_graphviz(diagram))
+    paths = [source]
+    for fmt in ("svg", "png"):
+        target = stem.with_suffix(f".{fmt}")
+        subprocess.run([dot, f"-T{fmt}", str(source), "-o", str(target)], check=True)
+        paths.append(target)
+    return paths

@@ -1,0 +1,74 @@
+"""Metrics of SPEC section 9, computed from a run's logs."""
+from typing import Dict
+
+import numpy as np
+
+from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.scenario import Scenario
+
+
+def rms(x: np.ndarray) -> float:
+    """Root mean square over time of a scalar signal, or of the norm of a vector one."""
+    x = np.asarray(x, float)
+    if x.ndim > 1:
+        x = np.linalg.norm(x, axis=1)
+    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
+
+
+def relative_error_rms(estimate: np.ndarray, truth: np.ndarray) -> float:
+    """time-RMS of ||estimate(t) - truth(t)|| / ||truth(t)|| (Frobenius on rows)."""
+    ratio = (np.linalg.norm(estimate - truth, axis=1)
+             / np.maximum(np.linalg.norm(truth, axis=1), 1e-300))
+    return rms(ratio)
+
+
+def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
+    """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise."""
+    n = scenario.robot.num_links
+    nq = 3 + n
+    t = logs["time"]
+    phases = scenario.phases
+    active = t >= phases.linear_start
+    phase3 = t >= scenario.disturbance_start
+    lhs = logs["lhs_log"]
+    alpha_error = lhs[:, n]
+    e_tau = (logs["rhs_log"][:, :n] if "rhs_log" in logs
+             else logs["tau_request"] - logs["tau"])
+    state = logs["state"]
+    potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
+    out = {
+        "tracking_error_rms": rms(alpha_error[active]),
+        "tracking_error_rms_phase3": rms(alpha_error[phase3]),
+        "tracking_error_max": float(np.max(np.abs(alpha_error[active])))
+        if active.any() else float("nan"),
+        "control_effort_rms": rms(logs["u"][active]),
+        "e_tau_rms": rms(e_tau[active]),
+        "sliding_rms": rms(lhs[active, :n]),
+        "base_attitude_max_excursion": float(np.max(np.abs(state[:, 2] - state[0, 2]))),
+        "min_clearance": float(min(potential.MinClearance(x[3:nq]) for x in state)),
+    }
+    if "estimates" in logs:
+        window = (t >= max(phases.linear_start, phases.disturbance_start - 60.0)) & \
+                 (t < phases.disturbance_start)
+        truth, estimate = logs["true_matrices"][window], logs["estimates"][window]
+        out["estimation_error_B"] = relative_error_rms(estimate[:, :n * n], truth[:, :n * n])
+        out["estimation_error_D"] = relative_error_rms(estimate[:, n * n:], truth[:, n * n:])
+        rhs = logs["rhs_log"]
+        c, c_min = rhs[:, 2 * n + 2], rhs[:, 2 * n + 3]
+        out["c_min_over_bound"] = float(np.min(c / c_min))
+        out["chi_final"] = float(rhs[-1, n + 1])
+        out["dic_violations"] = int(np.sum(rhs[:, -1] < 0.5))
+    return out
+
+
+def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str, float]:
+    """The paper's headline numbers: tracking-error reduction 1 - e_DAC / e_MB and
+    control-effort increase effort_DAC / effort_MB - 1."""
+    return {
+        "tracking_error_reduction": 1 - dac["tracking_error_rms"]
+        / model_based["tracking_error_rms"],
+        "tracking_error_reduction_phase3": 1 - dac["tracking_error_rms_phase3"]
+        / model_based["tracking_error_rms_phase3"],
+        "control_effort_increase": dac["control_effort_rms"]
+        / model_based["control_effort_rms"] - 1,
+    }

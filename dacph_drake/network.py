@@ -1,0 +1,105 @@
+"""The physics-informed RHS network (SPEC section 6, paper eqs. for h_B, h_D):
+
+    h_B = MLP_B(X(x)), h_D = MLP_D(X(x)),  X(x) = (q, p / p_scale)
+    B_hat(x) = mat(W_B h_B + b_B)                 (n x n)
+    D_hat(x) = diag(softplus(W_D h_D + b_D))      (positive definite)
+    tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
+
+Trained in torch (float64); the fast loops evaluate an exported copy of the weights
+in numpy (``evaluate_exported``), so torch never runs inside them. The output layers
+start at zero with biases vec(B0) and softplus^-1(D0): the first estimate is the
+nominal RHS.
+"""
+from typing import List
+
+import numpy as np
+import torch
+
+
+class RhsNetwork(torch.nn.Module):
+    def __init__(self, n: int, hidden: List[int], B0, D0, momentum_scale: float,
+                 seed: int):
+        super().__init__()
+        generator_state = torch.random.get_rng_state()
+        torch.manual_seed(seed)
+        self.n = n
+        self.momentum_scale = momentum_scale
+        self.body_B = _mlp(2 * n, hidden)
+        self.body_D = _mlp(2 * n, hidden)
+        self.head_B = torch.nn.Linear(hidden[-1], n * n, dtype=torch.float64)
+        self.head_D = torch.nn.Linear(hidden[-1], n, dtype=torch.float64)
+        with torch.no_grad():
+            for head in (self.head_B, self.head_D):
+                head.weight.zero_()
+            self.head_B.bias.copy_(torch.as_tensor(np.asarray(B0, float).reshape(-1)))
+            D0 = np.maximum(np.asarray(D0, float), 1e-6)
+            self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(D0))))
+        torch.random.set_rng_state(generator_state)
+
+    def features(self, q, p):
+        return torch.cat([q, p / self.momentum_scale], dim=-1)
+
+    def forward(self, q, p):
+        """(B_hat, D_hat diagonal) for a batch: shapes (m, n, n), (m, n)."""
+        X = self.features(q, p)
+        B = self.head_B(self.body_B(X)).reshape(-1, self.n, self.n)
+        D = torch.nn.functional.softplus(self.head_D(self.body_D(X)))
+        return B, D
+
+    def predict(self, q, p, qdot, u):
+        B, D = self(q, p)
+        return torch.einsum("mij,mj->mi", B, u) - D * qdot
+
+    def export(self) -> np.ndarray:
+        """All parameters as one float64 vector (the order evaluate_exported reads)."""
+        return torch.cat([t.detach().reshape(-1) for t in self.parameters()]).numpy()
+
+
+def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
+    layers, width = [], inputs
+    for h in hidden:
+        layers += [torch.nn.Linear(width, h, dtype=torch.float64), torch.nn.Tanh()]
+        width = h
+    return torch.nn.Sequential(*layers)
+
+
+class ExportedNetwork:
+    """numpy evaluation of RhsNetwork from its exported parameter vector."""
+
+    def __init__(self, n: int, hidden: List[int], momentum_scale: float):
+        self.n = n
+        self._momentum_scale = momentum_scale
+        shapes = []
+        for _ in range(2):                    # body_B then body_D
+            width = 2 * n
+            for h in hidden:
+                shapes += [(h, width), (h,)]
+                width = h
+        shapes_B, shapes_D = shapes[:len(shapes) // 2], shapes[len(shapes) // 2:]
+        # torch's parameters() order: body_B, body_D, head_B, head_D.
+        self._shapes = (shapes_B + shapes_D + [(n * n, hidden[-1]), (n * n,),
+                                               (n, hidden[-1]), (n,)])
+        self.size = int(sum(np.prod(s) for s in self._shapes))
+        self._layers = len(hidden)
+
+    def _Unpack(self, weights):
+        out, i = [], 0
+        for s in self._shapes:
+            k = int(np.prod(s))
+            out.append(weights[i:i + k].reshape(s))
+            i += k
+        return out
+
+    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
+        """(B_hat (n x n), D_hat diagonal (n,)) at one state."""
+        params = self._Unpack(weights)
+        L = 2 * self._layers
+        X = np.concatenate([q, p / self._momentum_scale])
+        hB, hD = X, X
+        for i in range(0, L, 2):
+            hB = np.tanh(params[i] @ hB + params[i + 1])
+            hD = np.tanh(params[L + i] @ hD + params[L + i + 1])
+        W_B, b_B, W_D, b_D = params[2 * L:]
+        B = (W_B @ hB + b_B).reshape(self.n, self.n)
+        D = np.logaddexp(0.0, W_D @ hD + b_D)          # softplus
+        return B, D

@@ -1,0 +1,18 @@
+"""Desired end-effector orientation alpha_d(t) (SPEC section 4; not given in the paper):
+alpha_d(t) = alpha(0) + sum_i a_i sin(2 pi t / T_i), smooth and persistently exciting."""
+import numpy as np
+
+from dacph_drake.scenario import Reference
+
+
+class OrientationReference:
+    def __init__(self, reference: Reference, alpha0: float):
+        self._a = np.asarray(reference.amplitudes, float)
+        self._w = 2 * np.pi / np.asarray(reference.periods, float)
+        self._alpha0 = alpha0
+
+    def __call__(self, t: float):
+        """(alpha_d, alpha_d_dot, alpha_d_ddot) at time t."""
+        s, c = np.sin(self._w * t), np.cos(self._w * t)
+        return (self._alpha0 + self._a @ s, self._a @ (self._w * c),
+                -self._a @ (self._w**2 * s))

@@ -1,0 +1,136 @@
+"""Simulating a closed loop: initial state, divergence monitor, progress bar, and
+saving the logs with the scenario, the versions and the seed."""
+import json
+import platform
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, Optional
+
+import numpy as np
+from pydrake.systems.framework import EventStatus
+
+from dacph_drake.diagrams import BUILDERS, ClosedLoop
+from dacph_drake.errors import ConfigError
+from dacph_drake.scenario import Scenario, save_scenario
+from dacph_drake.simulation import MakeSimulator
+
+MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
+
+
+@dataclass
+class RunResult:
+    controller: str
+    status: str                    # "ok" or "diverged"
+    reason: str
+    final_time: float
+    wall_time: float
+    logs: Dict[str, np.ndarray] = field(default_factory=dict)   # name -> (T, k); "time"
+
+
+def versions() -> Dict[str, str]:
+    import drake
+    import torch
+    out = {"python": platform.python_version(), "numpy": np.__version__,
+           "torch": torch.__version__}
+    try:
+        from importlib.metadata import version
+        out["drake"] = version("drake")
+    except Exception:   # a source build of drake has no distribution metadata
+        out["drake"] = getattr(drake, "__version__", "unknown")
+    from dacph_drake import __version__
+    out["dacph_drake"] = __version__
+    return out
+
+
+def _Progress(fraction: float, start: float, label: str) -> None:
+    width = 30
+    done = int(width * fraction)
+    elapsed = time.perf_counter() - start
+    eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
+    sys.stderr.write(f"\r{label} [{'#' * done}{'.' * (width - done)}] "
+                     f"{100 * fraction:5.1f}%  {elapsed:6.0f} s elapsed, ETA {eta:5.0f} s")
+    if fraction >= 1:
+        sys.stderr.write("\n")
+    sys.stderr.flush()
+
+
+def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
+             out_dir=None, progress: bool = False) -> RunResult:
+    """Builds the ``controller`` ("dac" or "model-based") loop for ``scenario``,
+    simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
+    given, saves logs.npz, scenario.yaml and run.json there. A run whose state turns
+    non-finite or whose joint rates exceed MAX_JOINT_RATE stops with a reason and
+    still saves what it has."""
+    if controller not in BUILDERS:
+        raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
+    loop = BUILDERS[controller](scenario)
+    duration = scenario.duration if duration is None else duration
+    simulator = MakeSimulator(loop.diagram, scenario.integration_scheme,
+                              scenario.periods.rhs)
+    context = simulator.get_mutable_context()
+    plant = loop.plant
+    plant_context = plant.GetMyContextFromRoot(context)
+    plant.SetPositions(plant_context, np.concatenate([[0.0, 0.0, 0.0], scenario.q0]))
+    plant.SetVelocities(plant_context, np.zeros(plant.num_velocities()))
+    problem = {}
+
+    def monitor(root_context):
+        x = plant.GetPositionsAndVelocities(plant_context)
+        if not np.all(np.isfinite(x)):
+            problem["reason"] = f"non-finite plant state at t = {root_context.get_time():.4f} s"
+        elif np.max(np.abs(x[plant.num_positions():])) > MAX_JOINT_RATE:
+            problem["reason"] = (f"runaway: a rate exceeded {MAX_JOINT_RATE} rad/s at "
+                                 f"t = {root_context.get_time():.4f} s")
+        else:
+            return EventStatus.Succeeded()
+        return EventStatus.Failed(None, problem["reason"])
+
+    simulator.set_monitor(monitor)
+    simulator.Initialize()
+    start = time.perf_counter()
+    chunks = max(1, int(np.ceil(duration / max(scenario.periods.log, duration / 200))))
+    label = f"{controller:>11s}"
+    for k in range(1, chunks + 1):
+        try:
+            simulator.AdvanceTo(duration * k / chunks)
+        except RuntimeError as e:
+            problem.setdefault("reason", str(e).splitlines()[0])
+            break
+        if progress:
+            _Progress(k / chunks, start, label)
+    if progress and problem:
+        sys.stderr.write("\n")
+    result = RunResult(controller=controller,
+                       status="diverged" if problem else "ok",
+                       reason=problem.get("reason", ""),
+                       final_time=context.get_time(),
+                       wall_time=time.perf_counter() - start,
+                       logs=_CollectLogs(loop, context))
+    if out_dir is not None:
+        save_run(result, scenario, out_dir)
+    return result
+
+
+def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
+    logs = {}
+    for name, logger in loop.loggers.items():
+        log = logger.FindLog(context)
+        logs[name] = log.data().T.copy()
+        logs.setdefault("time", log.sample_times().copy())
+    return logs
+
+
+def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(out / f"logs_{result.controller}.npz", **result.logs)
+    save_scenario(scenario, out / "scenario.yaml")
+    meta = {"controller": result.controller, "status": result.status,
+            "reason": result.reason, "final_time": result.final_time,
+            "wall_time": result.wall_time, "seed": scenario.seed,
+            "versions": versions()}
+    with open(out / f"run_{result.controller}.json", "w") as f:
+        json.dump(meta, f, indent=2)
+    return out

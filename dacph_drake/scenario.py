@@ -1,0 +1,261 @@
+"""Scenario: every setting of a closed-loop run, loaded from YAML with
+``pydrake.common.yaml.yaml_load_typed`` (SPEC sections 4-8 give the defaults, which
+are the paper's scenario, 1500 s)."""
+from dataclasses import dataclass, field
+from typing import List
+
+import numpy as np
+from pydrake.common.yaml import yaml_dump_typed
+
+from dacph_drake.errors import (ConfigError, require_in_range,
+                                require_nonnegative, require_positive)
+from dacph_drake.robot import RobotParams, load_yaml_dataclass
+
+
+@dataclass
+class Phases:
+    """Durations [s]: warm-up (B0, D0 only), then (1) linear uncertainty, (2) plus
+    nonlinear uncertainty, (3) plus the external disturbance d(t)."""
+    warmup: float = 60.0
+    linear: float = 480.0
+    nonlinear: float = 480.0
+    disturbance: float = 480.0
+
+    @property
+    def linear_start(self) -> float:
+        return self.warmup
+
+    @property
+    def nonlinear_start(self) -> float:
+        return self.warmup + self.linear
+
+    @property
+    def disturbance_start(self) -> float:
+        return self.warmup + self.linear + self.nonlinear
+
+    @property
+    def end(self) -> float:
+        return self.disturbance_start + self.disturbance
+
+
+@dataclass
+class LhsGains:
+    """Sliding-mode LHS controller (SPEC section 4): K_d = Kd I, Lambda, epsilon of
+    chi tanh(s / epsilon), eta of xi = -eta grad U."""
+    Kd: float = 0.5
+    Lambda: float = 1.0
+    epsilon: float = 0.2
+    eta: float = 0.1
+    chi_model_based: float = 0.05   # fixed chi of the model-based baseline [N m]
+
+
+@dataclass
+class Potential:
+    """Null-space artificial potential field U(q) (Khatib's FIRAS form
+    U = k / 2 (1 / rho - 1 / rho0)^2 for rho < rho0):
+    links against the base square (sample points along each link, clearance rho in
+    metres) and each joint k >= 2 against folding (rho = pi - |q_k| in radians)."""
+    base_gain: float = 1e-3         # k for link-base clearance [J m^2]
+    base_margin: float = 0.06       # rho0 [m]
+    fold_gain: float = 1e-3         # k for folding [J rad^2]
+    fold_margin: float = 0.6        # rho0 [rad]
+    points_per_link: int = 4
+
+
+@dataclass
+class Reference:
+    """alpha_d(t) = alpha(0) + sum_i amplitudes[i] sin(2 pi t / periods[i]) [rad]."""
+    amplitudes: List[float] = field(default_factory=lambda: [0.3, 0.1])
+    periods: List[float] = field(default_factory=lambda: [30.0, 11.0])
+
+
+@dataclass
+class Rhs:
+    """RHS integrator (SPEC section 5): k_p = c / Re(lambda_hat_p), c filtered towards
+    (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
+    with exponential forgetting over chi_window, never below chi_floor."""
+    Td: float = 2.0
+    c_margin: float = 0.1
+    c_time_constant: float = 1.0    # [s]
+    chi_window: float = 2.0         # [s]
+    chi_floor: float = 1e-3         # [N m]
+    chi_initial: float = 0.05       # [N m]
+    observer_noise: float = 0.0     # std of tau_obs measurement noise [N m]
+
+
+@dataclass
+class Periods:
+    """Discrete update periods [s] (SPEC section 8): rhs < lhs < learner."""
+    rhs: float = 2.5e-4
+    lhs: float = 1e-3
+    learner: float = 0.1
+    learner_sample: float = 0.01
+    log: float = 0.01
+
+
+@dataclass
+class Uncertainty:
+    """Ground-truth RHS (SPEC section 7): B~ = B0 + Delta B, D~ = D0 + Delta D with
+    Delta D(p) = diag(D_offset + D_linear * p)            [linear phase on]
+               + diag(D_quadratic * p * p)                [nonlinear phase on]
+    Delta B(x) = diag(B_linear @ q)                       [linear phase on]
+               + diag(B_quadratic * p * p) + B_q1_squared q1^2   [nonlinear phase on]
+    each group multiplied by linear_scale / nonlinear_scale."""
+    B0: List[float] = field(default_factory=lambda: [1.0, 1.0])     # diagonal
+    D0: List[float] = field(default_factory=lambda: [0.1, 0.1])     # diagonal
+    D_offset: List[float] = field(default_factory=lambda: [0.02, 0.05])
+    D_linear: List[float] = field(default_factory=lambda: [0.4, 0.4])
+    D_quadratic: List[float] = field(default_factory=lambda: [-0.05, 0.1])
+    B_linear: list[list[float]] = field(
+        default_factory=lambda: [[-0.1, 0.0], [0.05, 0.15]])
+    B_quadratic: List[float] = field(default_factory=lambda: [0.15, -0.25])
+    B_q1_squared: list[list[float]] = field(
+        default_factory=lambda: [[0.0, -0.1], [0.4, 0.0]])
+    linear_scale: float = 1.0
+    nonlinear_scale: float = 1.0
+
+
+@dataclass
+class Disturbance:
+    """d(t) = d_LF + d_HF from ``start`` (default: start of phase 3), times ``scale``:
+    d_LF = lf_offset + lf_amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), ...]
+    d_HF = hf_amplitude sin(2 pi hf_frequency t) hf_direction      [N m]"""
+    start: float = -1.0             # [s]; negative: start of phase 3
+    scale: float = 1.0
+    lf_offset: List[float] = field(default_factory=lambda: [0.03, -0.02])
+    lf_amplitude: List[float] = field(default_factory=lambda: [0.02, 0.02])
+    lf_frequency: List[float] = field(default_factory=lambda: [0.05, 0.07])   # [Hz]
+    hf_amplitude: float = 0.005
+    hf_frequency: float = 20.0      # [Hz]
+    hf_direction: List[float] = field(default_factory=lambda: [1.0, -1.0])
+
+
+@dataclass
+class Learner:
+    """Physics-informed network (SPEC section 6), trained online with Adam."""
+    hidden: List[int] = field(default_factory=lambda: [16, 8])
+    learning_rate: float = 3e-3
+    window: int = 400               # training samples kept (at periods.learner_sample)
+    steps_per_update: int = 5       # Adam steps per learner period
+    momentum_scale: float = 0.01    # p is divided by this in the features [kg m^2/s]
+    beta1: float = 0.9
+    beta2: float = 0.999
+    eps: float = 1e-8
+
+
+@dataclass
+class Scenario:
+    robot: RobotParams = field(default_factory=RobotParams)
+    nominal_robot: RobotParams = field(default_factory=RobotParams)
+    q0: List[float] = field(default_factory=lambda: [0.3, 1.0])   # initial joints [rad]
+    phases: Phases = field(default_factory=Phases)
+    lhs: LhsGains = field(default_factory=LhsGains)
+    potential: Potential = field(default_factory=Potential)
+    reference: Reference = field(default_factory=Reference)
+    rhs: Rhs = field(default_factory=Rhs)
+    periods: Periods = field(default_factory=Periods)
+    uncertainty: Uncertainty = field(default_factory=Uncertainty)
+    disturbance: Disturbance = field(default_factory=Disturbance)
+    learner: Learner = field(default_factory=Learner)
+    integration_scheme: str = "runge_kutta3"
+    seed: int = 0
+
+    @property
+    def duration(self) -> float:
+        return self.phases.end
+
+    @property
+    def disturbance_start(self) -> float:
+        return (self.disturbance.start if self.disturbance.start >= 0
+                else self.phases.disturbance_start)
+
+    def Validate(self) -> None:
+        """Raises ConfigError naming the first invalid setting and its allowed range
+        (the RHS period is checked against the gain rule when a diagram is built:
+        gain_rule.check_rhs_period)."""
+        from dacph_drake.gain_rule import check_period_order
+        from dacph_drake.simulation import INTEGRATION_SCHEMES
+        self.robot.Validate("robot")
+        self.nominal_robot.Validate("nominal_robot")
+        n = self.robot.num_links
+        if self.nominal_robot.num_links != n:
+            raise ConfigError(f"nominal_robot has {self.nominal_robot.num_links} links; "
+                              f"allowed: the same as robot ({n})")
+        _require_length("q0", self.q0, n)
+        for name in ("warmup", "linear", "nonlinear", "disturbance"):
+            require_nonnegative(f"phases.{name}", getattr(self.phases, name), "s")
+        require_positive("phases (total)", self.phases.end, "s")
+        for name in ("Kd", "Lambda", "epsilon", "eta"):
+            require_positive(f"lhs.{name}", getattr(self.lhs, name))
+        require_nonnegative("lhs.chi_model_based", self.lhs.chi_model_based, "N m")
+        for name in ("base_gain", "base_margin", "fold_gain"):
+            require_positive(f"potential.{name}", getattr(self.potential, name))
+        require_in_range("potential.fold_margin", self.potential.fold_margin, 1e-3,
+                         np.pi, "rad")
+        require_in_range("potential.points_per_link", self.potential.points_per_link,
+                         1, 100)
+        if len(self.reference.amplitudes) != len(self.reference.periods):
+            raise ConfigError("reference.amplitudes and reference.periods must have the "
+                              "same length")
+        for i, T in enumerate(self.reference.periods):
+            require_positive(f"reference.periods[{i}]", T, "s")
+        require_positive("rhs.Td", self.rhs.Td)
+        require_nonnegative("rhs.c_margin", self.rhs.c_margin)
+        for name in ("c_time_constant", "chi_window", "chi_floor", "chi_initial"):
+            require_positive(f"rhs.{name}", getattr(self.rhs, name))
+        require_nonnegative("rhs.observer_noise", self.rhs.observer_noise, "N m")
+        for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
+            require_positive(f"periods.{name}", getattr(self.periods, name), "s")
+        check_period_order(self.periods)
+        u = self.uncertainty
+        for name in ("B0", "D0", "D_offset", "D_linear", "D_quadratic", "B_quadratic"):
+            _require_length(f"uncertainty.{name}", getattr(u, name), n)
+        for name in ("B_linear", "B_q1_squared"):
+            matrix = getattr(u, name)
+            if len(matrix) != n or any(len(row) != n for row in matrix):
+                raise ConfigError(f"uncertainty.{name} must be a {n} x {n} matrix")
+        for i, b in enumerate(u.B0):
+            require_positive(f"uncertainty.B0[{i}]", b)
+        for i, d in enumerate(u.D0):
+            require_nonnegative(f"uncertainty.D0[{i}]", d)
+        require_nonnegative("uncertainty.linear_scale", u.linear_scale)
+        require_nonnegative("uncertainty.nonlinear_scale", u.nonlinear_scale)
+        d = self.disturbance
+        for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
+            _require_length(f"disturbance.{name}", getattr(d, name), n)
+        require_nonnegative("disturbance.scale", d.scale)
+        require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
+        L = self.learner
+        if len(L.hidden) == 0:
+            raise ConfigError("learner.hidden is empty; allowed: at least one layer")
+        for i, width in enumerate(L.hidden):
+            require_in_range(f"learner.hidden[{i}]", width, 1, 4096)
+        require_positive("learner.learning_rate", L.learning_rate)
+        require_in_range("learner.window", L.window, 2, 10**6)
+        require_in_range("learner.steps_per_update", L.steps_per_update, 0, 10**4)
+        require_in_range("learner.beta1", L.beta1, 0.0, 0.999999)
+        require_in_range("learner.beta2", L.beta2, 0.0, 0.999999)
+        require_positive("learner.eps", L.eps)
+        require_positive("learner.momentum_scale", L.momentum_scale)
+        if self.integration_scheme not in INTEGRATION_SCHEMES:
+            raise ConfigError(f"integration_scheme = {self.integration_scheme!r}; "
+                              f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+
+
+def _require_length(name: str, values, n: int) -> None:
+    if len(values) != n:
+        raise ConfigError(f"{name} has {len(values)} entries; allowed: {n} "
+                          "(one per joint)")
+
+
+def load_scenario(path) -> Scenario:
+    """Loads and validates a scenario YAML file (unknown keys and wrong types are
+    errors that name the file and the key)."""
+    scenario = load_yaml_dataclass(path, Scenario)
+    scenario.Validate()
+    return scenario
+
+
+def save_scenario(scenario: Scenario, path) -> None:
+    with open(path, "w") as f:
+        f.write(yaml_dump_typed(scenario))

@@ -1,0 +1,113 @@
+"""RHS controller: decentralized integral control around the learned inverse
+feed-forward (paper section "RHS Control and Learning", SPEC section 5)."""
+import numpy as np
+from pydrake.systems.framework import LeafSystem
+
+from dacph_drake.gain_rule import c_lower_bound, integral_gains
+from dacph_drake.network import ExportedNetwork
+from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.scenario import Rhs
+
+
+class RhsIntegrator(LeafSystem):
+    """Every ``period`` (the fastest loop), with e_tau = tau_c^r - tau_obs:
+
+        u_I <- u_I + h K e_tau
+        u    = B_hat^-1 (tau_c^r + D_hat qdot) + u_I
+        chi  = max(||e_tau||, chi e^(-h / chi_window), chi_floor)
+
+    Every ``model_period`` it refreshes, from the learner's exported weights at the
+    sampled state x = (q, p): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
+    and c, which follows (1 + c_margin) c_min(beta_hat) (eq. 48) through a first-order
+    filter with time constant c_time_constant and never drops below c_min. If the DIC
+    check (det B_hat != 0, Re lambda_hat_p > 0) fails, the previous B_hat^-1, D_hat
+    and K are kept and ``dic_ok`` is 0 until it passes again.
+
+    Inputs ``tau_request``, ``tau_observed``, ``state``, ``weights``, ``beta_hat``.
+    Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
+    c_min, dic_ok]."""
+
+    def __init__(self, model: ReducedOrderModel, network: ExportedNetwork,
+                 settings: Rhs, Kd_max: float, lambda_min_M: float,
+                 period: float, model_period: float, num_positions: int,
+                 initial_weights: np.ndarray):
+        super().__init__()
+        n = model.num_joints
+        self._n, self._nq = n, num_positions
+        self._model, self._network = model, network
+        self._h, self._h_model = period, model_period
+        self._settings = settings
+        self._c_bound = lambda beta: c_lower_bound(settings.Td, Kd_max, lambda_min_M, beta)
+        self._chi_decay = np.exp(-period / settings.chi_window)
+        self._c_step = min(1.0, model_period / settings.c_time_constant)
+        self._tau_request = self.DeclareVectorInputPort("tau_request", n)
+        self._tau_observed = self.DeclareVectorInputPort("tau_observed", n)
+        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
+        self._weights = self.DeclareVectorInputPort("weights", network.size)
+        self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
+        # Fast group: [u_I (n), u (n), e_tau (n), ||e_tau||, chi].
+        self._fast = self.DeclareDiscreteState(
+            np.concatenate([np.zeros(3 * n + 1), [settings.chi_initial]]))
+        # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok].
+        c0 = (1 + settings.c_margin) * self._c_bound(1.0)
+        self._gains = self.DeclareDiscreteState(self._Refresh(
+            np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0]]),
+            initial_weights, np.zeros(n), np.zeros(n), beta=1.0))
+        fast_ticket = {self.discrete_state_ticket(self._fast)}
+        self.DeclareVectorOutputPort("u", n, lambda c, o: o.SetFromVector(
+            c.get_discrete_state(self._fast).get_value()[n:2 * n]),
+            prerequisites_of_calc=fast_ticket)
+        self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetFromVector(
+            c.get_discrete_state(self._fast).get_value()[-1:]),
+            prerequisites_of_calc=fast_ticket)
+        self.DeclareVectorOutputPort(
+            "rhs_log", 2 * n + 5, self._CalcLog,
+            prerequisites_of_calc={self.discrete_state_ticket(self._fast),
+                                   self.discrete_state_ticket(self._gains)})
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
+        self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
+
+    def _Refresh(self, gains, weights, q, qdot, beta):
+        """The model group after one refresh from ``gains`` (see class docstring)."""
+        n = self._n
+        gains = gains.copy()
+        p = self._model.MassMatrix(q) @ qdot
+        B_hat, D_hat = self._network.Evaluate(weights, q, p)
+        c_min = self._c_bound(beta)
+        c = gains[-3]
+        c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
+        k, _, dic_ok = integral_gains(B_hat, c)
+        if dic_ok:
+            gains[:n * n] = np.linalg.inv(B_hat).reshape(-1)
+            gains[n * n:n * n + n] = D_hat
+            gains[n * n + n:n * n + 2 * n] = k
+        gains[-3:] = [c, c_min, 1.0 if dic_ok else 0.0]
+        return gains
+
+    def _UpdateModel(self, context, discrete_state):
+        x = self._state.Eval(context)
+        beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0
+        gains = self._Refresh(context.get_discrete_state(self._gains).get_value(),
+                              self._weights.Eval(context), x[3:self._nq],
+                              x[self._nq + 3:], beta)
+        discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
+
+    def _UpdateIntegrator(self, context, discrete_state):
+        n = self._n
+        fast = context.get_discrete_state(self._fast).get_value()
+        gains = context.get_discrete_state(self._gains).get_value()
+        tau_request = self._tau_request.Eval(context)
+        e = tau_request - self._tau_observed.Eval(context)
+        e_norm = np.sqrt(e @ e)
+        u_I = fast[:n] + self._h * gains[n * n + n:n * n + 2 * n] * e
+        qdot = self._state.Eval(context)[self._nq + 3:]
+        u = gains[:n * n].reshape(n, n) @ (tau_request + gains[n * n:n * n + n] * qdot) + u_I
+        chi = max(e_norm, fast[-1] * self._chi_decay, self._settings.chi_floor)
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(
+            np.concatenate([u_I, u, e, [e_norm, chi]]))
+
+    def _CalcLog(self, context, output):
+        n = self._n
+        fast = context.get_discrete_state(self._fast).get_value()
+        gains = context.get_discrete_state(self._gains).get_value()
+        output.SetFromVector(np.concatenate([fast[2 * n:], gains[n * n + n:]]))

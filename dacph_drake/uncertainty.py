@@ -1,0 +1,36 @@
+"""The ground truth's RHS matrices B~(x) and D~(x) (SPEC section 7) by phase."""
+import numpy as np
+
+from dacph_drake.scenario import Phases, Uncertainty
+
+
+class TrueRhsModel:
+    """B~(q, p, t) = B0 + Delta B and D~(p, t) = D0 + Delta D, with the linear terms on
+    from phases.linear_start and the nonlinear terms from phases.nonlinear_start."""
+
+    def __init__(self, uncertainty: Uncertainty, phases: Phases):
+        u = uncertainty
+        self._B0 = np.diag(u.B0)
+        self._D0 = np.asarray(u.D0, float)
+        self._D_offset = u.linear_scale * np.asarray(u.D_offset, float)
+        self._D_linear = u.linear_scale * np.asarray(u.D_linear, float)
+        self._B_linear = u.linear_scale * np.asarray(u.B_linear, float)
+        self._D_quadratic = u.nonlinear_scale * np.asarray(u.D_quadratic, float)
+        self._B_quadratic = u.nonlinear_scale * np.asarray(u.B_quadratic, float)
+        self._B_q1_squared = u.nonlinear_scale * np.asarray(u.B_q1_squared, float)
+        self._linear_start = phases.linear_start
+        self._nonlinear_start = phases.nonlinear_start
+
+    def Matrices(self, t: float, q: np.ndarray, p: np.ndarray):
+        """(B~, diagonal of D~) at time t and state (q, p)."""
+        B = self._B0.copy()
+        D = self._D0.copy()
+        if t >= self._linear_start:
+            D += self._D_offset + self._D_linear * p
+            B[np.diag_indices_from(B)] += self._B_linear @ q
+        if t >= self._nonlinear_start:
+            pp = p * p
+            D += self._D_quadratic * pp
+            B[np.diag_indices_from(B)] += self._B_quadratic * pp
+            B += self._B_q1_squared * q[0]**2
+        return B, D

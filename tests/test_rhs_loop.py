@@ -1,0 +1,58 @@
+"""The RHS loop: gain rule, DIC check, and the decay rate of e_tau."""
+import numpy as np
+import pytest
+
+from dacph_drake.gain_rule import c_lower_bound, integral_gains
+from dacph_drake.network import ExportedNetwork, RhsNetwork
+from dacph_drake.plant import MakeArmPlant
+from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.scenario import Rhs, Scenario
+from dacph_drake.systems.rhs_integrator import RhsIntegrator
+
+
+def test_c_lower_bound_matches_spec():
+    # SPEC section 5: inf lambda_min(M) ~ 0.0051 gives c ~ 800 1/s with T_d = 2.
+    assert c_lower_bound(2.0, 0.5, 0.0051, 1.0) == pytest.approx(784.3, rel=1e-3)
+    assert c_lower_bound(2.0, 0.5, 0.0051, np.e**5) == pytest.approx(2 * 784.3, rel=1e-3)
+
+
+def test_integral_gains_and_dic():
+    k, lam, ok = integral_gains(np.array([[2.0, 0.1], [0.0, 0.5]]), 800.0)
+    assert ok and np.allclose(lam.real, [2.0, 0.5]) and np.allclose(k, [400.0, 1600.0])
+    assert not integral_gains(np.array([[1.0, 1.0], [1.0, 1.0]]), 800.0)[2]   # singular
+    assert not integral_gains(np.diag([1.0, -0.5]), 800.0)[2]                  # Re < 0
+
+
+@pytest.mark.parametrize("B_true", [np.eye(2), np.array([[1.2, 0.1], [-0.05, 0.8]])])
+def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
+    """A step in tau_c^r through tau = B~ u, observed one sample late, decays in the
+    integrator's discrete loop at least as fast as c_min (eq. 48) asks."""
+    scenario = Scenario()
+    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    network = ExportedNetwork(2, [16, 8], 0.01)
+    weights = RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01, 0).export()
+    h = scenario.periods.rhs
+    lambda_min = 0.005093
+    rhs = RhsIntegrator(model, network, Rhs(), 0.5, lambda_min, h, 1e-3, 5, weights)
+    context = rhs.CreateDefaultContext()
+    rhs.GetInputPort("state").FixValue(context, np.zeros(10))
+    rhs.GetInputPort("weights").FixValue(context, weights)
+    rhs.GetInputPort("beta_hat").FixValue(context, [1.0])
+    tau_request = np.array([0.05, -0.03])
+    rhs.GetInputPort("tau_request").FixValue(context, tau_request)
+    u_history = [np.zeros(2), np.zeros(2)]
+    errors = []
+    state = context.get_mutable_discrete_state()
+    for _ in range(60):
+        observed = B_true @ u_history[-2]
+        rhs.GetInputPort("tau_observed").FixValue(context, observed)
+        errors.append(np.linalg.norm(tau_request - observed))
+        rhs._UpdateIntegrator(context, state)
+        context.SetDiscreteState(state)
+        u_history.append(rhs.GetOutputPort("u").Eval(context).copy())
+    errors = np.array(errors)
+    assert errors[-1] < 1e-6 * errors[0]
+    rate = -np.log(errors[-1] / errors[-21]) / (20 * h)        # asymptotic decay rate
+    c_min = c_lower_bound(2.0, 0.5, lambda_min, 1.0)
+    print(f"e_tau decay rate {rate:.0f} 1/s, gain rule asks >= {c_min:.0f} 1/s")
+    assert rate >= c_min

@@ -1,0 +1,47 @@
+"""Scenario files: the shipped ones load, and bad input gets a clear error."""
+from pathlib import Path
+
+import pytest
+
+from dacph_drake.diagrams import build_dac_diagram
+from dacph_drake.errors import ConfigError
+from dacph_drake.scenario import Scenario, load_scenario, save_scenario
+
+DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
+
+
+@pytest.mark.parametrize("name", ["paper", "short"])
+def test_shipped_scenarios_load(name):
+    scenario = load_scenario(DIAGRAMS / f"{name}.yaml")
+    assert scenario.duration == (1500.0 if name == "paper" else 26.0)
+
+
+def test_yaml_round_trip(tmp_path):
+    save_scenario(Scenario(seed=7), tmp_path / "s.yaml")
+    assert load_scenario(tmp_path / "s.yaml") == Scenario(seed=7)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("lhs: {Kd: 0.5, gain: 1}\n", r"s.yaml.*gain"),
+    ("lhs: {Kd: fast}\n", r"s.yaml.*fast"),
+    ("lhs: {Kd: -0.5}\n", r"lhs.Kd = -0.5 .*> 0"),
+    ("periods: {rhs: 0.0}\n", r"periods.rhs = 0.0 .*> 0 s"),
+    ("periods: {lhs: 0.5}\n", r"periods.lhs = 0.5 s must not exceed periods.learner_sample"),
+    ("nominal_robot: {base: {mass: -2.0}}\n", r"nominal_robot.base.mass = -2.0"),
+    ("q0: [0.1]\n", r"q0 has 1 entries; allowed: 2"),
+    ("integration_scheme: euler\n", r"integration_scheme = 'euler'; allowed"),
+    ("uncertainty: {B_linear: [[1.0]]}\n", r"uncertainty.B_linear must be a 2 x 2"),
+])
+def test_bad_input_is_named(tmp_path, text, message):
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_scenario(path)
+
+
+def test_rhs_period_too_long_for_the_gain_rule():
+    scenario = Scenario()
+    scenario.periods.rhs = 5e-4
+    with pytest.raises(ConfigError, match=r"periods.rhs = 0.0005 s cannot realize the RHS "
+                                          r"decay rate c = 8\d\d.\d 1/s .* <= 1 / \(4 c\)"):
+        build_dac_diagram(scenario)

@@ -1,0 +1,126 @@
+"""Each LeafSystem alone, with FixValue inputs, against its equation."""
+import numpy as np
+import pytest
+
+from dacph_drake.plant import MakeArmPlant
+from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.reference import OrientationReference
+from dacph_drake.scenario import Disturbance, Scenario
+from dacph_drake.systems.disturbance import DisturbanceSource
+from dacph_drake.systems.lhs_controller import LhsController
+from dacph_drake.systems.model_based_inverter import ModelBasedInverter
+from dacph_drake.systems.port_observer import PortObserver
+from dacph_drake.systems.true_rhs import TrueRhs
+
+NQ = 5
+
+
+@pytest.fixture(scope="module")
+def model():
+    return ReducedOrderModel(MakeArmPlant(Scenario().nominal_robot))
+
+
+def _state(q, qdot, model):
+    v_base = model.BaseVelocity(np.concatenate([[0, 0, 0], q]), qdot)
+    return np.concatenate([[0, 0, 0], q, v_base, qdot])
+
+
+def test_disturbance_source_hand_values():
+    source = DisturbanceSource(Disturbance(), start=10.0)
+    context = source.CreateDefaultContext()
+    context.SetTime(9.99)
+    assert np.all(source.get_output_port().Eval(context) == 0)
+    context.SetTime(12.5)
+    t = 12.5
+    expected = (np.array([0.03, -0.02])
+                + 0.02 * np.array([np.sin(2 * np.pi * 0.05 * t), np.cos(2 * np.pi * 0.07 * t)])
+                + 0.005 * np.sin(2 * np.pi * 20 * t) * np.array([1, -1]))
+    np.testing.assert_allclose(source.get_output_port().Eval(context), expected, atol=1e-15)
+
+
+def test_true_rhs_by_phase(model):
+    scenario = Scenario()
+    truth = TrueRhs(scenario)
+    context = truth.CreateDefaultContext()
+    q, qdot = np.array([0.5, -0.2]), np.array([0.1, 0.3])
+    u, d = np.array([0.2, -0.1]), np.array([0.01, 0.02])
+    truth.GetInputPort("state").FixValue(context, _state(q, qdot, model))
+    truth.GetInputPort("u").FixValue(context, u)
+    truth.GetInputPort("disturbance").FixValue(context, d)
+    tau = truth.GetOutputPort("tau")
+    context.SetTime(1.0)                                    # warm-up: B0 = I, D0 = 0.1 I
+    np.testing.assert_allclose(tau.Eval(context), u - 0.1 * qdot + d, atol=1e-15)
+    p = model.MassMatrix(q) @ qdot
+    context.SetTime(100.0)                                  # linear terms on
+    B = np.diag([1 - 0.1 * 0.5, 1 + 0.05 * 0.5 + 0.15 * -0.2])
+    D = np.array([0.1 + 0.02 + 0.4 * p[0], 0.1 + 0.05 + 0.4 * p[1]])
+    np.testing.assert_allclose(tau.Eval(context), B @ u - D * qdot + d, atol=1e-14)
+    context.SetTime(600.0)                                  # plus nonlinear terms
+    B += np.diag([0.15 * p[0]**2, -0.25 * p[1]**2]) + np.array([[0, -0.1], [0.4, 0]]) * 0.25
+    D += np.array([-0.05 * p[0]**2, 0.1 * p[1]**2])
+    np.testing.assert_allclose(tau.Eval(context), B @ u - D * qdot + d, atol=1e-14)
+    np.testing.assert_allclose(truth.GetOutputPort("true_matrices").Eval(context),
+                               np.concatenate([B.reshape(-1), D]), atol=1e-14)
+
+
+def test_model_based_inverter():
+    inverter = ModelBasedInverter(Scenario(), NQ)
+    context = inverter.CreateDefaultContext()
+    x = np.arange(10) / 10.0
+    inverter.GetInputPort("state").FixValue(context, x)
+    inverter.GetInputPort("tau_request").FixValue(context, [0.3, -0.4])
+    np.testing.assert_allclose(inverter.GetOutputPort("u").Eval(context),
+                               np.array([0.3, -0.4]) + 0.1 * x[8:], atol=1e-15)
+
+
+def test_port_observer(model):
+    observer = PortObserver(model, NQ, 2.5e-4, 1e-3, 0.0, 0)
+    context = observer.CreateDefaultContext()
+    q, qdot, qddot = np.array([0.4, 0.9]), np.array([0.2, -0.5]), np.array([1.0, -2.0])
+    observer.GetInputPort("state").FixValue(context, _state(q, qdot, model))
+    observer.GetInputPort("acceleration").FixValue(context, np.concatenate([[0, 0, 0], qddot]))
+    state = context.get_mutable_discrete_state()
+    for event in (observer._UpdateModel, observer._UpdateSample):
+        event(context, state)
+        context.SetDiscreteState(state)
+    r = model.Evaluate(q, qdot)
+    np.testing.assert_allclose(observer.GetOutputPort("tau_observed").Eval(context),
+                               r.M @ qddot + r.C @ qdot, atol=1e-15)
+
+
+def test_lhs_controller_equation(model):
+    scenario = Scenario()
+    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
+    reference = OrientationReference(scenario.reference, 1.3)
+    lhs = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05)
+    q, qdot = np.array([1.3, 2.2]), np.array([0.3, -0.2])     # potential active here
+    x = _state(q, qdot, model)
+    x[2] = 0.1
+    t, chi = 3.0, 0.02
+    tau, log = lhs.Control(t, x, chi)
+    # Independent check of nu and s, and of nu_dot by differencing nu along the flow.
+    def nu_of(time, qq, qd):
+        r = model.Evaluate(qq, qd)
+        D = r.D
+        Dp = D / (D @ D)
+        a_d, ad_d, _ = reference(time)
+        alpha = x[2] + np.sum(qq) + (time - t) * r.base_velocity_map[2] @ qdot
+        xi = -scenario.lhs.eta * potential.Evaluate(qq, qd)[1]
+        return Dp * (ad_d - scenario.lhs.Lambda * (alpha - a_d)) \
+            + (np.eye(2) - np.outer(Dp, D)) @ xi, D, xi, Dp
+    nu, D, xi, Dp = nu_of(t, q, qdot)
+    s = qdot - nu
+    np.testing.assert_allclose(log[:2], s, atol=1e-14)
+    # The null-space term does not change alpha_dot: D (I - D+ D) xi = 0.
+    assert abs(D @ ((np.eye(2) - np.outer(Dp, D)) @ xi)) < 1e-15 * np.linalg.norm(xi) * 10
+    assert np.linalg.norm(xi) > 1e-3
+    h = 1e-6
+    qddot = np.array([0.7, -0.4])
+    nu_plus = nu_of(t + h, q + h * qdot, qdot + h * qddot)[0]
+    nu_minus = nu_of(t - h, q - h * qdot, qdot - h * qddot)[0]
+    nu_dot_fd = (nu_plus - nu_minus) / (2 * h)
+    r = model.Evaluate(q, qdot)
+    expected = (r.M @ nu_dot_fd + r.C @ nu - scenario.lhs.Kd * s
+                - chi * np.tanh(s / scenario.lhs.epsilon))
+    np.testing.assert_allclose(tau, expected, rtol=1e-6, atol=1e-9)
