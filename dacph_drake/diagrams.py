@@ -96,7 +96,8 @@ def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
         scenario.learner.momentum_scale, scenario.seed))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         loop.model, learner.exported, scenario.rhs, scenario.lhs.Kd, loop.lambda_min_M,
-        periods.rhs, periods.lhs, nq, learner.initial_weights))
+        scenario.uncertainty.B0, periods.rhs, periods.learner_sample, nq,
+        learner.initial_weights))
     builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
     builder.Connect(plant.get_generalized_acceleration_output_port(),
                     observer.GetInputPort("acceleration"))

@@ -34,6 +34,21 @@ def integral_gains(B_hat: np.ndarray, c: float):
     return k, paired, dic_ok
 
 
+def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) -> bool:
+    """The bounded-learning-error condition made operational: every paired
+    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the nominal B0's,
+    1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <= trust_ratio.
+
+    Why: the discrete RHS loop of mode p has the loop gain
+    g_p = h k_p lambda~_p = h c lambda~_p / Re(lambda_hat_p); it is stable for g_p < 1
+    and well damped for g_p <= 1/4. A learned eigenvalue far below the true one (a
+    biased estimate, e.g. while an unmodelled disturbance acts) makes g_p exceed 1
+    and the loop diverges within milliseconds. Rejecting such estimates keeps
+    g_p <= h c trust_ratio lambda~_p / lambda0_p."""
+    ratio = paired.real / np.asarray(nominal, float)
+    return bool(np.all(ratio >= 1.0 / trust_ratio) and np.all(ratio <= trust_ratio))
+
+
 def discrete_loop_gain(rhs_period: float, c: float) -> float:
     """g = h c: the per-sample loop gain of every mode when k_p lambda_p = c."""
     return rhs_period * c

@@ -57,7 +57,8 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         c, c_min = rhs[:, 2 * n + 2], rhs[:, 2 * n + 3]
         out["c_min_over_bound"] = float(np.min(c / c_min))
         out["chi_final"] = float(rhs[-1, n + 1])
-        out["dic_violations"] = int(np.sum(rhs[:, -1] < 0.5))
+        out["dic_violations"] = int(np.sum(rhs[:, -2] < 0.5))
+        out["rejected_estimates"] = int(np.sum(rhs[:, -1] < 0.5))
     return out
 
 

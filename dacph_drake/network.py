@@ -81,14 +81,20 @@ class ExportedNetwork:
                                                (n, hidden[-1]), (n,)])
         self.size = int(sum(np.prod(s) for s in self._shapes))
         self._layers = len(hidden)
+        self._unpacked_from, self._unpacked = None, None
 
     def _Unpack(self, weights):
-        out, i = [], 0
-        for s in self._shapes:
-            k = int(np.prod(s))
-            out.append(weights[i:i + k].reshape(s))
-            i += k
-        return out
+        """The parameter arrays (copies); the last unpacking is reused while the
+        weights are unchanged (the learner publishes every periods.learner)."""
+        key = weights.tobytes()
+        if key != self._unpacked_from:
+            out, i = [], 0
+            for s in self._shapes:
+                k = int(np.prod(s))
+                out.append(weights[i:i + k].reshape(s).copy())
+                i += k
+            self._unpacked_from, self._unpacked = key, out
+        return self._unpacked
 
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
         """(B_hat (n x n), D_hat diagonal (n,)) at one state."""

@@ -73,7 +73,9 @@ class Reference:
 class Rhs:
     """RHS integrator (SPEC section 5): k_p = c / Re(lambda_hat_p), c filtered towards
     (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
-    with exponential forgetting over chi_window, never below chi_floor."""
+    with exponential forgetting over chi_window, never below chi_floor. A learned B_hat
+is used only if it passes the DIC check and lies within trust_ratio of B0 (the
+paper's bounded learning error, see gain_rule.within_trust)."""
     Td: float = 2.0
     c_margin: float = 0.1
     c_time_constant: float = 1.0    # [s]
@@ -81,11 +83,19 @@ class Rhs:
     chi_floor: float = 1e-3         # [N m]
     chi_initial: float = 0.05       # [N m]
     observer_noise: float = 0.0     # std of tau_obs measurement noise [N m]
+    trust_ratio: float = 2.0        # accept B_hat only if its eigenvalues are within
+    #                                 this factor of B0's (gain_rule.within_trust)
 
 
 @dataclass
 class Periods:
-    """Discrete update periods [s] (SPEC section 8): rhs < lhs < learner."""
+    """Discrete update periods [s] (SPEC section 8): rhs < lhs < learner.
+
+    rhs: the integrator and the observer's sampling; lhs: the sliding-mode
+    controller and the observer's M, C' refresh; learner_sample: the learner's data
+    sampling and the RHS loop's refresh of B_hat(x), D_hat(x) and K at the current
+    state (they change on the seconds scale of the arm's motion and when the
+    learner publishes); learner: a training step; log: the loggers."""
     rhs: float = 2.5e-4
     lhs: float = 1e-3
     learner: float = 0.1
@@ -204,6 +214,7 @@ class Scenario:
         for name in ("c_time_constant", "chi_window", "chi_floor", "chi_initial"):
             require_positive(f"rhs.{name}", getattr(self.rhs, name))
         require_nonnegative("rhs.observer_noise", self.rhs.observer_noise, "N m")
+        require_in_range("rhs.trust_ratio", self.rhs.trust_ratio, 1.0, 10.0)
         for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
             require_positive(f"periods.{name}", getattr(self.periods, name), "s")
         check_period_order(self.periods)

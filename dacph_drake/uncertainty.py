@@ -10,7 +10,7 @@ class TrueRhsModel:
 
     def __init__(self, uncertainty: Uncertainty, phases: Phases):
         u = uncertainty
-        self._B0 = np.diag(u.B0)
+        self._B0 = np.asarray(u.B0, float)           # diagonal
         self._D0 = np.asarray(u.D0, float)
         self._D_offset = u.linear_scale * np.asarray(u.D_offset, float)
         self._D_linear = u.linear_scale * np.asarray(u.D_linear, float)
@@ -23,14 +23,14 @@ class TrueRhsModel:
 
     def Matrices(self, t: float, q: np.ndarray, p: np.ndarray):
         """(B~, diagonal of D~) at time t and state (q, p)."""
-        B = self._B0.copy()
-        D = self._D0.copy()
-        if t >= self._linear_start:
-            D += self._D_offset + self._D_linear * p
-            B[np.diag_indices_from(B)] += self._B_linear @ q
-        if t >= self._nonlinear_start:
-            pp = p * p
-            D += self._D_quadratic * pp
-            B[np.diag_indices_from(B)] += self._B_quadratic * pp
-            B += self._B_q1_squared * q[0]**2
+        if t < self._linear_start:
+            return np.diag(self._B0), self._D0.copy()
+        B_diagonal = self._B0 + self._B_linear @ q
+        D = self._D0 + self._D_offset + self._D_linear * p
+        if t < self._nonlinear_start:
+            return np.diag(B_diagonal), D
+        pp = p * p
+        D += self._D_quadratic * pp
+        B = np.diag(B_diagonal + self._B_quadratic * pp)
+        B += (q[0] * q[0]) * self._B_q1_squared
         return B, D

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from dacph_drake.gain_rule import c_lower_bound, integral_gains
+from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.network import ExportedNetwork, RhsNetwork
 from dacph_drake.plant import MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
@@ -23,6 +23,48 @@ def test_integral_gains_and_dic():
     assert not integral_gains(np.diag([1.0, -0.5]), 800.0)[2]                  # Re < 0
 
 
+def test_trust_band_bounds_the_discrete_loop_gain():
+    nominal = np.array([1.0, 1.0])
+    assert within_trust(np.array([0.6, 1.9]), nominal, 2.0)
+    assert not within_trust(np.array([0.4, 1.0]), nominal, 2.0)     # too small
+    assert not within_trust(np.array([1.0, 2.1]), nominal, 2.0)     # too large
+
+
+def _Integrator(B_hat_scale):
+    """An RhsIntegrator whose learner publishes B_hat = B_hat_scale I."""
+    model = ReducedOrderModel(MakeArmPlant(Scenario().nominal_robot))
+    network = ExportedNetwork(2, [16, 8], 0.01)
+    weights = RhsNetwork(2, [16, 8], B_hat_scale * np.eye(2), [0.1, 0.1], 0.01,
+                         0).export()
+    rhs = RhsIntegrator(model, network, Rhs(), 0.5, 0.005093, [1.0, 1.0], 2.5e-4,
+                        1e-2, 5, RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01,
+                                            0).export())
+    context = rhs.CreateDefaultContext()
+    rhs.GetInputPort("state").FixValue(context, np.zeros(10))
+    rhs.GetInputPort("weights").FixValue(context, weights)
+    rhs.GetInputPort("beta_hat").FixValue(context, [1.0])
+    return rhs, context
+
+
+@pytest.mark.parametrize("scale, accepted", [(1.5, True), (0.1, False), (-1.0, False)])
+def test_integrator_rejects_estimates_outside_dic_or_trust(scale, accepted):
+    """A learned B_hat = 0.1 I (within DIC, outside the trust band) or -I (DIC
+    violation) leaves B_hat^-1 and K as they were; 1.5 I is adopted."""
+    rhs, context = _Integrator(scale)
+    n = 2
+    before = context.get_discrete_state(rhs._gains).get_value().copy()
+    state = context.get_mutable_discrete_state()
+    rhs._UpdateModel(context, state)
+    after = state.get_vector(rhs._gains).get_value()
+    B_inverse, K = after[:n * n].reshape(n, n), after[n * n + n:n * n + 2 * n]
+    dic_ok, trusted = after[-2:]
+    c = after[-4]
+    assert trusted == float(accepted) and dic_ok == float(scale > 0)
+    expected_B_inverse = np.eye(n) / scale if accepted else before[:n * n].reshape(n, n)
+    assert np.allclose(B_inverse, expected_B_inverse)
+    assert np.allclose(K, c / (scale if accepted else 1.0))
+
+
 @pytest.mark.parametrize("B_true", [np.eye(2), np.array([[1.2, 0.1], [-0.05, 0.8]])])
 def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     """A step in tau_c^r through tau = B~ u, observed one sample late, decays in the
@@ -33,7 +75,8 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     weights = RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01, 0).export()
     h = scenario.periods.rhs
     lambda_min = 0.005093
-    rhs = RhsIntegrator(model, network, Rhs(), 0.5, lambda_min, h, 1e-3, 5, weights)
+    rhs = RhsIntegrator(model, network, Rhs(), 0.5, lambda_min, [1.0, 1.0], h, 1e-2, 5,
+                        weights)
     context = rhs.CreateDefaultContext()
     rhs.GetInputPort("state").FixValue(context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)

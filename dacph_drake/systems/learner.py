@@ -17,7 +17,9 @@ class RhsLearner(LeafSystem):
     Outputs: ``weights`` (the exported parameter vector, held between updates; the
     fast loops evaluate it with numpy), ``beta_hat`` = 1 + RMS residual / RMS tau_obs
     over the window (an empirical multiplicative uncertainty of the learned RHS, used
-    by the gain rule), ``learner_log`` = [loss, beta_hat], and ``estimates`` =
+    by the gain rule), ``learner_log`` = [loss, beta_hat, nominal_loss] where
+    nominal_loss is the same loss of the nominal RHS (B0, D0) on the same window (the
+    learner's loss relative to the prior it started from), and ``estimates`` =
     [vec(B_hat(x)), diag(D_hat(x))] at the current state, for the metrics.
 
     The torch module and Adam's moments live in this object, not in the Context:
@@ -31,6 +33,8 @@ class RhsLearner(LeafSystem):
         n = model.num_joints
         self._n, self._nq, self._model = n, num_positions, model
         self._settings = settings
+        self._B0 = torch.as_tensor(np.diag(B0), dtype=torch.float64)
+        self._D0 = torch.as_tensor(np.asarray(D0, float))
         torch.set_num_threads(1)
         self._net = RhsNetwork(n, settings.hidden, np.diag(B0), D0, momentum_scale, seed)
         self._optimizer = torch.optim.Adam(
@@ -44,11 +48,11 @@ class RhsLearner(LeafSystem):
         # Buffer: window rows of (q, p, qdot, u, tau) and the number of samples taken.
         self._buffer = self.DeclareDiscreteState(settings.window * 5 * n + 1)
         self._weights = self.DeclareDiscreteState(self.initial_weights)
-        self._stats = self.DeclareDiscreteState(np.array([np.nan, 1.0]))
+        self._stats = self.DeclareDiscreteState(np.array([np.nan, 1.0, np.nan]))
         self.DeclareStateOutputPort("weights", self._weights)
         self.DeclareVectorOutputPort(
             "beta_hat", 1, lambda c, o: o.SetFromVector(
-                c.get_discrete_state(self._stats).get_value()[1:]),
+                c.get_discrete_state(self._stats).get_value()[1:2]),
             prerequisites_of_calc={self.discrete_state_ticket(self._stats)})
         self.DeclareStateOutputPort("learner_log", self._stats)
         self.DeclareVectorOutputPort(
@@ -93,8 +97,11 @@ class RhsLearner(LeafSystem):
             beta = 1.0 + float(torch.sqrt(torch.mean(residual)
                                           / torch.clamp(torch.mean(torch.sum(tau**2, 1)),
                                                         min=1e-30)))
+            nominal = tau - (u @ self._B0.T - self._D0 * qdot)
+            nominal_loss = float(torch.mean(torch.sum(nominal**2, 1)))
         discrete_state.get_mutable_vector(self._weights).SetFromVector(self._net.export())
-        discrete_state.get_mutable_vector(self._stats).SetFromVector([loss, beta])
+        discrete_state.get_mutable_vector(self._stats).SetFromVector(
+            [loss, beta, nominal_loss])
 
     def _CalcEstimates(self, context, output):
         q, p, _ = self._QPQdot(context)

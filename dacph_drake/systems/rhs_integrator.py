@@ -3,7 +3,7 @@ feed-forward (paper section "RHS Control and Learning", SPEC section 5)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.gain_rule import c_lower_bound, integral_gains
+from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs
@@ -20,23 +20,26 @@ class RhsIntegrator(LeafSystem):
     sampled state x = (q, p): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
     and c, which follows (1 + c_margin) c_min(beta_hat) (eq. 48) through a first-order
     filter with time constant c_time_constant and never drops below c_min. If the DIC
-    check (det B_hat != 0, Re lambda_hat_p > 0) fails, the previous B_hat^-1, D_hat
-    and K are kept and ``dic_ok`` is 0 until it passes again.
+    check (det B_hat != 0, Re lambda_hat_p > 0) fails, or B_hat's eigenvalues leave the
+    trust band around B0 (``trust_ratio``, gain_rule.within_trust), the previous
+    B_hat^-1, D_hat and K are kept and ``dic_ok`` (resp. ``trusted``) is 0 until the
+    estimate passes again.
 
     Inputs ``tau_request``, ``tau_observed``, ``state``, ``weights``, ``beta_hat``.
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
-    c_min, dic_ok]."""
+    c_min, dic_ok, trusted]."""
 
     def __init__(self, model: ReducedOrderModel, network: ExportedNetwork,
                  settings: Rhs, Kd_max: float, lambda_min_M: float,
-                 period: float, model_period: float, num_positions: int,
-                 initial_weights: np.ndarray):
+                 B0: np.ndarray, period: float, model_period: float,
+                 num_positions: int, initial_weights: np.ndarray):
         super().__init__()
         n = model.num_joints
         self._n, self._nq = n, num_positions
         self._model, self._network = model, network
         self._h, self._h_model = period, model_period
         self._settings = settings
+        self._B0_eigenvalues = np.asarray(B0, float)
         self._c_bound = lambda beta: c_lower_bound(settings.Td, Kd_max, lambda_min_M, beta)
         self._chi_decay = np.exp(-period / settings.chi_window)
         self._c_step = min(1.0, model_period / settings.c_time_constant)
@@ -48,10 +51,10 @@ class RhsIntegrator(LeafSystem):
         # Fast group: [u_I (n), u (n), e_tau (n), ||e_tau||, chi].
         self._fast = self.DeclareDiscreteState(
             np.concatenate([np.zeros(3 * n + 1), [settings.chi_initial]]))
-        # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok].
+        # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok, trusted].
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
         self._gains = self.DeclareDiscreteState(self._Refresh(
-            np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0]]),
+            np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
             initial_weights, np.zeros(n), np.zeros(n), beta=1.0))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareVectorOutputPort("u", n, lambda c, o: o.SetFromVector(
@@ -61,7 +64,7 @@ class RhsIntegrator(LeafSystem):
             c.get_discrete_state(self._fast).get_value()[-1:]),
             prerequisites_of_calc=fast_ticket)
         self.DeclareVectorOutputPort(
-            "rhs_log", 2 * n + 5, self._CalcLog,
+            "rhs_log", 2 * n + 6, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._fast),
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
@@ -74,14 +77,18 @@ class RhsIntegrator(LeafSystem):
         p = self._model.MassMatrix(q) @ qdot
         B_hat, D_hat = self._network.Evaluate(weights, q, p)
         c_min = self._c_bound(beta)
-        c = gains[-3]
+        c = gains[-4]
         c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
-        k, _, dic_ok = integral_gains(B_hat, c)
-        if dic_ok:
+        k, paired, dic_ok = integral_gains(B_hat, c)
+        trusted = dic_ok and within_trust(paired, self._B0_eigenvalues,
+                                          self._settings.trust_ratio)
+        if trusted:
             gains[:n * n] = np.linalg.inv(B_hat).reshape(-1)
             gains[n * n:n * n + n] = D_hat
             gains[n * n + n:n * n + 2 * n] = k
-        gains[-3:] = [c, c_min, 1.0 if dic_ok else 0.0]
+        else:     # keep B_hat^-1, D_hat; K follows c with the kept eigenvalues
+            gains[n * n + n:n * n + 2 * n] *= c / gains[-4]
+        gains[-4:] = [c, c_min, float(dic_ok), float(trusted)]
         return gains
 
     def _UpdateModel(self, context, discrete_state):

@@ -21,9 +21,10 @@ class TrueRhs(LeafSystem):
         n = scenario.robot.num_links
         self._plant = MakeArmPlant(scenario.robot)
         self._plant_context = self._plant.CreateDefaultContext()
-        coords = ArmCoordinates.FromPlant(self._plant)
         self._nq = self._plant.num_positions()
-        self._joint_q, self._joint_v = coords.joint_q, coords.joint_v
+        # The layout every controller system reads: base (x, y, theta0) first.
+        assert np.array_equal(ArmCoordinates.FromPlant(self._plant).joint_v,
+                              np.arange(3, self._nq))
         self._model = TrueRhsModel(scenario.uncertainty, scenario.phases)
         self._u = self.DeclareVectorInputPort("u", n)
         self._state = self.DeclareVectorInputPort("state", 2 * self._nq)
@@ -37,12 +38,11 @@ class TrueRhs(LeafSystem):
 
     def _Matrices(self, context):
         x = self._state.Eval(context)
-        q, v = x[:self._nq], x[self._nq:]
-        self._plant.SetPositions(self._plant_context, q)
-        p = self._plant.CalcMassMatrix(self._plant_context)[self._joint_v] @ v
-        qdot = v[self._joint_v]
-        B, D = self._model.Matrices(context.get_time(), q[self._joint_q], p)
-        return B, D, qdot
+        nq = self._nq
+        self._plant.SetPositions(self._plant_context, x[:nq])
+        p = self._plant.CalcMassMatrix(self._plant_context)[3:] @ x[nq:]
+        B, D = self._model.Matrices(context.get_time(), x[3:nq], p)
+        return B, D, x[nq + 3:]
 
     def _CalcTau(self, context, output):
         B, D, qdot = self._Matrices(context)
