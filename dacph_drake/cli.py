@@ -27,8 +27,8 @@ def _free_flight(args) -> int:
 def _simulate(args) -> int:
     from dacph_drake.metrics import run_metrics
     from dacph_drake.run import simulate
-    from dacph_drake.scenario import load_scenario
-    scenario = load_scenario(args.scenario)
+    from dacph_drake.scenario import scenario_from_argument
+    scenario = scenario_from_argument(args.scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
                       out_dir=args.out, progress=True)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
@@ -56,6 +56,49 @@ def _diagram(args) -> int:
     return 0
 
 
+def _print_table(summary) -> None:
+    from dacph_drake.reproduce import format_value
+    for row in summary["table"]:
+        print(f"  {row['metric']:52s} paper {format_value(row['paper'], row['unit']):>14s}"
+              f"   here {format_value(row['this_project'], row['unit']):>14s}")
+
+
+def _animate_run(run_dir, controller: str, out=None):
+    from pathlib import Path
+    from dacph_drake.animation import write_animation
+    from dacph_drake.reproduce import load_logs
+    from dacph_drake.scenario import load_scenario
+    run_dir = Path(run_dir)
+    scenario = load_scenario(run_dir / "scenario.yaml")
+    out = Path(out) if out else run_dir / f"animation_{controller.replace('-', '_')}.html"
+    return write_animation(scenario, load_logs(run_dir, controller), out)
+
+
+def _reproduce(args) -> int:
+    import time
+    from dacph_drake.reproduce import reproduce
+    from dacph_drake.scenario import scenario_from_argument
+    name = args.scenario or ("short" if args.quick else "paper")
+    start = time.perf_counter()
+    summary = reproduce(scenario_from_argument(name), args.out)
+    print(f"reproduced {name} in {time.perf_counter() - start:.0f} s -> {args.out}")
+    _print_table(summary)
+    if args.animate:
+        print(_animate_run(args.out, "dac"))
+    return 0 if all(r["status"] == "ok" for r in summary["runs"].values()) else 1
+
+
+def _report(args) -> int:
+    from dacph_drake.reproduce import report
+    _print_table(report(args.run_dir))
+    return 0
+
+
+def _animate(args) -> int:
+    print(_animate_run(args.run_dir, args.controller, args.out))
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -66,7 +109,8 @@ def main(argv=None) -> int:
     free.add_argument("--duration", type=float, default=10.0, help="[s]")
     free.set_defaults(run=_free_flight)
     sim = commands.add_parser("simulate", help="simulate a closed loop and save its logs")
-    sim.add_argument("scenario", help="scenario YAML (e.g. diagrams/short.yaml)")
+    sim.add_argument("scenario", help="scenario YAML (e.g. diagrams/short.yaml) or a "
+                                      "built-in name: paper, short")
     sim.add_argument("--out", required=True, help="output directory")
     sim.add_argument("--controller", choices=["dac", "model-based"], default="dac")
     sim.add_argument("--duration", type=float, default=None,
@@ -78,6 +122,27 @@ def main(argv=None) -> int:
                        help="default: both")
     graph.add_argument("--out", default=None, help="default: the scenario's folder")
     graph.set_defaults(run=_diagram)
+    rep = commands.add_parser(
+        "reproduce", help="run DAC and the model-based baseline, write the paper's "
+                          "panels and the metrics table beside the paper's numbers")
+    rep.add_argument("scenario", nargs="?", default=None,
+                     help="scenario YAML or built-in name (default: paper, 1500 s)")
+    rep.add_argument("--out", required=True, help="output directory")
+    rep.add_argument("--quick", action="store_true",
+                     help="the short scenario (26 s) instead of the paper's")
+    rep.add_argument("--animate", action="store_true",
+                     help="also write an HTML animation of the DAC run")
+    rep.set_defaults(run=_reproduce)
+    rpt = commands.add_parser("report", help="panels and metrics table of a directory "
+                                             "holding a DAC and a model-based run")
+    rpt.add_argument("run_dir")
+    rpt.set_defaults(run=_report)
+    ani = commands.add_parser("animate", help="self-contained HTML animation of a run "
+                                              "(Meshcat)")
+    ani.add_argument("run_dir")
+    ani.add_argument("--controller", choices=["dac", "model-based"], default="dac")
+    ani.add_argument("--out", default=None, help="HTML file (default: in run_dir)")
+    ani.set_defaults(run=_animate)
     args = parser.parse_args(argv)
     try:
         return args.run(args)

@@ -48,7 +48,7 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         "min_clearance": float(min(potential.MinClearance(x[3:nq]) for x in state)),
     }
     if "estimates" in logs:
-        window = (t >= max(phases.linear_start, phases.disturbance_start - 60.0)) & \
+        window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \
                  (t < phases.disturbance_start)
         truth, estimate = logs["true_matrices"][window], logs["estimates"][window]
         out["estimation_error_B"] = relative_error_rms(estimate[:, :n * n], truth[:, :n * n])

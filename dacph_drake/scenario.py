@@ -267,6 +267,28 @@ def load_scenario(path) -> Scenario:
     return scenario
 
 
+def paper_scenario() -> Scenario:
+    """The paper's scenario (SPEC section 7, 1500 s): the defaults;
+    diagrams/paper.yaml is its file."""
+    return Scenario()
+
+
+def short_scenario() -> Scenario:
+    """The paper's phases compressed to 2 + 8 + 8 + 8 s (tests and a quick look);
+    diagrams/short.yaml is its file."""
+    return Scenario(phases=Phases(warmup=2.0, linear=8.0, nonlinear=8.0, disturbance=8.0))
+
+
+BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
+
+
+def scenario_from_argument(argument) -> Scenario:
+    """A built-in scenario's name ("paper", "short") or a YAML file's path."""
+    if str(argument) in BUILT_IN_SCENARIOS:
+        return BUILT_IN_SCENARIOS[str(argument)]()
+    return load_scenario(argument)
+
+
 def save_scenario(scenario: Scenario, path) -> None:
     with open(path, "w") as f:
         f.write(yaml_dump_typed(scenario))

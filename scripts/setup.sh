@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
-# Installs everything dacph-drake needs into ./.venv: system tools (graphviz's dot),
+# Installs everything dacph-drake needs into ./.venv: system tools (graphviz's dot,
+# and Debian's chromium for the headless test of the HTML animation),
 # the CPU build of torch (pinned here; the project itself only asks for a range),
 # and the package with its test extra. Safe to run again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if ! command -v dot >/dev/null; then
+missing=()
+command -v dot >/dev/null || missing+=(graphviz)
+command -v chromium >/dev/null || missing+=(chromium)
+if [ ${#missing[@]} -gt 0 ]; then
     SUDO=$([ "$(id -u)" = 0 ] && echo "" || echo sudo)
     $SUDO apt-get update -qq
-    $SUDO apt-get install -y -qq graphviz >/dev/null
+    $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/pip install -q --upgrade pip

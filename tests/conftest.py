@@ -34,3 +34,13 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "long" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def quick_reproduction(tmp_path_factory):
+    """`dacph reproduce --quick --animate` run once per session, end to end through
+    the CLI: (exit status, output directory)."""
+    from dacph_drake.cli import main
+    out = tmp_path_factory.mktemp("reproduce_quick")
+    status = main(["reproduce", "--quick", "--animate", "--out", str(out)])
+    return status, out

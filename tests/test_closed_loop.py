@@ -1,38 +1,37 @@
 """End to end on the short scenario (CI): DAC tracks alpha_d, learns, keeps the arm
-off the base, and beats the model-based baseline once the disturbance is on."""
-from pathlib import Path
+off the base, and beats the model-based baseline once the disturbance is on. The
+runs are those of the session's `dacph reproduce --quick` (conftest)."""
+import json
 
 import numpy as np
 import pytest
 
 from dacph_drake.metrics import comparison, run_metrics
-from dacph_drake.run import simulate
-from dacph_drake.scenario import load_scenario
-
-SHORT = Path(__file__).resolve().parents[1] / "diagrams" / "short.yaml"
+from dacph_drake.reproduce import CONTROLLERS, load_logs
+from dacph_drake.scenario import load_scenario, short_scenario
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    scenario = load_scenario(SHORT)
-    out = tmp_path_factory.mktemp("short")
-    results = {c: simulate(scenario, c, out_dir=out) for c in ("dac", "model-based")}
-    return scenario, out, results
+def runs(quick_reproduction):
+    _, out = quick_reproduction
+    meta = {c: json.loads((out / f"run_{c}.json").read_text()) for c in CONTROLLERS}
+    logs = {c: load_logs(out, c) for c in CONTROLLERS}
+    return load_scenario(out / "scenario.yaml"), out, meta, logs
 
 
 def test_runs_finish_and_save(runs):
-    scenario, out, results = runs
-    for controller, result in results.items():
-        assert result.status == "ok", result.reason
-        assert result.final_time == pytest.approx(scenario.duration)
-        assert (out / f"logs_{controller}.npz").exists()
-        assert (out / f"run_{controller}.json").exists()
-    assert load_scenario(out / "scenario.yaml") == scenario
+    scenario, out, meta, _ = runs
+    assert scenario == short_scenario()
+    for controller in CONTROLLERS:
+        assert meta[controller]["status"] == "ok", meta[controller]["reason"]
+        assert meta[controller]["final_time"] == pytest.approx(scenario.duration)
+        assert meta[controller]["seed"] == scenario.seed
+        assert {"drake", "torch", "numpy"} <= set(meta[controller]["versions"])
 
 
 def test_dac_tracks_learns_and_stays_clear(runs):
-    scenario, _, results = runs
-    logs = results["dac"].logs
+    scenario, _, _, logs = runs
+    logs = logs["dac"]
     m = run_metrics(logs, scenario)
     # Tracking bound over phases 1-3 (alpha_d swings by +-0.4 rad).
     assert m["tracking_error_rms"] < 5e-4
@@ -58,10 +57,23 @@ def test_dac_tracks_learns_and_stays_clear(runs):
     assert np.all(logs["rhs_log"][before, -1] == 1.0)
 
 
+def test_e_tau_follows_tau_request_at_the_gain_rule_rate(runs):
+    """An integral loop with decay rate c follows a ramp in tau_c^r with the error
+    |d tau_c^r / dt| / c. In phases 1-2 the measured RMS of ||e_tau|| stays within
+    RMS(d tau_c^r / dt) / c_min: the loop realizes the rate eq. (48) asks for."""
+    scenario, _, _, logs = runs
+    n = scenario.robot.num_links
+    t, rhs = logs["dac"]["time"], logs["dac"]["rhs_log"]
+    window = (t >= scenario.phases.linear_start + 0.5) & (t < scenario.disturbance_start)
+    ramp = np.gradient(logs["dac"]["tau_request"], t, axis=0)[window]
+    e_rms = np.sqrt(np.mean(rhs[window, n] ** 2))
+    bound = np.sqrt(np.mean(np.sum(ramp**2, axis=1))) / np.max(rhs[window, 2 * n + 3])
+    assert 0 < e_rms <= bound, (e_rms, bound)
+
+
 def test_dac_beats_model_based_once_the_disturbance_is_on(runs):
-    scenario, _, results = runs
-    assert all(r.status == "ok" for r in results.values())   # whole phase 3 compared
-    dac = run_metrics(results["dac"].logs, scenario)
-    model_based = run_metrics(results["model-based"].logs, scenario)
+    scenario, _, _, logs = runs
+    dac = run_metrics(logs["dac"], scenario)
+    model_based = run_metrics(logs["model-based"], scenario)
     assert dac["tracking_error_rms_phase3"] < model_based["tracking_error_rms_phase3"]
     assert comparison(dac, model_based)["tracking_error_reduction"] > 0.5

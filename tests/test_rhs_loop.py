@@ -99,3 +99,4 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     c_min = c_lower_bound(2.0, 0.5, lambda_min, 1.0)
     print(f"e_tau decay rate {rate:.0f} 1/s, gain rule asks >= {c_min:.0f} 1/s")
     assert rate >= c_min
+

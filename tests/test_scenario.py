@@ -5,7 +5,8 @@ import pytest
 
 from dacph_drake.diagrams import build_dac_diagram
 from dacph_drake.errors import ConfigError
-from dacph_drake.scenario import Scenario, load_scenario, save_scenario
+from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
+                                  save_scenario)
 
 DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
 
@@ -14,6 +15,7 @@ DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
 def test_shipped_scenarios_load(name):
     scenario = load_scenario(DIAGRAMS / f"{name}.yaml")
     assert scenario.duration == (1500.0 if name == "paper" else 26.0)
+    assert scenario == BUILT_IN_SCENARIOS[name]()       # the files match the built-ins
 
 
 def test_yaml_round_trip(tmp_path):

@@ -1,0 +1,72 @@
+"""`dacph reproduce --quick --animate` end to end (the session's run, conftest): every
+panel, the table (whose numbers match the logs) and an HTML animation that a real
+headless Chromium shows offline."""
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from dacph_drake.figures import PANELS
+from dacph_drake.metrics import run_metrics
+from dacph_drake.reproduce import CONTROLLERS, PAPER_ROWS, flat_metrics, load_logs
+from dacph_drake.scenario import load_scenario
+
+
+def test_reproduce_writes_panels_table_scenario_and_animation(quick_reproduction):
+    status, out = quick_reproduction
+    assert status == 0
+    for panel in PANELS:
+        for suffix in ("png", "pdf"):
+            path = out / "figures" / f"{panel}.{suffix}"
+            assert path.stat().st_size > 10_000, path
+    assert (out / "metrics.md").read_text().count("\n| ") == len(PAPER_ROWS) + 1
+    assert (out / "animation_dac.html").stat().st_size > 100_000
+    load_scenario(out / "scenario.yaml")          # the directory alone reproduces it
+
+
+def test_table_numbers_match_the_logs(quick_reproduction):
+    _, out = quick_reproduction
+    summary = json.loads((out / "metrics.json").read_text())
+    scenario = load_scenario(out / "scenario.yaml")
+    metrics = {c: run_metrics(load_logs(out, c), scenario) for c in CONTROLLERS}
+    flat = flat_metrics(metrics)
+    assert [row["key"] for row in summary["table"]] == [r.key for r in PAPER_ROWS]
+    for row in summary["table"]:
+        assert row["this_project"] == pytest.approx(flat[row["key"]], rel=1e-12)
+    reduction = 1 - metrics["dac"]["tracking_error_rms"] / \
+        metrics["model-based"]["tracking_error_rms"]
+    assert summary["table"][0]["this_project"] == pytest.approx(reduction)
+    assert summary["table"][0]["paper"] == 0.775
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        if shutil.which(name):
+            return shutil.which(name)
+    pytest.fail("no Chromium: scripts/setup.sh installs Debian's chromium package")
+
+
+def test_animation_shows_the_robot_offline_in_headless_chromium(quick_reproduction,
+                                                                tmp_path):
+    """The page loads with the network blocked (an unreachable proxy) and its
+    screenshot shows the grey base, the two coloured links and the red alpha_d bar."""
+    import matplotlib.image
+    _, out = quick_reproduction
+    shot = tmp_path / "shot.png"
+    subprocess.run(
+        [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
+         "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+         "--proxy-server=127.0.0.1:9", "--window-size=800,800",
+         "--virtual-time-budget=8000", f"--screenshot={shot}",
+         (out / "animation_dac.html").resolve().as_uri()],
+        check=True, capture_output=True, timeout=120)
+    image = matplotlib.image.imread(shot)[..., :3]
+    saturated = image.max(axis=2) - image.min(axis=2) > 0.3     # coloured pixels
+    red = (image[..., 0] > 0.7) & (image[..., 1] < 0.35) & (image[..., 2] < 0.35)
+    grey = (np.abs(image - image.mean(axis=2, keepdims=True)).max(axis=2) < 0.03) & \
+        (image.mean(axis=2) > 0.7) & (image.mean(axis=2) < 0.9)
+    assert saturated.sum() > 2000, "no coloured links in the screenshot"
+    assert red.sum() > 50, "no alpha_d bar in the screenshot"
+    assert grey.sum() > 2000, "no base in the screenshot"
