@@ -97,7 +97,7 @@ def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         loop.model, learner.exported, scenario.rhs, scenario.lhs.Kd, loop.lambda_min_M,
         scenario.uncertainty.B0, periods.rhs, periods.learner_sample, nq,
-        learner.initial_weights))
+        learner.initial_weights, scenario.stress))
     builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
     builder.Connect(plant.get_generalized_acceleration_output_port(),
                     observer.GetInputPort("acceleration"))

@@ -2,6 +2,7 @@
 saving the logs with the scenario, the versions and the seed."""
 import json
 import platform
+import resource
 import sys
 import time
 from dataclasses import dataclass, field
@@ -27,6 +28,7 @@ class RunResult:
     final_time: float
     wall_time: float
     logs: Dict[str, np.ndarray] = field(default_factory=dict)   # name -> (T, k); "time"
+    peak_memory_mib: float = float("nan")    # of this process so far (ru_maxrss)
 
 
 def versions() -> Dict[str, str]:
@@ -108,7 +110,9 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
                        reason=problem.get("reason", ""),
                        final_time=context.get_time(),
                        wall_time=time.perf_counter() - start,
-                       logs=_CollectLogs(loop, context))
+                       logs=_CollectLogs(loop, context),
+                       peak_memory_mib=resource.getrusage(
+                           resource.RUSAGE_SELF).ru_maxrss / 1024)
     if out_dir is not None:
         save_run(result, scenario, out_dir)
     return result
@@ -131,6 +135,7 @@ def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
     meta = {"controller": result.controller, "status": result.status,
             "reason": result.reason, "final_time": result.final_time,
             "wall_time": result.wall_time, "seed": scenario.seed,
+            "peak_memory_mib": result.peak_memory_mib,
             "versions": versions()}
     with open(out / f"run_{result.controller}.json", "w") as f:
         json.dump(meta, f, indent=2)

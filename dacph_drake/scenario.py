@@ -154,6 +154,15 @@ class Learner:
 
 
 @dataclass
+class Stress:
+    """A deliberately wrong learner, for verification (``dacph verify``): from time
+    ``start`` on, the RHS integrator uses B_hat_scale * B_hat in place of the
+    learner's B_hat (1 = the learner's estimate, no stress)."""
+    B_hat_scale: float = 1.0
+    start: float = 0.0              # [s]
+
+
+@dataclass
 class Scenario:
     robot: RobotParams = field(default_factory=RobotParams)
     nominal_robot: RobotParams = field(default_factory=RobotParams)
@@ -167,6 +176,7 @@ class Scenario:
     uncertainty: Uncertainty = field(default_factory=Uncertainty)
     disturbance: Disturbance = field(default_factory=Disturbance)
     learner: Learner = field(default_factory=Learner)
+    stress: Stress = field(default_factory=Stress)
     integration_scheme: str = "runge_kutta3"
     seed: int = 0
 
@@ -215,6 +225,8 @@ class Scenario:
             require_positive(f"rhs.{name}", getattr(self.rhs, name))
         require_nonnegative("rhs.observer_noise", self.rhs.observer_noise, "N m")
         require_in_range("rhs.trust_ratio", self.rhs.trust_ratio, 1.0, 10.0)
+        require_positive("stress.B_hat_scale", self.stress.B_hat_scale)
+        require_nonnegative("stress.start", self.stress.start, "s")
         for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
             require_positive(f"periods.{name}", getattr(self.periods, name), "s")
         check_period_order(self.periods)

@@ -3,14 +3,21 @@
 Each comparison is a ratio measured in this one run (the machines are shared).
 """
 import argparse
+import json
 import time
+from pathlib import Path
 
 import numpy as np
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.free_flight import run_free_flight
-from dacph_drake.plant import MakeArmPlant
+from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.robot import RobotParams
+from dacph_drake.run import simulate
+from dacph_drake.scenario import short_scenario
+from dacph_drake.simulation import MakeSimulator
 
 
 def _best_of(fn, repeats=5, number=2000) -> float:
@@ -52,12 +59,61 @@ def bench_plant_integration(duration: float):
     print(f"  discrete plant h = 0.25 ms: max|momentum| {r.max_momentum:.1e}")
 
 
+def _plant_alone_wall(scenario, duration: float) -> float:
+    """Wall time of the ground-truth plant alone (constant small torques), with the
+    closed loop's integrator and step."""
+    builder = DiagramBuilder()
+    plant, _ = AddFreeFloatingArm(builder, scenario.robot)
+    torque = builder.AddSystem(ConstantVectorSource(np.full(plant.num_actuators(), 1e-3)))
+    builder.Connect(torque.get_output_port(), plant.get_actuation_input_port())
+    diagram = builder.Build()
+    simulator = MakeSimulator(diagram, scenario.integration_scheme, scenario.periods.rhs)
+    plant.SetPositions(plant.GetMyContextFromRoot(simulator.get_mutable_context()),
+                       np.concatenate([[0.0, 0.0, 0.0], scenario.q0]))
+    simulator.Initialize()
+    start = time.perf_counter()
+    simulator.AdvanceTo(duration)
+    return time.perf_counter() - start
+
+
+def bench_closed_loop(duration: float, paper_run: Path = None):
+    """Wall time per simulated second: plant alone, model-based loop, DAC loop (the
+    short scenario, all phases on by ``duration``), their ratios; the paper
+    scenario's wall time and peak memory from a saved run, else extrapolated."""
+    scenario = short_scenario()
+    plant = _plant_alone_wall(scenario, duration) / duration
+    walls = {"plant": plant}
+    for controller in ("model-based", "dac"):
+        result = simulate(scenario, controller, duration=duration)
+        walls[controller] = result.wall_time / duration
+    print(f"closed loop, {duration:g} s of the short scenario, RHS step "
+          f"{scenario.periods.rhs * 1e3:.2f} ms ({scenario.integration_scheme}):")
+    for name, wall in walls.items():
+        print(f"  {name:12s} {wall:6.3f} s wall per simulated s   "
+              f"ratio to plant alone {wall / plant:5.2f}  (target DAC <= 1.5)")
+    if paper_run is not None:
+        meta = json.loads((Path(paper_run) / "run_dac.json").read_text())
+        print(f"  paper scenario ({meta['final_time']:g} s, {meta['status']}): wall "
+              f"{meta['wall_time']:.0f} s (target <= 120 s), real-time factor "
+              f"{meta['final_time'] / meta['wall_time']:.2f}, peak memory "
+              f"{meta['peak_memory_mib']:.0f} MiB (target <= 1024 MiB)")
+    else:
+        print(f"  paper scenario (1500 s), extrapolated: wall "
+              f"{1500 * walls['dac']:.0f} s (target <= 120 s); pass --paper-run DIR "
+              "for a measured run")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=20.0)
+    parser.add_argument("--loop-duration", type=float, default=20.0,
+                        help="[s] of the short scenario for the closed-loop figures")
+    parser.add_argument("--paper-run", type=Path, default=None,
+                        help="a directory holding a saved paper-scenario DAC run")
     args = parser.parse_args()
     bench_reduced_model()
     bench_plant_integration(args.duration)
+    bench_closed_loop(args.loop_duration, args.paper_run)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,1 @@
+"""Verification of the paper's Lyapunov claims on any run (``dacph verify``)."""

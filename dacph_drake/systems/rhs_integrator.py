@@ -6,7 +6,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.scenario import Rhs
+from dacph_drake.scenario import Rhs, Stress
 
 
 class RhsIntegrator(LeafSystem):
@@ -25,6 +25,9 @@ class RhsIntegrator(LeafSystem):
     B_hat^-1, D_hat and K are kept and ``dic_ok`` (resp. ``trusted``) is 0 until the
     estimate passes again.
 
+    ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
+    from stress.start on.
+
     Inputs ``tau_request``, ``tau_observed``, ``state``, ``weights``, ``beta_hat``.
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
     c_min, dic_ok, trusted]."""
@@ -32,7 +35,8 @@ class RhsIntegrator(LeafSystem):
     def __init__(self, model: ReducedOrderModel, network: ExportedNetwork,
                  settings: Rhs, Kd_max: float, lambda_min_M: float,
                  B0: np.ndarray, period: float, model_period: float,
-                 num_positions: int, initial_weights: np.ndarray):
+                 num_positions: int, initial_weights: np.ndarray,
+                 stress: Stress = Stress()):
         super().__init__()
         n = model.num_joints
         self._n, self._nq = n, num_positions
@@ -40,6 +44,7 @@ class RhsIntegrator(LeafSystem):
         self._h, self._h_model = period, model_period
         self._settings = settings
         self._B0_eigenvalues = np.asarray(B0, float)
+        self._stress = stress
         self._c_bound = lambda beta: c_lower_bound(settings.Td, Kd_max, lambda_min_M, beta)
         self._chi_decay = np.exp(-period / settings.chi_window)
         self._c_step = min(1.0, model_period / settings.c_time_constant)
@@ -55,7 +60,7 @@ class RhsIntegrator(LeafSystem):
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
         self._gains = self.DeclareDiscreteState(self._Refresh(
             np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
-            initial_weights, np.zeros(n), np.zeros(n), beta=1.0))
+            initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareVectorOutputPort("u", n, lambda c, o: o.SetFromVector(
             c.get_discrete_state(self._fast).get_value()[n:2 * n]),
@@ -70,12 +75,13 @@ class RhsIntegrator(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
 
-    def _Refresh(self, gains, weights, q, qdot, beta):
+    def _Refresh(self, gains, weights, q, qdot, beta, B_hat_scale):
         """The model group after one refresh from ``gains`` (see class docstring)."""
         n = self._n
         gains = gains.copy()
         p = self._model.MassMatrix(q) @ qdot
         B_hat, D_hat = self._network.Evaluate(weights, q, p)
+        B_hat = B_hat_scale * B_hat
         c_min = self._c_bound(beta)
         c = gains[-4]
         c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
@@ -96,7 +102,9 @@ class RhsIntegrator(LeafSystem):
         beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0
         gains = self._Refresh(context.get_discrete_state(self._gains).get_value(),
                               self._weights.Eval(context), x[3:self._nq],
-                              x[self._nq + 3:], beta)
+                              x[self._nq + 3:], beta,
+                              self._stress.B_hat_scale
+                              if context.get_time() >= self._stress.start else 1.0)
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
 
     def _UpdateIntegrator(self, context, discrete_state):

@@ -1,0 +1,178 @@
+"""``dacph verify``: the paper's Lyapunov claims checked on a DAC run.
+
+1. LHS: V = s^T M s / 2 inside its exponential envelope wherever ||e_tau|| <= chi
+   (lyapunov_envelope).
+2. RHS: at every learner update, the discrete RHS loop with the learner's B_hat,
+   the gains K, the RHS period and the observer's delay (rhs_loop): spectral
+   radius with margin, P > 0 from RealDiscreteLyapunovEquation, DIC, time-scale
+   separation; estimates the integrator rejected (DIC or trust band) are counted,
+   not checked, since the loop kept its previous gains. The same loop with the
+   ground truth's B~ (known in simulation only) is checked at every logged sample:
+   a learner that is wrong but self-consistent (B_hat K = c I) passes the first
+   check and fails this one.
+3. A region-of-attraction certificate of the sliding dynamics at the initial
+   configuration (region_of_attraction), checked to contain s(0).
+The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
+"""
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
+    check_lyapunov_envelope, envelope_bounds)
+from dacph_drake.analysis.region_of_attraction import \
+    sliding_region_of_attraction  # noqa: E402
+from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
+from dacph_drake.plant import MakeArmPlant  # noqa: E402
+from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
+                                       mass_matrix_bounds)
+from dacph_drake.scenario import Scenario, load_scenario  # noqa: E402
+
+
+@dataclass
+class LoopSeries:
+    """Checks of the RHS loop over a run (one row per learner update)."""
+    time: List[float] = field(default_factory=list)
+    margin: List[float] = field(default_factory=list)
+    separation: List[float] = field(default_factory=list)
+    failures: List[str] = field(default_factory=list)       # "t = ...: reason"
+    failure_times: List[float] = field(default_factory=list)
+
+    def summary(self) -> Dict:
+        if not self.time:
+            return {"evaluated": 0, "ok": True, "min_margin": None}
+        worst = int(np.argmin(self.margin))
+        return {"evaluated": len(self.time), "failed": len(self.failures),
+                "ok": not self.failures, "min_margin": self.margin[worst],
+                "min_margin_time": self.time[worst],
+                "min_separation": float(np.min(self.separation)),
+                "first_failure": self.failures[0] if self.failures else "",
+                "first_failure_time": self.failure_times[0] if self.failures else None}
+
+
+def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
+                every: int) -> LoopSeries:
+    """check_rhs_loop on every ``every``-th logged sample with the gains K in effect
+    and B from logs[B_column] ("estimates": the learner's, scaled as the stress
+    setting asks; "true_matrices": the ground truth's)."""
+    n = scenario.robot.num_links
+    t, rhs = logs["time"], logs["rhs_log"]
+    learned = B_column == "estimates"
+    series = LoopSeries()
+    for k in range(0, len(t), every):
+        if learned and rhs[k, -1] < 0.5:
+            continue               # the integrator rejected this estimate, kept gains
+        B = logs[B_column][k, :n * n].reshape(n, n)
+        # A logged sample shows the state before the updates at its own time.
+        if learned and t[k] > scenario.stress.start:
+            B = scenario.stress.B_hat_scale * B
+        check = check_rhs_loop(B, rhs[k, n + 2:2 * n + 2], scenario.periods.rhs,
+                               lambda_lhs, scenario.rhs.Td)
+        series.time.append(float(t[k]))
+        series.margin.append(check.margin)
+        series.separation.append(check.separation)
+        if not check.ok:
+            series.failures.append(f"t = {t[k]:.3f} s: {check.reason}")
+            series.failure_times.append(float(t[k]))
+    return series
+
+
+def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
+                out_dir=None) -> Dict:
+    """All checks on the logs of a DAC run; writes verification.{md,json} and plots
+    into out_dir when given. Returns the report dictionary (``ok`` is the verdict)."""
+    n = scenario.robot.num_links
+    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    lambda_min_M, lambda_max_M = mass_matrix_bounds(model)
+    Kd, epsilon = scenario.lhs.Kd, scenario.lhs.epsilon
+    lambda_lhs = 2 * Kd / lambda_min_M
+    t, lhs, rhs = logs["time"], logs["lhs_log"], logs["rhs_log"]
+    V, e_norm, chi = lhs[:, n + 2], rhs[:, n], rhs[:, n + 1]
+
+    envelope = check_lyapunov_envelope(t, V, e_norm, chi, Kd, Kd, lambda_min_M,
+                                       lambda_max_M, epsilon, n)
+    per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))
+    learned = _rhs_series(logs, scenario, lambda_lhs, "estimates", per_update)
+    truth = _rhs_series(logs, scenario, lambda_lhs, "true_matrices", 1)
+    rejected = np.flatnonzero(rhs[:, -1] < 0.5)
+    region = sliding_region_of_attraction(model, np.asarray(scenario.q0), Kd,
+                                          scenario.rhs.chi_initial, epsilon)
+    s0 = float(np.linalg.norm(lhs[0, :n]))
+    checks = {
+        "run_finished": {"ok": run_meta.get("status") == "ok",
+                         "status": run_meta.get("status"),
+                         "reason": run_meta.get("reason", ""),
+                         "final_time": run_meta.get("final_time")},
+        "lhs_envelope": envelope.as_dict(),
+        "rhs_loop_learned": learned.summary(),
+        "rhs_loop_truth": truth.summary(),
+        "region_of_attraction": {**region.as_dict(), "s0_norm": s0,
+                                 "ok": s0 <= region.radius},
+    }
+    estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
+                 "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
+                 "dic_violations": int(np.sum(rhs[:, -2] < 0.5))}
+    report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
+              "estimates_rejected_by_the_integrator": estimates,
+              "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
+                           "lambda_lhs": lambda_lhs, "rhs_period": scenario.periods.rhs,
+                           "inf_lambda_min_M": lambda_min_M,
+                           "sup_lambda_max_M": lambda_max_M}}
+    if out_dir is not None:
+        _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario,
+               (Kd, lambda_min_M, lambda_max_M, epsilon, n))
+    return report
+
+
+def verify_run(run_dir, out_dir=None) -> Dict:
+    """verify_logs on the DAC run saved in run_dir (by ``dacph simulate`` or
+    ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
+    run_dir = Path(run_dir)
+    scenario = load_scenario(run_dir / "scenario.yaml")
+    with np.load(run_dir / "logs_dac.npz") as data:
+        logs = {k: data[k] for k in data.files}
+    meta = json.loads((run_dir / "run_dac.json").read_text())
+    return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
+
+
+def _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario, constants):
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "verification.json").write_text(json.dumps(report, indent=2))
+    Kd, lambda_min_M, lambda_max_M, epsilon, n = constants
+    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, Kd, Kd, lambda_min_M,
+                                   lambda_max_M, epsilon, n)
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    axes[0].semilogy(t, np.maximum(V, 1e-30), "k-", lw=0.8, label="V = s^T M s / 2")
+    axes[0].semilogy(t[1:], np.maximum(upper, 1e-30), "C3--", lw=0.6,
+                     label="upper bound (rate 2 lambda_min(K_d) / sup lambda_max(M))")
+    axes[0].set_ylabel("V [J]")
+    axes[0].legend(fontsize=7)
+    for series, label, style in [(learned, "loop with learned B_hat", "C0."),
+                                 (truth, "loop with true B~", "C1.")]:
+        axes[1].plot(series.time, series.margin, style, ms=2, label=label)
+    axes[1].axhline(STABILITY_MARGIN, color="k", ls="--", lw=0.8,
+                    label="required margin")
+    axes[1].set_ylabel("1 - spectral radius [-]")
+    axes[1].set_xlabel("time t [s]")
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "verification.png", dpi=120)
+    plt.close(fig)
+    lines = [f"# Verification: {'PASS' if report['ok'] else 'FAIL'}", ""]
+    for name, check in report["checks"].items():
+        lines.append(f"## {name}: {'ok' if check['ok'] else 'FAILED'}")
+        lines += [f"- {k}: {v}" for k, v in check.items() if k != "ok"]
+        lines.append("")
+    lines.append("## estimates rejected by the integrator (DIC or trust band; the "
+                 "loop kept its gains)")
+    lines += [f"- {k}: {v}" for k, v in report["estimates_rejected_by_the_integrator"].items()]
+    lines += ["", "![V and margins](verification.png)"]
+    (out / "verification.md").write_text("\n".join(lines) + "\n")
