@@ -80,7 +80,7 @@ def _reproduce(args) -> int:
     from dacph_drake.scenario import scenario_from_argument
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
-    summary = reproduce(scenario_from_argument(name), args.out)
+    summary = reproduce(scenario_from_argument(name), args.out, jobs=args.jobs)
     print(f"reproduced {name} in {time.perf_counter() - start:.0f} s -> {args.out}")
     _print_table(summary)
     if args.animate:
@@ -96,6 +96,58 @@ def _report(args) -> int:
 
 def _animate(args) -> int:
     print(_animate_run(args.run_dir, args.controller, args.out))
+    return 0
+
+
+def _verify(args) -> int:
+    """Verifies a run directory, or simulates the scenario's DAC loop into --out
+    first; exit status 1 when a check fails."""
+    from pathlib import Path
+    from dacph_drake.analysis.verify import verify_run
+    from dacph_drake.run import simulate
+    from dacph_drake.scenario import scenario_from_argument
+    target = Path(args.target)
+    if target.is_dir():
+        run_dir = target
+    else:
+        if not args.out:
+            raise ConfigError("--out is required when verifying a scenario (the DAC "
+                              "run is saved there)")
+        run_dir = Path(args.out)
+        simulate(scenario_from_argument(args.target), "dac", out_dir=run_dir,
+                 progress=True)
+    report = verify_run(run_dir)
+    for name, check in report["checks"].items():
+        detail = check.get("reason") or check.get("first_failure") or ""
+        print(f"  {name:22s} {'ok' if check['ok'] else 'FAILED'}  {detail}")
+    print(f"{'PASS' if report['ok'] else 'FAIL'}: report in {run_dir / 'verification.md'}")
+    return 0 if report["ok"] else 1
+
+
+def _sweep(args) -> int:
+    from dacph_drake.montecarlo.definition import load_sweep
+    from dacph_drake.montecarlo.executors import InProcessExecutor, dask_executor
+    from dacph_drake.montecarlo.runner import run_sweep
+    from dacph_drake.montecarlo.store import read_rows
+    from dacph_drake.montecarlo.summary import format_summary, write_summary
+    definition = load_sweep(args.sweep)
+    if args.workers is not None and args.workers < 0:
+        raise ConfigError(f"--workers = {args.workers}; allowed: >= 0 (0: in this process)")
+    if not args.report:
+        try:
+            if args.dask:
+                with dask_executor(args.dask, args.workers) as (executor, slots):
+                    run_sweep(definition, args.out, executor, slots, progress=True)
+            elif args.workers == 0:
+                run_sweep(definition, args.out, InProcessExecutor(), 1, progress=True)
+            else:
+                run_sweep(definition, args.out, slots=args.workers, progress=True)
+        except KeyboardInterrupt:
+            print(f"\ninterrupted: {len(read_rows(args.out))} trials saved in {args.out}; "
+                  "run the same command to resume", file=sys.stderr)
+            return 130
+    print(format_summary(write_summary(args.out, definition)), end="")
+    print(f"saved to {args.out}")
     return 0
 
 
@@ -132,6 +184,9 @@ def main(argv=None) -> int:
                      help="the short scenario (26 s) instead of the paper's")
     rep.add_argument("--animate", action="store_true",
                      help="also write an HTML animation of the DAC run")
+    rep.add_argument("--jobs", type=int, choices=[1, 2], default=1,
+                     help="2: run the two controllers in two processes (no progress "
+                          "bars)")
     rep.set_defaults(run=_reproduce)
     rpt = commands.add_parser("report", help="panels and metrics table of a directory "
                                              "holding a DAC and a model-based run")
@@ -143,6 +198,28 @@ def main(argv=None) -> int:
     ani.add_argument("--controller", choices=["dac", "model-based"], default="dac")
     ani.add_argument("--out", default=None, help="HTML file (default: in run_dir)")
     ani.set_defaults(run=_animate)
+    ver = commands.add_parser(
+        "verify", help="check the paper's Lyapunov claims on a DAC run (exit 1 on a "
+                       "failed check)")
+    ver.add_argument("target", help="a run directory (holding logs_dac.npz), or a "
+                                    "scenario YAML / built-in name to simulate first")
+    ver.add_argument("--out", default=None, help="where to save the run of a scenario")
+    ver.set_defaults(run=_verify)
+    swp = commands.add_parser(
+        "sweep", help="Monte Carlo sweep over uncertainty (resumes where it stopped)")
+    swp.add_argument("sweep", help="sweep YAML (e.g. sweeps/short_sweep.yaml)")
+    swp.add_argument("--out", required=True,
+                     help="output directory; run the same command again to resume")
+    swp.add_argument("--workers", type=int, default=None,
+                     help="local worker processes (default: one per core; 0: run in "
+                          "this process); with --dask local, the cluster's workers")
+    swp.add_argument("--dask", metavar="ADDRESS", default=None,
+                     help="run on the Dask cluster at ADDRESS (e.g. tcp://host:8786), "
+                          "or 'local' for a new LocalCluster")
+    swp.add_argument("--report", action="store_true",
+                     help="only write the summary, Parquet table and plots of the rows "
+                          "so far")
+    swp.set_defaults(run=_sweep)
     args = parser.parse_args(argv)
     try:
         return args.run(args)

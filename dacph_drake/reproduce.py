@@ -2,6 +2,8 @@
 panels of SPEC section 10, and the metrics table with the paper's values beside
 this project's (SPEC section 9)."""
 import json
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional
@@ -74,7 +76,7 @@ def format_value(value, unit: str) -> str:
     if value is None:
         return "not reported"
     if unit == "%":
-        return f"{100 * value:+.1f} %" if value < 0 else f"{100 * value:.1f} %"
+        return f"{100 * value:+.2f} %" if value < 0 else f"{100 * value:.2f} %"
     if unit == "samples":
         return f"{value:.0f}"
     return f"{value:.4g} {unit}"
@@ -117,12 +119,24 @@ def report(run_dir) -> Dict:
     return summary
 
 
-def reproduce(scenario: Scenario, out_dir, progress: bool = True) -> Dict:
+def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
+    return simulate(scenario, controller, out_dir=out).status
+
+
+def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1) -> Dict:
     """Runs both controllers on ``scenario`` into out_dir (logs, scenario.yaml,
-    run_*.json with versions and seed), then writes the panels and the table."""
+    run_*.json with versions and seed), then writes the panels and the table.
+    jobs = 2 runs the two controllers in two processes (no progress bars)."""
+    if jobs not in (1, 2):
+        raise ValueError(f"jobs = {jobs!r}; allowed: 1 or 2")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     save_scenario(scenario, out / "scenario.yaml")
-    for controller in CONTROLLERS:
-        simulate(scenario, controller, out_dir=out, progress=progress)
+    if jobs == 1:
+        for controller in CONTROLLERS:
+            simulate(scenario, controller, out_dir=out, progress=progress)
+    else:
+        with ProcessPoolExecutor(len(CONTROLLERS),
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
+            list(pool.map(_simulate_into, [scenario] * 2, CONTROLLERS, [out] * 2))
     return report(out)

@@ -11,6 +11,7 @@ from dacph_drake.analysis.lyapunov_envelope import check_lyapunov_envelope
 from dacph_drake.analysis.region_of_attraction import sliding_region_of_attraction
 from dacph_drake.analysis.rhs_loop import check_rhs_loop, rhs_loop_system
 from dacph_drake.analysis.verify import verify_logs, verify_run
+from dacph_drake.cli import main
 from dacph_drake.plant import MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.robot import RobotParams
@@ -100,6 +101,7 @@ def test_region_of_attraction_is_a_real_certificate():
 def test_short_scenario_passes_every_check(quick_reproduction, tmp_path):
     _, run_dir = quick_reproduction
     report = verify_run(run_dir, tmp_path)
+    assert main(["verify", str(run_dir)]) == 0
     failed = {k: v for k, v in report["checks"].items() if not v["ok"]}
     assert report["ok"], failed
     assert report["checks"]["rhs_loop_learned"]["evaluated"] > 100
@@ -108,13 +110,13 @@ def test_short_scenario_passes_every_check(quick_reproduction, tmp_path):
         assert (tmp_path / name).stat().st_size > 500
 
 
-def _stress_run(scale, trust_ratio):
+def _stress_run(scale, trust_ratio, out_dir=None):
     scenario = short_scenario()
     scenario.phases = Phases(warmup=0.5, linear=1.0, nonlinear=0.5, disturbance=0.5)
     scenario.stress = Stress(B_hat_scale=scale, start=1.0)
     scenario.rhs.trust_ratio = trust_ratio
     scenario.periods.log = 1e-3
-    result = simulate(scenario, "dac")
+    result = simulate(scenario, "dac", out_dir=out_dir)
     meta = {"status": result.status, "reason": result.reason,
             "final_time": result.final_time}
     return result, verify_logs(result.logs, scenario, meta)
@@ -127,16 +129,18 @@ def test_stress_within_the_bound_stays_stable_and_verified():
     assert result.status == "ok" and report["ok"], report["checks"]
 
 
-def test_stress_beyond_the_bound_is_flagged_before_it_diverges():
+def test_stress_beyond_the_bound_is_flagged_before_it_diverges(tmp_path):
     """B_hat off by 0.15 with the trust band opened (trust_ratio 10): the loop with
     the true B~ has gain h c / 0.15 > 1. The truth-loop check flags it before the
     divergence monitor stops the run; with the default band the integrator rejects
     the estimate instead and the run stays stable."""
-    result, report = _stress_run(0.15, 10.0)
+    result, report = _stress_run(0.15, 10.0, tmp_path)
     truth = report["checks"]["rhs_loop_truth"]
     assert result.status == "diverged" and not report["ok"]
     assert 1.0 <= truth["first_failure_time"] < result.final_time
     assert "spectral radius" in truth["first_failure"]
+    assert main(["verify", str(tmp_path)]) == 1          # usable in a user's CI
+    assert (tmp_path / "verification.md").read_text().startswith("# Verification: FAIL")
     guarded, guarded_report = _stress_run(0.15, 2.0)
     assert guarded.status == "ok" and guarded_report["ok"]
     rejected = guarded_report["estimates_rejected_by_the_integrator"]

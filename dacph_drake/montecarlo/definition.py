@@ -1,0 +1,337 @@
+"""The sweep file: a base scenario, the distributions to sample (Drake's own schema
+types, ``pydrake.common.schema``), the number of trials, the controllers run on each
+sample; and the sampling of one trial from (sweep seed, trial id) only.
+
+Every sampled setting is optional (absent: the base scenario's value). A setting
+named ``*_scale`` multiplies the base scenario's value; ``q0`` and ``learner_seed``
+replace it. Per-link and per-joint settings take a vector distribution
+(``!UniformVector {min: [..], max: [..]}``, ``!GaussianVector``,
+``!DeterministicVector``, a plain list) with one entry per link, or a scalar
+distribution (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``, ``!Deterministic``)
+drawn independently for each link. The controllers keep the nominal robot
+(``nominal_robot``): only the ground truth is perturbed.
+
+A sample is not checked against the robot's physical bounds here: a trial whose
+sampled scenario fails ``Scenario.Validate()`` (e.g. ``link_inertia_scale`` beyond
+the rod bound, a negative mass from a Gaussian) is recorded as failed with the
+ConfigError's message, which is also the documented way to make a trial fail.
+"""
+import copy
+import hashlib
+from dataclasses import dataclass, field, fields, is_dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Union
+
+import numpy as np
+from pydrake.common import RandomGenerator, schema
+from pydrake.common.yaml import yaml_dump_typed, yaml_load
+
+from dacph_drake.diagrams import BUILDERS
+from dacph_drake.errors import ConfigError, require_in_range
+from dacph_drake.robot import load_yaml_dataclass
+from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario, load_scenario
+
+CONTROLLERS = tuple(BUILDERS)            # "dac", "model-based"
+
+# The YAML tags of Drake's distributions, and DistributionVariant and
+# DistributionVectorVariantX as Python unions (plus a scalar distribution drawn per
+# entry in the vector case).
+SCALAR_TAGS = {"Deterministic": schema.Deterministic, "Gaussian": schema.Gaussian,
+               "Uniform": schema.Uniform, "UniformDiscrete": schema.UniformDiscrete}
+VECTOR_TAGS = {"DeterministicVector": schema.DeterministicVectorX,
+               "GaussianVector": schema.GaussianVectorX,
+               "UniformVector": schema.UniformVectorX}
+ScalarDistribution = Union[(float, *SCALAR_TAGS.values())]
+VectorDistribution = Union[(List[float], *VECTOR_TAGS.values(), float,
+                            *SCALAR_TAGS.values())]
+
+
+@dataclass
+class Distributions:
+    """What each trial samples; None keeps the base scenario's value."""
+    # Ground-truth robot (the controllers keep nominal_robot), one factor per link:
+    link_mass_scale: Optional[VectorDistribution] = None     # mass and inertia
+    link_length_scale: Optional[VectorDistribution] = None   # length, com, width by f,
+    #                                                          inertia by f^2
+    link_inertia_scale: Optional[VectorDistribution] = None  # inertia only
+    base_mass_scale: Optional[ScalarDistribution] = None     # base mass and inertia
+    base_inertia_scale: Optional[ScalarDistribution] = None  # base inertia only
+    # Ground-truth RHS:
+    delta_B_scale: Optional[ScalarDistribution] = None  # B_linear, B_quadratic, B_q1_squared
+    delta_D_scale: Optional[ScalarDistribution] = None  # D_offset, D_linear, D_quadratic
+    disturbance_scale: Optional[ScalarDistribution] = None     # d(t) amplitude
+    disturbance_frequency_scale: Optional[ScalarDistribution] = None  # all of d's
+    #                                                                  frequencies
+    q0: Optional[VectorDistribution] = None             # initial joint angles [rad]
+    learner_seed: Optional[ScalarDistribution] = None   # integers; None: the trial's
+    #                                                     own seed (see trial_seed)
+
+
+@dataclass
+class Sweep:
+    scenario: str = "short"     # built-in name (paper, short) or YAML path, relative
+    #                             to the sweep file
+    trials: int = 10
+    seed: int = 0
+    controllers: List[str] = field(default_factory=lambda: list(CONTROLLERS))
+    distributions: Distributions = field(default_factory=Distributions)
+    save_logs: bool = False     # also write each run's logs under OUT/logs/
+
+
+@dataclass
+class SweepDefinition:
+    """A loaded, validated sweep with its base scenario."""
+    sweep: Sweep
+    scenario: Scenario          # the base scenario
+    source: Path                # the sweep file
+    text: str                   # the sweep file as written
+
+    def fingerprint(self) -> str:
+        """sha256 of the normalized sweep and base scenario: two definitions with the
+        same fingerprint sample and run the same trials."""
+        canonical = yaml_dump_typed(self.sweep) + "\n---\n" + yaml_dump_typed(self.scenario)
+        return hashlib.sha256(canonical.encode()).hexdigest()
+
+
+@dataclass
+class TrialSample:
+    trial: int
+    seed: int
+    scenario: Scenario               # the base scenario with the sample applied
+    sampled: Dict[str, object]       # setting -> float, list of floats, or int
+
+
+def load_sweep(path) -> SweepDefinition:
+    """Loads and validates a sweep file; every error names the setting and what is
+    allowed."""
+    path = Path(path)
+    try:
+        raw = yaml_load(filename=str(path))
+    except (OSError, RuntimeError, ValueError) as e:
+        raise ConfigError(f"{path}: {e}") from e
+    _check_keys(raw, Sweep, f"{path}: ")
+    _check_distribution_keys((raw or {}).get("distributions") or {}, f"{path}: ")
+    sweep = load_yaml_dataclass(path, Sweep)
+    require_in_range("trials", sweep.trials, 1, 10**6)
+    require_in_range("seed", sweep.seed, 0, 2**32 - 1)
+    if not sweep.controllers:
+        raise ConfigError(f"controllers is empty; allowed: one or more of "
+                          f"{', '.join(CONTROLLERS)}")
+    for name in sweep.controllers:
+        if name not in CONTROLLERS:
+            raise ConfigError(f"controllers: {name!r} is unknown; allowed: "
+                              f"{', '.join(CONTROLLERS)}")
+    if len(set(sweep.controllers)) != len(sweep.controllers):
+        raise ConfigError(f"controllers = {sweep.controllers} names one twice; allowed: "
+                          "each at most once")
+    scenario = _base_scenario(sweep.scenario, path.parent)
+    _check_distributions(sweep.distributions, scenario.robot.num_links)
+    return SweepDefinition(sweep=sweep, scenario=scenario, source=path,
+                           text=path.read_text())
+
+
+def _base_scenario(name: str, folder: Path) -> Scenario:
+    if name in BUILT_IN_SCENARIOS:
+        return BUILT_IN_SCENARIOS[name]()
+    path = folder / name
+    if not path.is_file():
+        raise ConfigError(f"scenario = {name!r} is neither a built-in scenario nor a file "
+                          f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)} "
+                          "or a scenario YAML path relative to the sweep file")
+    return load_scenario(path)
+
+
+def _check_keys(data, schema_type, where: str) -> None:
+    """Unknown keys, named with the allowed ones (yaml_load_typed only names the
+    unknown key)."""
+    if not isinstance(data, dict):
+        return
+    allowed = {f.name: f.type for f in fields(schema_type)}
+    for key, value in data.items():
+        if key == "_tag":
+            continue
+        if key not in allowed:
+            raise ConfigError(f"{where}unknown key {key!r}; allowed: {', '.join(allowed)}")
+        if is_dataclass(allowed[key]):
+            _check_keys(value, allowed[key], f"{where}{key}.")
+
+
+def _check_distribution_keys(raw: dict, where: str) -> None:
+    """Each distribution's tag and keys, named with the allowed ones."""
+    per_link = {f.name for f in fields(Distributions) if _is_per_link(f)}
+    for name, value in raw.items():
+        if not isinstance(value, dict):
+            continue
+        tags = {**SCALAR_TAGS, **VECTOR_TAGS} if name in per_link else SCALAR_TAGS
+        tag = value.get("_tag", "!")[1:]
+        if tag not in tags:
+            raise ConfigError(f"{where}distributions.{name}: !{tag} is not a distribution "
+                              f"here; allowed: {', '.join('!' + t for t in tags)}")
+        allowed = [f.name for f in tags[tag].__fields__]
+        for key in value:
+            if key != "_tag" and key not in allowed:
+                raise ConfigError(f"{where}distributions.{name}: unknown key {key!r} of "
+                                  f"!{tag}; allowed: {', '.join(allowed)}")
+
+
+def _check_distributions(d: Distributions, num_links: int) -> None:
+    for f in fields(Distributions):
+        value = getattr(d, f.name)
+        if value is None:
+            continue
+        name = f"distributions.{f.name}"
+        if _is_per_link(f):
+            _check_vector(name, value, num_links)
+        else:
+            _check_scalar(name, value)
+    if d.learner_seed is not None:
+        _check_seed_values(d.learner_seed)
+
+
+def _is_per_link(setting) -> bool:
+    """Whether a Distributions field takes one value per link (or joint)."""
+    return setting.type == Optional[VectorDistribution]
+
+
+def _check_scalar(name: str, value) -> None:
+    if isinstance(value, schema.Gaussian) and not value.stddev >= 0:
+        raise ConfigError(f"{name}: !Gaussian stddev = {value.stddev}; allowed: >= 0")
+    if isinstance(value, schema.Uniform) and not value.min <= value.max:
+        raise ConfigError(f"{name}: !Uniform min = {value.min} > max = {value.max}; "
+                          "allowed: min <= max")
+    if isinstance(value, schema.UniformDiscrete) and len(value.values) == 0:
+        raise ConfigError(f"{name}: !UniformDiscrete values is empty; allowed: one or "
+                          "more values")
+    for number in _numbers_of(value):
+        if not np.isfinite(number):
+            raise ConfigError(f"{name} = {number}; allowed: finite numbers")
+
+
+def _check_vector(name: str, value, n: int) -> None:
+    if isinstance(value, list):
+        sizes = {"entries": len(value)}
+    elif isinstance(value, schema.DeterministicVectorX):
+        sizes = {"value": len(value.value)}
+    elif isinstance(value, schema.GaussianVectorX):
+        sizes = {"mean": len(value.mean)}
+        if len(value.stddev) not in (1, n):
+            raise ConfigError(f"{name}: !GaussianVector stddev has {len(value.stddev)} "
+                              f"entries; allowed: 1 or {n} (one per link)")
+        if not np.all(np.asarray(value.stddev) >= 0):
+            raise ConfigError(f"{name}: !GaussianVector stddev = {list(value.stddev)}; "
+                              "allowed: >= 0")
+    elif isinstance(value, schema.UniformVectorX):
+        sizes = {"min": len(value.min), "max": len(value.max)}
+        if sizes["min"] == sizes["max"] and not np.all(value.min <= value.max):
+            raise ConfigError(f"{name}: !UniformVector min = {list(value.min)} exceeds "
+                              f"max = {list(value.max)}; allowed: min <= max entrywise")
+    else:
+        _check_scalar(name, value)
+        return
+    for part, size in sizes.items():
+        if size != n:
+            raise ConfigError(f"{name}: {part} has {size} entries; allowed: {n} "
+                              "(one per link)")
+    for number in _numbers_of(value):
+        if not np.isfinite(number):
+            raise ConfigError(f"{name} = {number}; allowed: finite numbers")
+
+
+def _check_seed_values(value) -> None:
+    if isinstance(value, (schema.Gaussian, schema.Uniform)):
+        raise ConfigError("distributions.learner_seed: a continuous distribution; "
+                          "allowed: an integer, !Deterministic or !UniformDiscrete of "
+                          "integers >= 0")
+    for number in _numbers_of(value):
+        if not (number >= 0 and float(number).is_integer()):
+            raise ConfigError(f"distributions.learner_seed = {number}; allowed: "
+                              "integers >= 0")
+
+
+def _numbers_of(value) -> List[float]:
+    """The numbers written in a distribution's fields."""
+    if isinstance(value, (int, float)):
+        return [float(value)]
+    if isinstance(value, list):
+        return [float(v) for v in value]
+    numbers = []
+    for f in type(value).__fields__:
+        numbers.extend(np.atleast_1d(np.asarray(getattr(value, f.name), float)).tolist())
+    return numbers
+
+
+def trial_seed(sweep_seed: int, trial: int) -> int:
+    """The seed of one trial, derived from (sweep seed, trial id) only (numpy's
+    SeedSequence): the sample and, unless learner_seed is sampled, the learner's
+    initialization and the observer's noise."""
+    return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0])
+
+
+def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
+    """The trial's scenario: the base scenario with every distribution sampled, in
+    the order of the Distributions fields, from a generator seeded by trial_seed."""
+    seed = trial_seed(definition.sweep.seed, trial)
+    generator = RandomGenerator(seed)
+    d = definition.sweep.distributions
+    n = definition.scenario.robot.num_links
+    sampled: Dict[str, object] = {}
+    for f in fields(Distributions):
+        value = getattr(d, f.name)
+        if value is None:
+            continue
+        if _is_per_link(f):
+            sampled[f.name] = _sample_vector(value, n, generator)
+        else:
+            sampled[f.name] = float(schema.ToDistribution(value).Sample(generator))
+    if "learner_seed" in sampled:
+        sampled["learner_seed"] = int(sampled["learner_seed"])
+    scenario = apply_sample(definition.scenario, sampled, seed)
+    return TrialSample(trial=trial, seed=seed, scenario=scenario, sampled=sampled)
+
+
+def _sample_vector(value, n: int, generator: RandomGenerator) -> List[float]:
+    if isinstance(value, list):
+        return [float(v) for v in value]
+    if isinstance(value, (schema.DeterministicVectorX, schema.GaussianVectorX,
+                          schema.UniformVectorX)):
+        return [float(v) for v in schema.ToDistributionVector(value).Sample(generator)]
+    distribution = schema.ToDistribution(value)
+    return [float(distribution.Sample(generator)) for _ in range(n)]
+
+
+def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scenario:
+    """A copy of ``base`` with the sampled settings applied (see the module's
+    docstring for what each one changes); scenario.seed = learner_seed if sampled,
+    else ``seed``."""
+    s = copy.deepcopy(base)
+    links = s.robot.links
+    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
+        link.mass *= f
+        link.inertia *= f
+    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
+        link.length *= f
+        link.com *= f
+        link.width *= f
+        link.inertia *= f * f
+    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
+        link.inertia *= f
+    f = sampled.get("base_mass_scale", 1.0)
+    s.robot.base.mass *= f
+    s.robot.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
+    u = s.uncertainty
+    fB, fD = sampled.get("delta_B_scale", 1.0), sampled.get("delta_D_scale", 1.0)
+    u.B_linear = [[fB * v for v in row] for row in u.B_linear]
+    u.B_q1_squared = [[fB * v for v in row] for row in u.B_q1_squared]
+    u.B_quadratic = [fB * v for v in u.B_quadratic]
+    u.D_offset = [fD * v for v in u.D_offset]
+    u.D_linear = [fD * v for v in u.D_linear]
+    u.D_quadratic = [fD * v for v in u.D_quadratic]
+    dist = s.disturbance
+    dist.scale *= sampled.get("disturbance_scale", 1.0)
+    f = sampled.get("disturbance_frequency_scale", 1.0)
+    dist.lf_frequency = [f * v for v in dist.lf_frequency]
+    dist.hf_frequency *= f
+    if "q0" in sampled:
+        s.q0 = list(sampled["q0"])
+    s.seed = sampled.get("learner_seed", seed)
+    return s

@@ -1,0 +1,159 @@
+"""Running a sweep: sample the trials not yet in the output directory, hand them to
+an executor (at most one per worker slot in flight), persist each row as it
+arrives, show progress with an ETA."""
+import sys
+import time
+from concurrent.futures import FIRST_COMPLETED, Executor, wait
+from concurrent.futures.process import BrokenProcessPool
+from typing import Dict, Iterator, List, Optional
+
+from dacph_drake.montecarlo.definition import SweepDefinition, sample_trial
+from dacph_drake.montecarlo.executors import (default_workers, local_process_pool,
+                                              stop_local_pool)
+from dacph_drake.montecarlo.store import RowStore, sorted_rows
+from dacph_drake.montecarlo.trial import Trial, failed_row, run_trial
+
+
+def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor] = None,
+              slots: Optional[int] = None, progress: bool = False) -> List[Dict]:
+    """Runs the trials of ``definition`` missing from ``out_dir`` and returns all its
+    rows, by trial id.
+
+    executor: any concurrent.futures.Executor, with ``slots`` trials kept in flight
+    (default: one per core). None: a local process pool of ``slots`` workers (default:
+    one per core); if one of its workers dies, the trials it may have been running
+    are run again one at a time in a fresh process, and a trial that kills that one
+    too is recorded as failed. A Dask KilledWorker is recorded the same way. A
+    trial's row is the same whichever executor, worker count or order ran it
+    (except its wall times)."""
+    from dacph_drake.run import versions
+    slots = slots or default_workers()
+    label = (f"{type(executor).__name__}, {slots} slots" if executor
+             else f"local process pool, {slots} workers")
+    store = RowStore(out_dir, definition, versions(), label)
+    try:
+        pending = [t for t in range(definition.sweep.trials) if t not in store.rows]
+        bar = _Progress(definition.sweep.trials, len(store.rows), progress)
+        tasks = (_task(definition, t, store.out) for t in pending)
+
+        def record(row: Dict) -> None:
+            store.append(row)
+            bar.update(row)
+
+        if executor is not None:
+            _dispatch(executor, tasks, slots, record, recover=False)
+        else:
+            _run_on_local_pools(tasks, slots, record)
+        return sorted_rows(store.rows)
+    finally:
+        store.close()
+
+
+def _task(definition: SweepDefinition, trial: int, out) -> Trial:
+    sample = sample_trial(definition, trial)
+    return Trial(trial=trial, seed=sample.seed, scenario=sample.scenario,
+                 sampled=sample.sampled, controllers=list(definition.sweep.controllers),
+                 log_dir=str(out / "logs") if definition.sweep.save_logs else None)
+
+
+def _run_on_local_pools(tasks: Iterator[Trial], workers: int, record) -> None:
+    while True:
+        pool = local_process_pool(workers)
+        try:
+            suspects = _dispatch(pool, tasks, workers, record, recover=True)
+        except BaseException:       # an interruption: do not wait for running trials
+            stop_local_pool(pool)
+            raise
+        pool.shutdown(wait=False, cancel_futures=True)
+        if not suspects:
+            return
+        print(f"\na worker process died: trials {[t.trial for t in suspects]} run again, "
+              "each alone in a new process", file=sys.stderr)
+        for task in suspects:
+            record(_run_alone(task))
+
+
+def _run_alone(task: Trial) -> Dict:
+    """A trial that was running when a worker died, in a process of its own."""
+    pool = local_process_pool(1)
+    try:
+        row = pool.submit(run_trial, task).result()
+    except BrokenProcessPool:
+        row = failed_row(task, "the worker process died while running this trial, also "
+                               "when run alone")
+    except BaseException:
+        stop_local_pool(pool)
+        raise
+    pool.shutdown(wait=False)
+    return row
+
+
+def _dispatch(executor: Executor, tasks: Iterator[Trial], slots: int, record,
+              recover: bool) -> List[Trial]:
+    """Keeps ``slots`` tasks in flight and records each row as it arrives. Returns
+    [] when the tasks are done, or, with ``recover``, the tasks in flight when the
+    process pool broke (the rest stay in ``tasks``)."""
+    in_flight = {}
+    while True:
+        while len(in_flight) < slots:
+            task = next(tasks, None)
+            if task is None:
+                break
+            in_flight[executor.submit(run_trial, task)] = task
+        if not in_flight:
+            return []
+        done, _ = wait(in_flight, return_when=FIRST_COMPLETED)
+        for future in done:
+            task = in_flight.pop(future)
+            try:
+                record(future.result())
+            except BrokenProcessPool:
+                if not recover:
+                    raise
+                in_flight[future] = task
+                return _salvage(in_flight, record)
+            except Exception as e:
+                if type(e).__name__ != "KilledWorker":      # Dask gave up on the trial
+                    raise
+                record(failed_row(task, f"KilledWorker: {e}"))
+
+
+def _salvage(in_flight: Dict, record) -> List[Trial]:
+    """Records the rows of a broken pool's finished futures; returns the other
+    tasks."""
+    suspects = []
+    for future, task in in_flight.items():
+        if future.done() and future.exception() is None:
+            record(future.result())
+        else:
+            suspects.append(task)
+    return suspects
+
+
+class _Progress:
+    """One stderr line: bar, trials done / total, failed, elapsed, ETA (from this
+    session's rate)."""
+
+    def __init__(self, total: int, done: int, enabled: bool):
+        self._total, self._done, self._enabled = total, done, enabled
+        self._start_done, self._failed = done, 0
+        self._start = time.perf_counter()
+        if enabled and done:
+            sys.stderr.write(f"resuming: {done} of {total} trials already done\n")
+
+    def update(self, row: Dict) -> None:
+        self._done += 1
+        self._failed += row["status"] != "ok"
+        if not self._enabled:
+            return
+        elapsed = time.perf_counter() - self._start
+        rate = (self._done - self._start_done) / elapsed
+        eta = (self._total - self._done) / rate
+        width = 30
+        filled = int(width * self._done / self._total)
+        sys.stderr.write(f"\rsweep [{'#' * filled}{'.' * (width - filled)}] "
+                         f"{self._done}/{self._total} trials, {self._failed} failed, "
+                         f"{elapsed:6.0f} s elapsed, ETA {eta:6.0f} s")
+        if self._done == self._total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()

@@ -1,0 +1,131 @@
+"""A sweep's output directory, which is also its resume state:
+
+    rows.jsonl     one JSON row per finished trial, appended, flushed and fsync'ed by
+                   the parent process as each trial finishes (workers never write it)
+    sweep.yaml     the sweep file as written
+    scenario.yaml  its base scenario
+    manifest.json  the definition's fingerprint and, per session, the start time,
+                   the executor and the package versions
+
+A kill -9 can leave a truncated last line: it is dropped when the directory is
+opened again, so that trial runs again. An exclusive lock on rows.jsonl keeps a
+second sweep from writing to the same directory at the same time.
+"""
+import fcntl
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Dict, List
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.montecarlo.definition import SweepDefinition
+from dacph_drake.scenario import save_scenario
+
+ROWS, MANIFEST = "rows.jsonl", "manifest.json"
+
+
+def read_rows(out_dir) -> Dict[int, Dict]:
+    """trial id -> row of every complete line of OUT/rows.jsonl (a truncated last
+    line, left by a kill during a write, is ignored)."""
+    rows, _ = _parse_rows(Path(out_dir) / ROWS)
+    return rows
+
+
+def _parse_rows(path: Path):
+    """(rows, number of bytes of complete lines)."""
+    data = path.read_bytes() if path.exists() else b""
+    complete = data.rfind(b"\n") + 1
+    rows: Dict[int, Dict] = {}
+    for number, line in enumerate(data[:complete].splitlines(), start=1):
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError as e:
+            raise ConfigError(f"{path}: line {number} is not a JSON row ({e}); allowed: "
+                              "one row per line (only the last line may be cut short)")
+        if row["trial"] in rows:
+            raise ConfigError(f"{path}: trial {row['trial']} appears twice (line "
+                              f"{number}); allowed: one row per trial")
+        rows[row["trial"]] = row
+    return rows, complete
+
+
+def read_manifest(out_dir, definition: SweepDefinition) -> Dict:
+    """OUT/manifest.json, after checking that ``definition`` created OUT."""
+    path = Path(out_dir) / MANIFEST
+    if not path.exists():
+        raise ConfigError(f"{out_dir} holds no sweep ({MANIFEST} is missing); allowed: a "
+                          "sweep's output directory")
+    manifest = json.loads(path.read_text())
+    if manifest["fingerprint"] != definition.fingerprint():
+        raise ConfigError(
+            f"{out_dir} holds a different sweep (its sweep.yaml and scenario.yaml differ "
+            f"from {definition.source} and its scenario); allowed: the sweep that created "
+            "it, or a new output directory")
+    return manifest
+
+
+class RowStore:
+    """Opens (creating or resuming) a sweep's output directory for one session."""
+
+    def __init__(self, out_dir, definition: SweepDefinition, versions: Dict[str, str],
+                 executor: str):
+        self.out = Path(out_dir)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self._fd = os.open(self.out / ROWS, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
+        try:
+            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(self._fd)
+            raise ConfigError(f"{self.out} is in use by another running sweep; allowed: "
+                              "one sweep per output directory at a time")
+        try:
+            self._open_manifest(definition, versions, executor)
+            self.rows, complete = _parse_rows(self.out / ROWS)
+        except BaseException:
+            self.close()
+            raise
+        os.ftruncate(self._fd, complete)     # drop a truncated last line
+
+    def _open_manifest(self, definition: SweepDefinition, versions, executor) -> None:
+        path = self.out / MANIFEST
+        session = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "executor": executor,
+                   "versions": versions}
+        if path.exists():
+            manifest = read_manifest(self.out, definition)
+            first = manifest["sessions"][0]["versions"]
+            if first != versions:
+                print(f"warning: {self.out} was started with {first}, this session has "
+                      f"{versions}: rows of the two may differ", file=sys.stderr)
+            manifest["sessions"].append(session)
+        elif os.path.getsize(self.out / ROWS) > 0:
+            raise ConfigError(f"{self.out} has rows.jsonl but no {MANIFEST}; allowed: a "
+                              "sweep's output directory or a new one")
+        else:
+            (self.out / "sweep.yaml").write_text(definition.text)
+            save_scenario(definition.scenario, self.out / "scenario.yaml")
+            manifest = {"fingerprint": definition.fingerprint(),
+                        "sweep_file": str(definition.source), "sessions": [session]}
+        _write_atomically(path, json.dumps(manifest, indent=2))
+
+    def append(self, row: Dict) -> None:
+        """Persists one finished trial's row before returning."""
+        os.write(self._fd, (json.dumps(row, sort_keys=True) + "\n").encode())
+        os.fsync(self._fd)
+        self.rows[row["trial"]] = row
+
+    def close(self) -> None:
+        if self._fd >= 0:
+            os.close(self._fd)      # also releases the lock
+            self._fd = -1
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    temporary = path.with_suffix(path.suffix + ".tmp")
+    temporary.write_text(text)
+    os.replace(temporary, path)
+
+
+def sorted_rows(rows: Dict[int, Dict]) -> List[Dict]:
+    return [rows[t] for t in sorted(rows)]

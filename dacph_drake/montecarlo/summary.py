@@ -1,0 +1,191 @@
+"""What a sweep's rows say: quantiles of each metric per controller, success rates,
+the paired DAC-vs-baseline improvement with a bootstrap confidence interval; the
+rows as one flat table (Parquet); plots of the distributions and of a metric against
+each sampled parameter."""
+import json
+from pathlib import Path
+from typing import Dict, List
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from dacph_drake.metrics import comparison  # noqa: E402
+from dacph_drake.montecarlo.definition import SweepDefinition  # noqa: E402
+from dacph_drake.montecarlo.store import read_manifest, read_rows, sorted_rows  # noqa: E402
+
+QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+BOOTSTRAP_RESAMPLES = 2000
+PLOTTED_METRICS = ("tracking_error_rms", "tracking_error_rms_phase3", "control_effort_rms",
+                   "e_tau_rms", "sliding_rms", "min_clearance")
+SENSITIVITY_METRIC = "tracking_error_rms"
+
+
+def flat_row(row: Dict) -> Dict:
+    """A row as one level of columns: trial, seed, status, reason, wall_time,
+    sampled.NAME (per-link settings: sampled.NAME[k]), CONTROLLER.status,
+    CONTROLLER.reason, CONTROLLER.final_time, CONTROLLER.wall_time,
+    CONTROLLER.METRIC."""
+    out = {k: row[k] for k in ("trial", "seed", "status", "reason", "wall_time")}
+    for name, value in row["sampled"].items():
+        if isinstance(value, list):
+            out.update({f"sampled.{name}[{k}]": v for k, v in enumerate(value)})
+        else:
+            out[f"sampled.{name}"] = value
+    for controller, run in row["runs"].items():
+        for key in ("status", "reason", "final_time", "wall_time"):
+            out[f"{controller}.{key}"] = run[key]
+        for metric, value in (run["metrics"] or {}).items():
+            out[f"{controller}.{metric}"] = value
+    return out
+
+
+def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
+    """Success rates (a controller's: the fraction of finished trials in which it ran
+    to the end), quantiles of each metric over its successful runs, and, when DAC and
+    the model-based baseline both run, the paired comparison (metrics.comparison) on
+    the trials where both succeeded: mean, median and a 95 % percentile-bootstrap
+    interval of the mean (resampling seeded with the sweep's seed)."""
+    summary = {"trials": len(rows), "succeeded": sum(r["status"] == "ok" for r in rows),
+               "controllers": {}, "paired": {},
+               "failures": [{"trial": r["trial"], "reason": r["reason"]}
+                            for r in rows if r["status"] != "ok"]}
+    summary["success_rate"] = summary["succeeded"] / max(len(rows), 1)
+    for controller in controllers:
+        ok = [r["runs"][controller]["metrics"] for r in rows
+              if r["runs"].get(controller, {}).get("status") == "ok"]
+        names = list(dict.fromkeys(k for metrics in ok for k in metrics))
+        summary["controllers"][controller] = {
+            "succeeded": len(ok), "success_rate": len(ok) / max(len(rows), 1),
+            "metrics": {name: _quantiles([m[name] for m in ok]) for name in names}}
+    if {"dac", "model-based"} <= set(controllers):
+        pairs = [comparison(r["runs"]["dac"]["metrics"], r["runs"]["model-based"]["metrics"])
+                 for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
+                 and r["runs"].get("model-based", {}).get("status") == "ok"]
+        rng = np.random.default_rng(seed)
+        for name in (pairs[0] if pairs else {}):
+            summary["paired"][name] = _mean_interval([p[name] for p in pairs], rng)
+    return summary
+
+
+def _quantiles(values) -> Dict:
+    values = np.asarray(values, float)
+    return {"n": int(values.size),
+            **{f"q{round(100 * q):02d}": float(np.quantile(values, q)) for q in QUANTILES}}
+
+
+def _mean_interval(values, rng) -> Dict:
+    """Mean, median and the 95 % percentile-bootstrap interval of the mean (None
+    below two values)."""
+    values = np.asarray(values, float)
+    interval = None
+    if values.size >= 2:
+        means = rng.choice(values, (BOOTSTRAP_RESAMPLES, values.size)).mean(axis=1)
+        interval = [float(np.quantile(means, 0.025)), float(np.quantile(means, 0.975))]
+    return {"n": int(values.size), "mean": float(values.mean()),
+            "median": float(np.median(values)), "ci95": interval}
+
+
+def format_summary(summary: Dict) -> str:
+    """The summary as Markdown tables."""
+    lines = [f"trials: {summary['trials']}, succeeded: {summary['succeeded']} "
+             f"({100 * summary['success_rate']:.1f} %)"]
+    lines += [f"{c}: ran to the end in {s['succeeded']} trials "
+              f"({100 * s['success_rate']:.1f} %)"
+              for c, s in summary["controllers"].items()]
+    lines += ["", "| controller | metric | n | 5 % | 25 % | median | 75 % | 95 % |",
+              "|---|---|---|---|---|---|---|---|"]
+    for controller, s in summary["controllers"].items():
+        for name, q in s["metrics"].items():
+            cells = " | ".join(f"{q[f'q{round(100 * p):02d}']:.4g}" for p in QUANTILES)
+            lines.append(f"| {controller} | {name} | {q['n']} | {cells} |")
+    if summary["paired"]:
+        lines += ["", "| DAC vs model-based, paired | n | mean | 95 % CI of the mean | "
+                      "median |", "|---|---|---|---|---|"]
+        for name, p in summary["paired"].items():
+            ci = (f"[{100 * p['ci95'][0]:.2f} %, {100 * p['ci95'][1]:.2f} %]"
+                  if p["ci95"] else "-")
+            lines.append(f"| {name} | {p['n']} | {100 * p['mean']:.2f} % | {ci} | "
+                         f"{100 * p['median']:.2f} % |")
+    for failure in summary["failures"]:
+        lines.append(f"failed trial {failure['trial']}: {failure['reason']}")
+    return "\n".join(lines) + "\n"
+
+
+def write_summary(out_dir, definition: SweepDefinition) -> Dict:
+    """From OUT/rows.jsonl: summary.json, summary.md, rows.parquet (with pyarrow)
+    and figures/. Returns the summary, with "parquet" saying where the table went."""
+    out = Path(out_dir)
+    read_manifest(out, definition)
+    rows = sorted_rows(read_rows(out))
+    summary = summarize(rows, definition.sweep.controllers, definition.sweep.seed)
+    flat = [flat_row(r) for r in rows]
+    summary["parquet"] = write_parquet(flat, out / "rows.parquet")
+    summary["figures"] = [str(p.relative_to(out)) for p in
+                          plot_sweep(flat, definition.sweep.controllers, out / "figures")]
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out / "summary.md").write_text(format_summary(summary))
+    return summary
+
+
+def write_parquet(flat: List[Dict], path: Path) -> str:
+    try:
+        import pyarrow
+        import pyarrow.parquet
+    except ImportError:
+        return ("not written: pyarrow is not installed (pip install "
+                "'dacph-drake[parquet]'); the rows are in rows.jsonl")
+    pyarrow.parquet.write_table(pyarrow.Table.from_pylist(flat), path)
+    return str(path.name)
+
+
+def plot_sweep(flat: List[Dict], controllers: List[str], folder: Path) -> List[Path]:
+    """distributions.png: each plotted metric per controller (successful runs);
+    sensitivity.png: SENSITIVITY_METRIC against each sampled parameter, failed
+    trials marked on the axis."""
+    folder.mkdir(parents=True, exist_ok=True)
+    metrics = [m for m in PLOTTED_METRICS if any(f"{c}.{m}" in r for r in flat
+                                                 for c in controllers)]
+    paths = []
+    if metrics:
+        fig, axes = plt.subplots(1, len(metrics), figsize=(3.2 * len(metrics), 3.6),
+                                 squeeze=False)
+        for ax, metric in zip(axes[0], metrics):
+            data = [[r[f"{c}.{metric}"] for r in flat if f"{c}.{metric}" in r]
+                    for c in controllers]
+            ax.boxplot([d if d else [np.nan] for d in data], tick_labels=controllers)
+            values = [v for d in data for v in d]
+            if values and min(values) > 0 and max(values) > 10 * min(values):
+                ax.set_yscale("log")
+            ax.set_title(metric, fontsize=9)
+        fig.tight_layout()
+        paths.append(folder / "distributions.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    parameters = list(dict.fromkeys(k for r in flat for k in r if k.startswith("sampled.")))
+    if parameters:
+        columns = min(4, len(parameters))
+        rows = -(-len(parameters) // columns)
+        fig, axes = plt.subplots(rows, columns, figsize=(3.4 * columns, 3.0 * rows),
+                                 squeeze=False)
+        for ax, parameter in zip(axes.flat, parameters):
+            for controller in controllers:
+                key = f"{controller}.{SENSITIVITY_METRIC}"
+                points = [(r[parameter], r[key]) for r in flat if key in r]
+                if points:
+                    ax.scatter(*zip(*points), s=12, label=controller)
+            failed = [r[parameter] for r in flat if r["status"] != "ok"]
+            ax.scatter(failed, np.full(len(failed), 0.02), marker="x", color="red",
+                       transform=ax.get_xaxis_transform(), label="failed trial")
+            ax.set_xlabel(parameter.removeprefix("sampled."), fontsize=8)
+            ax.set_ylabel(SENSITIVITY_METRIC, fontsize=8)
+        for ax in list(axes.flat)[len(parameters):]:
+            ax.axis("off")
+        axes.flat[0].legend(fontsize=7)
+        fig.tight_layout()
+        paths.append(folder / "sensitivity.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths
