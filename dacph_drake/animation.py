@@ -11,6 +11,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import require_positive
+from dacph_drake.log_layout import LhsLog
 from dacph_drake.plant import END_EFFECTOR, AddFreeFloatingArm
 from dacph_drake.scenario import Scenario
 
@@ -35,7 +36,7 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     if len(t) < 2:
         raise ValueError("the run has fewer than two logged samples to animate")
     n = scenario.robot.num_links
-    alpha_desired = logs["lhs_log"][:, n + 1]
+    alpha_desired = logs["lhs_log"][:, LhsLog(n).alpha_desired]
     meshcat = meshcat or Meshcat()
     builder = DiagramBuilder()
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)

@@ -19,6 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
@@ -95,7 +96,8 @@ def _panel_a(dac: Logs, scenario: Scenario, out: Path):
     ax1.plot(t[i], eD[i], "C1-", lw=0.8, label=r"$\|\hat D - \tilde D\|$")
     ax1.set_ylabel("norm [-] / [N m s]")
     ax1.legend(fontsize=7, ncol=2, loc="upper left")
-    ax2.semilogy(t[i], np.maximum(dac["rhs_log"][i, n], 1e-12), "C3-", lw=0.6)
+    ax2.semilogy(t[i], np.maximum(dac["rhs_log"][i, RhsLog(n).e_norm], 1e-12), "C3-",
+                 lw=0.6)
     ax2.set_ylabel(r"$\|e_\tau\|$ [N m]")
     return _save(fig, out, PANELS[0])
 
@@ -122,18 +124,18 @@ def _entries(dac: Logs, scenario: Scenario, out: Path, name: str, xlim=None):
 
 def _panel_d(dac: Logs, scenario: Scenario, out: Path):
     n = scenario.robot.num_links
-    t, rhs = dac["time"], dac["rhs_log"]
+    t, rhs, R = dac["time"], dac["rhs_log"], RhsLog(n)
     i = _stride(t)
     fig, (ax1, ax2, ax3) = _figure(3, scenario)
     for k in range(n):
-        ax1.plot(t[i], rhs[i, n + 2 + k], lw=0.8, label=f"$k_{k + 1}$")
+        ax1.plot(t[i], rhs[i, R.K][:, k], lw=0.8, label=f"$k_{k + 1}$")
     ax1.set_ylabel(r"gains $k_p$ [1/s]")
     ax1.legend(fontsize=7)
-    ax2.plot(t[i], rhs[i, 2 * n + 2], "C0-", lw=1, label="c")
-    ax2.plot(t[i], rhs[i, 2 * n + 3], "k--", lw=1, label=r"$c_{min}$ (eq. 48)")
+    ax2.plot(t[i], rhs[i, R.c], "C0-", lw=1, label="c")
+    ax2.plot(t[i], rhs[i, R.c_min], "k--", lw=1, label=r"$c_{min}$ (eq. 48)")
     ax2.set_ylabel("c [1/s]")
     ax2.legend(fontsize=7)
-    ax3.semilogy(t[i], rhs[i, n + 1], "C2-", lw=0.8)
+    ax3.semilogy(t[i], rhs[i, R.chi], "C2-", lw=0.8)
     ax3.set_ylabel(r"$\chi$ [N m]")
     return _save(fig, out, PANELS[3])
 
@@ -144,8 +146,10 @@ def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
     for logs, label, style in [(model_based, "model-based", "C1-"), (dac, "DAC-pH", "C0-")]:
         t = logs["time"]
         i = _stride(t)
-        ax1.plot(t[i], logs["lhs_log"][i, n], style, lw=0.7, label=label)
-        ax2.plot(t[i], np.linalg.norm(logs["lhs_log"][i, :n], axis=1), style, lw=0.7,
+        ax1.plot(t[i], logs["lhs_log"][i, LhsLog(n).alpha_error], style, lw=0.7,
+                 label=label)
+        ax2.plot(t[i], np.linalg.norm(logs["lhs_log"][i, LhsLog(n).s], axis=1), style,
+                 lw=0.7,
                  label=label)
     ax1.set_ylabel(r"$\tilde\alpha$ [rad]")
     ax1.legend(fontsize=7)
@@ -176,7 +180,8 @@ def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
     ax2.plot(t[i], x[i, 2], "k-", lw=0.8, label=r"$\theta_0$ (base)")
     for k in range(n):
         ax2.plot(t[i], x[i, 3 + k], color=f"C{k}", lw=0.8, label=f"$q_{k + 1}$")
-    ax2.plot(t[i], dac["lhs_log"][i, n + 1], "C3--", lw=0.8, label=r"$\alpha_d$")
+    ax2.plot(t[i], dac["lhs_log"][i, LhsLog(n).alpha_desired], "C3--", lw=0.8,
+             label=r"$\alpha_d$")
     ax2.set_ylabel("angles [rad]")
     ax2.legend(fontsize=7, ncol=n + 2)
     for k in range(n):

@@ -3,6 +3,7 @@ from typing import Dict
 
 import numpy as np
 
+from dacph_drake.log_layout import LhsLog, RhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario
 
@@ -30,9 +31,9 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
     phases = scenario.phases
     active = t >= phases.linear_start
     phase3 = t >= scenario.disturbance_start
-    lhs = logs["lhs_log"]
-    alpha_error = lhs[:, n]
-    e_tau = (logs["rhs_log"][:, :n] if "rhs_log" in logs
+    lhs, L, R = logs["lhs_log"], LhsLog(n), RhsLog(n)
+    alpha_error = lhs[:, L.alpha_error]
+    e_tau = (logs["rhs_log"][:, R.e_tau] if "rhs_log" in logs
              else logs["tau_request"] - logs["tau"])
     state = logs["state"]
     potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
@@ -43,7 +44,7 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         if active.any() else float("nan"),
         "control_effort_rms": rms(logs["u"][active]),
         "e_tau_rms": rms(e_tau[active]),
-        "sliding_rms": rms(lhs[active, :n]),
+        "sliding_rms": rms(lhs[active, L.s]),
         "base_attitude_max_excursion": float(np.max(np.abs(state[:, 2] - state[0, 2]))),
         "min_clearance": float(min(potential.MinClearance(x[3:nq]) for x in state)),
     }
@@ -54,11 +55,10 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         out["estimation_error_B"] = relative_error_rms(estimate[:, :n * n], truth[:, :n * n])
         out["estimation_error_D"] = relative_error_rms(estimate[:, n * n:], truth[:, n * n:])
         rhs = logs["rhs_log"]
-        c, c_min = rhs[:, 2 * n + 2], rhs[:, 2 * n + 3]
-        out["c_min_over_bound"] = float(np.min(c / c_min))
-        out["chi_final"] = float(rhs[-1, n + 1])
-        out["dic_violations"] = int(np.sum(rhs[:, -2] < 0.5))
-        out["rejected_estimates"] = int(np.sum(rhs[:, -1] < 0.5))
+        out["c_min_over_bound"] = float(np.min(rhs[:, R.c] / rhs[:, R.c_min]))
+        out["chi_final"] = float(rhs[-1, R.chi])
+        out["dic_violations"] = int(np.sum(rhs[:, R.dic_ok] < 0.5))
+        out["rejected_estimates"] = int(np.sum(rhs[:, R.trusted] < 0.5))
     return out
 
 

@@ -224,10 +224,24 @@ class ReducedOrderModel:
         return 0.5 * float(p @ np.linalg.solve(self.MassMatrix(q), p))
 
 
+_MASS_MATRIX_BOUNDS = {}      # (trigonometric coefficients, grid) -> bounds
+
+
 def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                        ) -> "tuple[float, float]":
     """(inf_q lambda_min(M), sup_q lambda_max(M)) over a uniform grid of joint angles
-    in [-pi, pi)^n: the paper's lambda_min_min(M) and lambda_max_max(M)."""
+    in [-pi, pi)^n: the paper's lambda_min_min(M) and lambda_max_max(M).
+
+    The grid search takes ~0.1 s and every diagram build and verification asks for
+    it, so it runs once per distinct robot in a process: the model's fitted
+    coefficients determine M(q) entirely and serve as the key."""
+    key = (model._coefficients.tobytes(), model._coefficients.shape, samples_per_joint)
+    if key not in _MASS_MATRIX_BOUNDS:
+        _MASS_MATRIX_BOUNDS[key] = _GridMassMatrixBounds(model, samples_per_joint)
+    return _MASS_MATRIX_BOUNDS[key]
+
+
+def _GridMassMatrixBounds(model: ReducedOrderModel, samples_per_joint: int):
     n = model.num_joints
     axes = [np.linspace(-np.pi, np.pi, samples_per_joint, endpoint=False)] * n
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)

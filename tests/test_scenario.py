@@ -33,6 +33,9 @@ def test_yaml_round_trip(tmp_path):
     ("q0: [0.1]\n", r"q0 has 1 entries; allowed: 2"),
     ("integration_scheme: euler\n", r"integration_scheme = 'euler'; allowed"),
     ("uncertainty: {B_linear: [[1.0]]}\n", r"uncertainty.B_linear must be a 2 x 2"),
+    ("rhs: {trust_ratio: 0.5}\n", r"rhs.trust_ratio = 0.5 .*in \[1, 10\]"),
+    ("stress: {B_hat_scale: 0.0}\n", r"stress.B_hat_scale = 0.0 .*> 0"),
+    ("stress: {start: -1.0}\n", r"stress.start = -1.0 .*>= 0 s"),
 ])
 def test_bad_input_is_named(tmp_path, text, message):
     path = tmp_path / "s.yaml"

@@ -127,12 +127,17 @@ def _wait_for_rows(out: Path, process: subprocess.Popen, timeout: float = 60.0) 
         time.sleep(0.05)
 
 
+def _cli_sweep_with_a_first_row(path: Path, out: Path):
+    """A 2-worker CLI sweep, once its first row is saved: (process, worker pids)."""
+    process = _start_cli_sweep(path, out)
+    _wait_for_rows(out, process)
+    return process, _spawned_workers(process.pid)
+
+
 def test_sweep_killed_with_sigkill_resumes_without_loss_or_duplicates(serial, tmp_path):
     path, _, rows = serial
     out = tmp_path / "out"
-    process = _start_cli_sweep(path, out)
-    _wait_for_rows(out, process)
-    workers = _spawned_workers(process.pid)
+    process, workers = _cli_sweep_with_a_first_row(path, out)
     process.send_signal(signal.SIGKILL)
     process.communicate()
     finished = len(read_rows(out))
@@ -155,9 +160,7 @@ def test_sweep_killed_with_sigkill_resumes_without_loss_or_duplicates(serial, tm
 def test_killed_worker_is_replaced_and_its_trial_rerun(serial, tmp_path):
     path, _, rows = serial
     out = tmp_path / "out"
-    process = _start_cli_sweep(path, out)
-    _wait_for_rows(out, process)
-    workers = _spawned_workers(process.pid)
+    process, workers = _cli_sweep_with_a_first_row(path, out)
     os.kill(workers[0], signal.SIGKILL)
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 0, stderr

@@ -30,6 +30,7 @@ from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
 from dacph_drake.analysis.region_of_attraction import \
     sliding_region_of_attraction  # noqa: E402
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
+from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
                                        mass_matrix_bounds)
@@ -63,17 +64,17 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     and B from logs[B_column] ("estimates": the learner's, scaled as the stress
     setting asks; "true_matrices": the ground truth's)."""
     n = scenario.robot.num_links
-    t, rhs = logs["time"], logs["rhs_log"]
+    t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     learned = B_column == "estimates"
     series = LoopSeries()
     for k in range(0, len(t), every):
-        if learned and rhs[k, -1] < 0.5:
+        if learned and rhs[k, R.trusted] < 0.5:
             continue               # the integrator rejected this estimate, kept gains
         B = logs[B_column][k, :n * n].reshape(n, n)
         # A logged sample shows the state before the updates at its own time.
         if learned and t[k] > scenario.stress.start:
             B = scenario.stress.B_hat_scale * B
-        check = check_rhs_loop(B, rhs[k, n + 2:2 * n + 2], scenario.periods.rhs,
+        check = check_rhs_loop(B, rhs[k, R.K], scenario.periods.rhs,
                                lambda_lhs, scenario.rhs.Td)
         series.time.append(float(t[k]))
         series.margin.append(check.margin)
@@ -94,17 +95,18 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     Kd, epsilon = scenario.lhs.Kd, scenario.lhs.epsilon
     lambda_lhs = 2 * Kd / lambda_min_M
     t, lhs, rhs = logs["time"], logs["lhs_log"], logs["rhs_log"]
-    V, e_norm, chi = lhs[:, n + 2], rhs[:, n], rhs[:, n + 1]
+    L, R = LhsLog(n), RhsLog(n)
+    V, e_norm, chi = lhs[:, L.lyapunov_V], rhs[:, R.e_norm], rhs[:, R.chi]
 
     envelope = check_lyapunov_envelope(t, V, e_norm, chi, Kd, Kd, lambda_min_M,
                                        lambda_max_M, epsilon, n)
     per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))
     learned = _rhs_series(logs, scenario, lambda_lhs, "estimates", per_update)
     truth = _rhs_series(logs, scenario, lambda_lhs, "true_matrices", 1)
-    rejected = np.flatnonzero(rhs[:, -1] < 0.5)
+    rejected = np.flatnonzero(rhs[:, R.trusted] < 0.5)
     region = sliding_region_of_attraction(model, np.asarray(scenario.q0), Kd,
                                           scenario.rhs.chi_initial, epsilon)
-    s0 = float(np.linalg.norm(lhs[0, :n]))
+    s0 = float(np.linalg.norm(lhs[0, L.s]))
     checks = {
         "run_finished": {"ok": run_meta.get("status") == "ok",
                          "status": run_meta.get("status"),
@@ -118,7 +120,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     }
     estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
                  "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
-                 "dic_violations": int(np.sum(rhs[:, -2] < 0.5))}
+                 "dic_violations": int(np.sum(rhs[:, R.dic_ok] < 0.5))}
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,

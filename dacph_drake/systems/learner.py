@@ -65,7 +65,7 @@ class RhsLearner(LeafSystem):
     def _QPQdot(self, context):
         x = self._state.Eval(context)
         q, qdot = x[3:self._nq], x[self._nq + 3:]
-        return q, self._model.MassMatrix(q) @ qdot, qdot
+        return q, self._model.Momentum(q, qdot), qdot
 
     def _UpdateSample(self, context, discrete_state):
         n, window = self._n, self._settings.window

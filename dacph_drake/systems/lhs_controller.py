@@ -3,6 +3,7 @@ field (paper section "LHS Model-Based Control", SPEC section 4)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
+from dacph_drake.log_layout import LhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.reference import OrientationReference
@@ -23,8 +24,6 @@ class LhsController(LeafSystem):
     not connected. Output ``tau_request`` is held between updates; output
     ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]."""
 
-    LOG_FIELDS = ("alpha_error", "alpha_desired", "lyapunov_V", "potential_U",
-                  "lambda_min_M")
 
     def __init__(self, model: ReducedOrderModel, potential: BaseRepulsionPotential,
                  reference: OrientationReference, gains: LhsGains, period: float,
@@ -39,7 +38,7 @@ class LhsController(LeafSystem):
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._chi = self.DeclareVectorInputPort("chi", 1)
         self._tau_index = self.DeclareDiscreteState(n)
-        self._log_index = self.DeclareDiscreteState(n + len(self.LOG_FIELDS))
+        self._log_index = self.DeclareDiscreteState(LhsLog(n).size)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareStateOutputPort("lhs_log", self._log_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)

@@ -4,6 +4,7 @@ import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
+from dacph_drake.log_layout import RhsLog
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Stress
@@ -69,7 +70,7 @@ class RhsIntegrator(LeafSystem):
             c.get_discrete_state(self._fast).get_value()[-1:]),
             prerequisites_of_calc=fast_ticket)
         self.DeclareVectorOutputPort(
-            "rhs_log", 2 * n + 6, self._CalcLog,
+            "rhs_log", RhsLog(n).size, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._fast),
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
@@ -79,8 +80,7 @@ class RhsIntegrator(LeafSystem):
         """The model group after one refresh from ``gains`` (see class docstring)."""
         n = self._n
         gains = gains.copy()
-        p = self._model.MassMatrix(q) @ qdot
-        B_hat, D_hat = self._network.Evaluate(weights, q, p)
+        B_hat, D_hat = self._network.Evaluate(weights, q, self._model.Momentum(q, qdot))
         B_hat = B_hat_scale * B_hat
         c_min = self._c_bound(beta)
         c = gains[-4]

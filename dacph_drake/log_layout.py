@@ -1,0 +1,21 @@
+"""Column layout of the controllers' logs, shared by the systems that write them
+(LhsController, RhsIntegrator) and the metrics, figures and checks that read them."""
+
+
+class LhsLog:
+    """lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]."""
+
+    def __init__(self, n: int):
+        self.s = slice(0, n)
+        self.alpha_error, self.alpha_desired, self.lyapunov_V = n, n + 1, n + 2
+        self.size = n + 5
+
+
+class RhsLog:
+    """rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted]."""
+
+    def __init__(self, n: int):
+        self.e_tau, self.e_norm, self.chi = slice(0, n), n, n + 1
+        self.K = slice(n + 2, 2 * n + 2)
+        self.c, self.c_min, self.dic_ok, self.trusted = range(2 * n + 2, 2 * n + 6)
+        self.size = 2 * n + 6
