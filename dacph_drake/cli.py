@@ -6,6 +6,10 @@ import numpy as np
 
 from dacph_drake.errors import ConfigError
 
+# The controllers every command accepts (diagrams.BUILDERS; importing it here would
+# load Drake for `dacph --help`).
+CONTROLLERS = ("dac", "dac-nominal", "model-based")
+
 
 def _free_flight(args) -> int:
     from dacph_drake.free_flight import run_free_flight
@@ -61,6 +65,11 @@ def _print_table(summary) -> None:
     for row in summary["table"]:
         print(f"  {row['metric']:52s} paper {format_value(row['paper'], row['unit']):>14s}"
               f"   here {format_value(row['this_project'], row['unit']):>14s}")
+    if summary["ablation"]:
+        print(f"  {'per phase:':52s} {'1':>14s} {'2':>14s} {'3':>14s}")
+    for row in summary["ablation"]:
+        print(f"  {row['metric']:52s} " + " ".join(
+            f"{format_value(v, row['unit']):>14s}" for v in row["phases"]))
 
 
 def _animate_run(run_dir, controller: str, out=None):
@@ -164,19 +173,21 @@ def main(argv=None) -> int:
     sim.add_argument("scenario", help="scenario YAML (e.g. diagrams/short.yaml) or a "
                                       "built-in name: paper, short")
     sim.add_argument("--out", required=True, help="output directory")
-    sim.add_argument("--controller", choices=["dac", "model-based"], default="dac")
+    sim.add_argument("--controller", choices=CONTROLLERS, default="dac",
+                     help="dac-nominal: DAC with the learner off (the ablation)")
     sim.add_argument("--duration", type=float, default=None,
                      help="[s] (default: the scenario's phases)")
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
     graph.add_argument("scenario")
-    graph.add_argument("--controller", choices=["dac", "model-based"], default=None,
-                       help="default: both")
+    graph.add_argument("--controller", choices=CONTROLLERS, default=None,
+                       help="default: all")
     graph.add_argument("--out", default=None, help="default: the scenario's folder")
     graph.set_defaults(run=_diagram)
     rep = commands.add_parser(
-        "reproduce", help="run DAC and the model-based baseline, write the paper's "
-                          "panels and the metrics table beside the paper's numbers")
+        "reproduce", help="run DAC, its learning ablation (dac-nominal) and the "
+                          "model-based baseline, write the paper's panels, the metrics "
+                          "table beside the paper's numbers and the ablation table")
     rep.add_argument("scenario", nargs="?", default=None,
                      help="scenario YAML or built-in name (default: paper, 1500 s)")
     rep.add_argument("--out", required=True, help="output directory")
@@ -184,18 +195,19 @@ def main(argv=None) -> int:
                      help="the short scenario (26 s) instead of the paper's")
     rep.add_argument("--animate", action="store_true",
                      help="also write an HTML animation of the DAC run")
-    rep.add_argument("--jobs", type=int, choices=[1, 2], default=1,
-                     help="2: run the two controllers in two processes (no progress "
-                          "bars)")
+    rep.add_argument("--jobs", type=int, choices=[1, 2, 3], default=1,
+                     help="run the three controllers in this many processes (no "
+                          "progress bars above 1)")
     rep.set_defaults(run=_reproduce)
-    rpt = commands.add_parser("report", help="panels and metrics table of a directory "
-                                             "holding a DAC and a model-based run")
+    rpt = commands.add_parser("report", help="panels, metrics and ablation tables of a "
+                                             "directory holding a DAC and a model-based "
+                                             "run (and a dac-nominal run)")
     rpt.add_argument("run_dir")
     rpt.set_defaults(run=_report)
     ani = commands.add_parser("animate", help="self-contained HTML animation of a run "
                                               "(Meshcat)")
     ani.add_argument("run_dir")
-    ani.add_argument("--controller", choices=["dac", "model-based"], default="dac")
+    ani.add_argument("--controller", choices=CONTROLLERS, default="dac")
     ani.add_argument("--out", default=None, help="HTML file (default: in run_dir)")
     ani.set_defaults(run=_animate)
     ver = commands.add_parser(

@@ -1,4 +1,5 @@
-"""Closed-loop diagrams: ``build_dac_diagram(scenario)`` and
+"""Closed-loop diagrams: ``build_dac_diagram(scenario)``,
+``build_dac_nominal_diagram(scenario)`` (the learning ablation) and
 ``build_model_based_diagram(scenario)``, each returning a ClosedLoop (the Diagram and
 the handles a user needs)."""
 from dataclasses import dataclass, field
@@ -13,12 +14,13 @@ from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.reference import OrientationReference
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.lhs_controller import LhsController
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 from dacph_drake.systems.port_observer import PortObserver
+from dacph_drake.systems.regression_filter import RegressionFilter
 from dacph_drake.systems.rhs_integrator import RhsIntegrator
 from dacph_drake.systems.true_rhs import TrueRhs
 
@@ -37,8 +39,9 @@ class ClosedLoop:
     systems: Dict[str, object] = field(default_factory=dict)
 
 
-def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float):
-    """Plant, true RHS, disturbance and LHS controller; loggers shared by both loops."""
+def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
+                 excitation: Excitation):
+    """Plant, true RHS, disturbance and LHS controller; loggers shared by all loops."""
     scenario.Validate()
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     plant.set_name("plant")
@@ -55,7 +58,8 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float):
     disturbance = builder.AddNamedSystem(
         "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
     lhs = builder.AddNamedSystem("lhs_controller", LhsController(
-        model, potential, reference, scenario.lhs, scenario.periods.lhs, nq, fixed_chi))
+        model, potential, reference, scenario.lhs, scenario.periods.lhs, nq, fixed_chi,
+        excitation))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
     builder.Connect(disturbance.get_output_port(), truth.GetInputPort("disturbance"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
@@ -78,22 +82,28 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float):
     return loop
 
 
-def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
+def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     """Plant + true RHS + disturbance, closed by the DAC-pH controller: the LHS
-    sliding-mode controller (chi from the RHS loop), the port observer, the RHS
-    integrator and the learner."""
+    sliding-mode controller (chi from the RHS loop, plus scenario.excitation), the
+    port observer, the RHS integrator and the learner (in regularized mode behind a
+    RegressionFilter). With ``learning`` False the learner keeps its initial
+    weights, so the integrator runs on the nominal RHS (B0, D0): the dac-nominal
+    ablation, otherwise the same diagram."""
     builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial)
+    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial,
+                        excitation=scenario.excitation)
     plant, lhs = loop.plant, loop.systems["lhs_controller"]
     nq = plant.num_positions()
-    periods = scenario.periods
+    periods, settings = scenario.periods, scenario.learner
+    regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         loop.model, nq, periods.rhs, periods.lhs, scenario.rhs.observer_noise,
-        scenario.seed))
+        scenario.seed, anti_alias_cutoff=settings.band[1] if regularized else 0.0))
     learner = builder.AddNamedSystem("learner", RhsLearner(
-        loop.model, scenario.learner, periods.learner, periods.learner_sample, nq,
-        scenario.uncertainty.B0, scenario.uncertainty.D0,
-        scenario.learner.momentum_scale, scenario.seed))
+        model=loop.model, settings=settings, period=periods.learner,
+        sample_period=periods.learner_sample, num_positions=nq,
+        B0=scenario.uncertainty.B0, D0=scenario.uncertainty.D0, seed=scenario.seed,
+        learning=learning))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         loop.model, learner.exported, scenario.rhs, scenario.lhs.Kd, loop.lambda_min_M,
         scenario.uncertainty.B0, periods.rhs, periods.learner_sample, nq,
@@ -101,16 +111,24 @@ def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
     builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
     builder.Connect(plant.get_generalized_acceleration_output_port(),
                     observer.GetInputPort("acceleration"))
-    for port in ("state", "tau_observed"):
-        source = (plant.get_state_output_port() if port == "state"
-                  else observer.GetOutputPort("tau_observed"))
-        builder.Connect(source, rhs.GetInputPort(port))
-        builder.Connect(source, learner.GetInputPort(port))
+    builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
+    port_sample = observer.GetOutputPort("port_sample")
+    if regularized:
+        prefilter = builder.AddNamedSystem("regression_filter", RegressionFilter(
+            settings=settings, num_joints=loop.model.num_joints,
+            period=periods.learner_sample))
+        builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
+        port_sample = prefilter.GetOutputPort("filtered_sample")
+        loop.systems["regression_filter"] = prefilter
+    builder.Connect(port_sample, learner.GetInputPort("port_sample"))
+    builder.Connect(plant.get_state_output_port(), learner.GetInputPort("state"))
+    builder.Connect(plant.get_state_output_port(), rhs.GetInputPort("state"))
+    builder.Connect(observer.GetOutputPort("tau_observed"),
+                    rhs.GetInputPort("tau_observed"))
     builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
     builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
     builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
     builder.Connect(rhs.GetOutputPort("chi"), lhs.GetInputPort("chi"))
-    builder.Connect(rhs.GetOutputPort("u"), learner.GetInputPort("u"))
     builder.Connect(rhs.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
     loop.systems.update(port_observer=observer, learner=learner, rhs_integrator=rhs)
     for name, port in [("u", rhs.GetOutputPort("u")),
@@ -121,8 +139,15 @@ def build_dac_diagram(scenario: Scenario) -> ClosedLoop:
         loop.loggers[name] = LogVectorOutput(port, builder, periods.log)
         loop.loggers[name].set_name(f"log_{name}")
     loop.diagram = builder.Build()
-    loop.diagram.set_name("dac_closed_loop")
+    loop.diagram.set_name("dac_closed_loop" if learning else "dac_nominal_closed_loop")
     return loop
+
+
+def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
+    """The learning ablation: build_dac_diagram with the learner switched off (the
+    integrator on the nominal RHS B0, D0; the excitation stays, so that learning is
+    the only difference)."""
+    return build_dac_diagram(scenario, learning=False)
 
 
 def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
@@ -130,7 +155,8 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
     chi = lhs.chi_model_based and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
     no integrator, no learning."""
     builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.lhs.chi_model_based)
+    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.lhs.chi_model_based,
+                        excitation=Excitation(amplitude=0.0))
     plant, lhs = loop.plant, loop.systems["lhs_controller"]
     inverter = builder.AddNamedSystem("model_based_inverter",
                                       ModelBasedInverter(scenario, plant.num_positions()))
@@ -146,4 +172,5 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
     return loop
 
 
-BUILDERS = {"dac": build_dac_diagram, "model-based": build_model_based_diagram}
+BUILDERS = {"dac": build_dac_diagram, "dac-nominal": build_dac_nominal_diagram,
+            "model-based": build_model_based_diagram}

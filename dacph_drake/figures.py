@@ -1,8 +1,9 @@
 """The paper's figures (SPEC section 10) as six panels, from the logs of a DAC run
 and a model-based run of the same scenario:
 
-(a) uncertainty, estimation error and RHS control error (norms)
-(b) true and estimated entries of B~ and D~
+(a) uncertainty (= the nominal prior's error), learned estimation error and RHS
+    control error (norms)
+(b) true, learned and nominal (prior) entries of B~ and D~
 (c) zoom on (b) shortly after the nonlinear terms switch on
 (d) RHS gains K, c against its lower bound c_min (eq. 48), chi
 (e) DAC against model-based: alpha~, ||s||, d(t)
@@ -90,10 +91,12 @@ def _panel_a(dac: Logs, scenario: Scenario, out: Path):
     i = _stride(t)
     dB, dD, eB, eD = _matrix_norms(dac, n, scenario.uncertainty.B0, scenario.uncertainty.D0)
     fig, (ax1, ax2) = _figure(2, scenario)
-    ax1.plot(t[i], dB[i], "k-", lw=1, label=r"$\|\Delta B\|_F$ (uncertainty)")
-    ax1.plot(t[i], dD[i], "k--", lw=1, label=r"$\|\Delta D\|$ (uncertainty)")
-    ax1.plot(t[i], eB[i], "C0-", lw=0.8, label=r"$\|\hat B - \tilde B\|_F$")
-    ax1.plot(t[i], eD[i], "C1-", lw=0.8, label=r"$\|\hat D - \tilde D\|$")
+    ax1.plot(t[i], dB[i], "C0:", lw=1.2,
+             label=r"$\|B_0 - \tilde B\|_F$ (nominal prior = uncertainty)")
+    ax1.plot(t[i], dD[i], "C1:", lw=1.2,
+             label=r"$\|D_0 - \tilde D\|$ (nominal prior = uncertainty)")
+    ax1.plot(t[i], eB[i], "C0-", lw=0.8, label=r"$\|\hat B - \tilde B\|_F$ (learned)")
+    ax1.plot(t[i], eD[i], "C1-", lw=0.8, label=r"$\|\hat D - \tilde D\|$ (learned)")
     ax1.set_ylabel("norm [-] / [N m s]")
     ax1.legend(fontsize=7, ncol=2, loc="upper left")
     ax2.semilogy(t[i], np.maximum(dac["rhs_log"][i, RhsLog(n).e_norm], 1e-12), "C3-",
@@ -110,6 +113,8 @@ def _entries(dac: Logs, scenario: Scenario, out: Path, name: str, xlim=None):
     labels = [(r"$B_{%d%d}$" % (r + 1, c + 1), r * n + c) for r in range(n)
               for c in range(n)]
     labels += [(r"$D_{%d%d}$" % (k + 1, k + 1), n * n + k) for k in range(n)]
+    prior = np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
+                            scenario.uncertainty.D0])
     for ax, group, unit in [(axes[0], labels[:n * n], "[-]"),
                             (axes[1], labels[n * n:], "[N m s]")]:
         for color, (label, col) in enumerate(group):
@@ -117,8 +122,10 @@ def _entries(dac: Logs, scenario: Scenario, out: Path, name: str, xlim=None):
                     label=f"true {label}")
             ax.plot(t[i], dac["estimates"][i, col], color=f"C{color}", lw=0.8, ls="--",
                     label=f"learned {label}")
+            ax.axhline(prior[col], color=f"C{color}", lw=0.8, ls=":",
+                       label=f"nominal {label}")
         ax.set_ylabel(f"entries of {'B' if unit == '[-]' else 'D'} {unit}")
-        ax.legend(fontsize=7, ncol=2 * n, loc="upper left")
+        ax.legend(fontsize=7, ncol=3 * n, loc="upper left")
     return _save(fig, out, name)
 
 

@@ -1,5 +1,5 @@
 """Column layout of the controllers' logs, shared by the systems that write them
-(LhsController, RhsIntegrator) and the metrics, figures and checks that read them."""
+(LhsController, RhsIntegrator, RhsLearner) and the metrics, figures and checks that read them."""
 
 
 class LhsLog:
@@ -19,3 +19,14 @@ class RhsLog:
         self.K = slice(n + 2, 2 * n + 2)
         self.c, self.c_min, self.dic_ok, self.trusted = range(2 * n + 2, 2 * n + 6)
         self.size = 2 * n + 6
+
+
+class LearnerLog:
+    """learner_log = [loss, beta_hat, nominal loss, holding]: the fit's weighted
+    squared residual, the gain rule's uncertainty estimate, the same residual of the
+    nominal RHS (B0, D0) on the same samples, and 1 while a detected change pauses
+    training (identification.ChangeDetector)."""
+
+    def __init__(self):
+        self.loss, self.beta_hat, self.nominal_loss, self.holding = range(4)
+        self.size = 4

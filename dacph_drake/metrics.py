@@ -23,8 +23,43 @@ def relative_error_rms(estimate: np.ndarray, truth: np.ndarray) -> float:
     return rms(ratio)
 
 
+PHASES = ("phase1", "phase2", "phase3")
+
+
+def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
+    """Masks of the three uncertainty phases (SPEC section 7): linear, plus nonlinear,
+    plus disturbance (the last from phases.disturbance_start to the end)."""
+    p = scenario.phases
+    edges = [p.linear_start, p.nonlinear_start, p.disturbance_start, np.inf]
+    return {name: (t >= lo) & (t < hi) for name, lo, hi in zip(PHASES, edges, edges[1:])}
+
+
+def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
+                     mask: np.ndarray) -> Dict[str, float]:
+    """Learning's own value over the samples ``mask`` (SPEC section 9): the time-RMS
+    relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and of the nominal
+    prior (B0, D0), their ratio (below 1: learning beats the prior), and the share of
+    samples whose B_hat the RHS integrator rejected (DIC or trust band)."""
+    n = scenario.robot.num_links
+    truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
+    prior = np.tile(np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
+                                    scenario.uncertainty.D0]), (len(truth), 1))
+    out = {}
+    for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
+        learned = relative_error_rms(estimate[:, columns], truth[:, columns])
+        nominal = relative_error_rms(prior[:, columns], truth[:, columns])
+        out.update({f"{name}_error": learned, f"{name}_error_nominal": nominal,
+                    f"{name}_error_ratio": learned / nominal if nominal > 0
+                    else float("nan")})
+    trusted = logs["rhs_log"][mask, RhsLog(n).trusted]
+    out["rejected_share"] = float(np.mean(trusted < 0.5)) if len(trusted) else float("nan")
+    return out
+
+
 def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
-    """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise."""
+    """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise;
+    "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
+    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics."""
     n = scenario.robot.num_links
     nq = 3 + n
     t = logs["time"]
@@ -59,6 +94,13 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         out["chi_final"] = float(rhs[-1, R.chi])
         out["dic_violations"] = int(np.sum(rhs[:, R.dic_ok] < 0.5))
         out["rejected_estimates"] = int(np.sum(rhs[:, R.trusted] < 0.5))
+    for phase, mask in phase_windows(scenario, t).items():
+        out[f"{phase}.tracking_error_rms"] = rms(alpha_error[mask])
+        out[f"{phase}.e_tau_rms"] = rms(e_tau[mask])
+        if "estimates" in logs:
+            out[f"{phase}.chi_rms"] = rms(logs["rhs_log"][mask, R.chi])
+            out.update({f"{phase}.{k}": v for k, v in
+                        learning_metrics(logs, scenario, mask).items()})
     return out
 
 

@@ -1,6 +1,7 @@
-"""Reproducing the paper: DAC and the model-based baseline on one scenario, the six
-panels of SPEC section 10, and the metrics table with the paper's values beside
-this project's (SPEC section 9)."""
+"""Reproducing the paper: DAC, its learning ablation (dac-nominal) and the
+model-based baseline on one scenario, the six panels of SPEC section 10, the metrics
+table with the paper's values beside this project's, and the ablation table of
+learning per phase (SPEC section 9)."""
 import json
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
@@ -11,11 +12,13 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from dacph_drake.figures import plot_panels
-from dacph_drake.metrics import comparison, run_metrics
+from dacph_drake.metrics import PHASES, comparison, run_metrics
 from dacph_drake.run import simulate, versions
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
-CONTROLLERS = ("dac", "model-based")
+CONTROLLERS = ("dac", "dac-nominal", "model-based")
+REQUIRED = ("dac", "model-based")       # report() also reads directories without
+#                                         the ablation run
 
 
 @dataclass(frozen=True)
@@ -55,6 +58,37 @@ PAPER_ROWS = (
 )
 
 
+@dataclass(frozen=True)
+class AblationRow:
+    """One row of the ablation table: ``key`` "CONTROLLER.NAME" is looked up as
+    "CONTROLLER.phaseK.NAME" for each phase; ``over`` divides it by the same phase's
+    value of another key (a ratio row)."""
+    key: str
+    label: str
+    unit: str
+    over: Optional[str] = None
+
+
+ABLATION_ROWS = (
+    AblationRow("dac.tracking_error_rms", "RMS alpha~, DAC", "rad"),
+    AblationRow("dac-nominal.tracking_error_rms", "RMS alpha~, dac-nominal", "rad"),
+    AblationRow("model-based.tracking_error_rms", "RMS alpha~, model-based", "rad"),
+    AblationRow("dac.e_tau_rms", "RMS ||e_tau||, DAC", "N m"),
+    AblationRow("dac-nominal.e_tau_rms", "RMS ||e_tau||, dac-nominal", "N m"),
+    AblationRow("dac.e_tau_rms", "RMS ||e_tau||, DAC / dac-nominal", "-",
+                over="dac-nominal.e_tau_rms"),
+    AblationRow("dac.chi_rms", "RMS chi, DAC", "N m"),
+    AblationRow("dac-nominal.chi_rms", "RMS chi, dac-nominal", "N m"),
+    AblationRow("dac.B_error", "B error, learned", "-"),
+    AblationRow("dac.B_error_nominal", "B error, nominal prior B0", "-"),
+    AblationRow("dac.B_error_ratio", "B error, learned / nominal", "-"),
+    AblationRow("dac.D_error", "D error, learned", "-"),
+    AblationRow("dac.D_error_nominal", "D error, nominal prior D0", "-"),
+    AblationRow("dac.D_error_ratio", "D error, learned / nominal", "-"),
+    AblationRow("dac.rejected_share", "rejected B_hat, DAC", "%"),
+)
+
+
 def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
     """{"dac": {...}, "model-based": {...}} -> comparison keys plus "dac.x" keys."""
     out = dict(comparison(metrics["dac"], metrics["model-based"]))
@@ -72,6 +106,37 @@ def metrics_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
              "this_project": flat[r.key], "target": r.target} for r in PAPER_ROWS]
 
 
+def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
+    """The ABLATION_ROWS whose controllers ran, one value per phase (time-RMS
+    relative errors: metrics.learning_metrics)."""
+    flat = {f"{c}.{k}": v for c, values in metrics.items() for k, v in values.items()}
+    rows = []
+    for r in ABLATION_ROWS:
+        controller, name = r.key.split(".", 1)
+        if controller not in metrics or (r.over and r.over.split(".")[0] not in metrics):
+            continue
+        values = []
+        for phase in PHASES:
+            value = flat[f"{controller}.{phase}.{name}"]
+            if r.over:
+                over_controller, over_name = r.over.split(".", 1)
+                value = value / flat[f"{over_controller}.{phase}.{over_name}"]
+            values.append(value)
+        rows.append({"metric": r.label, "key": r.key, "over": r.over, "unit": r.unit,
+                     "phases": values})
+    return rows
+
+
+def ablation_markdown(rows: List[Dict], title: str) -> str:
+    lines = [f"## {title}", "", "| metric | phase 1 (linear) | phase 2 (+ nonlinear) | "
+             "phase 3 (+ disturbance) |", "|---|---|---|---|"]
+    for row in rows:
+        metric = row["metric"].replace("|", "\\|")
+        lines.append(f"| {metric} | " + " | ".join(
+            format_value(v, row["unit"]) for v in row["phases"]) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def format_value(value, unit: str) -> str:
     if value is None:
         return "not reported"
@@ -79,7 +144,7 @@ def format_value(value, unit: str) -> str:
         return f"{100 * value:+.2f} %" if value < 0 else f"{100 * value:.2f} %"
     if unit == "samples":
         return f"{value:.0f}"
-    return f"{value:.4g} {unit}"
+    return f"{value:.4g}" if unit == "-" else f"{value:.4g} {unit}"
 
 
 def table_markdown(rows: List[Dict], title: str) -> str:
@@ -98,24 +163,31 @@ def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
 
 
 def report(run_dir) -> Dict:
-    """Panels and table for a directory holding both runs (as ``reproduce`` or two
-    ``dacph simulate`` calls leave it). Writes figures/, metrics.md, metrics.json."""
+    """Panels and tables for a directory holding the runs (as ``reproduce`` or
+    ``dacph simulate`` calls leave it: dac and model-based, and dac-nominal for the
+    ablation). Writes figures/, metrics.md, ablation.md and metrics.json."""
     run_dir = Path(run_dir)
     scenario = load_scenario(run_dir / "scenario.yaml")
-    logs = {c: load_logs(run_dir, c) for c in CONTROLLERS}
-    runs = {c: json.loads((run_dir / f"run_{c}.json").read_text()) for c in CONTROLLERS}
-    metrics = {c: run_metrics(logs[c], scenario) for c in CONTROLLERS}
+    controllers = [c for c in CONTROLLERS
+                   if c in REQUIRED or (run_dir / f"logs_{c}.npz").exists()]
+    logs = {c: load_logs(run_dir, c) for c in controllers}
+    runs = {c: json.loads((run_dir / f"run_{c}.json").read_text()) for c in controllers}
+    metrics = {c: run_metrics(logs[c], scenario) for c in controllers}
     rows = metrics_table(metrics)
+    ablation = ablation_table(metrics)
     figures = plot_panels(logs["dac"], logs["model-based"], scenario, run_dir / "figures")
     summary = {"scenario": "scenario.yaml", "duration": scenario.duration,
-               "runs": runs, "table": rows, "metrics": metrics,
+               "runs": runs, "table": rows, "ablation": ablation, "metrics": metrics,
                "figures": [str(p.relative_to(run_dir)) for p in figures],
                "versions": versions()}
     (run_dir / "metrics.json").write_text(json.dumps(summary, indent=2))
     status = ", ".join(f"{c}: {runs[c]['status']} in {runs[c]['wall_time']:.0f} s wall"
-                       for c in CONTROLLERS)
+                       for c in controllers)
     (run_dir / "metrics.md").write_text(table_markdown(
         rows, f"DAC-pH against the paper ({scenario.duration:g} s scenario; {status})"))
+    (run_dir / "ablation.md").write_text(ablation_markdown(
+        ablation, f"Learning per phase: DAC, dac-nominal (learner off), model-based "
+                  f"({scenario.duration:g} s scenario)"))
     return summary
 
 
@@ -124,11 +196,11 @@ def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
 
 
 def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1) -> Dict:
-    """Runs both controllers on ``scenario`` into out_dir (logs, scenario.yaml,
-    run_*.json with versions and seed), then writes the panels and the table.
-    jobs = 2 runs the two controllers in two processes (no progress bars)."""
-    if jobs not in (1, 2):
-        raise ValueError(f"jobs = {jobs!r}; allowed: 1 or 2")
+    """Runs the CONTROLLERS on ``scenario`` into out_dir (logs, scenario.yaml,
+    run_*.json with versions and seed), then writes the panels and the tables.
+    jobs > 1 runs them in that many processes (no progress bars)."""
+    if jobs not in range(1, len(CONTROLLERS) + 1):
+        raise ValueError(f"jobs = {jobs!r}; allowed: 1 to {len(CONTROLLERS)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     save_scenario(scenario, out / "scenario.yaml")
@@ -136,7 +208,8 @@ def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1)
         for controller in CONTROLLERS:
             simulate(scenario, controller, out_dir=out, progress=progress)
     else:
-        with ProcessPoolExecutor(len(CONTROLLERS),
+        with ProcessPoolExecutor(jobs,
                                  mp_context=multiprocessing.get_context("spawn")) as pool:
-            list(pool.map(_simulate_into, [scenario] * 2, CONTROLLERS, [out] * 2))
+            list(pool.map(_simulate_into, [scenario] * len(CONTROLLERS), CONTROLLERS,
+                          [out] * len(CONTROLLERS)))
     return report(out)

@@ -140,17 +140,72 @@ class Disturbance:
     hf_direction: List[float] = field(default_factory=lambda: [1.0, -1.0])
 
 
+LEARNER_MODES = ("regularized", "plain")
+
+
 @dataclass
 class Learner:
-    """Physics-informed network (SPEC section 6), trained online with Adam."""
+    """Physics-informed network (SPEC section 6), trained online with Adam.
+
+    ``mode`` "plain" is the paper's learner: the raw port samples (x, u, qdot,
+    tau_obs) of the last ``window`` sampling instants, the loss
+    mean ||tau_obs - (B_hat u - D_hat qdot)||^2, no prior.
+
+    ``mode`` "regularized" (default) identifies only what the closed-loop data
+    inform (README, "Identifiability in closed loop"):
+    - band: u, qdot, tau_obs pass the same band-pass filter before the regression
+      (band_sections[0] first-order high-pass sections at band[0] Hz, then
+      band_sections[1] low-pass sections at band[1] Hz). The relation
+      tau = B u - D qdot + d holds for the filtered signals while B, D vary slowly;
+      the high-pass removes the slow disturbance d_LF (and the slow reference
+      motion, which shares its band), the low-pass d_HF. Excitation (section
+      ``excitation``) supplies the content inside the band.
+    - forgetting: sample k has the weight exp(-(t - t_k) / forgetting).
+    - prior_weight rho: the loss adds
+      rho (E_u sum w ||B_hat - B0||_F^2 + E_q sum w ||D_hat - D0||^2), E_u and E_q
+      the weighted mean squares of the filtered u and qdot entries: a direction of
+      (B, D) whose information is below rho times the average stays at the prior.
+    - change_ratio, change_floor, change_hold: when the relative residual of the
+      newest samples jumps above change_ratio times its recent median and above
+      change_floor (an abrupt change of B, D or d), training pauses for change_hold
+      seconds and forgets the samples before the pause ends (the band-pass filter's
+      memory holds a mix of old and new data until then)."""
+    mode: str = "regularized"
     hidden: List[int] = field(default_factory=lambda: [16, 8])
-    learning_rate: float = 3e-3
+    learning_rate: float = 1e-2
     window: int = 400               # training samples kept (at periods.learner_sample)
     steps_per_update: int = 5       # Adam steps per learner period
     momentum_scale: float = 0.01    # p is divided by this in the features [kg m^2/s]
     beta1: float = 0.9
     beta2: float = 0.999
     eps: float = 1e-8
+    band: List[float] = field(default_factory=lambda: [2.0, 6.0])     # [Hz]
+    band_sections: List[int] = field(default_factory=lambda: [4, 8])  # high, low
+    forgetting: float = 1.0         # [s]
+    prior_weight: float = 1e-3
+    change_ratio: float = 5.0
+    change_floor: float = 0.05
+    change_hold: float = 1.5        # [s]
+
+
+@dataclass
+class Excitation:
+    """A persistently exciting port request for the learner (DAC only): the LHS
+    adds tau_pe(t) = amplitude sin(2 pi f_j t) to channel j of tau_c^r, with f_j
+    spread geometrically over ``frequencies`` = [f_first, f_last] [Hz]
+    (f_j = f_first (f_last / f_first)^(j / (n - 1))). amplitude = 0 switches it off.
+
+    Why: under the slow reference the data inform B only weakly, and from phase 3
+    on the low-frequency disturbance shares the reference's band; a small request
+    inside the learner's band, away from both, makes B and D identifiable
+    (README, "Identifiability in closed loop")."""
+    amplitude: float = 2e-4         # [N m]
+    frequencies: List[float] = field(default_factory=lambda: [3.1, 4.3])   # [Hz]
+
+    def Frequencies(self, n: int) -> np.ndarray:
+        """f_j for joints j = 0 .. n-1 [Hz]."""
+        first, last = self.frequencies
+        return first * (last / first) ** (np.arange(n) / max(n - 1, 1))
 
 
 @dataclass
@@ -176,6 +231,7 @@ class Scenario:
     uncertainty: Uncertainty = field(default_factory=Uncertainty)
     disturbance: Disturbance = field(default_factory=Disturbance)
     learner: Learner = field(default_factory=Learner)
+    excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
     integration_scheme: str = "runge_kutta3"
     seed: int = 0
@@ -249,6 +305,9 @@ class Scenario:
         require_nonnegative("disturbance.scale", d.scale)
         require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
         L = self.learner
+        if L.mode not in LEARNER_MODES:
+            raise ConfigError(f"learner.mode = {L.mode!r}; allowed: "
+                              f"{', '.join(LEARNER_MODES)}")
         if len(L.hidden) == 0:
             raise ConfigError("learner.hidden is empty; allowed: at least one layer")
         for i, width in enumerate(L.hidden):
@@ -260,15 +319,50 @@ class Scenario:
         require_in_range("learner.beta2", L.beta2, 0.0, 0.999999)
         require_positive("learner.eps", L.eps)
         require_positive("learner.momentum_scale", L.momentum_scale)
+        nyquist = 0.5 / self.periods.learner_sample
+        _require_length("learner.band", L.band, 2, "[low, high] in Hz")
+        require_in_range("learner.band[0]", L.band[0], 0.0, nyquist,
+                         "Hz (0: no high-pass; at most the Nyquist frequency of "
+                         "periods.learner_sample)")
+        require_in_range("learner.band[1]", L.band[1], L.band[0], nyquist,
+                         "Hz (above band[0], at most the Nyquist frequency of "
+                         "periods.learner_sample)")
+        _require_length("learner.band_sections", L.band_sections, 2,
+                        "[high-pass, low-pass] section counts")
+        for i, count in enumerate(L.band_sections):
+            require_in_range(f"learner.band_sections[{i}]", count, 0, 16)
+        require_positive("learner.forgetting", L.forgetting, "s")
+        require_nonnegative("learner.prior_weight", L.prior_weight)
+        require_in_range("learner.change_ratio", L.change_ratio, 1.0, 1e6)
+        require_nonnegative("learner.change_floor", L.change_floor)
+        require_nonnegative("learner.change_hold", L.change_hold, "s")
+        E = self.excitation
+        require_nonnegative("excitation.amplitude", E.amplitude, "N m")
+        _require_length("excitation.frequencies", E.frequencies, 2,
+                        "[first, last] in Hz")
+        require_in_range("excitation.frequencies[0]", E.frequencies[0], 1e-3,
+                         0.5 / self.periods.lhs, "Hz (at most the Nyquist frequency "
+                         "of periods.lhs)")
+        require_in_range("excitation.frequencies[1]", E.frequencies[1],
+                         E.frequencies[0], 0.5 / self.periods.lhs,
+                         "Hz (at least frequencies[0], at most the Nyquist frequency "
+                         "of periods.lhs)")
+        if E.amplitude > 0 and L.mode == "regularized" and not (
+                L.band[0] < E.frequencies[0] and E.frequencies[1] < L.band[1]):
+            raise ConfigError(
+                f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
+                f"= {L.band} Hz; allowed: inside the band (the learner filters "
+                "everything else out)")
         if self.integration_scheme not in INTEGRATION_SCHEMES:
             raise ConfigError(f"integration_scheme = {self.integration_scheme!r}; "
                               f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
 
 
-def _require_length(name: str, values, n: int) -> None:
+def _require_length(name: str, values, n: int, meaning: str = "one per joint"
+                    ) -> None:
     if len(values) != n:
         raise ConfigError(f"{name} has {len(values)} entries; allowed: {n} "
-                          "(one per joint)")
+                          f"({meaning})")
 
 
 def load_scenario(path) -> Scenario:

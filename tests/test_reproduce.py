@@ -10,7 +10,8 @@ import pytest
 
 from dacph_drake.figures import PANELS
 from dacph_drake.metrics import run_metrics
-from dacph_drake.reproduce import CONTROLLERS, PAPER_ROWS, flat_metrics, load_logs
+from dacph_drake.reproduce import (ABLATION_ROWS, CONTROLLERS, PAPER_ROWS, flat_metrics,
+                                   load_logs)
 from dacph_drake.scenario import load_scenario
 
 
@@ -39,6 +40,27 @@ def test_table_numbers_match_the_logs(quick_reproduction):
         metrics["model-based"]["tracking_error_rms"]
     assert summary["table"][0]["this_project"] == pytest.approx(reduction)
     assert summary["table"][0]["paper"] == 0.775
+
+
+def test_ablation_numbers_match_the_logs(quick_reproduction):
+    """ablation.md / metrics.json["ablation"]: one row per ABLATION_ROWS entry, each
+    phase's value equal to the metric recomputed from the saved logs."""
+    _, out = quick_reproduction
+    summary = json.loads((out / "metrics.json").read_text())
+    scenario = load_scenario(out / "scenario.yaml")
+    metrics = {c: run_metrics(load_logs(out, c), scenario) for c in CONTROLLERS}
+    assert [row["metric"] for row in summary["ablation"]] == \
+        [r.label for r in ABLATION_ROWS]
+    for row in summary["ablation"]:
+        controller, name = row["key"].split(".", 1)
+        for phase, value in zip(("phase1", "phase2", "phase3"), row["phases"]):
+            expected = metrics[controller][f"{phase}.{name}"]
+            if row["over"]:
+                over_controller, over_name = row["over"].split(".", 1)
+                expected /= metrics[over_controller][f"{phase}.{over_name}"]
+            assert value == pytest.approx(expected, rel=1e-12), (row["metric"], phase)
+    text = (out / "ablation.md").read_text()
+    assert text.count("\n| ") == len(ABLATION_ROWS) + 1
 
 
 def _chromium():

@@ -36,6 +36,20 @@ def test_yaml_round_trip(tmp_path):
     ("rhs: {trust_ratio: 0.5}\n", r"rhs.trust_ratio = 0.5 .*in \[1, 10\]"),
     ("stress: {B_hat_scale: 0.0}\n", r"stress.B_hat_scale = 0.0 .*> 0"),
     ("stress: {start: -1.0}\n", r"stress.start = -1.0 .*>= 0 s"),
+    ("learner: {mode: adaptive}\n", r"learner.mode = 'adaptive'; allowed: regularized, "
+                                    r"plain"),
+    ("learner: {band: [1.0]}\n", r"learner.band has 1 entries; allowed: 2 \(\[low, "
+                                 r"high\] in Hz\)"),
+    ("learner: {band: [2.0, 60.0]}\n", r"learner.band\[1\] = 60.0 .*in \[2, 50\] Hz"),
+    ("learner: {band_sections: [4, 40]}\n", r"learner.band_sections\[1\] = 40 .*\[0, 16\]"),
+    ("learner: {forgetting: 0.0}\n", r"learner.forgetting = 0.0 .*> 0 s"),
+    ("learner: {prior_weight: -1.0}\n", r"learner.prior_weight = -1.0 .*>= 0"),
+    ("learner: {change_ratio: 0.5}\n", r"learner.change_ratio = 0.5 .*\[1, 1e\+06\]"),
+    ("excitation: {amplitude: .nan}\n", r"excitation.amplitude = nan .*>= 0 N m"),
+    ("excitation: {frequencies: [5.0, 4.0]}\n",
+     r"excitation.frequencies\[1\] = 4.0 .*in \[5, 500\] Hz"),
+    ("excitation: {frequencies: [0.5, 4.0]}\n",
+     r"excitation.frequencies = \[0.5, 4.0\] Hz lie outside learner.band"),
 ])
 def test_bad_input_is_named(tmp_path, text, message):
     path = tmp_path / "s.yaml"
@@ -50,3 +64,13 @@ def test_rhs_period_too_long_for_the_gain_rule():
     with pytest.raises(ConfigError, match=r"periods.rhs = 0.0005 s cannot realize the RHS "
                                           r"decay rate c = 8\d\d.\d 1/s .* <= 1 / \(4 c\)"):
         build_dac_diagram(scenario)
+
+
+
+def test_plain_learner_needs_no_band():
+    """The paper's plain learner ignores the band, so an excitation outside it is
+    allowed (and useless to it)."""
+    scenario = Scenario()
+    scenario.learner.mode = "plain"
+    scenario.excitation.frequencies = [0.5, 0.7]
+    scenario.Validate()

@@ -238,6 +238,32 @@ def test_summary_table_parquet_and_plots(serial):
     assert "| DAC vs model-based, paired |" in (out / "summary.md").read_text()
 
 
+def test_summary_learning_section(serial):
+    """Per phase: the share of trials whose learned B and D beat the prior and the
+    ratios' median, from the rows' own metrics."""
+    path, out, rows = serial
+    summary = write_summary(out, load_sweep(path))
+    learning = summary["learning"]
+    assert learning["trials"] == TRIALS
+    for phase in ("phase1", "phase2", "phase3"):
+        for name in ("B", "D"):
+            ratios = np.array([r["runs"]["dac"]["metrics"][f"{phase}.{name}_error_ratio"]
+                               for r in rows])
+            entry = learning["phases"][phase][name]
+            assert entry["beats_prior"] == pytest.approx(np.mean(ratios <= 1.0))
+            assert entry["median"] == pytest.approx(np.median(ratios), rel=1e-12)
+        assert learning["phases"][phase]["e_tau_ratio_median"] is None   # no dac-nominal
+    assert "Learning (DAC, 4 finished trials)" in (out / "summary.md").read_text()
+
+
+def test_shipped_learning_robustness_sweep_loads():
+    definition = load_sweep(SWEEPS / "learning_robustness.yaml")
+    assert definition.scenario == short_scenario()
+    assert definition.sweep.trials >= 20 and definition.sweep.distributions.learner_seed \
+        is None                                # each trial seeds its own learner
+    assert definition.sweep.controllers == ["dac", "dac-nominal"]
+
+
 def test_an_output_directory_belongs_to_one_sweep(tmp_path):
     first = load_sweep(write_sweep(tmp_path, SWEEP))
     other = load_sweep(write_sweep(tmp_path, SWEEP.replace("seed: 11", "seed: 12"),
@@ -279,7 +305,7 @@ def test_shipped_sweep_loads():
     ("distributions: {learner_seed: !UniformDiscrete {values: [1, 2.5]}}\n",
      r"distributions.learner_seed = 2.5; allowed: integers >= 0"),
     ("trials: 0\n", r"trials = 0 is out of range; allowed: in \[1, 1e\+06\]"),
-    ("controllers: [dac, pid]\n", r"controllers: 'pid' is unknown; allowed: dac, model-based"),
+    ("controllers: [dac, pid]\n", r"controllers: 'pid' is unknown; allowed: dac, dac-nominal, model-based"),
     ("scenario: missing.yaml\n", r"scenario = 'missing.yaml' is neither a built-in scenario"),
 ])
 def test_malformed_sweep_is_named(tmp_path, setting, message):

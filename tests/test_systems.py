@@ -124,3 +124,71 @@ def test_lhs_controller_equation(model):
     expected = (r.M @ nu_dot_fd + r.C @ nu - scenario.lhs.Kd * s
                 - chi * np.tanh(s / scenario.lhs.epsilon))
     np.testing.assert_allclose(tau, expected, rtol=1e-6, atol=1e-9)
+
+
+def test_port_observer_sample_is_one_consistent_instant(model):
+    """port_sample = [q, M qdot, qdot, u, tau_obs] of the same sample: the u the plant
+    received when qddot was measured; with an anti-alias cutoff f the regressed part
+    moves by a = 1 - exp(-2 pi f h) of the way towards the new sample."""
+    h, f = 2.5e-4, 6.0
+    q, qdot, qddot = np.array([0.4, 0.9]), np.array([0.2, -0.5]), np.array([1.0, -2.0])
+    u = np.array([0.03, -0.01])
+    r = model.Evaluate(q, qdot)
+    tau = r.M @ qddot + r.C @ qdot
+    for cutoff, a in ((0.0, 1.0), (f, 1 - np.exp(-2 * np.pi * f * h))):
+        observer = PortObserver(model, NQ, h, 1e-3, 0.0, 0, anti_alias_cutoff=cutoff)
+        context = observer.CreateDefaultContext()
+        observer.GetInputPort("state").FixValue(context, _state(q, qdot, model))
+        observer.GetInputPort("acceleration").FixValue(
+            context, np.concatenate([[0, 0, 0], qddot]))
+        observer.GetInputPort("u").FixValue(context, u)
+        state = context.get_mutable_discrete_state()
+        for event in (observer._UpdateModel, observer._UpdateSample):
+            event(context, state)
+            context.SetDiscreteState(state)
+        sample = observer.GetOutputPort("port_sample").Eval(context)
+        np.testing.assert_allclose(sample[:4], np.concatenate([q, r.M @ qdot]),
+                                   atol=1e-15)
+        np.testing.assert_allclose(sample[4:], a * np.concatenate([qdot, u, tau]),
+                                   atol=1e-15)
+
+
+def test_regression_filter_is_the_band_pass_cascade():
+    from dacph_drake.identification import BandPassCascade
+    from dacph_drake.scenario import Learner
+    from dacph_drake.systems.regression_filter import RegressionFilter
+    settings, h = Learner(), 0.01
+    system = RegressionFilter(settings=settings, num_joints=2, period=h)
+    context = system.CreateDefaultContext()
+    rng = np.random.default_rng(3)
+    samples = rng.standard_normal((50, 10))
+    outputs = []
+    state = context.get_mutable_discrete_state()
+    for sample in samples:
+        system.GetInputPort("port_sample").FixValue(context, sample)
+        system._UpdateFilter(context, state)
+        context.SetDiscreteState(state)
+        outputs.append(system.GetOutputPort("filtered_sample").Eval(context).copy())
+    outputs = np.array(outputs)
+    expected = BandPassCascade(*settings.band, *settings.band_sections, h).Filter(
+        samples[:, 4:])
+    np.testing.assert_array_equal(outputs[:, :4], samples[:, :4])     # q, p unfiltered
+    np.testing.assert_allclose(outputs[:, 4:], expected, atol=1e-15)
+
+
+def test_lhs_controller_adds_the_excitation(model):
+    from dacph_drake.scenario import Excitation
+    scenario = Scenario()
+    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
+    reference = OrientationReference(scenario.reference, 1.3)
+    excitation = Excitation(amplitude=2e-3, frequencies=[3.0, 5.0])
+    plain = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05)
+    excited = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05,
+                            excitation)
+    x = _state(np.array([0.3, 1.0]), np.array([0.1, -0.1]), model)
+    t = 0.37
+    difference = excited.Control(t, x, 0.02)[0] - plain.Control(t, x, 0.02)[0]
+    np.testing.assert_allclose(
+        difference, 2e-3 * np.sin(2 * np.pi * np.array([3.0, 5.0]) * t), atol=1e-17)
+    np.testing.assert_allclose(Excitation(frequencies=[2.0, 8.0]).Frequencies(3),
+                               [2.0, 4.0, 8.0])

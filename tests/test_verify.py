@@ -78,6 +78,23 @@ def test_envelope_accepts_decay_between_the_rates_and_rejects_growth():
     assert not too_fast.ok
 
 
+def test_envelope_accounts_for_the_excitation():
+    """A V held up by the excitation tau_pe (||tau_pe|| <= a) at its level: the
+    envelope without the excitation term rejects it, the one with a admits it, and
+    growth is still rejected with it."""
+    t = np.arange(0, 1, 0.01)
+    n, a, Kd, chi, epsilon = len(t), 2e-4 * np.sqrt(2), 0.5, 1e-3, 0.2
+    r_slow = 2 * Kd / 0.04442
+    floor = 2 * 2 * 0.2785 * chi * epsilon / r_slow          # above delta / r_slow
+    assert floor < (2 * 0.2785 * chi * epsilon + a**2 / (2 * Kd)) / (r_slow / 2)
+    V = np.full(n, floor)
+    check = lambda V, a: check_lyapunov_envelope(            # noqa: E731
+        t, V, np.zeros(n), np.full(n, chi), Kd, Kd, 0.005093, 0.04442, epsilon, 2,
+        excitation_norm=a)
+    assert not check(V, 0.0).ok and check(V, a).ok
+    assert not check(floor * np.exp(5.0 * t), a).ok
+
+
 def test_region_of_attraction_is_a_real_certificate():
     """Drake's SOS certificate: the polynomial sliding dynamics started on the
     boundary of the certified ball converge; the region shrinks as chi grows

@@ -98,8 +98,11 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     L, R = LhsLog(n), RhsLog(n)
     V, e_norm, chi = lhs[:, L.lyapunov_V], rhs[:, R.e_norm], rhs[:, R.chi]
 
+    # The learner's excitation tau_pe enters the s dynamics as a known input.
+    excitation_norm = scenario.excitation.amplitude * np.sqrt(n)
     envelope = check_lyapunov_envelope(t, V, e_norm, chi, Kd, Kd, lambda_min_M,
-                                       lambda_max_M, epsilon, n)
+                                       lambda_max_M, epsilon, n,
+                                       excitation_norm=excitation_norm)
     per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))
     learned = _rhs_series(logs, scenario, lambda_lhs, "estimates", per_update)
     truth = _rhs_series(logs, scenario, lambda_lhs, "true_matrices", 1)
@@ -124,12 +127,13 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
+                           "excitation_norm": excitation_norm,
                            "lambda_lhs": lambda_lhs, "rhs_period": scenario.periods.rhs,
                            "inf_lambda_min_M": lambda_min_M,
                            "sup_lambda_max_M": lambda_max_M}}
     if out_dir is not None:
         _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario,
-               (Kd, lambda_min_M, lambda_max_M, epsilon, n))
+               (Kd, lambda_min_M, lambda_max_M, epsilon, n, excitation_norm))
     return report
 
 
@@ -148,13 +152,14 @@ def _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario, constan
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "verification.json").write_text(json.dumps(report, indent=2))
-    Kd, lambda_min_M, lambda_max_M, epsilon, n = constants
+    Kd, lambda_min_M, lambda_max_M, epsilon, n, excitation_norm = constants
     lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, Kd, Kd, lambda_min_M,
-                                   lambda_max_M, epsilon, n)
+                                   lambda_max_M, epsilon, n, excitation_norm)
     fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     axes[0].semilogy(t, np.maximum(V, 1e-30), "k-", lw=0.8, label="V = s^T M s / 2")
     axes[0].semilogy(t[1:], np.maximum(upper, 1e-30), "C3--", lw=0.6,
-                     label="upper bound (rate 2 lambda_min(K_d) / sup lambda_max(M))")
+                     label="upper bound (rate 2 lambda_min(K_d) / sup lambda_max(M), "
+                           "halved with excitation)")
     axes[0].set_ylabel("V [J]")
     axes[0].legend(fontsize=7)
     for series, label, style in [(learned, "loop with learned B_hat", "C0."),

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from dacph_drake.metrics import comparison  # noqa: E402
+from dacph_drake.metrics import PHASES, comparison  # noqa: E402
 from dacph_drake.montecarlo.definition import SweepDefinition  # noqa: E402
 from dacph_drake.montecarlo.store import read_manifest, read_rows, sorted_rows  # noqa: E402
 
@@ -60,6 +60,8 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
         summary["controllers"][controller] = {
             "succeeded": len(ok), "success_rate": len(ok) / max(len(rows), 1),
             "metrics": {name: _quantiles([m[name] for m in ok]) for name in names}}
+    if "dac" in controllers:
+        summary["learning"] = learning_summary(rows)
     if {"dac", "model-based"} <= set(controllers):
         pairs = [comparison(r["runs"]["dac"]["metrics"], r["runs"]["model-based"]["metrics"])
                  for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
@@ -68,6 +70,37 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
         for name in (pairs[0] if pairs else {}):
             summary["paired"][name] = _mean_interval([p[name] for p in pairs], rng)
     return summary
+
+
+def learning_summary(rows: List[Dict]) -> Dict:
+    """Per phase, over the trials whose DAC run finished: how often the learned B and
+    D beat the nominal prior (learned / nominal error ratio <= 1), the ratios'
+    median and 95 % quantile, and the share of samples whose B_hat the integrator
+    rejected (the largest one, and how many trials exceed 5 %); with dac-nominal
+    runs, the median over trials of RMS e_tau with learning / without."""
+    ok = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"]
+    runs = [r["runs"]["dac"]["metrics"] for r in ok]
+    nominal = [(r["runs"]["dac"]["metrics"], r["runs"]["dac-nominal"]["metrics"])
+               for r in ok if r["runs"].get("dac-nominal", {}).get("status") == "ok"]
+    out = {"trials": len(runs), "phases": {}}
+    if not runs:
+        return out
+    for phase in PHASES:
+        entry = {}
+        for name in ("B", "D"):
+            ratios = np.array([m[f"{phase}.{name}_error_ratio"] for m in runs], float)
+            entry[name] = {"beats_prior": float(np.mean(ratios <= 1.0)),
+                           "median": float(np.median(ratios)),
+                           "q95": float(np.quantile(ratios, 0.95))}
+        rejected = np.array([m[f"{phase}.rejected_share"] for m in runs], float)
+        entry["rejected_share_max"] = float(rejected.max())
+        entry["trials_rejecting_over_5_percent"] = int(np.sum(rejected > 0.05))
+        key = f"{phase}.e_tau_rms"
+        entry["e_tau_ratio_median"] = (float(np.median([a[key] / b[key]
+                                                        for a, b in nominal]))
+                                       if nominal else None)
+        out["phases"][phase] = entry
+    return out
 
 
 def _quantiles(values) -> Dict:
@@ -109,6 +142,23 @@ def format_summary(summary: Dict) -> str:
                   if p["ci95"] else "-")
             lines.append(f"| {name} | {p['n']} | {100 * p['mean']:.2f} % | {ci} | "
                          f"{100 * p['median']:.2f} % |")
+    if summary.get("learning"):
+        learning = summary["learning"]
+        lines += ["", f"Learning (DAC, {learning['trials']} finished trials): learned / "
+                      "nominal error ratio",
+                  "", "| phase | B ratio <= 1 | B median | B 95 % | D ratio <= 1 | "
+                      "D median | D 95 % | max rejected B_hat | trials rejecting > 5 % | "
+                      "median e_tau DAC / dac-nominal |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for phase, e in learning["phases"].items():
+            e_tau = e["e_tau_ratio_median"]
+            lines.append(
+                f"| {phase} | {100 * e['B']['beats_prior']:.0f} % | {e['B']['median']:.3g} "
+                f"| {e['B']['q95']:.3g} | {100 * e['D']['beats_prior']:.0f} % | "
+                f"{e['D']['median']:.3g} | {e['D']['q95']:.3g} | "
+                f"{100 * e['rejected_share_max']:.2f} % | "
+                f"{e['trials_rejecting_over_5_percent']} | "
+                f"{'-' if e_tau is None else f'{e_tau:.3g}'} |")
     for failure in summary["failures"]:
         lines.append(f"failed trial {failure['trial']}: {failure['reason']}")
     return "\n".join(lines) + "\n"

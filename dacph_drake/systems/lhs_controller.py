@@ -7,7 +7,7 @@ from dacph_drake.log_layout import LhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.reference import OrientationReference
-from dacph_drake.scenario import LhsGains
+from dacph_drake.scenario import Excitation, LhsGains
 
 
 class LhsController(LeafSystem):
@@ -27,7 +27,8 @@ class LhsController(LeafSystem):
 
     def __init__(self, model: ReducedOrderModel, potential: BaseRepulsionPotential,
                  reference: OrientationReference, gains: LhsGains, period: float,
-                 num_positions: int, fixed_chi: float):
+                 num_positions: int, fixed_chi: float,
+                 excitation: Excitation = Excitation(amplitude=0.0)):
         super().__init__()
         n = model.num_joints
         self._n, self._nq = n, num_positions
@@ -35,6 +36,8 @@ class LhsController(LeafSystem):
         self._Kd, self._Lambda = gains.Kd, gains.Lambda
         self._epsilon, self._eta = gains.epsilon, gains.eta
         self._fixed_chi = fixed_chi
+        self._excitation_amplitude = excitation.amplitude
+        self._excitation_omega = 2 * np.pi * excitation.Frequencies(n)
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._chi = self.DeclareVectorInputPort("chi", 1)
         self._tau_index = self.DeclareDiscreteState(n)
@@ -68,6 +71,8 @@ class LhsController(LeafSystem):
                   + P_dot @ xi + P @ xi_dot)
         s = qdot - nu
         tau = r.M @ nu_dot + r.C @ nu - self._Kd * s - chi * np.tanh(s / self._epsilon)
+        if self._excitation_amplitude > 0:
+            tau = tau + self._excitation_amplitude * np.sin(self._excitation_omega * t)
         log = np.concatenate([s, [alpha_error, alpha_d, 0.5 * s @ r.M @ s, U,
                                   np.linalg.eigvalsh(r.M)[0]]])
         return tau, log

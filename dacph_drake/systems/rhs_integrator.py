@@ -11,11 +11,19 @@ from dacph_drake.scenario import Rhs, Stress
 
 
 class RhsIntegrator(LeafSystem):
-    """Every ``period`` (the fastest loop), with e_tau = tau_c^r - tau_obs:
+    """Every ``period`` h (the fastest loop), at sample k:
 
+        e_tau = tau_c^r(k-1) - tau_obs(k)
         u_I <- u_I + h K e_tau
         u    = B_hat^-1 (tau_c^r + D_hat qdot) + u_I
         chi  = max(||e_tau||, chi e^(-h / chi_window), chi_floor)
+
+    tau_obs(k), the observer's held output, was measured at sample k-1, so e_tau
+    compares it with the request of that same instant (the paper's
+    e_tau = tau_c^r - tau_c^g). Against the current request instead, e_tau would
+    also carry the request's own increment over one sample, which the feed-forward
+    already delivers: the integrator would wind up on it and no model of the RHS
+    could remove that error.
 
     Every ``model_period`` it refreshes, from the learner's exported weights at the
     sampled state x = (q, p): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
@@ -62,6 +70,7 @@ class RhsIntegrator(LeafSystem):
         self._gains = self.DeclareDiscreteState(self._Refresh(
             np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
             initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
+        self._previous_request = self.DeclareDiscreteState(n)
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareVectorOutputPort("u", n, lambda c, o: o.SetFromVector(
             c.get_discrete_state(self._fast).get_value()[n:2 * n]),
@@ -112,7 +121,8 @@ class RhsIntegrator(LeafSystem):
         fast = context.get_discrete_state(self._fast).get_value()
         gains = context.get_discrete_state(self._gains).get_value()
         tau_request = self._tau_request.Eval(context)
-        e = tau_request - self._tau_observed.Eval(context)
+        e = (context.get_discrete_state(self._previous_request).get_value()
+             - self._tau_observed.Eval(context))
         e_norm = np.sqrt(e @ e)
         u_I = fast[:n] + self._h * gains[n * n + n:n * n + 2 * n] * e
         qdot = self._state.Eval(context)[self._nq + 3:]
@@ -120,6 +130,8 @@ class RhsIntegrator(LeafSystem):
         chi = max(e_norm, fast[-1] * self._chi_decay, self._settings.chi_floor)
         discrete_state.get_mutable_vector(self._fast).SetFromVector(
             np.concatenate([u_I, u, e, [e_norm, chi]]))
+        discrete_state.get_mutable_vector(self._previous_request).SetFromVector(
+            tau_request)
 
     def _CalcLog(self, context, output):
         n = self._n

@@ -1,0 +1,233 @@
+"""Online identification of the RHS (paper section "RHS Control and Learning", SPEC
+section 6): the regression the learner solves, its band-pass prefilter and its
+change detector, free of Drake so they can be tested on synthetic data.
+
+A port sample is one instant of the port relation (the paper's tau_breve model)
+
+    tau_obs = B~(x) u - D~(x) qdot + d(t),      x = (q, p)
+
+laid out as [q, p, qdot, u, tau_obs] (PortSample). The learner fits the network's
+B_hat(x), D_hat(x) (network.RhsNetwork) to a window of such samples.
+"""
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+import torch
+
+from dacph_drake.network import RhsNetwork
+from dacph_drake.scenario import Learner
+
+
+class PortSample:
+    """Column layout of a port sample [q, p, qdot, u, tau_obs] (n entries each); the
+    band-pass acts on the ``regressed`` part [qdot, u, tau_obs]."""
+
+    def __init__(self, n: int):
+        self.q, self.p = slice(0, n), slice(n, 2 * n)
+        self.qdot, self.u, self.tau = slice(2 * n, 3 * n), slice(3 * n, 4 * n), \
+            slice(4 * n, 5 * n)
+        self.regressed = slice(2 * n, 5 * n)
+        self.size = 5 * n
+
+
+class BandPassCascade:
+    """A cascade of first-order sections sampled at ``period`` h,
+
+        low-pass  y_k = y_(k-1) + a (x_k - y_(k-1)),   a = 1 - exp(-2 pi f h)
+        high-pass x_k - (the low-pass of x at f)
+
+    ``high_sections`` high-pass sections at ``low`` Hz, then ``low_sections``
+    low-pass sections at ``high`` Hz. The state is one row per section (the
+    low-pass memory of that section), so it can live in a Drake Context."""
+
+    def __init__(self, low: float, high: float, high_sections: int, low_sections: int,
+                 period: float):
+        gain = lambda f: 1.0 - np.exp(-2 * np.pi * f * period)     # noqa: E731
+        self.gains = np.array([gain(low)] * high_sections + [gain(high)] * low_sections)
+        self.is_high_pass = np.arange(len(self.gains)) < high_sections
+
+    @property
+    def num_sections(self) -> int:
+        return len(self.gains)
+
+    def Step(self, state: np.ndarray, x: np.ndarray):
+        """(next state, output) for one input sample x; state has shape
+        (num_sections, len(x))."""
+        state = state.copy()
+        y = np.asarray(x, float)
+        for i, (a, high) in enumerate(zip(self.gains, self.is_high_pass)):
+            state[i] += a * (y - state[i])
+            y = y - state[i] if high else state[i]
+        return state, y
+
+    def Filter(self, x: np.ndarray) -> np.ndarray:
+        """The filtered sequence of the rows of x, from a zero state."""
+        state = np.zeros((self.num_sections, x.shape[1]))
+        out = np.empty_like(x, dtype=float)
+        for k, row in enumerate(x):
+            state, out[k] = self.Step(state, row)
+        return out
+
+
+@dataclass
+class FitStatistics:
+    """Of the current network on the weighted window: loss = sum w ||r||^2 (r the
+    residual of the port relation), nominal_loss the same for (B0, D0), and
+    beta_hat = 1 + RMS residual / RMS tau (the gain rule's uncertainty estimate)."""
+    loss: float
+    nominal_loss: float
+    beta_hat: float
+
+
+class RhsIdentifier:
+    """The learner's regression on a window of port samples (rows [t, PortSample]).
+
+    plain (the paper): Adam on mean ||tau - (B_hat(x) u - D_hat(x) qdot)||^2.
+    regularized: Adam on
+
+        [sum_k w_k ||r_k||^2 + rho (E_u sum_k w_k ||B_hat(x_k) - B0||_F^2
+                                   + E_q sum_k w_k ||D_hat(x_k) - D0||^2)] / (E_u + E_q)
+
+    with w_k = exp(-(t - t_k) / forgetting) (zero before ``window_start``),
+    normalized to sum 1, E_u = sum w ||u||^2 / n, E_q = sum w ||qdot||^2 / n. The
+    prior term keeps at (B0, D0) what the window does not inform; dividing by
+    E_u + E_q makes rho dimensionless and the loss O(1) for Adam.
+
+    The torch module and Adam's moments are this object's state."""
+
+    def __init__(self, n: int, settings: Learner, B0: np.ndarray, D0: np.ndarray,
+                 seed: int):
+        self.n = n
+        self._settings = settings
+        self._regularized = settings.mode == "regularized"
+        self._layout = PortSample(n)
+        torch.set_num_threads(1)
+        self.network = RhsNetwork(n, settings.hidden, B0, D0, settings.momentum_scale,
+                                  seed)
+        self._optimizer = torch.optim.Adam(
+            self.network.parameters(), lr=settings.learning_rate,
+            betas=(settings.beta1, settings.beta2), eps=settings.eps)
+        self._B0 = torch.as_tensor(np.asarray(B0, float))
+        self._D0 = torch.as_tensor(np.asarray(D0, float))
+
+    def _Split(self, rows: np.ndarray):
+        data = torch.tensor(rows)
+        L = self._layout
+        sample = data[:, 1:]
+        return (data[:, 0], sample[:, L.q], sample[:, L.p], sample[:, L.qdot],
+                sample[:, L.u], sample[:, L.tau])
+
+    def Weights(self, times: torch.Tensor, t_now: float, window_start: float):
+        """The samples' weights, normalized to sum 1 (uniform in plain mode)."""
+        if not self._regularized:
+            w = torch.ones_like(times)
+        else:
+            w = torch.exp((times - t_now) / self._settings.forgetting)
+            w = torch.where(times >= window_start, w, torch.zeros_like(w))
+        return w / torch.clamp(w.sum(), min=1e-300)
+
+    def _Loss(self, w, q, p, qdot, u, tau):
+        B, D = self.network(q, p)
+        residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
+        data = torch.sum(w * torch.sum(residual**2, 1))
+        if not self._regularized:
+            return data
+        E_u = torch.sum(w * torch.sum(u**2, 1)) / self.n
+        E_q = torch.sum(w * torch.sum(qdot**2, 1)) / self.n
+        prior = (E_u * torch.sum(w * torch.sum((B - self._B0)**2, (1, 2)))
+                 + E_q * torch.sum(w * torch.sum((D - self._D0)**2, 1)))
+        return (data + self._settings.prior_weight * prior) / torch.clamp(
+            E_u + E_q, min=1e-300)
+
+    def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> None:
+        """settings.steps_per_update Adam steps on the window ``rows``."""
+        times, q, p, qdot, u, tau = self._Split(rows)
+        w = self.Weights(times, t_now, window_start)
+        for _ in range(self._settings.steps_per_update):
+            self._optimizer.zero_grad()
+            self._Loss(w, q, p, qdot, u, tau).backward()
+            self._optimizer.step()
+
+    def Statistics(self, rows: np.ndarray, t_now: float) -> FitStatistics:
+        """FitStatistics on ``rows`` (weighted by recency in regularized mode, the
+        samples before a change included: they show the stale model's misfit)."""
+        times, q, p, qdot, u, tau = self._Split(rows)
+        w = self.Weights(times, t_now, -np.inf)
+        with torch.no_grad():
+            B, D = self.network(q, p)
+            residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
+            nominal = tau - (u @ self._B0.T - self._D0 * qdot)
+            loss = float(torch.sum(w * torch.sum(residual**2, 1)))
+            nominal_loss = float(torch.sum(w * torch.sum(nominal**2, 1)))
+            signal = float(torch.sum(w * torch.sum(tau**2, 1)))
+        return FitStatistics(loss=loss, nominal_loss=nominal_loss,
+                             beta_hat=1.0 + np.sqrt(loss / max(signal, 1e-300)))
+
+    def RelativeResidual(self, rows: np.ndarray) -> float:
+        """sqrt(sum ||r||^2 / sum ||tau||^2) of the current network on ``rows``."""
+        _, q, p, qdot, u, tau = self._Split(rows)
+        with torch.no_grad():
+            B, D = self.network(q, p)
+            residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
+            return float(torch.sqrt(torch.sum(residual**2)
+                                    / torch.clamp(torch.sum(tau**2), min=1e-300)))
+
+    def Estimate(self, q: np.ndarray, p: np.ndarray):
+        """(B_hat (n x n), diag D_hat (n,)) at one state."""
+        with torch.no_grad():
+            B, D = self.network(torch.as_tensor(q)[None], torch.as_tensor(p)[None])
+        return B[0].numpy(), D[0].numpy()
+
+    def Export(self) -> np.ndarray:
+        return self.network.export()
+
+
+class ChangeDetector:
+    """Flags an abrupt change of the port relation. Its state is a vector (so it can
+    live in a Drake Context): [hold_until, window_start, count, history (H)], the
+    history holding the last H relative residuals of the newest samples.
+
+    Update(state, t, e_new): while t < hold_until nothing happens; otherwise, when
+    at least MIN_HISTORY residuals are known and e_new > ratio * median(history) and
+    e_new > floor, a change is detected: hold_until = window_start = t + hold and the
+    history restarts; else e_new joins the history."""
+
+    HISTORY = 30
+    MIN_HISTORY = 5
+
+    def __init__(self, ratio: float, floor: float, hold: float):
+        self._ratio, self._floor, self._hold = ratio, floor, hold
+
+    @classmethod
+    def InitialState(cls) -> np.ndarray:
+        return np.concatenate([[-np.inf, -np.inf, 0.0], np.zeros(cls.HISTORY)])
+
+    @staticmethod
+    def Holding(state: np.ndarray, t: float) -> bool:
+        return t < state[0]
+
+    @staticmethod
+    def WindowStart(state: np.ndarray) -> float:
+        return float(state[1])
+
+    def Update(self, state: np.ndarray, t: float, e_new: float) -> np.ndarray:
+        state = state.copy()
+        if t < state[0] or not np.isfinite(e_new):
+            return state
+        count = int(state[2])
+        known = state[3:3 + min(count, self.HISTORY)]
+        if (count >= self.MIN_HISTORY and e_new > self._ratio * np.median(known)
+                and e_new > self._floor):
+            state[0] = state[1] = t + self._hold
+            state[2] = 0.0
+        else:
+            state[3 + count % self.HISTORY] = e_new
+            state[2] = count + 1
+        return state
+
+
+def NewestRows(rows: np.ndarray, t_now: float, period: float) -> Optional[np.ndarray]:
+    """The rows sampled in the last ``period`` before t_now (None if none)."""
+    newest = rows[rows[:, 0] > t_now - period + 1e-12]
+    return newest if len(newest) else None

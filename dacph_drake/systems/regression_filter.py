@@ -1,0 +1,42 @@
+"""Band-pass prefilter of the learner's port samples (Learner.band, SPEC section 6)."""
+import numpy as np
+from pydrake.systems.framework import LeafSystem
+
+from dacph_drake.identification import BandPassCascade, PortSample
+from dacph_drake.scenario import Learner
+
+
+class RegressionFilter(LeafSystem):
+    """Every ``period`` it passes the [qdot, u, tau_obs] part of the input
+    ``port_sample`` through identification.BandPassCascade (settings.band,
+    settings.band_sections) and holds [q, p, filtered qdot, u, tau_obs] on the
+    output ``filtered_sample``.
+
+    The same linear filter on every signal keeps the port relation
+    tau = B u - D qdot + d for the filtered signals while B(x), D(x) vary slowly
+    against the filter's memory, and removes d(t) where it lies outside the band.
+    q and p pass unfiltered: they are the network's features."""
+
+    def __init__(self, *, settings: Learner, num_joints: int, period: float):
+        super().__init__()
+        self._layout = PortSample(num_joints)
+        self._cascade = BandPassCascade(settings.band[0], settings.band[1],
+                                        settings.band_sections[0],
+                                        settings.band_sections[1], period)
+        width = 3 * num_joints
+        self._port_sample = self.DeclareVectorInputPort("port_sample", self._layout.size)
+        self._sections = self.DeclareDiscreteState(self._cascade.num_sections * width)
+        self._filtered = self.DeclareDiscreteState(self._layout.size)
+        self._width = width
+        self.DeclareStateOutputPort("filtered_sample", self._filtered)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateFilter)
+
+    def _UpdateFilter(self, context, discrete_state):
+        L = self._layout
+        sample = self._port_sample.Eval(context).copy()
+        sections = context.get_discrete_state(self._sections).get_value().reshape(
+            -1, self._width)
+        sections, sample[L.regressed] = self._cascade.Step(sections, sample[L.regressed])
+        discrete_state.get_mutable_vector(self._sections).SetFromVector(
+            sections.reshape(-1))
+        discrete_state.get_mutable_vector(self._filtered).SetFromVector(sample)
