@@ -31,17 +31,17 @@ def _free_flight(args) -> int:
 def _simulate(args) -> int:
     from dacph_drake.metrics import run_metrics
     from dacph_drake.run import simulate
-    from dacph_drake.scenario import scenario_from_argument
-    scenario = scenario_from_argument(args.scenario)
+    from dacph_drake.scenario import load_scenario
+    scenario = load_scenario(args.scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
-                      out_dir=args.out, progress=True)
+                      out_dir=args.out, progress=True, interruptible=True)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
     if result.final_time > scenario.phases.linear_start:
         for name, value in run_metrics(result.logs, scenario).items():
             print(f"  {name:32s} {value:.6g}")
     print(f"saved to {args.out}")
-    return 0 if result.status == "ok" else 1
+    return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
 
 def _diagram(args) -> int:
@@ -86,10 +86,10 @@ def _animate_run(run_dir, controller: str, out=None):
 def _reproduce(args) -> int:
     import time
     from dacph_drake.reproduce import reproduce
-    from dacph_drake.scenario import scenario_from_argument
+    from dacph_drake.scenario import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
-    summary = reproduce(scenario_from_argument(name), args.out, jobs=args.jobs)
+    summary = reproduce(load_scenario(name), args.out, jobs=args.jobs)
     print(f"reproduced {name} in {time.perf_counter() - start:.0f} s -> {args.out}")
     _print_table(summary)
     if args.animate:
@@ -114,17 +114,17 @@ def _verify(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.run import simulate
-    from dacph_drake.scenario import scenario_from_argument
+    from dacph_drake.scenario import load_scenario
     target = Path(args.target)
     if target.is_dir():
         run_dir = target
     else:
+        scenario = load_scenario(args.target)
         if not args.out:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        simulate(scenario_from_argument(args.target), "dac", out_dir=run_dir,
-                 progress=True)
+        simulate(scenario, "dac", out_dir=run_dir, progress=True)
     report = verify_run(run_dir)
     for name, check in report["checks"].items():
         detail = check.get("reason") or check.get("first_failure") or ""

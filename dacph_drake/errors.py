@@ -1,4 +1,6 @@
-"""Error types shared by the package."""
+"""Error types shared by the package, and the checks that raise them."""
+import dataclasses
+import math
 
 
 class ConfigError(ValueError):
@@ -33,3 +35,22 @@ def _require(name: str, value: float, ok: bool, allowed: str) -> None:
         raise ConfigError(f"{name} = {value!r} is not a number; allowed: {allowed}")
     if not (finite and ok):
         raise ConfigError(f"{name} = {value!r} is out of range; allowed: {allowed}")
+
+
+def require_finite_numbers(name: str, value) -> None:
+    """Raises ConfigError naming the first entry of ``value`` (a dataclass, a list or a
+    number, walked recursively; ``name`` is its dotted path) that is a NaN or an
+    infinity, or a string where a number belongs. Fields whose value is a string
+    by design (names, modes) are left to their own checks."""
+    if dataclasses.is_dataclass(value):
+        for f in dataclasses.fields(value):
+            if f.type is not str:
+                require_finite_numbers(f"{name}.{f.name}" if name else f.name,
+                                       getattr(value, f.name))
+    elif isinstance(value, (list, tuple)):
+        for i, entry in enumerate(value):
+            require_finite_numbers(f"{name}[{i}]", entry)
+    elif isinstance(value, str):
+        raise ConfigError(f"{name} = {value!r} is not a number; allowed: a finite number")
+    elif isinstance(value, (int, float)) and not math.isfinite(value):
+        raise ConfigError(f"{name} = {value!r} is not finite; allowed: a finite number")

@@ -1,9 +1,12 @@
 """Simulating a closed loop: initial state, divergence monitor, progress bar, and
 saving the logs with the scenario, the versions and the seed."""
 import json
+import os
 import platform
 import resource
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -13,7 +16,7 @@ import numpy as np
 from pydrake.systems.framework import EventStatus
 
 from dacph_drake.diagrams import BUILDERS, ClosedLoop
-from dacph_drake.errors import ConfigError
+from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.scenario import Scenario, save_scenario
 from dacph_drake.simulation import MakeSimulator
 
@@ -23,7 +26,7 @@ MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 @dataclass
 class RunResult:
     controller: str
-    status: str                    # "ok" or "diverged"
+    status: str                    # "ok", "diverged" or "interrupted"
     reason: str
     final_time: float
     wall_time: float
@@ -58,17 +61,50 @@ def _Progress(fraction: float, start: float, label: str) -> None:
     sys.stderr.flush()
 
 
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread while an interruptible run simulates."""
+
+
+def _RaiseTerminated(signum, frame):
+    raise _Terminated()
+
+
+def prepare_out_dir(out_dir) -> Path:
+    """Creates ``out_dir`` and checks that it is a writable directory, before any
+    simulation time is spent (ConfigError naming the path otherwise)."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out = {str(out)!r} is an existing file; allowed: a "
+                          "directory (created if missing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ConfigError(f"--out = {str(out)!r} cannot be created ({e.strerror}); "
+                          "allowed: a writable directory") from e
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out = {str(out)!r} is not writable; allowed: a writable "
+                          "directory")
+    return out
+
+
 def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
-             out_dir=None, progress: bool = False) -> RunResult:
-    """Builds the ``controller`` ("dac" or "model-based") loop for ``scenario``,
+             out_dir=None, progress: bool = False,
+             interruptible: bool = False) -> RunResult:
+    """Builds the ``controller`` (diagrams.BUILDERS) loop for ``scenario``,
     simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
-    given, saves logs.npz, scenario.yaml and run.json there. A run whose state turns
-    non-finite or whose joint rates exceed MAX_JOINT_RATE stops with a reason and
-    still saves what it has."""
+    given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
+    before the simulation starts). A run whose state turns non-finite or whose joint
+    rates exceed MAX_JOINT_RATE stops with a reason and still saves what it has.
+    With ``interruptible`` (the CLI's single runs), SIGINT and SIGTERM stop the run
+    the same way, with status "interrupted"; sweeps and pools leave it off so that an
+    interrupted trial is redone on resume."""
     if controller not in BUILDERS:
         raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
-    loop = BUILDERS[controller](scenario)
     duration = scenario.duration if duration is None else duration
+    require_positive("duration", duration, "s")
+    if out_dir is not None:
+        prepare_out_dir(out_dir)
+    loop = BUILDERS[controller](scenario)
     simulator = MakeSimulator(loop.diagram, scenario.integration_scheme,
                               scenario.periods.rhs)
     context = simulator.get_mutable_context()
@@ -95,18 +131,32 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     start = time.perf_counter()
     chunks = max(1, int(np.ceil(duration / max(scenario.periods.log, duration / 200))))
     label = f"{controller:>11s}"
-    for k in range(1, chunks + 1):
-        try:
-            simulator.AdvanceTo(duration * k / chunks)
-        except RuntimeError as e:
-            problem.setdefault("reason", str(e).splitlines()[0])
-            break
-        if progress:
-            _Progress(k / chunks, start, label)
+    handle_term = interruptible and threading.current_thread() is threading.main_thread()
+    previous_term = signal.signal(signal.SIGTERM, _RaiseTerminated) if handle_term else None
+    interrupted = False
+    try:
+        for k in range(1, chunks + 1):
+            try:
+                simulator.AdvanceTo(duration * k / chunks)
+            except RuntimeError as e:
+                problem.setdefault("reason", str(e).splitlines()[0])
+                break
+            if progress:
+                _Progress(k / chunks, start, label)
+    except KeyboardInterrupt as e:
+        if not interruptible:
+            raise
+        interrupted = True
+        source = "SIGTERM" if isinstance(e, _Terminated) else "SIGINT"
+        problem["reason"] = f"interrupted by {source} at t = {context.get_time():.4f} s"
+    finally:
+        if handle_term:
+            signal.signal(signal.SIGTERM, previous_term)
     if progress and problem:
         sys.stderr.write("\n")
     result = RunResult(controller=controller,
-                       status="diverged" if problem else "ok",
+                       status=("interrupted" if interrupted else
+                               "diverged" if problem else "ok"),
                        reason=problem.get("reason", ""),
                        final_time=context.get_time(),
                        wall_time=time.perf_counter() - start,

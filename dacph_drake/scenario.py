@@ -2,12 +2,13 @@
 ``pydrake.common.yaml.yaml_load_typed`` (SPEC sections 4-8 give the defaults, which
 are the paper's scenario, 1500 s)."""
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import List
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 
-from dacph_drake.errors import (ConfigError, require_in_range,
+from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.robot import RobotParams, load_yaml_dataclass
 
@@ -251,6 +252,10 @@ class Scenario:
         gain_rule.check_rhs_period)."""
         from dacph_drake.gain_rule import check_period_order
         from dacph_drake.simulation import INTEGRATION_SCHEMES
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
+            raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
+                              "integer in [0, 2^32 - 1]")
+        require_in_range("seed", self.seed, 0, 2**32 - 1)
         self.robot.Validate("robot")
         self.nominal_robot.Validate("nominal_robot")
         n = self.robot.num_links
@@ -286,6 +291,10 @@ class Scenario:
         for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
             require_positive(f"periods.{name}", getattr(self.periods, name), "s")
         check_period_order(self.periods)
+        if self.periods.log > self.duration:
+            raise ConfigError(f"periods.log = {self.periods.log:g} s is longer than the "
+                              f"run ({self.duration:g} s, the phases' total); allowed: "
+                              "at most the run's duration")
         u = self.uncertainty
         for name in ("B0", "D0", "D_offset", "D_linear", "D_quadratic", "B_quadratic"):
             _require_length(f"uncertainty.{name}", getattr(u, name), n)
@@ -356,6 +365,8 @@ class Scenario:
         if self.integration_scheme not in INTEGRATION_SCHEMES:
             raise ConfigError(f"integration_scheme = {self.integration_scheme!r}; "
                               f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+        # Last, so that a setting with a range names it: every other number finite.
+        require_finite_numbers("", self)
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"
@@ -366,8 +377,14 @@ def _require_length(name: str, values, n: int, meaning: str = "one per joint"
 
 
 def load_scenario(path) -> Scenario:
-    """Loads and validates a scenario YAML file (unknown keys and wrong types are
-    errors that name the file and the key)."""
+    """Loads and validates a scenario: a YAML file (unknown keys and wrong types are
+    errors that name the file and the key) or a built-in name (BUILT_IN_SCENARIOS:
+    "paper", "short") where no file of that name exists."""
+    if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
+        return BUILT_IN_SCENARIOS[str(path)]()
+    if not Path(path).is_file():
+        raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
+                          f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
     scenario = load_yaml_dataclass(path, Scenario)
     scenario.Validate()
     return scenario
@@ -386,13 +403,6 @@ def short_scenario() -> Scenario:
 
 
 BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
-
-
-def scenario_from_argument(argument) -> Scenario:
-    """A built-in scenario's name ("paper", "short") or a YAML file's path."""
-    if str(argument) in BUILT_IN_SCENARIOS:
-        return BUILT_IN_SCENARIOS[str(argument)]()
-    return load_scenario(argument)
 
 
 def save_scenario(scenario: Scenario, path) -> None:

@@ -50,6 +50,19 @@ def test_yaml_round_trip(tmp_path):
      r"excitation.frequencies\[1\] = 4.0 .*in \[5, 500\] Hz"),
     ("excitation: {frequencies: [0.5, 4.0]}\n",
      r"excitation.frequencies = \[0.5, 4.0\] Hz lie outside learner.band"),
+    # Non-finite numbers anywhere, and settings that cannot run together.
+    ("q0: [.nan, 1.0]\n", r"q0\[0\] = nan is not finite; allowed: a finite number"),
+    ("q0: [0.3, .inf]\n", r"q0\[1\] = inf is not finite"),
+    ("reference: {amplitudes: [.nan, 0.1]}\n", r"reference.amplitudes\[0\] = nan"),
+    ("uncertainty: {B_linear: [[.nan, 0.0], [0.05, 0.15]]}\n",
+     r"uncertainty.B_linear\[0\]\[0\] = nan is not finite"),
+    ("disturbance: {hf_amplitude: .nan}\n", r"disturbance.hf_amplitude = nan"),
+    ("disturbance: {start: .nan}\n", r"disturbance.start = nan is not finite"),
+    ("disturbance: {lf_offset: [.inf, 0.0]}\n", r"disturbance.lf_offset\[0\] = inf"),
+    ("robot: {links: [{mass: 1.0, length: .nan}, {mass: 1.0}]}\n", r"robot.links\[0\]"),
+    ("seed: -1\n", r"seed = -1 is out of range; allowed: in \[0, 4\.29497e\+09\]"),
+    ("periods: {log: 100.0}\nphases: {warmup: 1.0, linear: 1.0, nonlinear: 1.0, "
+     "disturbance: 1.0}\n", r"periods.log = 100 s is longer than the run \(4 s"),
 ])
 def test_bad_input_is_named(tmp_path, text, message):
     path = tmp_path / "s.yaml"
@@ -66,7 +79,6 @@ def test_rhs_period_too_long_for_the_gain_rule():
         build_dac_diagram(scenario)
 
 
-
 def test_plain_learner_needs_no_band():
     """The paper's plain learner ignores the band, so an excitation outside it is
     allowed (and useless to it)."""
@@ -74,3 +86,32 @@ def test_plain_learner_needs_no_band():
     scenario.learner.mode = "plain"
     scenario.excitation.frequencies = [0.5, 0.7]
     scenario.Validate()
+
+
+def test_a_string_set_from_python_names_the_field():
+    scenario = Scenario()
+    scenario.q0 = [0.3, "1.0"]
+    with pytest.raises(ConfigError, match=r"q0\[1\] = '1.0' is not a number"):
+        scenario.Validate()
+    scenario = Scenario()
+    scenario.seed = 1.5
+    with pytest.raises(ConfigError, match=r"seed = 1.5 is not an integer"):
+        scenario.Validate()
+
+
+def test_built_in_names_load_and_unknown_ones_are_named(tmp_path):
+    assert load_scenario("short") == BUILT_IN_SCENARIOS["short"]()
+    assert load_scenario("paper") == BUILT_IN_SCENARIOS["paper"]()
+    with pytest.raises(ConfigError, match=r"scenario 'shrot': no such file; allowed: a "
+                                          r"scenario YAML file or a built-in name "
+                                          r"\(paper, short\)"):
+        load_scenario("shrot")
+    with pytest.raises(ConfigError, match=r"no such file"):
+        load_scenario(tmp_path)                            # a directory
+
+
+@pytest.mark.parametrize("duration", [-1.0, 0.0, float("nan"), float("inf")])
+def test_simulate_refuses_a_bad_duration_before_building(duration):
+    from dacph_drake.run import simulate
+    with pytest.raises(ConfigError, match=r"duration = .* allowed: > 0 s"):
+        simulate(BUILT_IN_SCENARIOS["short"](), "dac", duration=duration)

@@ -1,0 +1,82 @@
+"""Failures are named and nothing is lost: bad input exits 2 with one line naming the
+setting, a bad --out is refused before any simulation time is spent, and SIGINT or
+SIGTERM of a running `dacph simulate` leave a readable run directory marked
+interrupted."""
+import json
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from dacph_drake.cli import main
+from dacph_drake.errors import ConfigError
+from dacph_drake.run import simulate
+from dacph_drake.scenario import short_scenario
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["simulate", "shrot", "--out", "OUT"], "scenario 'shrot': no such file"),
+    (["simulate", "short", "--out", "OUT", "--duration", "-1"],
+     "duration = -1.0 is out of range; allowed: > 0 s"),
+    (["simulate", "short", "--out", "OUT", "--duration", "nan"], "duration = nan"),
+    (["simulate", "BAD", "--out", "OUT"], "q0[0] = nan is not finite"),
+    (["verify", "shrot"], "scenario 'shrot': no such file"),
+    (["diagram", "shrot"], "scenario 'shrot': no such file"),
+    (["reproduce", "shrot", "--out", "OUT"], "scenario 'shrot': no such file"),
+    (["simulate", "short", "--out", "FILE"], "is an existing file; allowed: a directory"),
+])
+def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, message):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("q0: [.nan, 1.0]\n")
+    existing = tmp_path / "file"
+    existing.write_text("")
+    replace = {"OUT": str(tmp_path / "out"), "BAD": str(bad), "FILE": str(existing)}
+    assert main([replace.get(a, a) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dacph: error: ") and message in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_out_dir_is_checked_before_the_simulation(tmp_path):
+    existing = tmp_path / "file"
+    existing.write_text("")
+    start = time.perf_counter()
+    with pytest.raises(ConfigError, match="is an existing file"):
+        simulate(short_scenario(), "dac", out_dir=existing)
+    assert time.perf_counter() - start < 1.0        # refused before the diagram is built
+
+
+def _interrupt_simulate(out, sig):
+    """Starts `dacph simulate short`, sends ``sig`` once the progress bar runs, and
+    returns the exit status."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dacph_drake.cli", "simulate", "short", "--out", str(out)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    started = threading.Event()
+
+    def watch():
+        for chunk in iter(lambda: process.stderr.read(64), b""):
+            if b"elapsed" in chunk:
+                started.set()
+    threading.Thread(target=watch, daemon=True).start()
+    assert started.wait(300), "the simulation did not start"
+    time.sleep(1.0)
+    process.send_signal(sig)
+    return process.wait(120)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_run_saves_what_it_has(tmp_path, sig):
+    out = tmp_path / "run"
+    assert _interrupt_simulate(out, sig) == 130
+    meta = json.loads((out / "run_dac.json").read_text())
+    assert meta["status"] == "interrupted" and sig.name in meta["reason"]
+    assert 0 < meta["final_time"] < short_scenario().duration
+    with np.load(out / "logs_dac.npz") as logs:
+        assert logs["time"][-1] <= meta["final_time"] and len(logs["time"]) > 10
+    assert (out / "scenario.yaml").is_file()
