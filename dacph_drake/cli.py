@@ -29,7 +29,7 @@ def _free_flight(args) -> int:
 
 
 def _simulate(args) -> int:
-    from dacph_drake.metrics import run_metrics
+    from dacph_drake.metrics import PHASES, run_metrics
     from dacph_drake.run import simulate
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
@@ -38,8 +38,15 @@ def _simulate(args) -> int:
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
     if result.final_time > scenario.phases.linear_start:
+        starts = dict(zip(PHASES, (scenario.phases.linear_start,
+                                   scenario.phases.nonlinear_start,
+                                   scenario.phases.disturbance_start)))
         for name, value in run_metrics(result.logs, scenario).items():
-            print(f"  {name:32s} {value:.6g}")
+            phase = name.split(".")[0]
+            reached = phase not in starts or result.final_time > starts[phase]
+            print(f"  {name:32s} {value:.6g}" if reached else
+                  f"  {name:32s} not reached (the run ended at "
+                  f"{result.final_time:g} s)")
     print(f"saved to {args.out}")
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
@@ -155,8 +162,13 @@ def _sweep(args) -> int:
             print(f"\ninterrupted: {len(read_rows(args.out))} trials saved in {args.out}; "
                   "run the same command to resume", file=sys.stderr)
             return 130
-    print(format_summary(write_summary(args.out, definition)), end="")
+    summary = write_summary(args.out, definition)
+    print(format_summary(summary), end="")
     print(f"saved to {args.out}")
+    if summary["trials"] and summary["succeeded"] == 0:
+        print(f"dacph: error: none of the {summary['trials']} trials ran to the end "
+              f"(reasons in {args.out}/rows.jsonl)", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -29,6 +29,7 @@ def require_in_range(name: str, value: float, low: float, high: float,
 
 
 def _require(name: str, value: float, ok: bool, allowed: str) -> None:
+    value = _plain(value)
     try:
         finite = float(value) == float(value) and abs(float(value)) != float("inf")
     except (TypeError, ValueError):
@@ -53,4 +54,12 @@ def require_finite_numbers(name: str, value) -> None:
     elif isinstance(value, str):
         raise ConfigError(f"{name} = {value!r} is not a number; allowed: a finite number")
     elif isinstance(value, (int, float)) and not math.isfinite(value):
-        raise ConfigError(f"{name} = {value!r} is not finite; allowed: a finite number")
+        raise ConfigError(f"{name} = {_plain(value)!r} is not finite; allowed: a finite "
+                          "number")
+
+
+def _plain(value):
+    """A numpy scalar as the Python number it holds (its repr names the number,
+    not np.float64), anything else unchanged."""
+    return value.item() if type(value).__module__ == "numpy" and hasattr(value, "item") \
+        else value

@@ -11,9 +11,10 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from dacph_drake.errors import ConfigError
 from dacph_drake.figures import plot_panels
 from dacph_drake.metrics import PHASES, comparison, run_metrics
-from dacph_drake.run import simulate, versions
+from dacph_drake.run import scenario_fingerprint, simulate, versions
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
 CONTROLLERS = ("dac", "dac-nominal", "model-based")
@@ -162,6 +163,25 @@ def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
         return {k: data[k] for k in data.files}
 
 
+def check_runs_belong_together(run_dir: Path, scenario: Scenario,
+                               runs: Dict[str, Dict]) -> None:
+    """ConfigError unless every run (its run_CONTROLLER.json) was made from
+    ``scenario`` (the directory's scenario.yaml) and for the same duration. Runs
+    saved before run.json recorded these are not checked."""
+    fingerprint = scenario_fingerprint(scenario)
+    for controller, run in runs.items():
+        if run.get("scenario_fingerprint", fingerprint) != fingerprint:
+            raise ConfigError(
+                f"{run_dir}: the {controller} run was made from another scenario than "
+                "scenario.yaml (the last run saved there); allowed: runs of one "
+                "scenario in one directory")
+    durations = {c: run["duration"] for c, run in runs.items() if "duration" in run}
+    if len(set(durations.values())) > 1:
+        listed = ", ".join(f"{c} {d:g} s" for c, d in durations.items())
+        raise ConfigError(f"{run_dir}: the runs have different durations ({listed}); "
+                          "allowed: runs of one duration in one directory")
+
+
 def report(run_dir) -> Dict:
     """Panels and tables for a directory holding the runs (as ``reproduce`` or
     ``dacph simulate`` calls leave it: dac and model-based, and dac-nominal for the
@@ -172,6 +192,7 @@ def report(run_dir) -> Dict:
                    if c in REQUIRED or (run_dir / f"logs_{c}.npz").exists()]
     logs = {c: load_logs(run_dir, c) for c in controllers}
     runs = {c: json.loads((run_dir / f"run_{c}.json").read_text()) for c in controllers}
+    check_runs_belong_together(run_dir, scenario, runs)
     metrics = {c: run_metrics(logs[c], scenario) for c in controllers}
     rows = metrics_table(metrics)
     ablation = ablation_table(metrics)

@@ -1,5 +1,7 @@
 """Simulating a closed loop: initial state, divergence monitor, progress bar, and
 saving the logs with the scenario, the versions and the seed."""
+import fcntl
+import hashlib
 import json
 import os
 import platform
@@ -13,6 +15,7 @@ from pathlib import Path
 from typing import Dict, Optional
 
 import numpy as np
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.framework import EventStatus
 
 from dacph_drake.diagrams import BUILDERS, ClosedLoop
@@ -32,6 +35,13 @@ class RunResult:
     wall_time: float
     logs: Dict[str, np.ndarray] = field(default_factory=dict)   # name -> (T, k); "time"
     peak_memory_mib: float = float("nan")    # of this process so far (ru_maxrss)
+    duration: float = float("nan")           # the duration asked for [s]
+
+
+def scenario_fingerprint(scenario: Scenario) -> str:
+    """A hash of every setting of ``scenario`` (its YAML form): run.json records it,
+    so that report() can refuse runs of different scenarios in one directory."""
+    return hashlib.sha256(yaml_dump_typed(scenario).encode()).hexdigest()[:16]
 
 
 def versions() -> Dict[str, str]:
@@ -93,7 +103,8 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     """Builds the ``controller`` (diagrams.BUILDERS) loop for ``scenario``,
     simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
     given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
-    before the simulation starts). A run whose state turns non-finite or whose joint
+    before the simulation starts and locked against a second writer of the same
+    controller; run.json records the duration and scenario_fingerprint). A run whose state turns non-finite or whose joint
     rates exceed MAX_JOINT_RATE stops with a reason and still saves what it has.
     With ``interruptible`` (the CLI's single runs), SIGINT and SIGTERM stop the run
     the same way, with status "interrupted"; sweeps and pools leave it off so that an
@@ -102,8 +113,32 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
-    if out_dir is not None:
-        prepare_out_dir(out_dir)
+    lock = _LockRun(prepare_out_dir(out_dir), controller) if out_dir is not None else None
+    try:
+        result = _Simulate(scenario, controller, duration, progress, interruptible)
+        if out_dir is not None:
+            save_run(result, scenario, out_dir)
+    finally:
+        if lock is not None:
+            lock.close()
+    return result
+
+
+def _LockRun(out: Path, controller: str):
+    """An exclusive lock on out/.run_CONTROLLER.lock, held while the run simulates
+    and saves (ConfigError when another process holds it)."""
+    lock = open(out / f".run_{controller}.lock", "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        lock.close()
+        raise ConfigError(f"--out = {str(out)!r}: another process is writing a "
+                          f"{controller} run there; allowed: one writer per run")
+    return lock
+
+
+def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bool,
+              interruptible: bool) -> RunResult:
     loop = BUILDERS[controller](scenario)
     simulator = MakeSimulator(loop.diagram, scenario.integration_scheme,
                               scenario.periods.rhs)
@@ -154,18 +189,16 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
             signal.signal(signal.SIGTERM, previous_term)
     if progress and problem:
         sys.stderr.write("\n")
-    result = RunResult(controller=controller,
-                       status=("interrupted" if interrupted else
-                               "diverged" if problem else "ok"),
-                       reason=problem.get("reason", ""),
-                       final_time=context.get_time(),
-                       wall_time=time.perf_counter() - start,
-                       logs=_CollectLogs(loop, context),
-                       peak_memory_mib=resource.getrusage(
-                           resource.RUSAGE_SELF).ru_maxrss / 1024)
-    if out_dir is not None:
-        save_run(result, scenario, out_dir)
-    return result
+    return RunResult(controller=controller,
+                     status=("interrupted" if interrupted else
+                             "diverged" if problem else "ok"),
+                     reason=problem.get("reason", ""),
+                     final_time=context.get_time(),
+                     wall_time=time.perf_counter() - start,
+                     logs=_CollectLogs(loop, context),
+                     peak_memory_mib=resource.getrusage(
+                         resource.RUSAGE_SELF).ru_maxrss / 1024,
+                     duration=duration)
 
 
 def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
@@ -185,6 +218,8 @@ def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
     meta = {"controller": result.controller, "status": result.status,
             "reason": result.reason, "final_time": result.final_time,
             "wall_time": result.wall_time, "seed": scenario.seed,
+            "duration": result.duration,
+            "scenario_fingerprint": scenario_fingerprint(scenario),
             "peak_memory_mib": result.peak_memory_mib,
             "versions": versions()}
     with open(out / f"run_{result.controller}.json", "w") as f:

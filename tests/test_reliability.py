@@ -80,3 +80,45 @@ def test_an_interrupted_run_saves_what_it_has(tmp_path, sig):
     with np.load(out / "logs_dac.npz") as logs:
         assert logs["time"][-1] <= meta["final_time"] and len(logs["time"]) > 10
     assert (out / "scenario.yaml").is_file()
+
+
+def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
+    """A DAC run and a model-based run of another scenario, or of another duration,
+    in one directory: report names the problem instead of printing a table."""
+    from dacph_drake.reproduce import report
+    scenario = short_scenario()
+    other = short_scenario()
+    other.disturbance.scale = 2.0
+    mixed, durations = tmp_path / "mixed", tmp_path / "durations"
+    simulate(scenario, "dac", duration=0.3, out_dir=mixed)
+    simulate(other, "model-based", duration=0.3, out_dir=mixed)
+    with pytest.raises(ConfigError, match="the dac run was made from another scenario"):
+        report(mixed)
+    simulate(scenario, "dac", duration=0.3, out_dir=durations)
+    simulate(scenario, "model-based", duration=0.2, out_dir=durations)
+    with pytest.raises(ConfigError, match=r"different durations \(dac 0.3 s, "
+                                          r"model-based 0.2 s\)"):
+        report(durations)
+    assert main(["report", str(durations)]) == 2
+
+
+def test_a_second_writer_of_the_same_run_is_refused(tmp_path):
+    import fcntl
+    out = tmp_path / "run"
+    out.mkdir()
+    with open(out / ".run_dac.lock", "w") as held:            # a run in progress
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(ConfigError, match="another process is writing a dac run"):
+            simulate(short_scenario(), "dac", duration=0.1, out_dir=out)
+    result = simulate(short_scenario(), "dac", duration=0.1, out_dir=out)   # released
+    assert result.status == "ok"
+
+
+def test_metrics_of_phases_a_run_never_reached_say_so(tmp_path, capsys):
+    assert main(["simulate", "short", "--out", str(tmp_path / "run"),
+                 "--duration", "3"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    phase2 = [line for line in lines if line.strip().startswith("phase2.")]
+    assert phase2 and all("not reached (the run ended at 3 s)" in line for line in phase2)
+    assert not any(line.strip().startswith("phase1.") and "not reached" in line
+                   for line in lines)

@@ -318,3 +318,24 @@ def test_cli_reports_a_malformed_sweep(tmp_path, capsys):
     path = write_sweep(tmp_path, "trials: -2\n")
     assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
     assert "trials = -2 is out of range" in capsys.readouterr().err
+
+
+def test_a_sweep_with_no_successful_trial_exits_1(tmp_path, capsys):
+    """Every sample invalid (link 2 inertia far above the rod bound): each trial is
+    recorded as failed with its reason, which names a plain number, and the command
+    says so and exits 1."""
+    path = write_sweep(tmp_path, """\
+scenario: tiny.yaml
+trials: 3
+seed: 5
+controllers: [model-based]
+distributions:
+  link_inertia_scale: !UniformVector {min: [1.0, 50.0], max: [1.0, 60.0]}
+""")
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "0"]) == 1
+    assert "none of the 3 trials ran to the end" in capsys.readouterr().err
+    rows = [json.loads(line) for line in (out / "rows.jsonl").read_text().splitlines()]
+    assert len(rows) == 3 and all(r["status"] == "failed" for r in rows)
+    assert all("robot.links[1].inertia = " in r["reason"] and "np.float64" not in r["reason"]
+               for r in rows)
