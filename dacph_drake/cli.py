@@ -83,8 +83,9 @@ def _animate_run(run_dir, controller: str, out=None):
     from pathlib import Path
     from dacph_drake.animation import write_animation
     from dacph_drake.reproduce import load_logs
+    from dacph_drake.run import require_run_files
     from dacph_drake.scenario import load_scenario
-    run_dir = Path(run_dir)
+    run_dir = require_run_files(run_dir, [controller])
     scenario = load_scenario(run_dir / "scenario.yaml")
     out = Path(out) if out else run_dir / f"animation_{controller.replace('-', '_')}.html"
     return write_animation(scenario, load_logs(run_dir, controller), out)

@@ -9,6 +9,7 @@ import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
+from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
 from dacph_drake.potential import BaseRepulsionPotential
@@ -39,10 +40,23 @@ class ClosedLoop:
     systems: Dict[str, object] = field(default_factory=dict)
 
 
+def _RequireClearStart(scenario: Scenario) -> None:
+    """ConfigError unless every link of the ground-truth arm at q0 lies outside the
+    base (clearance of the link outline > 0, as potential.BaseRepulsionPotential
+    measures it)."""
+    clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance(
+        np.asarray(scenario.q0, float))
+    if clearance <= 0:
+        raise ConfigError(f"q0 = {list(scenario.q0)} puts the arm into the base "
+                          f"(clearance {clearance:.3f} m); allowed: a configuration "
+                          "with every link outside the base")
+
+
 def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
                  excitation: Excitation):
     """Plant, true RHS, disturbance and LHS controller; loggers shared by all loops."""
     scenario.Validate()
+    _RequireClearStart(scenario)
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     plant.set_name("plant")
     nq = plant.num_positions()

@@ -14,7 +14,8 @@ import numpy as np
 from dacph_drake.errors import ConfigError
 from dacph_drake.figures import plot_panels
 from dacph_drake.metrics import PHASES, comparison, run_metrics
-from dacph_drake.run import scenario_fingerprint, simulate, versions
+from dacph_drake.run import (require_run_files, scenario_fingerprint, simulate,
+                             versions)
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
 CONTROLLERS = ("dac", "dac-nominal", "model-based")
@@ -186,7 +187,7 @@ def report(run_dir) -> Dict:
     """Panels and tables for a directory holding the runs (as ``reproduce`` or
     ``dacph simulate`` calls leave it: dac and model-based, and dac-nominal for the
     ablation). Writes figures/, metrics.md, ablation.md and metrics.json."""
-    run_dir = Path(run_dir)
+    run_dir = require_run_files(run_dir, REQUIRED)
     scenario = load_scenario(run_dir / "scenario.yaml")
     controllers = [c for c in CONTROLLERS
                    if c in REQUIRED or (run_dir / f"logs_{c}.npz").exists()]

@@ -9,9 +9,12 @@ Each link's frame sits at its proximal joint with x along the link; its centre o
 mass lies ``com`` metres along x; the next joint (or the end effector) sits at
 ``length``. Descriptions load from YAML with ``pydrake.common.yaml``.
 """
+import dataclasses
+import typing
 from dataclasses import dataclass, field
 from typing import List
 
+import yaml
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 
 from dacph_drake.errors import ConfigError, require_in_range, require_positive
@@ -103,8 +106,74 @@ def save_robot(robot: RobotParams, path: str) -> None:
 
 
 def load_yaml_dataclass(path: str, schema):
-    """yaml_load_typed with errors that name the file (unknown keys, wrong types)."""
+    """yaml_load_typed with one-line errors that name the file: malformed YAML (with
+    its line and column), a value of the wrong kind (naming the setting), unknown
+    keys."""
+    try:
+        with open(path) as f:
+            raw = yaml.load(f, Loader=_TaggedLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark
+        raise ConfigError(f"{path}: malformed YAML at line {mark.line + 1}, column "
+                          f"{mark.column + 1}: {e.problem}") from e
+    except (OSError, yaml.YAMLError) as e:
+        raise ConfigError(f"{path}: cannot be read ({e}); allowed: a readable YAML "
+                          "file") from e
+    _check_kinds(raw if raw is not None else {}, schema, f"{path}: ")
     try:
         return yaml_load_typed(schema=schema, filename=str(path))
     except (RuntimeError, ValueError, TypeError) as e:
-        raise ConfigError(f"{path}: {e}") from e
+        raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
+
+
+class _TaggedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader reading a tagged node (Drake's schema types such as
+    !Uniform {min, max}) as its untagged mapping, list or scalar."""
+
+
+def _construct_untagged(loader, suffix, node):
+    if isinstance(node, yaml.MappingNode):
+        return loader.construct_mapping(node, deep=True)
+    if isinstance(node, yaml.SequenceNode):
+        return loader.construct_sequence(node, deep=True)
+    return loader.construct_scalar(node)
+
+
+_TaggedLoader.add_multi_constructor("!", _construct_untagged)
+
+
+def _check_kinds(raw, schema, where: str, name: str = "") -> None:
+    """ConfigError naming the first setting of ``raw`` (parsed YAML) whose kind does
+    not fit ``schema`` (a dataclass type, List[...], float, int or str): a mapping
+    where a section belongs, a list where a list belongs, a number where a number
+    belongs. Unknown keys are left to yaml_load_typed."""
+    shown = name or "the file"
+    if dataclasses.is_dataclass(schema):
+        if not isinstance(raw, dict):
+            raise ConfigError(f"{where}{shown} = {raw!r} is not a mapping; allowed: a "
+                              f"section of settings")
+        types = {f.name: f.type for f in dataclasses.fields(schema)}
+        for key, value in raw.items():
+            if key in types:
+                _check_kinds(value, types[key], where, f"{name}.{key}" if name else key)
+    elif typing.get_origin(schema) in (list, List):
+        if not isinstance(raw, list):
+            raise ConfigError(f"{where}{shown} = {raw!r} is not a list; allowed: a list "
+                              "[...]")
+        for i, value in enumerate(raw):
+            _check_kinds(value, typing.get_args(schema)[0], where, f"{name}[{i}]")
+    elif schema in (float, int) and not _reads_as_number(raw):
+        raise ConfigError(f"{where}{shown} = {raw!r} is not a number; allowed: a "
+                          f"{'whole ' if schema is int else ''}number")
+
+
+def _reads_as_number(raw) -> bool:
+    """Whether a parsed YAML scalar is a number to Drake's YAML reader (which, unlike
+    YAML 1.1, also reads 1e-3 without a dot)."""
+    if isinstance(raw, bool) or raw is None or isinstance(raw, (list, dict)):
+        return False
+    try:
+        float(raw)
+    except (TypeError, ValueError):
+        return False
+    return True

@@ -210,6 +210,22 @@ def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
     return logs
 
 
+def require_run_files(run_dir, controllers) -> Path:
+    """ConfigError naming the first file that ``save_run`` would have written for
+    ``controllers`` and that run_dir lacks (scenario.yaml, logs_C.npz, run_C.json)."""
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise ConfigError(f"{str(run_dir)!r} is not a directory; allowed: a run "
+                          "directory saved by dacph simulate or reproduce")
+    names = ["scenario.yaml"] + [f"{kind}_{c}.{ext}" for c in controllers
+                                 for kind, ext in (("logs", "npz"), ("run", "json"))]
+    for name in names:
+        if not (run_dir / name).is_file():
+            raise ConfigError(f"{run_dir}: {name} is missing; allowed: a run directory "
+                              "saved by dacph simulate or reproduce")
+    return run_dir
+
+
 def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -122,3 +122,49 @@ def test_metrics_of_phases_a_run_never_reached_say_so(tmp_path, capsys):
     assert phase2 and all("not reached (the run ended at 3 s)" in line for line in phase2)
     assert not any(line.strip().startswith("phase1.") and "not reached" in line
                    for line in lines)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("q0: [0.3, 1.0\nlhs: {Kd: 0.5}\n",
+     "malformed YAML at line 2, column 4: expected ',' or ']', but got ':'"),
+    ("q0: 0.3\n", "q0 = 0.3 is not a list"),
+    ("lhs: 3\n", "lhs = 3 is not a mapping"),
+    ("robot: {links: [{mass: heavy}]}\n", "robot.links[0].mass = 'heavy' is not a number"),
+    ("reference: {periods: [30.0, eleven]}\n",
+     "reference.periods[1] = 'eleven' is not a number"),
+])
+def test_malformed_files_get_one_line_naming_the_place(tmp_path, capsys, text, message):
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    assert main(["simulate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_numbers_without_a_dot_still_load(tmp_path):
+    from dacph_drake.scenario import load_scenario
+    path = tmp_path / "s.yaml"
+    path.write_text("learner: {eps: 1e-8}\n")
+    assert load_scenario(path).learner.eps == 1e-8
+
+
+@pytest.mark.parametrize("command", ["report", "verify", "animate"])
+def test_an_incomplete_run_directory_names_the_missing_file(tmp_path, capsys, command):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "scenario.yaml").write_text("seed: 0\n")
+    assert main([command, str(run)]) == 2
+    err = capsys.readouterr().err
+    assert "logs_dac.npz is missing" in err and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("q0", [[2.5, 0.5], [1.5, 2.9]])
+def test_a_start_inside_the_base_is_refused(q0):
+    """Such a run used to "diverge" at t = 0.0003 s with a runaway message that never
+    named the collision."""
+    from dacph_drake.diagrams import build_dac_diagram
+    scenario = short_scenario()
+    scenario.q0 = q0
+    with pytest.raises(ConfigError, match=r"q0 = .* puts the arm into the base "
+                                          r"\(clearance -0.\d+ m\)"):
+        build_dac_diagram(scenario)

@@ -34,6 +34,7 @@ from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
                                        mass_matrix_bounds)
+from dacph_drake.run import require_run_files  # noqa: E402
 from dacph_drake.scenario import Scenario, load_scenario  # noqa: E402
 
 
@@ -140,7 +141,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
 def verify_run(run_dir, out_dir=None) -> Dict:
     """verify_logs on the DAC run saved in run_dir (by ``dacph simulate`` or
     ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
-    run_dir = Path(run_dir)
+    run_dir = require_run_files(run_dir, ["dac"])
     scenario = load_scenario(run_dir / "scenario.yaml")
     with np.load(run_dir / "logs_dac.npz") as data:
         logs = {k: data[k] for k in data.files}
