@@ -63,7 +63,6 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
     model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
     lambda_min, lambda_max = mass_matrix_bounds(model)
     c_min = c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0)
-    check_rhs_period(scenario.periods, (1 + scenario.rhs.c_margin) * c_min)
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
     alpha0 = float(np.sum(scenario.q0))               # base at theta0 = 0
     reference = OrientationReference(scenario.reference, alpha0)
@@ -106,6 +105,7 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     builder = DiagramBuilder()
     loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial,
                         excitation=scenario.excitation)
+    check_rhs_period(scenario.periods, (1 + scenario.rhs.c_margin) * loop.c_min_nominal)
     plant, lhs = loop.plant, loop.systems["lhs_controller"]
     nq = plant.num_positions()
     periods, settings = scenario.periods, scenario.learner

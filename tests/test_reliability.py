@@ -168,3 +168,14 @@ def test_a_start_inside_the_base_is_refused(q0):
     with pytest.raises(ConfigError, match=r"q0 = .* puts the arm into the base "
                                           r"\(clearance -0.\d+ m\)"):
         build_dac_diagram(scenario)
+
+
+def test_the_rhs_period_check_applies_to_the_integrator_only():
+    """The model-based baseline has no RHS integrator, so a coarse periods.rhs that
+    the DAC diagram refuses is allowed for it."""
+    from dacph_drake.diagrams import build_dac_diagram, build_model_based_diagram
+    scenario = short_scenario()
+    scenario.periods.rhs = 5e-4
+    with pytest.raises(ConfigError, match="periods.rhs = 0.0005 s cannot realize"):
+        build_dac_diagram(scenario)
+    assert build_model_based_diagram(scenario).diagram is not None
