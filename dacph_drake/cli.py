@@ -34,7 +34,8 @@ def _simulate(args) -> int:
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
-                      out_dir=args.out, progress=True, interruptible=True)
+                      out_dir=args.out, progress=True, interruptible=True,
+                      checkpoint_seconds=args.checkpoint)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
     if result.final_time > scenario.phases.linear_start:
@@ -190,6 +191,9 @@ def main(argv=None) -> int:
                      help="dac-nominal: DAC with the learner off (the ablation)")
     sim.add_argument("--duration", type=float, default=None,
                      help="[s] (default: the scenario's phases)")
+    sim.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
+                     help="save the logs so far every SECONDS of wall time (status "
+                          "'incomplete' until the run ends; default 60)")
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
     graph.add_argument("scenario")

@@ -213,8 +213,12 @@ def report(run_dir) -> Dict:
     return summary
 
 
+CHECKPOINT_SECONDS = 60.0    # wall time between saves of a run's logs so far
+
+
 def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
-    return simulate(scenario, controller, out_dir=out).status
+    return simulate(scenario, controller, out_dir=out,
+                    checkpoint_seconds=CHECKPOINT_SECONDS).status
 
 
 def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1) -> Dict:
@@ -228,7 +232,8 @@ def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1)
     save_scenario(scenario, out / "scenario.yaml")
     if jobs == 1:
         for controller in CONTROLLERS:
-            simulate(scenario, controller, out_dir=out, progress=progress)
+            simulate(scenario, controller, out_dir=out, progress=progress,
+                     checkpoint_seconds=CHECKPOINT_SECONDS)
     else:
         with ProcessPoolExecutor(jobs,
                                  mp_context=multiprocessing.get_context("spawn")) as pool:

@@ -29,7 +29,8 @@ MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 @dataclass
 class RunResult:
     controller: str
-    status: str                    # "ok", "diverged" or "interrupted"
+    status: str                    # "ok", "diverged", "interrupted" or, in a
+    #                                checkpoint of a run still going, "incomplete"
     reason: str
     final_time: float
     wall_time: float
@@ -98,24 +99,33 @@ def prepare_out_dir(out_dir) -> Path:
 
 
 def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
-             out_dir=None, progress: bool = False,
-             interruptible: bool = False) -> RunResult:
+             out_dir=None, progress: bool = False, interruptible: bool = False,
+             checkpoint_seconds: Optional[float] = None) -> RunResult:
     """Builds the ``controller`` (diagrams.BUILDERS) loop for ``scenario``,
     simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
     given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
     before the simulation starts and locked against a second writer of the same
-    controller; run.json records the duration and scenario_fingerprint). A run whose state turns non-finite or whose joint
-    rates exceed MAX_JOINT_RATE stops with a reason and still saves what it has.
-    With ``interruptible`` (the CLI's single runs), SIGINT and SIGTERM stop the run
-    the same way, with status "interrupted"; sweeps and pools leave it off so that an
-    interrupted trial is redone on resume."""
+    controller; run.json records the duration and scenario_fingerprint). A run
+    whose state turns non-finite or whose joint rates exceed MAX_JOINT_RATE stops
+    with a reason and still saves what it has. With ``interruptible`` (the CLI's
+    single runs), SIGINT and SIGTERM stop the run the same way, with status
+    "interrupted"; sweeps and pools leave it off so that an interrupted trial is
+    redone on resume. With ``checkpoint_seconds`` and out_dir, the logs so far are
+    saved every checkpoint_seconds of wall time with status "incomplete", so that a
+    crash or kill -9 loses at most that much (every file is replaced atomically)."""
     if controller not in BUILDERS:
         raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     lock = _LockRun(prepare_out_dir(out_dir), controller) if out_dir is not None else None
+    checkpoint = None
+    if out_dir is not None and checkpoint_seconds is not None:
+        require_positive("checkpoint_seconds", checkpoint_seconds, "s")
+        checkpoint = (checkpoint_seconds,
+                      lambda partial: save_run(partial, scenario, out_dir, compress=False))
     try:
-        result = _Simulate(scenario, controller, duration, progress, interruptible)
+        result = _Simulate(scenario, controller, duration, progress, interruptible,
+                           checkpoint)
         if out_dir is not None:
             save_run(result, scenario, out_dir)
     finally:
@@ -138,7 +148,9 @@ def _LockRun(out: Path, controller: str):
 
 
 def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bool,
-              interruptible: bool) -> RunResult:
+              interruptible: bool, checkpoint=None) -> RunResult:
+    """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
+    partial result that often."""
     loop = BUILDERS[controller](scenario)
     simulator = MakeSimulator(loop.diagram, scenario.integration_scheme,
                               scenario.periods.rhs)
@@ -169,6 +181,17 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     handle_term = interruptible and threading.current_thread() is threading.main_thread()
     previous_term = signal.signal(signal.SIGTERM, _RaiseTerminated) if handle_term else None
     interrupted = False
+
+    def result(status: str, reason: str) -> RunResult:
+        return RunResult(controller=controller, status=status, reason=reason,
+                         final_time=context.get_time(),
+                         wall_time=time.perf_counter() - start,
+                         logs=_CollectLogs(loop, context),
+                         peak_memory_mib=resource.getrusage(
+                             resource.RUSAGE_SELF).ru_maxrss / 1024,
+                         duration=duration)
+
+    last_checkpoint = start
     try:
         for k in range(1, chunks + 1):
             try:
@@ -178,6 +201,12 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
                 break
             if progress:
                 _Progress(k / chunks, start, label)
+            if checkpoint and time.perf_counter() - last_checkpoint >= checkpoint[0] \
+                    and k < chunks:
+                checkpoint[1](result("incomplete", "checkpoint at t = "
+                                     f"{context.get_time():.4f} s; the run had not "
+                                     "finished"))
+                last_checkpoint = time.perf_counter()
     except KeyboardInterrupt as e:
         if not interruptible:
             raise
@@ -189,16 +218,8 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
             signal.signal(signal.SIGTERM, previous_term)
     if progress and problem:
         sys.stderr.write("\n")
-    return RunResult(controller=controller,
-                     status=("interrupted" if interrupted else
-                             "diverged" if problem else "ok"),
-                     reason=problem.get("reason", ""),
-                     final_time=context.get_time(),
-                     wall_time=time.perf_counter() - start,
-                     logs=_CollectLogs(loop, context),
-                     peak_memory_mib=resource.getrusage(
-                         resource.RUSAGE_SELF).ru_maxrss / 1024,
-                     duration=duration)
+    return result("interrupted" if interrupted else "diverged" if problem else "ok",
+                  problem.get("reason", ""))
 
 
 def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
@@ -226,11 +247,18 @@ def require_run_files(run_dir, controllers) -> Path:
     return run_dir
 
 
-def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
+def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = True
+             ) -> Path:
+    """Writes logs_C.npz, scenario.yaml and run_C.json into out_dir, each replaced
+    atomically (a reader or a crash never sees half a file)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(out / f"logs_{result.controller}.npz", **result.logs)
-    save_scenario(scenario, out / "scenario.yaml")
+    logs_path = out / f"logs_{result.controller}.npz"
+    with open(logs_path.with_suffix(".npz.tmp"), "wb") as f:
+        (np.savez_compressed if compress else np.savez)(f, **result.logs)
+    os.replace(logs_path.with_suffix(".npz.tmp"), logs_path)
+    save_scenario(scenario, out / "scenario.yaml.tmp")
+    os.replace(out / "scenario.yaml.tmp", out / "scenario.yaml")
     meta = {"controller": result.controller, "status": result.status,
             "reason": result.reason, "final_time": result.final_time,
             "wall_time": result.wall_time, "seed": scenario.seed,
@@ -238,6 +266,8 @@ def save_run(result: RunResult, scenario: Scenario, out_dir) -> Path:
             "scenario_fingerprint": scenario_fingerprint(scenario),
             "peak_memory_mib": result.peak_memory_mib,
             "versions": versions()}
-    with open(out / f"run_{result.controller}.json", "w") as f:
+    meta_path = out / f"run_{result.controller}.json"
+    with open(meta_path.with_suffix(".json.tmp"), "w") as f:
         json.dump(meta, f, indent=2)
+    os.replace(meta_path.with_suffix(".json.tmp"), meta_path)
     return out

@@ -50,11 +50,12 @@ def test_out_dir_is_checked_before_the_simulation(tmp_path):
     assert time.perf_counter() - start < 1.0        # refused before the diagram is built
 
 
-def _interrupt_simulate(out, sig):
-    """Starts `dacph simulate short`, sends ``sig`` once the progress bar runs, and
-    returns the exit status."""
+def _interrupt_simulate(out, sig, extra=(), after=1.0):
+    """Starts `dacph simulate short` (with ``extra`` arguments), sends ``sig``
+    ``after`` seconds into the progress bar, and returns the exit status."""
     process = subprocess.Popen(
-        [sys.executable, "-m", "dacph_drake.cli", "simulate", "short", "--out", str(out)],
+        [sys.executable, "-m", "dacph_drake.cli", "simulate", "short", "--out", str(out),
+         *extra],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     started = threading.Event()
@@ -65,7 +66,7 @@ def _interrupt_simulate(out, sig):
                 started.set()
     threading.Thread(target=watch, daemon=True).start()
     assert started.wait(300), "the simulation did not start"
-    time.sleep(1.0)
+    time.sleep(after)
     process.send_signal(sig)
     return process.wait(120)
 
@@ -179,3 +180,17 @@ def test_the_rhs_period_check_applies_to_the_integrator_only():
     with pytest.raises(ConfigError, match="periods.rhs = 0.0005 s cannot realize"):
         build_dac_diagram(scenario)
     assert build_model_based_diagram(scenario).diagram is not None
+
+
+def test_a_killed_run_keeps_its_last_checkpoint(tmp_path):
+    """kill -9 cannot be caught: what survives is the last checkpoint, a readable
+    directory whose run.json says the run had not finished."""
+    out = tmp_path / "run"
+    assert _interrupt_simulate(out, signal.SIGKILL, ["--checkpoint", "0.5"],
+                               after=4.0) == -signal.SIGKILL
+    meta = json.loads((out / "run_dac.json").read_text())
+    assert meta["status"] == "incomplete" and "had not finished" in meta["reason"]
+    assert 0 < meta["final_time"] < short_scenario().duration
+    with np.load(out / "logs_dac.npz") as logs:
+        assert abs(logs["time"][-1] - meta["final_time"]) <= 0.011
+    assert main(["verify", str(out)]) == 1          # run_finished fails, with a report
