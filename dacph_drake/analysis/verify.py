@@ -177,10 +177,28 @@ def _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario, constan
     lines = [f"# Verification: {'PASS' if report['ok'] else 'FAIL'}", ""]
     for name, check in report["checks"].items():
         lines.append(f"## {name}: {'ok' if check['ok'] else 'FAILED'}")
-        lines += [f"- {k}: {v}" for k, v in check.items() if k != "ok"]
+        lines += [_Item(k, v) for k, v in check.items() if k != "ok"]
         lines.append("")
     lines.append("## estimates rejected by the integrator (DIC or trust band; the "
                  "loop kept its gains)")
-    lines += [f"- {k}: {v}" for k, v in report["estimates_rejected_by_the_integrator"].items()]
+    lines += [_Item(k, v) for k, v in report["estimates_rejected_by_the_integrator"].items()]
     lines += ["", "![V and margins](verification.png)"]
     (out / "verification.md").write_text("\n".join(lines) + "\n")
+
+
+# Units of the report's quantities (verification.json keeps full precision).
+_UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time": "s",
+          "worst_time": "s", "min_margin_time": "s", "first_failure_time": "s",
+          "first_rejection_time": "s", "radius": "rad/s", "s0_norm": "rad/s",
+          "rho": "J", "q": "rad", "fraction_inside": "-", "worst_violation": "-",
+          "min_margin": "-", "min_separation": "-"}
+
+
+def _Item(key: str, value) -> str:
+    """One line of verification.md: floats to 4 significant digits, with units."""
+    if isinstance(value, float):
+        value = f"{value:.4g}"
+    elif isinstance(value, list) and all(isinstance(v, float) for v in value):
+        value = "[" + ", ".join(f"{v:.4g}" for v in value) + "]"
+    unit = _UNITS.get(key)
+    return f"- {key}: {value}" + (f" {unit}" if unit and unit != "-" else "")
