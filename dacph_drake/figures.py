@@ -21,6 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
+from dacph_drake.metrics import nominal_estimates  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
@@ -113,8 +114,7 @@ def _entries(dac: Logs, scenario: Scenario, out: Path, name: str, xlim=None):
     labels = [(r"$B_{%d%d}$" % (r + 1, c + 1), r * n + c) for r in range(n)
               for c in range(n)]
     labels += [(r"$D_{%d%d}$" % (k + 1, k + 1), n * n + k) for k in range(n)]
-    prior = np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
-                            scenario.uncertainty.D0])
+    prior = nominal_estimates(scenario)
     for ax, group, unit in [(axes[0], labels[:n * n], "[-]"),
                             (axes[1], labels[n * n:], "[N m s]")]:
         for color, (label, col) in enumerate(group):

@@ -15,7 +15,7 @@ from typing import Optional
 import numpy as np
 import torch
 
-from dacph_drake.network import RhsNetwork
+from dacph_drake.network import RhsNetwork, port_torque
 from dacph_drake.scenario import Learner
 
 
@@ -129,7 +129,7 @@ class RhsIdentifier:
 
     def _Loss(self, w, q, p, qdot, u, tau):
         B, D = self.network(q, p)
-        residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
+        residual = tau - port_torque(B, D, u, qdot)
         data = torch.sum(w * torch.sum(residual**2, 1))
         if not self._regularized:
             return data
@@ -155,9 +155,8 @@ class RhsIdentifier:
         times, q, p, qdot, u, tau = self._Split(rows)
         w = self.Weights(times, t_now, -np.inf)
         with torch.no_grad():
-            B, D = self.network(q, p)
-            residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
-            nominal = tau - (u @ self._B0.T - self._D0 * qdot)
+            residual = tau - port_torque(*self.network(q, p), u, qdot)
+            nominal = tau - port_torque(self._B0, self._D0, u, qdot)
             loss = float(torch.sum(w * torch.sum(residual**2, 1)))
             nominal_loss = float(torch.sum(w * torch.sum(nominal**2, 1)))
             signal = float(torch.sum(w * torch.sum(tau**2, 1)))
@@ -168,8 +167,7 @@ class RhsIdentifier:
         """sqrt(sum ||r||^2 / sum ||tau||^2) of the current network on ``rows``."""
         _, q, p, qdot, u, tau = self._Split(rows)
         with torch.no_grad():
-            B, D = self.network(q, p)
-            residual = tau - (torch.einsum("mij,mj->mi", B, u) - D * qdot)
+            residual = tau - port_torque(*self.network(q, p), u, qdot)
             return float(torch.sqrt(torch.sum(residual**2)
                                     / torch.clamp(torch.sum(tau**2), min=1e-300)))
 

@@ -34,6 +34,12 @@ def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
     return {name: (t >= lo) & (t < hi) for name, lo, hi in zip(PHASES, edges, edges[1:])}
 
 
+def nominal_estimates(scenario: Scenario) -> np.ndarray:
+    """The prior (B0, D0) laid out as the ``estimates`` log: [vec(B0), diag(D0)]."""
+    return np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
+                           scenario.uncertainty.D0])
+
+
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray) -> Dict[str, float]:
     """Learning's own value over the samples ``mask`` (SPEC section 9): the time-RMS
@@ -42,8 +48,7 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     samples whose B_hat the RHS integrator rejected (DIC or trust band)."""
     n = scenario.robot.num_links
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
-    prior = np.tile(np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
-                                    scenario.uncertainty.D0]), (len(truth), 1))
+    prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
     out = {}
     for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
         learned = relative_error_rms(estimate[:, columns], truth[:, columns])

@@ -16,6 +16,13 @@ import numpy as np
 import torch
 
 
+def port_torque(B, D, u, qdot):
+    """The RHS's port torque tau = B u - D qdot for a batch of samples (torch): B of
+    shape (m, n, n) or one (n, n) for all, D of shape (m, n) or (n,), u and qdot
+    (m, n)."""
+    return torch.einsum("...ij,...j->...i", B, u) - D * qdot
+
+
 class RhsNetwork(torch.nn.Module):
     def __init__(self, n: int, hidden: List[int], B0, D0, momentum_scale: float,
                  seed: int):
@@ -46,9 +53,6 @@ class RhsNetwork(torch.nn.Module):
         D = torch.nn.functional.softplus(self.head_D(self.body_D(X)))
         return B, D
 
-    def predict(self, q, p, qdot, u):
-        B, D = self(q, p)
-        return torch.einsum("mij,mj->mi", B, u) - D * qdot
 
     def export(self) -> np.ndarray:
         """All parameters as one float64 vector (the order evaluate_exported reads)."""
