@@ -117,10 +117,11 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
+    if checkpoint_seconds is not None:
+        require_positive("checkpoint_seconds (--checkpoint)", checkpoint_seconds, "s")
     lock = _LockRun(prepare_out_dir(out_dir), controller) if out_dir is not None else None
     checkpoint = None
     if out_dir is not None and checkpoint_seconds is not None:
-        require_positive("checkpoint_seconds", checkpoint_seconds, "s")
         checkpoint = (checkpoint_seconds,
                       lambda partial: save_run(partial, scenario, out_dir, compress=False))
     try:

@@ -28,6 +28,8 @@ from dacph_drake.scenario import short_scenario
     (["diagram", "shrot"], "scenario 'shrot': no such file"),
     (["reproduce", "shrot", "--out", "OUT"], "scenario 'shrot': no such file"),
     (["simulate", "short", "--out", "FILE"], "is an existing file; allowed: a directory"),
+    (["simulate", "short", "--out", "OUT", "--checkpoint", "0"],
+     "checkpoint_seconds (--checkpoint) = 0.0 is out of range; allowed: > 0 s"),
 ])
 def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, message):
     bad = tmp_path / "bad.yaml"
