@@ -1,5 +1,6 @@
 """Command line: ``dacph <command> ...`` (``dacph --help`` lists the commands)."""
 import argparse
+import logging
 import sys
 
 import numpy as np
@@ -250,6 +251,7 @@ def main(argv=None) -> int:
                           "so far")
     swp.set_defaults(run=_sweep)
     args = parser.parse_args(argv)
+    logging.basicConfig(format="dacph: note: %(message)s", level=logging.WARNING)
     try:
         return args.run(args)
     except ConfigError as e:

@@ -40,27 +40,35 @@ class ClosedLoop:
     systems: Dict[str, object] = field(default_factory=dict)
 
 
-def _RequireClearStart(scenario: Scenario) -> None:
-    """ConfigError unless every link of the ground-truth arm at q0 lies outside the
-    base (clearance of the link outline > 0, as potential.BaseRepulsionPotential
-    measures it)."""
-    clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance(
-        np.asarray(scenario.q0, float))
+def _RequireRunnableStart(scenario: Scenario, model: ReducedOrderModel) -> None:
+    """ConfigError unless the run can start at q0: every link of the ground-truth arm
+    lies outside the base (clearance of the link outline > 0, as
+    potential.BaseRepulsionPotential measures it), and the controller's task
+    Jacobian D(q0) (1 x n, d alpha / d qdot) is far enough from singular for
+    D+ = D^T / (D D^T): ||D(q0)|| >= lhs.min_task_singular_value."""
+    q0 = np.asarray(scenario.q0, float)
+    clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance(q0)
     if clearance <= 0:
         raise ConfigError(f"q0 = {list(scenario.q0)} puts the arm into the base "
                           f"(clearance {clearance:.3f} m); allowed: a configuration "
                           "with every link outside the base")
+    sigma = float(np.linalg.norm(model.Evaluate(q0, np.zeros_like(q0)).D))
+    if sigma < scenario.lhs.min_task_singular_value:
+        raise ConfigError(
+            f"q0 = {list(scenario.q0)} is near a singularity of the task Jacobian D "
+            f"(||D(q0)|| = {sigma:.3g}); allowed: a q0 with ||D(q0)|| >= "
+            f"lhs.min_task_singular_value = {scenario.lhs.min_task_singular_value:g}")
 
 
 def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
                  excitation: Excitation):
     """Plant, true RHS, disturbance and LHS controller; loggers shared by all loops."""
     scenario.Validate()
-    _RequireClearStart(scenario)
+    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    _RequireRunnableStart(scenario, model)
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     plant.set_name("plant")
     nq = plant.num_positions()
-    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
     lambda_min, lambda_max = mass_matrix_bounds(model)
     c_min = c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0)
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
@@ -105,7 +113,12 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     builder = DiagramBuilder()
     loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial,
                         excitation=scenario.excitation)
-    check_rhs_period(scenario.periods, (1 + scenario.rhs.c_margin) * loop.c_min_nominal)
+    rhs_settings = scenario.rhs
+    check_rhs_period(scenario.periods, (1 + rhs_settings.c_margin) * loop.c_min_nominal,
+                     (1 + rhs_settings.c_margin) * c_lower_bound(
+                         rhs_settings.Td, scenario.lhs.Kd, loop.lambda_min_M,
+                         rhs_settings.beta_max),
+                     rhs_settings.beta_max)
     plant, lhs = loop.plant, loop.systems["lhs_controller"]
     nq = plant.num_positions()
     periods, settings = scenario.periods, scenario.learner

@@ -70,13 +70,16 @@ def check_period_order(periods) -> None:
                           f"periods.lhs = {periods.lhs:g} s")
 
 
-def check_rhs_period(periods, c_required: float) -> None:
-    """Refuses an RHS period that cannot realize the decay rate ``c_required`` [1/s]
-    with a well-damped discrete loop (g = h c <= 1/4, see WELL_DAMPED_LOOP_GAIN)."""
-    bound = WELL_DAMPED_LOOP_GAIN / c_required
+def check_rhs_period(periods, c_nominal: float, c_largest: float, beta_max: float) -> None:
+    """Refuses an RHS period that cannot realize the largest decay rate the integrator
+    may run, ``c_largest`` = (1 + c_margin) c_min(beta_max) [1/s], with a well-damped
+    discrete loop (g = h c <= 1/4, see WELL_DAMPED_LOOP_GAIN); ``c_nominal`` is the
+    rate at beta_hat = 1, where every run starts."""
+    bound = WELL_DAMPED_LOOP_GAIN / c_largest
     if periods.rhs > bound:
         raise ConfigError(
             f"periods.rhs = {periods.rhs:g} s cannot realize the RHS decay rate "
-            f"c = {c_required:.1f} 1/s required by the gain rule (eq. 48) with a "
+            f"c = {c_nominal:.1f} 1/s required by the gain rule (eq. 48) at beta_hat = 1, "
+            f"up to {c_largest:.1f} 1/s at rhs.beta_max = {beta_max:g}, with a "
             f"well-damped discrete loop; allowed: periods.rhs <= 1 / (4 c) = "
-            f"{bound:.3g} s")
+            f"{bound:.3g} s, or a smaller rhs.beta_max")

@@ -3,7 +3,7 @@ from typing import Dict
 
 import numpy as np
 
-from dacph_drake.log_layout import LhsLog, RhsLog
+from dacph_drake.log_layout import LearnerLog, LhsLog, RhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario
 
@@ -44,8 +44,10 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray) -> Dict[str, float]:
     """Learning's own value over the samples ``mask`` (SPEC section 9): the time-RMS
     relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and of the nominal
-    prior (B0, D0), their ratio (below 1: learning beats the prior), and the share of
-    samples whose B_hat the RHS integrator rejected (DIC or trust band)."""
+    prior (B0, D0), their ratio (below 1: learning beats the prior), the share of
+    samples whose B_hat the RHS integrator rejected (DIC or trust band), and the
+    share where the learner's beta_hat exceeded rhs.beta_max, so that the gain rule
+    ran on beta_max instead (RhsIntegrator)."""
     n = scenario.robot.num_links
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
@@ -58,6 +60,9 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                     else float("nan")})
     trusted = logs["rhs_log"][mask, RhsLog(n).trusted]
     out["rejected_share"] = float(np.mean(trusted < 0.5)) if len(trusted) else float("nan")
+    beta_hat = logs["learner_log"][mask, LearnerLog().beta_hat]
+    out["beta_clipped_share"] = (float(np.mean(beta_hat > scenario.rhs.beta_max))
+                                 if len(beta_hat) else float("nan"))
     return out
 
 

@@ -88,6 +88,7 @@ ABLATION_ROWS = (
     AblationRow("dac.D_error_nominal", "D error, nominal prior D0", "-"),
     AblationRow("dac.D_error_ratio", "D error, learned / nominal", "-"),
     AblationRow("dac.rejected_share", "rejected B_hat, DAC", "%"),
+    AblationRow("dac.beta_clipped_share", "beta_hat above rhs.beta_max, DAC", "%"),
 )
 
 

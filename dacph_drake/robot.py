@@ -10,6 +10,7 @@ mass lies ``com`` metres along x; the next joint (or the end effector) sits at
 ``length``. Descriptions load from YAML with ``pydrake.common.yaml``.
 """
 import dataclasses
+import logging
 import typing
 from dataclasses import dataclass, field
 from typing import List
@@ -105,10 +106,11 @@ def save_robot(robot: RobotParams, path: str) -> None:
         f.write(yaml_dump_typed(robot))
 
 
-def load_yaml_dataclass(path: str, schema):
+def load_yaml_dataclass(path: str, schema, noted_defaults=()):
     """yaml_load_typed with one-line errors that name the file: malformed YAML (with
     its line and column), a value of the wrong kind (naming the setting), unknown
-    keys."""
+    keys. Each top-level section in ``noted_defaults`` that the file leaves out is
+    named in a logged warning (it takes the schema's default)."""
     try:
         with open(path) as f:
             raw = yaml.load(f, Loader=_TaggedLoader)
@@ -119,7 +121,14 @@ def load_yaml_dataclass(path: str, schema):
     except (OSError, yaml.YAMLError) as e:
         raise ConfigError(f"{path}: cannot be read ({e}); allowed: a readable YAML "
                           "file") from e
-    _check_kinds(raw if raw is not None else {}, schema, f"{path}: ")
+    raw = raw if raw is not None else {}
+    _check_kinds(raw, schema, f"{path}: ")
+    missing = [name for name in noted_defaults
+               if not (isinstance(raw, dict) and name in raw)]
+    if missing:
+        logging.getLogger(__name__).warning(
+            "%s: no %s section; using the defaults (the paper's robot)", path,
+            " or ".join(f"{name}:" for name in missing))
     try:
         return yaml_load_typed(schema=schema, filename=str(path))
     except (RuntimeError, ValueError, TypeError) as e:

@@ -42,12 +42,15 @@ class Phases:
 @dataclass
 class LhsGains:
     """Sliding-mode LHS controller (SPEC section 4): K_d = Kd I, Lambda, epsilon of
-    chi tanh(s / epsilon), eta of xi = -eta grad U."""
+    chi tanh(s / epsilon), eta of xi = -eta grad U. A run must start where the task
+    Jacobian's singular value ||D(q0)|| is at least min_task_singular_value (the
+    paper's arm has 0.61 to 1.21 over all q)."""
     Kd: float = 0.5
     Lambda: float = 1.0
     epsilon: float = 0.2
     eta: float = 0.1
     chi_model_based: float = 0.05   # fixed chi of the model-based baseline [N m]
+    min_task_singular_value: float = 0.05
 
 
 @dataclass
@@ -76,7 +79,9 @@ class Rhs:
     (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
     with exponential forgetting over chi_window, never below chi_floor. A learned B_hat
 is used only if it passes the DIC check and lies within trust_ratio of B0 (the
-paper's bounded learning error, see gain_rule.within_trust)."""
+paper's bounded learning error, see gain_rule.within_trust). The gain rule reads
+min(beta_hat, beta_max): periods.rhs is checked at build time for the largest c
+that this allows, so the discrete loop never runs past the bound it was built for."""
     Td: float = 2.0
     c_margin: float = 0.1
     c_time_constant: float = 1.0    # [s]
@@ -86,6 +91,8 @@ paper's bounded learning error, see gain_rule.within_trust)."""
     observer_noise: float = 0.0     # std of tau_obs measurement noise [N m]
     trust_ratio: float = 2.0        # accept B_hat only if its eigenvalues are within
     #                                 this factor of B0's (gain_rule.within_trust)
+    beta_max: float = 2.0           # the largest beta_hat the gain rule uses: the RHS
+    #                                 period is sized for c_min(beta_max), see RhsIntegrator
 
 
 @dataclass
@@ -269,6 +276,8 @@ class Scenario:
         for name in ("Kd", "Lambda", "epsilon", "eta"):
             require_positive(f"lhs.{name}", getattr(self.lhs, name))
         require_nonnegative("lhs.chi_model_based", self.lhs.chi_model_based, "N m")
+        require_in_range("lhs.min_task_singular_value", self.lhs.min_task_singular_value,
+                         0.0, 10.0)
         for name in ("base_gain", "base_margin", "fold_gain"):
             require_positive(f"potential.{name}", getattr(self.potential, name))
         require_in_range("potential.fold_margin", self.potential.fold_margin, 1e-3,
@@ -286,6 +295,7 @@ class Scenario:
             require_positive(f"rhs.{name}", getattr(self.rhs, name))
         require_nonnegative("rhs.observer_noise", self.rhs.observer_noise, "N m")
         require_in_range("rhs.trust_ratio", self.rhs.trust_ratio, 1.0, 10.0)
+        require_in_range("rhs.beta_max", self.rhs.beta_max, 1.0, 1e6)
         require_positive("stress.B_hat_scale", self.stress.B_hat_scale)
         require_nonnegative("stress.start", self.stress.start, "s")
         for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
@@ -378,14 +388,16 @@ def _require_length(name: str, values, n: int, meaning: str = "one per joint"
 
 def load_scenario(path) -> Scenario:
     """Loads and validates a scenario: a YAML file (unknown keys and wrong types are
-    errors that name the file and the key) or a built-in name (BUILT_IN_SCENARIOS:
+    errors that name the file and the key; a file without a robot: or nominal_robot:
+    section gets the paper's arm and a logged warning saying so) or a built-in name (BUILT_IN_SCENARIOS:
     "paper", "short") where no file of that name exists."""
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
-    scenario = load_yaml_dataclass(path, Scenario)
+    scenario = load_yaml_dataclass(path, Scenario,
+                                   noted_defaults=("robot", "nominal_robot"))
     scenario.Validate()
     return scenario
 

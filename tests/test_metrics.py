@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from dacph_drake.log_layout import LearnerLog
 from dacph_drake.metrics import comparison, relative_error_rms, rms, run_metrics
 from dacph_drake.reproduce import metrics_table
 from dacph_drake.scenario import short_scenario
@@ -39,8 +40,10 @@ def _synthetic_logs(scenario, error_amplitude, effort, B_error):
     rhs[:, -2:] = 1.0
     u = np.zeros((T, n))
     u[:, 0] = effort
+    learner = np.zeros((T, LearnerLog().size))
+    learner[:, LearnerLog().beta_hat] = np.where(t >= scenario.disturbance_start, 3.0, 1.0)
     return {"time": t, "lhs_log": lhs, "state": state, "u": u, "rhs_log": rhs,
-            "true_matrices": truth, "estimates": estimates,
+            "learner_log": learner, "true_matrices": truth, "estimates": estimates,
             "tau_request": np.zeros((T, n)), "tau": np.zeros((T, n))}
 
 
@@ -54,6 +57,8 @@ def test_run_metrics_and_table_on_synthetic_runs():
     assert dac["c_min_over_bound"] == pytest.approx(900 / 800)
     assert dac["dic_violations"] == 0 and dac["rejected_estimates"] == 0
     assert dac["min_clearance"] > 0
+    assert dac["phase2.beta_clipped_share"] == 0.0      # beta_hat = 1 <= rhs.beta_max = 2
+    assert dac["phase3.beta_clipped_share"] == 1.0      # beta_hat = 3
     c = comparison(dac, mb)
     assert c["tracking_error_reduction"] == pytest.approx(0.75, rel=1e-3)
     assert c["control_effort_increase"] == pytest.approx(0.16)

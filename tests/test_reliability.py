@@ -3,6 +3,7 @@ setting, a bad --out is refused before any simulation time is spent, and SIGINT 
 SIGTERM of a running `dacph simulate` leave a readable run directory marked
 interrupted."""
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -16,6 +17,7 @@ from dacph_drake.cli import main
 from dacph_drake.errors import ConfigError
 from dacph_drake.run import simulate
 from dacph_drake.scenario import short_scenario
+from test_scenario import BAD_SCENARIO_FILES
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -41,6 +43,48 @@ def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, messag
     err = capsys.readouterr().err
     assert err.startswith("dacph: error: ") and message in err, err
     assert len(err.strip().splitlines()) == 1
+
+
+# Files that load but cannot run: refused when the diagram is built, before any
+# simulated time, with the setting named.
+UNRUNNABLE_SCENARIO_FILES = [
+    ("q0: [2.5, 0.5]\n", r"q0 = \[2.5, 0.5\] puts the arm into the base"),
+    ("lhs: {min_task_singular_value: 0.9}\n",
+     r"q0 = \[0.3, 1.0\] is near a singularity of the task Jacobian D \(\|\|D\(q0\)\|\| = "
+     r"0.832\); allowed: .* lhs.min_task_singular_value = 0.9"),
+    ("periods: {rhs: 0.0005}\n", r"periods.rhs = 0.0005 s cannot realize"),
+    ("rhs: {beta_max: 100.0}\n", r"periods.rhs = 0.00025 s cannot realize .* up to "
+                                  r"\d+.\d 1/s at rhs.beta_max = 100, .* or a smaller "
+                                  r"rhs.beta_max"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD_SCENARIO_FILES + UNRUNNABLE_SCENARIO_FILES)
+def test_every_bad_scenario_file_exits_2_with_one_line(tmp_path, capsys, text, message):
+    """The whole bad-input table through `dacph simulate`: exit 2, one line that names
+    the setting, and no run directory left behind by a refused run."""
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["simulate", str(path), "--out", str(out)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines()
+           if not line.startswith("dacph: note: ")]
+    assert len(err) == 1 and err[0].startswith("dacph: error: "), err
+    assert re.search(message, err[0]), err[0]
+    assert not (out / "run_dac.json").exists()
+
+
+def test_a_file_without_a_robot_section_says_so(tmp_path, caplog):
+    from dacph_drake.scenario import load_scenario
+    path = tmp_path / "s.yaml"
+    path.write_text("seed: 3\n")
+    with caplog.at_level("WARNING"):
+        assert load_scenario(path).robot == short_scenario().robot
+    assert "no robot: or nominal_robot: section; using the defaults" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING"):
+        load_scenario("diagrams/short.yaml")
+    assert caplog.text == ""
 
 
 def test_out_dir_is_checked_before_the_simulation(tmp_path):

@@ -23,7 +23,9 @@ def test_yaml_round_trip(tmp_path):
     assert load_scenario(tmp_path / "s.yaml") == Scenario(seed=7)
 
 
-@pytest.mark.parametrize("text, message", [
+# Scenario files that must be refused, and a pattern the one-line message must
+# match (it names the setting); the CLI's table in test_reliability runs them too.
+BAD_SCENARIO_FILES = [
     ("lhs: {Kd: 0.5, gain: 1}\n", r"s.yaml.*gain"),
     ("lhs: {Kd: fast}\n", r"s.yaml.*fast"),
     ("lhs: {Kd: -0.5}\n", r"lhs.Kd = -0.5 .*> 0"),
@@ -63,7 +65,13 @@ def test_yaml_round_trip(tmp_path):
     ("seed: -1\n", r"seed = -1 is out of range; allowed: in \[0, 4\.29497e\+09\]"),
     ("periods: {log: 100.0}\nphases: {warmup: 1.0, linear: 1.0, nonlinear: 1.0, "
      "disturbance: 1.0}\n", r"periods.log = 100 s is longer than the run \(4 s"),
-])
+    ("rhs: {beta_max: 0.5}\n", r"rhs.beta_max = 0.5 is out of range; allowed: in \[1, "),
+    ("lhs: {min_task_singular_value: -0.1}\n",
+     r"lhs.min_task_singular_value = -0.1 is out of range; allowed: in \[0, 10\]"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD_SCENARIO_FILES)
 def test_bad_input_is_named(tmp_path, text, message):
     path = tmp_path / "s.yaml"
     path.write_text(text)

@@ -27,8 +27,11 @@ class RhsIntegrator(LeafSystem):
 
     Every ``model_period`` it refreshes, from the learner's exported weights at the
     sampled state x = (q, p): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
-    and c, which follows (1 + c_margin) c_min(beta_hat) (eq. 48) through a first-order
-    filter with time constant c_time_constant and never drops below c_min. If the DIC
+    and c, which follows (1 + c_margin) c_min(beta) (eq. 48) through a first-order
+    filter with time constant c_time_constant and never drops below c_min, where
+    beta = min(beta_hat, beta_max): c never exceeds (1 + c_margin) c_min(beta_max),
+    the decay rate the RHS period was checked for when the diagram was built
+    (gain_rule.check_rhs_period), so h c stays within the well-damped bound. If the DIC
     check (det B_hat != 0, Re lambda_hat_p > 0) fails, or B_hat's eigenvalues leave the
     trust band around B0 (``trust_ratio``, gain_rule.within_trust), the previous
     B_hat^-1, D_hat and K are kept and ``dic_ok`` (resp. ``trusted``) is 0 until the
@@ -91,7 +94,7 @@ class RhsIntegrator(LeafSystem):
         gains = gains.copy()
         B_hat, D_hat = self._network.Evaluate(weights, q, self._model.Momentum(q, qdot))
         B_hat = B_hat_scale * B_hat
-        c_min = self._c_bound(beta)
+        c_min = self._c_bound(min(beta, self._settings.beta_max))
         c = gains[-4]
         c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
