@@ -20,7 +20,7 @@ from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.montecarlo.store import ROWS, RowStore, read_rows, sorted_rows
 from dacph_drake.montecarlo.summary import write_summary
 from dacph_drake.robot import LinkParams, link_inertia_bound
-from dacph_drake.scenario import Phases, save_scenario, short_scenario
+from dacph_drake.scenario import Phases, load_scenario, save_scenario, short_scenario
 
 SWEEPS = Path(__file__).resolve().parents[1] / "sweeps"
 TRIALS = 4
@@ -338,4 +338,25 @@ distributions:
     rows = [json.loads(line) for line in (out / "rows.jsonl").read_text().splitlines()]
     assert len(rows) == 3 and all(r["status"] == "failed" for r in rows)
     assert all("robot.links[1].inertia = " in r["reason"] and "np.float64" not in r["reason"]
+               for r in rows)
+
+
+def test_a_base_scenario_that_cannot_run_fails_every_trial_with_the_reason(tmp_path):
+    """The base scenario loads but starts the arm inside the base (refused when each
+    trial's diagram is built): every trial is recorded as failed, naming q0, and the
+    sweep goes through all of them."""
+    path = write_sweep(tmp_path, """\
+scenario: tiny.yaml
+trials: 3
+seed: 2
+controllers: [model-based, dac]
+distributions:
+  disturbance_scale: !Uniform {min: 0.5, max: 1.5}
+""")
+    scenario = load_scenario(tmp_path / "tiny.yaml")
+    scenario.q0 = [2.5, 0.5]
+    save_scenario(scenario, tmp_path / "tiny.yaml")
+    rows = run_sweep(load_sweep(path), tmp_path / "out", InProcessExecutor(), 1)
+    assert [r["trial"] for r in rows] == [0, 1, 2]
+    assert all(r["status"] == "failed" and "puts the arm into the base" in r["reason"]
                for r in rows)
