@@ -82,7 +82,8 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
         model, potential, reference, scenario.lhs, scenario.periods.lhs, nq, fixed_chi,
         excitation))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
-    builder.Connect(disturbance.get_output_port(), truth.GetInputPort("disturbance"))
+    builder.Connect(disturbance.GetOutputPort("disturbance_model"),
+                    truth.GetInputPort("disturbance_model"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
     builder.Connect(plant.get_state_output_port(), lhs.GetInputPort("state"))
 
@@ -95,7 +96,7 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
     for name, port in [("state", plant.get_state_output_port()),
                        ("tau", truth.GetOutputPort("tau")),
                        ("true_matrices", truth.GetOutputPort("true_matrices")),
-                       ("disturbance", disturbance.get_output_port()),
+                       ("disturbance", disturbance.GetOutputPort("disturbance")),
                        ("tau_request", lhs.GetOutputPort("tau_request")),
                        ("lhs_log", lhs.GetOutputPort("lhs_log"))]:
         loop.loggers[name] = LogVectorOutput(port, builder, period)
@@ -124,8 +125,9 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     periods, settings = scenario.periods, scenario.learner
     regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
-        loop.model, nq, periods.rhs, periods.lhs, scenario.rhs.observer_noise,
-        scenario.seed, anti_alias_cutoff=settings.band[1] if regularized else 0.0))
+        num_joints=loop.model.num_joints, num_positions=nq, sample_period=periods.rhs,
+        noise_std=scenario.rhs.observer_noise, seed=scenario.seed,
+        anti_alias_cutoff=settings.band[1] if regularized else 0.0))
     learner = builder.AddNamedSystem("learner", RhsLearner(
         model=loop.model, settings=settings, period=periods.learner,
         sample_period=periods.learner_sample, num_positions=nq,
@@ -136,8 +138,8 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
         scenario.uncertainty.B0, periods.rhs, periods.learner_sample, nq,
         learner.initial_weights, scenario.stress))
     builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
-    builder.Connect(plant.get_generalized_acceleration_output_port(),
-                    observer.GetInputPort("acceleration"))
+    builder.Connect(lhs.GetOutputPort("reduced_model"),
+                    observer.GetInputPort("reduced_model"))
     builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
     port_sample = observer.GetOutputPort("port_sample")
     if regularized:

@@ -40,6 +40,14 @@ class BaseRepulsionPotential:
         self._radius = np.array([robot.links[k].width / 2 for k in self._link_of])
         self._s = settings
 
+    @property
+    def kernel_arguments(self):
+        """(geometry, link_of, fraction, radius, gains) for kernels.potential.potential."""
+        s = self._s
+        return (np.concatenate([[self._half_size], self._shoulder, self._lengths]),
+                self._link_of, self._fraction.astype(float), self._radius,
+                np.array([s.base_gain, s.base_margin, s.fold_gain, s.fold_margin], float))
+
     def _Points(self, q, qdot):
         """Sample points P and their velocities Pdot (m x 2), joint positions O and
         velocities Odot (n x 2), all in the base frame (fixed-base kinematics)."""

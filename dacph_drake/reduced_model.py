@@ -90,6 +90,12 @@ class ReducedOrderModel:
         return self._num_joints
 
     @property
+    def trigonometric_representation(self):
+        """(coefficients, ranges) of H(q) = coefficients psi(q) for the compiled
+        kernels (kernels.arm)."""
+        return self._coefficients, self._ranges
+
+    @property
     def coordinates(self) -> ArmCoordinates:
         return self._coords
 

@@ -11,6 +11,11 @@ class OrientationReference:
         self._w = 2 * np.pi / np.asarray(reference.periods, float)
         self._alpha0 = alpha0
 
+    @property
+    def kernel_arguments(self) -> np.ndarray:
+        """[alpha(0), a (m), omega (m)] for kernels.loop.lhs_control."""
+        return np.concatenate([[self._alpha0], self._a, self._w])
+
     def __call__(self, t: float):
         """(alpha_d, alpha_d_dot, alpha_d_ddot) at time t."""
         s, c = np.sin(self._w * t), np.cos(self._w * t)

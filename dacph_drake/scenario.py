@@ -241,7 +241,7 @@ class Scenario:
     learner: Learner = field(default_factory=Learner)
     excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
-    integration_scheme: str = "runge_kutta3"
+    integration_scheme: str = "runge_kutta2"
     seed: int = 0
 
     @property

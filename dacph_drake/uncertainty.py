@@ -21,6 +21,13 @@ class TrueRhsModel:
         self._linear_start = phases.linear_start
         self._nonlinear_start = phases.nonlinear_start
 
+    @property
+    def kernel_arguments(self):
+        """The arguments of kernels.loop.true_matrices after (t, q, p)."""
+        return (self._B0, self._D0, self._D_offset, self._D_linear, self._B_linear,
+                self._D_quadratic, self._B_quadratic, self._B_q1_squared,
+                float(self._linear_start), float(self._nonlinear_start))
+
     def Matrices(self, t: float, q: np.ndarray, p: np.ndarray):
         """(B~, diagonal of D~) at time t and state (q, p)."""
         if t < self._linear_start:

@@ -240,3 +240,19 @@ def test_a_killed_run_keeps_its_last_checkpoint(tmp_path):
     with np.load(out / "logs_dac.npz") as logs:
         assert abs(logs["time"][-1] - meta["final_time"]) <= 0.011
     assert main(["verify", str(out)]) == 1          # run_finished fails, with a report
+
+
+def test_a_run_in_contact_stops_with_the_named_reason(monkeypatch):
+    """The ground truth has no collision geometry: the run's monitor checks the
+    links' kinematic clearance every run.MONITOR_PERIOD. A start inside the base,
+    let through the build-time check here, stops at the first check."""
+    import dacph_drake.diagrams as diagrams
+    from dacph_drake.run import MONITOR_PERIOD
+    monkeypatch.setattr(diagrams, "_RequireRunnableStart", lambda scenario, model: None)
+    scenario = short_scenario()
+    scenario.q0 = [2.5, 0.5]
+    scenario.potential.base_gain = 1e-12       # no field to blow up inside the base
+    result = simulate(scenario, "model-based", duration=0.5)
+    assert result.status == "diverged"
+    assert result.reason.startswith(f"collision: a link touched the base at t = "
+                                    f"{MONITOR_PERIOD:.4f} s (clearance -0.")

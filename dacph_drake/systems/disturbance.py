@@ -2,34 +2,40 @@
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
+from dacph_drake.kernels.loop import disturbance
 from dacph_drake.scenario import Disturbance
 
 
 class DisturbanceSource(LeafSystem):
-    """Output ``disturbance``: d(t) = scale (d_LF + d_HF) for t >= start, else 0,
+    """d(t) = scale (d_LF + d_HF) for t >= start, else 0,
         d_LF = offset + amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), sin, cos, ...]
         d_HF = a_HF sin(2 pi f_HF t) direction.
-    A stateless output that depends on time only."""
+
+    Output ``disturbance_model``: the constant parameter vector of d(t)
+    (kernels.loop.disturbance: [start, scale, 2 pi f_HF, offset, amplitude,
+    2 pi f, quadrature, a_HF direction]); the true RHS evaluates d(t) from it at
+    every integrator stage inside its compiled kernel, so d(t) costs no Python
+    call per stage. Output ``disturbance``: d(t) itself (time only), for loggers
+    and users."""
 
     def __init__(self, settings: Disturbance, start: float):
         super().__init__()
         n = len(settings.lf_offset)
-        self._start = start
-        self._scale = settings.scale
-        self._offset = np.asarray(settings.lf_offset, float)
-        self._amplitude = np.asarray(settings.lf_amplitude, float)
-        self._omega = 2 * np.pi * np.asarray(settings.lf_frequency, float)
-        self._quadrature = (np.arange(n) % 2) * np.pi / 2      # sin, cos, sin, ...
-        self._hf = settings.hf_amplitude * np.asarray(settings.hf_direction, float)
-        self._hf_omega = 2 * np.pi * settings.hf_frequency
+        self._model = np.concatenate([
+            [start, settings.scale, 2 * np.pi * settings.hf_frequency],
+            settings.lf_offset, settings.lf_amplitude,
+            2 * np.pi * np.asarray(settings.lf_frequency, float),
+            (np.arange(n) % 2) * np.pi / 2,                    # sin, cos, sin, ...
+            settings.hf_amplitude * np.asarray(settings.hf_direction, float)])
         self.DeclareVectorOutputPort("disturbance", n, self._CalcDisturbance,
                                      prerequisites_of_calc={self.time_ticket()})
+        self.DeclareVectorOutputPort(
+            "disturbance_model", len(self._model),
+            lambda context, output: output.SetFromVector(self._model),
+            prerequisites_of_calc={self.nothing_ticket()})
 
     def Evaluate(self, t: float) -> np.ndarray:
-        if t < self._start:
-            return np.zeros_like(self._offset)
-        lf = self._offset + self._amplitude * np.sin(self._omega * t + self._quadrature)
-        return self._scale * (lf + self._hf * np.sin(self._hf_omega * t))
+        return disturbance(t, self._model)
 
     def _CalcDisturbance(self, context, output):
         output.SetFromVector(self.Evaluate(context.get_time()))

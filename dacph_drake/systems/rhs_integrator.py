@@ -4,6 +4,7 @@ import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
+from dacph_drake.kernels.loop import integrator_sample
 from dacph_drake.log_layout import RhsLog
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
@@ -58,32 +59,31 @@ class RhsIntegrator(LeafSystem):
         self._B0_eigenvalues = np.asarray(B0, float)
         self._stress = stress
         self._c_bound = lambda beta: c_lower_bound(settings.Td, Kd_max, lambda_min_M, beta)
-        self._chi_decay = np.exp(-period / settings.chi_window)
+        self._constants = np.array([period, np.exp(-period / settings.chi_window),
+                                    settings.chi_floor])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._tau_request = self.DeclareVectorInputPort("tau_request", n)
         self._tau_observed = self.DeclareVectorInputPort("tau_observed", n)
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._weights = self.DeclareVectorInputPort("weights", network.size)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
-        # Fast group: [u_I (n), u (n), e_tau (n), ||e_tau||, chi].
-        self._fast = self.DeclareDiscreteState(
-            np.concatenate([np.zeros(3 * n + 1), [settings.chi_initial]]))
+        # Fast group: [u_I (n), e_tau (n), ||e_tau||]; u and chi are groups of their
+        # own, so that their output ports read the state without a Python call.
+        self._fast = self.DeclareDiscreteState(2 * n + 1)
+        self._u_index = self.DeclareDiscreteState(n)
+        self._chi_index = self.DeclareDiscreteState([settings.chi_initial])
         # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok, trusted].
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
         self._gains = self.DeclareDiscreteState(self._Refresh(
             np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
             initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
         self._previous_request = self.DeclareDiscreteState(n)
-        fast_ticket = {self.discrete_state_ticket(self._fast)}
-        self.DeclareVectorOutputPort("u", n, lambda c, o: o.SetFromVector(
-            c.get_discrete_state(self._fast).get_value()[n:2 * n]),
-            prerequisites_of_calc=fast_ticket)
-        self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetFromVector(
-            c.get_discrete_state(self._fast).get_value()[-1:]),
-            prerequisites_of_calc=fast_ticket)
+        self.DeclareStateOutputPort("u", self._u_index)
+        self.DeclareStateOutputPort("chi", self._chi_index)
         self.DeclareVectorOutputPort(
             "rhs_log", RhsLog(n).size, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._fast),
+                                   self.discrete_state_ticket(self._chi_index),
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
@@ -120,19 +120,17 @@ class RhsIntegrator(LeafSystem):
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
 
     def _UpdateIntegrator(self, context, discrete_state):
-        n = self._n
-        fast = context.get_discrete_state(self._fast).get_value()
-        gains = context.get_discrete_state(self._gains).get_value()
         tau_request = self._tau_request.Eval(context)
-        e = (context.get_discrete_state(self._previous_request).get_value()
-             - self._tau_observed.Eval(context))
-        e_norm = np.sqrt(e @ e)
-        u_I = fast[:n] + self._h * gains[n * n + n:n * n + 2 * n] * e
-        qdot = self._state.Eval(context)[self._nq + 3:]
-        u = gains[:n * n].reshape(n, n) @ (tau_request + gains[n * n:n * n + n] * qdot) + u_I
-        chi = max(e_norm, fast[-1] * self._chi_decay, self._settings.chi_floor)
-        discrete_state.get_mutable_vector(self._fast).SetFromVector(
-            np.concatenate([u_I, u, e, [e_norm, chi]]))
+        fast, u, chi = integrator_sample(
+            context.get_discrete_state(self._fast).get_value(),
+            context.get_discrete_state(self._gains).get_value(),
+            context.get_discrete_state(self._chi_index).get_value()[0], tau_request,
+            context.get_discrete_state(self._previous_request).get_value(),
+            self._tau_observed.Eval(context), self._state.Eval(context)[self._nq + 3:],
+            self._constants)
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(fast)
+        discrete_state.get_mutable_vector(self._u_index).SetFromVector(u)
+        discrete_state.get_mutable_vector(self._chi_index).SetAtIndex(0, chi)
         discrete_state.get_mutable_vector(self._previous_request).SetFromVector(
             tau_request)
 
@@ -140,4 +138,6 @@ class RhsIntegrator(LeafSystem):
         n = self._n
         fast = context.get_discrete_state(self._fast).get_value()
         gains = context.get_discrete_state(self._gains).get_value()
-        output.SetFromVector(np.concatenate([fast[2 * n:], gains[n * n + n:]]))
+        output.SetFromVector(np.concatenate(
+            [fast[n:], context.get_discrete_state(self._chi_index).get_value(),
+             gains[n * n + n:]]))

@@ -1,0 +1,127 @@
+"""The reduced model of a planar free-floating arm from its trigonometric mass
+matrix representation (reduced_model.ReducedOrderModel, which fits and checks it):
+H(q) = coefficients @ psi(q), psi = (1, cos s_r, sin s_r), s_r = sum of the joint
+angles in range r."""
+import numpy as np
+from numba import njit
+
+
+# Small dense products as loops: numba's @ calls BLAS through SciPy, which the
+# project does not need, and for n <= 7 the loops are faster than a BLAS call.
+@njit(cache=True)
+def matmul(A, B):
+    out = np.zeros((A.shape[0], B.shape[1]))
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            a = A[i, k]
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+    return out
+
+
+@njit(cache=True)
+def matvec(A, x):
+    out = np.zeros(A.shape[0])
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            out[i] += A[i, k] * x[k]
+    return out
+
+
+@njit(cache=True)
+def dot(a, b):
+    out = 0.0
+    for i in range(a.shape[0]):
+        out += a[i] * b[i]
+    return out
+
+
+@njit(cache=True)
+def mass_matrix_and_derivatives(q, coefficients, ranges):
+    """[H, dH/dq_1, ..., dH/dq_n] (shape (1 + n, N, N), N = n + 3) with the base pose
+    at zero: H = C psi(q), dH/dq_k = C dpsi/dq_k."""
+    n = q.shape[0]
+    R = ranges.shape[0]
+    N = n + 3
+    s = matvec(ranges, q)
+    c, si = np.cos(s), np.sin(s)
+    out = np.empty((1 + n, N * N))
+    for e in range(N * N):
+        value = coefficients[e, 0]
+        for r in range(R):
+            value += coefficients[e, 1 + r] * c[r] + coefficients[e, 1 + R + r] * si[r]
+        out[0, e] = value
+        for k in range(n):
+            d = 0.0
+            for r in range(R):
+                if ranges[r, k] != 0.0:
+                    d += coefficients[e, 1 + R + r] * c[r] - coefficients[e, 1 + r] * si[r]
+            out[1 + k, e] = d
+    return out.reshape(1 + n, N, N)
+
+
+@njit(cache=True)
+def inverse3(A):
+    """The inverse of a 3 x 3 matrix (adjugate over determinant)."""
+    out = np.empty((3, 3))
+    out[0, 0] = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
+    out[0, 1] = A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]
+    out[0, 2] = A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]
+    out[1, 0] = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
+    out[1, 1] = A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]
+    out[1, 2] = A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]
+    out[2, 0] = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
+    out[2, 1] = A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]
+    out[2, 2] = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    det = A[0, 0] * out[0, 0] + A[0, 1] * out[1, 0] + A[0, 2] * out[2, 0]
+    return out / det
+
+
+@njit(cache=True)
+def reduced_dynamics(q, qdot, coefficients, ranges):
+    """(M, C', D, dD) at (q, qdot), as ReducedOrderModel.Evaluate:
+    M = W^T H W and dM/dq_k = W^T dH/dq_k W with W = [-A; I], A = H_bb^-1 H_bm;
+    C'_ij = (Mdot_ij + G_ji - G_ij) / 2 with G_ij = sum_k dM_jk/dq_i qdot_k;
+    D = 1 - A[2] (alpha_dot = D qdot); dD[k] = -d(A[2])/dq_k."""
+    n = q.shape[0]
+    H = mass_matrix_and_derivatives(q, coefficients, ranges)
+    Hbb_inv = inverse3(np.ascontiguousarray(H[0, :3, :3]))
+    A = matmul(Hbb_inv, H[0, :3, 3:])
+    W = np.zeros((n + 3, n))
+    W[:3] = -A
+    for i in range(n):
+        W[3 + i, i] = 1.0
+    M = np.empty((n, n))
+    dM = np.empty((n, n, n))
+    dD = np.empty((n, n))
+    for k in range(1 + n):
+        HW = matmul(H[k], W)
+        MW = matmul(W.T, HW)
+        if k == 0:
+            M[:, :] = MW
+        else:
+            dM[k - 1] = MW
+            dD[k - 1] = -matvec(HW[:3].T, Hbb_inv[2])
+    Mdot = np.zeros((n, n))
+    G = np.zeros((n, n))
+    for k in range(n):
+        Mdot += qdot[k] * dM[k]
+        G[k] = matvec(dM[k], qdot)
+    C = 0.5 * (Mdot + G.T - G)
+    D = 1.0 - A[2]
+    return M, C, D, dD
+
+
+@njit(cache=True)
+def joint_momentum(x, coefficients, ranges):
+    """p = the joint rows of H(q_full) v at the plant state x = [q_full, v] of a
+    planar arm (base x, y, theta0 first): with the base's world velocity turned into
+    its own frame, p = H(q)[3:] T v, which at zero momentum is M(q) qdot."""
+    n = (x.shape[0] - 6) // 2
+    nq = n + 3
+    H = mass_matrix_and_derivatives(x[3:nq], coefficients, ranges)[0]
+    v = x[nq:].copy()
+    c, s = np.cos(x[2]), np.sin(x[2])
+    v[0] = c * x[nq] + s * x[nq + 1]
+    v[1] = -s * x[nq] + c * x[nq + 1]
+    return matvec(H[3:], v)

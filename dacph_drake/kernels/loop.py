@@ -1,0 +1,164 @@
+"""Kernels of the closed loop's systems: the LHS control law (LhsController), the
+true RHS with d(t) (TrueRhs, DisturbanceSource), the port observer's sample
+(PortObserver) and the RHS integrator's sample (RhsIntegrator). Each system's
+docstring states the equations; the kernels are their compiled bodies."""
+import numpy as np
+from numba import njit
+
+from dacph_drake.kernels.arm import dot, joint_momentum, matvec, reduced_dynamics
+from dacph_drake.kernels.potential import potential
+
+
+@njit(cache=True)
+def disturbance(t, model):
+    """d(t) from ``model`` = [start, scale, hf_omega, offset (n), amplitude (n),
+    omega (n), quadrature (n), hf (n)] (DisturbanceSource)."""
+    n = (model.shape[0] - 3) // 5
+    d = np.zeros(n)
+    if t < model[0]:
+        return d
+    hf = np.sin(model[2] * t)
+    for i in range(n):
+        lf = model[3 + i] + model[3 + n + i] * np.sin(model[3 + 2 * n + i] * t
+                                                      + model[3 + 3 * n + i])
+        d[i] = model[1] * (lf + model[3 + 4 * n + i] * hf)
+    return d
+
+
+@njit(cache=True)
+def true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
+                  B_quadratic, B_q1_squared, linear_start, nonlinear_start):
+    """(B~, diag D~) at time t and (q, p) (uncertainty.TrueRhsModel)."""
+    n = q.shape[0]
+    B = np.zeros((n, n))
+    if t < linear_start:
+        for i in range(n):
+            B[i, i] = B0[i]
+        return B, D0.copy()
+    B_diagonal = B0 + matvec(B_linear, q)
+    D = D0 + D_offset + D_linear * p
+    if t >= nonlinear_start:
+        pp = p * p
+        D = D + D_quadratic * pp
+        B_diagonal = B_diagonal + B_quadratic * pp
+        B += (q[0] * q[0]) * B_q1_squared
+    for i in range(n):
+        B[i, i] += B_diagonal[i]
+    return B, D
+
+
+def pack_true_rhs(coefficients, ranges, disturbance_model, uncertainty) -> np.ndarray:
+    """The constant arguments of true_torque as one array (numba's dispatch cost
+    grows with the number of array arguments: 16 of them cost 3 us a call, more
+    than the kernel): [vec(coefficients), vec(ranges), disturbance_model,
+    B0, D0, D_offset, D_linear, vec(B_linear), D_quadratic, B_quadratic,
+    vec(B_q1_squared), linear_start, nonlinear_start]."""
+    return np.concatenate([np.ravel(a) for a in
+                           (coefficients, ranges, disturbance_model, *uncertainty)]
+                          ).astype(float)
+
+
+@njit(cache=True)
+def true_torque(t, x, u, packed):
+    """tau = B~(x) u - D~(x) qdot + d(t) at time t and plant state x (TrueRhs), with
+    ``packed`` = pack_true_rhs(...)."""
+    n = u.shape[0]
+    nq = n + 3
+    N, R = n + 3, n * (n + 1) // 2
+    o = 0
+    coefficients = packed[o:o + N * N * (1 + 2 * R)].reshape(N * N, 1 + 2 * R)
+    o += N * N * (1 + 2 * R)
+    ranges = packed[o:o + R * n].reshape(R, n)
+    o += R * n
+    disturbance_model = packed[o:o + 3 + 5 * n]
+    o += 3 + 5 * n
+    B0, D0, D_offset, D_linear = (packed[o:o + n], packed[o + n:o + 2 * n],
+                                  packed[o + 2 * n:o + 3 * n], packed[o + 3 * n:o + 4 * n])
+    o += 4 * n
+    B_linear = packed[o:o + n * n].reshape(n, n)
+    o += n * n
+    D_quadratic, B_quadratic = packed[o:o + n], packed[o + n:o + 2 * n]
+    o += 2 * n
+    B_q1_squared = packed[o:o + n * n].reshape(n, n)
+    o += n * n
+    p = joint_momentum(x, coefficients, ranges)
+    B, D = true_matrices(t, x[3:nq], p, B0, D0, D_offset, D_linear, B_linear,
+                         D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1])
+    return matvec(B, u) - D * x[nq + 3:] + disturbance(t, disturbance_model)
+
+
+@njit(cache=True)
+def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, radius,
+                potential_gains, reference, gains, excitation):
+    """(tau_c^r, [s, alpha~, alpha_d, V, U], M, C') at time t and plant state x
+    (LhsController). ``reference`` = [alpha0, amplitudes (m), omegas (m)];
+    ``gains`` = [Kd, Lambda, epsilon, eta]; ``excitation`` = [amplitude, omegas (n)]."""
+    n = (x.shape[0] - 6) // 2
+    nq = n + 3
+    q, qdot = x[3:nq].copy(), x[nq + 3:].copy()
+    M, C, D, dD = reduced_dynamics(q, qdot, coefficients, ranges)
+    m = (reference.shape[0] - 1) // 2
+    alpha_d, alpha_d_dot, alpha_d_ddot = reference[0], 0.0, 0.0
+    for i in range(m):
+        a, w = reference[1 + i], reference[1 + m + i]
+        alpha_d += a * np.sin(w * t)
+        alpha_d_dot += a * w * np.cos(w * t)
+        alpha_d_ddot -= a * w * w * np.sin(w * t)
+    Kd, Lambda, epsilon, eta = gains[0], gains[1], gains[2], gains[3]
+    alpha_error = x[2] + np.sum(q) - alpha_d
+    alpha_error_dot = dot(D, qdot) - alpha_d_dot
+    D_dot = matvec(dD.T, qdot)
+    DDt = dot(D, D)
+    D_pinv = D / DDt
+    D_pinv_dot = D_dot / DDt - D * (2.0 * dot(D, D_dot) / DDt**2)
+    P = np.eye(n) - np.outer(D_pinv, D)
+    P_dot = -(np.outer(D_pinv_dot, D) + np.outer(D_pinv, D_dot))
+    U, grad_U, grad_U_dot = potential(q, qdot, geometry, link_of, fraction, radius,
+                                      potential_gains)
+    xi, xi_dot = -eta * grad_U, -eta * grad_U_dot
+    task = alpha_d_dot - Lambda * alpha_error
+    nu = D_pinv * task + matvec(P, xi)
+    nu_dot = (D_pinv_dot * task + D_pinv * (alpha_d_ddot - Lambda * alpha_error_dot)
+              + matvec(P_dot, xi) + matvec(P, xi_dot))
+    s = qdot - nu
+    tau = matvec(M, nu_dot) + matvec(C, nu) - Kd * s - chi * np.tanh(s / epsilon)
+    if excitation[0] > 0:
+        tau = tau + excitation[0] * np.sin(excitation[1:] * t)
+    log = np.empty(n + 4)
+    log[:n] = s
+    log[n], log[n + 1], log[n + 2], log[n + 3] = alpha_error, alpha_d, 0.5 * dot(s, matvec(M, s)), U
+    return tau, log, M, C
+
+
+@njit(cache=True)
+def observed_port_torque(qdot, qdot_previous, model, h):
+    """(tau_obs, p, qdot_mid) over the last sample interval (PortObserver):
+    qddot = (qdot(k) - qdot(k-1)) / h, qdot_mid = (qdot(k) + qdot(k-1)) / 2,
+    tau_obs = M qddot + C' qdot_mid, p = M qdot_mid, with ``model`` = [vec(M), vec(C')]."""
+    n = qdot.shape[0]
+    M = model[:n * n].reshape(n, n)
+    C = model[n * n:].reshape(n, n)
+    qdot_mid = 0.5 * (qdot + qdot_previous)
+    tau = matvec(M, (qdot - qdot_previous) / h) + matvec(C, qdot_mid)
+    return tau, matvec(M, qdot_mid), qdot_mid
+
+
+@njit(cache=True)
+def integrator_sample(fast, gains, chi, tau_request, previous_request, tau_observed,
+                      qdot, constants):
+    """One RHS integrator sample (RhsIntegrator), with ``fast`` = [u_I, ...],
+    ``gains`` = [vec(B_hat^-1), D_hat, K, ...], ``constants`` = [h, chi_decay,
+    chi_floor]: e_tau = tau_c^r(k-1) - tau_obs(k), u_I += h K e_tau,
+    u = B_hat^-1 (tau_c^r + D_hat qdot) + u_I,
+    chi = max(||e_tau||, chi e^(-h / chi_window), chi_floor).
+    Returns ([u_I, e_tau, ||e_tau||], u, chi)."""
+    n = tau_request.shape[0]
+    h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
+    e = previous_request - tau_observed
+    out = np.empty(2 * n + 1)
+    out[:n] = fast[:n] + h * gains[n * n + n:n * n + 2 * n] * e
+    out[n:2 * n] = e
+    out[2 * n] = np.sqrt(dot(e, e))
+    u = (matvec(gains[:n * n].reshape(n, n), tau_request + gains[n * n:n * n + n] * qdot)
+         + out[:n])
+    return out, u, max(out[2 * n], chi * chi_decay, chi_floor)

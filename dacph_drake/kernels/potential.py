@@ -1,0 +1,87 @@
+"""The null-space potential U(q), grad U and Hess U qdot as one compiled kernel
+(reference: potential.BaseRepulsionPotential.Evaluate, which documents the model)."""
+import numpy as np
+from numba import njit
+
+RHO_FLOOR = 1e-4      # as potential._RHO_FLOOR
+
+
+@njit(cache=True)
+def _firas(rho, k, rho0):
+    """f, f', f'' of f(rho) = k / 2 (1 / rho - 1 / rho0)^2 on rho < rho0, else 0."""
+    rho = max(rho, RHO_FLOOR)
+    if rho >= rho0:
+        return 0.0, 0.0, 0.0
+    a = 1.0 / rho - 1.0 / rho0
+    return 0.5 * k * a * a, -k * a / rho**2, k / rho**4 + 2.0 * k * a / rho**3
+
+
+@njit(cache=True)
+def potential(q, qdot, geometry, link_of, fraction, radius, gains):
+    """(U, grad U, Hess U qdot). ``geometry`` = [half base size, shoulder x,
+    shoulder y, link lengths (n)]; point j lies ``fraction[j]`` along link
+    ``link_of[j]`` with half width ``radius[j]``; ``gains`` = [base_gain,
+    base_margin, fold_gain, fold_margin]."""
+    n = q.shape[0]
+    half = geometry[0]
+    lengths = geometry[3:]
+    base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]
+    phi, phidot = np.cumsum(q), np.cumsum(qdot)
+    e = np.empty((n, 2))
+    edot = np.empty((n, 2))
+    for i in range(n):
+        e[i, 0], e[i, 1] = np.cos(phi[i]), np.sin(phi[i])
+        edot[i, 0], edot[i, 1] = -phidot[i] * e[i, 1], phidot[i] * e[i, 0]
+    O = np.empty((n, 2))
+    Odot = np.zeros((n, 2))
+    O[0, 0], O[0, 1] = geometry[1], geometry[2]
+    for i in range(1, n):
+        O[i] = O[i - 1] + lengths[i - 1] * e[i - 1]
+        Odot[i] = Odot[i - 1] + lengths[i - 1] * edot[i - 1]
+    U = 0.0
+    grad = np.zeros(n)
+    grad_dot = np.zeros(n)
+    g = np.empty(2)
+    for j in range(link_of.shape[0]):
+        link = link_of[j]
+        reach = fraction[j] * lengths[link]
+        P = O[link] + reach * e[link]
+        Pdot = Odot[link] + reach * edot[link]
+        ex0, ex1 = abs(P[0]) - half, abs(P[1]) - half
+        out0, out1 = max(ex0, 0.0), max(ex1, 0.0)
+        dist = np.sqrt(out0 * out0 + out1 * out1)
+        h00 = h01 = h11 = 0.0
+        if dist == 0.0:          # inside: the gradient points to the nearest side
+            g[0] = g[1] = 0.0
+            if ex0 >= ex1:
+                g[0], dist = np.sign(P[0]), ex0
+            else:
+                g[1], dist = np.sign(P[1]), ex1
+        else:
+            g[0], g[1] = np.sign(P[0]) * out0 / dist, np.sign(P[1]) * out1 / dist
+            if ex0 > 0 and ex1 > 0:       # corner region: curvature of the distance
+                h00, h01, h11 = ((1 - g[0] * g[0]) / dist, -g[0] * g[1] / dist,
+                                 (1 - g[1] * g[1]) / dist)
+        rho = dist - radius[j]
+        if rho >= base_margin:
+            continue
+        f, df, ddf = _firas(rho, base_gain, base_margin)
+        gdot0 = h00 * Pdot[0] + h01 * Pdot[1]
+        gdot1 = h01 * Pdot[0] + h11 * Pdot[1]
+        rho_dot = g[0] * Pdot[0] + g[1] * Pdot[1]
+        U += f
+        for i in range(link + 1):        # dP/dq_i = z x (P - O_i)
+            r0, r1 = P[0] - O[i, 0], P[1] - O[i, 1]
+            rd0, rd1 = Pdot[0] - Odot[i, 0], Pdot[1] - Odot[i, 1]
+            Jg = r0 * g[1] - r1 * g[0]
+            Jg_dot = rd0 * g[1] - rd1 * g[0] + r0 * gdot1 - r1 * gdot0
+            grad[i] += df * Jg
+            grad_dot[i] += ddf * rho_dot * Jg + df * Jg_dot
+    for i in range(1, n):
+        fold = np.pi - abs(q[i])
+        if fold < fold_margin:
+            f, df, ddf = _firas(fold, fold_gain, fold_margin)
+            U += f
+            grad[i] -= np.sign(q[i]) * df
+            grad_dot[i] += ddf * qdot[i]
+    return U, grad, grad_dot
