@@ -235,11 +235,17 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
 
 
 def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
-    logs = {}
+    """Every logger's samples, cut to the samples all of them hold: a run stopped
+    inside the loggers' publish at one instant (SIGINT, a failed callback) has some
+    loggers one sample ahead of the others."""
+    logs, times = {}, None
     for name, logger in loop.loggers.items():
         log = logger.FindLog(context)
-        logs[name] = log.data().T.copy()
-        logs.setdefault("time", log.sample_times().copy())
+        logs[name] = log.data().T
+        times = log.sample_times() if times is None else times
+    count = min(len(data) for data in logs.values())
+    logs = {name: data[:count].copy() for name, data in logs.items()}
+    logs["time"] = times[:count].copy()
     return logs
 
 

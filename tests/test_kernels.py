@@ -98,13 +98,15 @@ def test_integrator_kernel_is_the_integrator_equation():
     n, h = 3, 2.5e-4
     B_inverse, D_hat, K = rng.normal(size=(n, n)), rng.uniform(0, 1, n), rng.uniform(500, 900, n)
     gains = np.concatenate([B_inverse.reshape(-1), D_hat, K, [800.0, 700.0, 1.0, 1.0]])
-    fast = np.concatenate([rng.normal(size=n), np.zeros(n + 1)])
     request, previous, observed, qdot = (rng.normal(size=n) for _ in range(4))
-    out, u, chi = integrator_sample(fast, gains, 0.02, request, previous, observed, qdot,
-                                    np.array([h, 0.99, 1e-3]))
+    u_I = rng.normal(size=n)
+    fast = np.concatenate([u_I, np.zeros(n + 1), [0.02], previous])
+    x = np.concatenate([np.zeros(3 + n + 3), qdot])
+    out = integrator_sample(fast, gains, request, observed, x, np.array([h, 0.99, 1e-3]))
     e = previous - observed
-    u_I = fast[:n] + h * K * e
-    np.testing.assert_allclose(out, np.concatenate([u_I, e, [np.linalg.norm(e)]]),
-                               atol=1e-15)
-    np.testing.assert_allclose(u, B_inverse @ (request + D_hat * qdot) + u_I, atol=1e-14)
-    assert chi == max(np.linalg.norm(e), 0.99 * 0.02, 1e-3)
+    u_I = u_I + h * K * e
+    chi = max(np.linalg.norm(e), 0.99 * 0.02, 1e-3)
+    np.testing.assert_allclose(out[:3 * n + 2], np.concatenate(
+        [u_I, e, [np.linalg.norm(e), chi], request]), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(out[3 * n + 2:], B_inverse @ (request + D_hat * qdot) + u_I,
+                               rtol=0, atol=1e-14)

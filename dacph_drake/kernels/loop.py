@@ -87,6 +87,54 @@ def true_torque(t, x, u, packed):
     return matvec(B, u) - D * x[nq + 3:] + disturbance(t, disturbance_model)
 
 
+def pack_lhs(coefficients, ranges, geometry, link_of, fraction, radius,
+             potential_gains, reference, gains, excitation) -> np.ndarray:
+    """The constant arguments of lhs_sample as one array (see pack_true_rhs):
+    [number of potential points, number of reference terms, vec(coefficients),
+    vec(ranges), geometry, link_of, fraction, radius, potential gains (4),
+    reference, gains (4), excitation]."""
+    return np.concatenate([[len(link_of), (len(reference) - 1) // 2],
+                           *(np.ravel(a) for a in (
+                               coefficients, ranges, geometry, link_of, fraction, radius,
+                               potential_gains, reference, gains, excitation))]
+                          ).astype(float)
+
+
+@njit(cache=True)
+def lhs_sample(t, x, chi, packed):
+    """lhs_control with its constant arguments unpacked from ``packed``
+    (pack_lhs), returning one array [tau_c^r (n), log (n + 4), vec(M), vec(C')]."""
+    n = (x.shape[0] - 6) // 2
+    N, R = n + 3, n * (n + 1) // 2
+    points, terms = int(packed[0]), int(packed[1])
+    o = 2
+    coefficients = packed[o:o + N * N * (1 + 2 * R)].reshape(N * N, 1 + 2 * R)
+    o += N * N * (1 + 2 * R)
+    ranges = packed[o:o + R * n].reshape(R, n)
+    o += R * n
+    geometry = packed[o:o + 3 + n]
+    o += 3 + n
+    link_of = packed[o:o + points].astype(np.int64)
+    o += points
+    fraction, radius = packed[o:o + points], packed[o + points:o + 2 * points]
+    o += 2 * points
+    potential_gains = packed[o:o + 4]
+    o += 4
+    reference = packed[o:o + 1 + 2 * terms]
+    o += 1 + 2 * terms
+    gains = packed[o:o + 4]
+    excitation = packed[o + 4:o + 5 + n]
+    tau, log, M, C = lhs_control(t, x, chi, coefficients, ranges, geometry, link_of,
+                                 fraction, radius, potential_gains, reference, gains,
+                                 excitation)
+    out = np.empty(2 * n + 4 + 2 * n * n)
+    out[:n] = tau
+    out[n:2 * n + 4] = log
+    out[2 * n + 4:2 * n + 4 + n * n] = M.ravel()
+    out[2 * n + 4 + n * n:] = C.ravel()
+    return out
+
+
 @njit(cache=True)
 def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, radius,
                 potential_gains, reference, gains, excitation):
@@ -131,34 +179,57 @@ def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, ra
 
 
 @njit(cache=True)
-def observed_port_torque(qdot, qdot_previous, model, h):
-    """(tau_obs, p, qdot_mid) over the last sample interval (PortObserver):
+def observer_sample(x, memory, model, u, noise, constants):
+    """One port-observer sample (PortObserver) at plant state x, with ``memory`` =
+    [qdot(k-1) (n), port_sample (5 n)], ``model`` = [vec(M), vec(C')],
+    ``constants`` = [h, anti-alias factor a]:
     qddot = (qdot(k) - qdot(k-1)) / h, qdot_mid = (qdot(k) + qdot(k-1)) / 2,
-    tau_obs = M qddot + C' qdot_mid, p = M qdot_mid, with ``model`` = [vec(M), vec(C')]."""
-    n = qdot.shape[0]
+    tau_obs = M qddot + C' qdot_mid + noise; port_sample = [q, p = M qdot_mid,
+    r], r <- r + a ([qdot_mid, u, tau_obs] - r).
+    Returns [tau_obs (n), qdot(k) (n), port_sample (5 n)]."""
+    n = u.shape[0]
+    nq = n + 3
+    h, a = constants[0], constants[1]
     M = model[:n * n].reshape(n, n)
     C = model[n * n:].reshape(n, n)
-    qdot_mid = 0.5 * (qdot + qdot_previous)
-    tau = matvec(M, (qdot - qdot_previous) / h) + matvec(C, qdot_mid)
-    return tau, matvec(M, qdot_mid), qdot_mid
+    qdot = x[nq + 3:]
+    qdot_mid = 0.5 * (qdot + memory[:n])
+    tau = matvec(M, (qdot - memory[:n]) / h) + matvec(C, qdot_mid) + noise
+    out = np.empty(7 * n)
+    out[:n] = tau
+    out[n:2 * n] = qdot
+    out[2 * n:3 * n] = x[3:nq]
+    out[3 * n:4 * n] = matvec(M, qdot_mid)
+    regressed = memory[3 * n:]          # port_sample[2 n:] = [qdot, u, tau_obs]
+    for i in range(n):
+        out[4 * n + i] = regressed[i] + a * (qdot_mid[i] - regressed[i])
+        out[5 * n + i] = regressed[n + i] + a * (u[i] - regressed[n + i])
+        out[6 * n + i] = regressed[2 * n + i] + a * (tau[i] - regressed[2 * n + i])
+    return out
 
 
 @njit(cache=True)
-def integrator_sample(fast, gains, chi, tau_request, previous_request, tau_observed,
-                      qdot, constants):
-    """One RHS integrator sample (RhsIntegrator), with ``fast`` = [u_I, ...],
-    ``gains`` = [vec(B_hat^-1), D_hat, K, ...], ``constants`` = [h, chi_decay,
-    chi_floor]: e_tau = tau_c^r(k-1) - tau_obs(k), u_I += h K e_tau,
-    u = B_hat^-1 (tau_c^r + D_hat qdot) + u_I,
-    chi = max(||e_tau||, chi e^(-h / chi_window), chi_floor).
-    Returns ([u_I, e_tau, ||e_tau||], u, chi)."""
+def integrator_sample(fast, gains, tau_request, tau_observed, x, constants):
+    """One RHS integrator sample (RhsIntegrator) at plant state x, with
+    ``fast`` = [u_I, e_tau, ||e_tau||, chi, tau_c^r(k-1)], ``gains`` =
+    [vec(B_hat^-1), D_hat, K, ...], ``constants`` = [h, chi_decay, chi_floor]:
+
+        e_tau = tau_c^r(k-1) - tau_obs(k),   u_I <- u_I + h K e_tau,
+        u = B_hat^-1 (tau_c^r + D_hat qdot) + u_I,
+        chi = max(||e_tau||, chi e^(-h / chi_window), chi_floor).
+
+    Returns [fast after the sample (3 n + 2), u (n)]."""
     n = tau_request.shape[0]
+    nq = n + 3
     h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
-    e = previous_request - tau_observed
-    out = np.empty(2 * n + 1)
+    out = np.empty(4 * n + 2)
+    e = fast[2 * n + 2:3 * n + 2] - tau_observed
     out[:n] = fast[:n] + h * gains[n * n + n:n * n + 2 * n] * e
     out[n:2 * n] = e
     out[2 * n] = np.sqrt(dot(e, e))
-    u = (matvec(gains[:n * n].reshape(n, n), tau_request + gains[n * n:n * n + n] * qdot)
-         + out[:n])
-    return out, u, max(out[2 * n], chi * chi_decay, chi_floor)
+    out[2 * n + 1] = max(out[2 * n], fast[2 * n + 1] * chi_decay, chi_floor)
+    out[2 * n + 2:3 * n + 2] = tau_request
+    out[3 * n + 2:] = (matvec(gains[:n * n].reshape(n, n),
+                              tau_request + gains[n * n:n * n + n] * x[nq + 3:])
+                       + out[:n])
+    return out

@@ -3,7 +3,7 @@ field (paper section "LHS Model-Based Control", SPEC section 4)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.kernels.loop import lhs_control
+from dacph_drake.kernels.loop import lhs_sample, pack_lhs
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel
@@ -25,7 +25,8 @@ class LhsController(LeafSystem):
     not connected. Output ``tau_request`` is held between updates; output
     ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)];
     output ``reduced_model`` = [vec(M), vec(C')] at the same sample (row-major), for
-    the port observer. The update is one compiled kernel (kernels.loop.lhs_control)."""
+    the port observer. The update is one compiled kernel (kernels.loop.lhs_sample);
+    lambda_min(M) of the log is computed when the log is read."""
 
 
     def __init__(self, model: ReducedOrderModel, potential: BaseRepulsionPotential,
@@ -36,8 +37,8 @@ class LhsController(LeafSystem):
         n = model.num_joints
         self._n, self._nq = n, num_positions
         self._fixed_chi = fixed_chi
-        # The kernel's constant arguments (kernels.loop.lhs_control).
-        self._arguments = (
+        # The kernel's constant arguments (kernels.loop.lhs_sample).
+        self._packed = pack_lhs(
             *model.trigonometric_representation, *potential.kernel_arguments,
             reference.kernel_arguments,
             np.array([gains.Kd, gains.Lambda, gains.epsilon, gains.eta]),
@@ -45,27 +46,41 @@ class LhsController(LeafSystem):
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._chi = self.DeclareVectorInputPort("chi", 1)
         self._tau_index = self.DeclareDiscreteState(n)
-        self._log_index = self.DeclareDiscreteState(LhsLog(n).size)
+        self._log_index = self.DeclareDiscreteState(n + 4)      # lhs_log but lambda_min
         self._model_index = self.DeclareDiscreteState(2 * n * n)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
-        self.DeclareStateOutputPort("lhs_log", self._log_index)
+        self.DeclareVectorOutputPort(
+            "lhs_log", LhsLog(n).size, self._CalcLog,
+            prerequisites_of_calc={self.discrete_state_ticket(self._log_index),
+                                   self.discrete_state_ticket(self._model_index)})
         self.DeclareStateOutputPort("reduced_model", self._model_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
     def Control(self, t: float, x: np.ndarray, chi: float):
-        """(tau_c^r, log vector) at time t and plant state x."""
-        return self._Evaluate(t, x, chi)[:2]
+        """(tau_c^r, lhs_log) at time t and plant state x."""
+        n = self._n
+        sample = lhs_sample(t, x, chi, self._packed)
+        return sample[:n], self._Log(sample[n:2 * n + 4], sample[2 * n + 4:])
 
-    def _Evaluate(self, t, x, chi):
-        tau, log, M, C = lhs_control(t, x, chi, *self._arguments)
-        return tau, np.append(log, np.linalg.eigvalsh(M)[0]), M, C
+    def _Log(self, log, model):
+        n = self._n
+        M = model[:n * n].reshape(n, n)
+        return np.append(log, np.linalg.eigvalsh(M)[0])
 
     def _UpdateControl(self, context, discrete_state):
+        n = self._n
         chi = (self._chi.Eval(context)[0] if self._chi.HasValue(context)
                else self._fixed_chi)
-        tau, log, M, C = self._Evaluate(context.get_time(), self._state.Eval(context), chi)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(tau)
-        discrete_state.get_mutable_vector(self._log_index).SetFromVector(log)
+        sample = lhs_sample(context.get_time(), self._state.Eval(context), chi,
+                            self._packed)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
+        discrete_state.get_mutable_vector(self._log_index).SetFromVector(
+            sample[n:2 * n + 4])
         discrete_state.get_mutable_vector(self._model_index).SetFromVector(
-            np.concatenate([M.reshape(-1), C.reshape(-1)]))
+            sample[2 * n + 4:])
+
+    def _CalcLog(self, context, output):
+        output.SetFromVector(self._Log(
+            context.get_discrete_state(self._log_index).get_value(),
+            context.get_discrete_state(self._model_index).get_value()))

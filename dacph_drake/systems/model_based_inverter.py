@@ -1,27 +1,32 @@
 """The model-based baseline's RHS (SPEC section 7): static inversion of the nominal RHS."""
 import numpy as np
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import MatrixGain, Multiplexer
 
 from dacph_drake.scenario import Scenario
 
 
-class ModelBasedInverter(LeafSystem):
+class ModelBasedInverter(Diagram):
     """u = B0^-1 (tau_c^r + D0 qdot); stateless (output ``u`` depends on the inputs
-    ``tau_request`` and ``state`` only)."""
+    ``tau_request`` and ``state`` only).
+
+    It feeds the true RHS, which the integrator evaluates at every stage, so it is
+    built from Drake's C++ primitives (no Python call per stage): a Multiplexer
+    stacks [tau_c^r; x] and a MatrixGain applies
+    [B0^-1 | 0 ... 0 B0^-1 diag(D0)], whose last block acts on qdot."""
 
     def __init__(self, scenario: Scenario, num_positions: int):
         super().__init__()
         n = scenario.robot.num_links
-        self._B0_inv = np.linalg.inv(np.diag(scenario.uncertainty.B0))
-        self._D0 = np.asarray(scenario.uncertainty.D0, float)
-        self._joint_v = slice(num_positions + 3, 2 * num_positions)
-        self._tau_request = self.DeclareVectorInputPort("tau_request", n)
-        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
-        self.DeclareVectorOutputPort(
-            "u", n, self._CalcU,
-            prerequisites_of_calc={self._tau_request.ticket(), self._state.ticket()})
-
-    def _CalcU(self, context, output):
-        qdot = self._state.Eval(context)[self._joint_v]
-        output.SetFromVector(self._B0_inv @ (self._tau_request.Eval(context)
-                                             + self._D0 * qdot))
+        B0_inv = np.linalg.inv(np.diag(scenario.uncertainty.B0))
+        gain = np.zeros((n, n + 2 * num_positions))
+        gain[:, :n] = B0_inv
+        gain[:, n + num_positions + 3:] = B0_inv @ np.diag(scenario.uncertainty.D0)
+        builder = DiagramBuilder()
+        stack = builder.AddNamedSystem("stack", Multiplexer([n, 2 * num_positions]))
+        inversion = builder.AddNamedSystem("inversion", MatrixGain(gain))
+        builder.Connect(stack.get_output_port(), inversion.get_input_port())
+        builder.ExportInput(stack.get_input_port(0), "tau_request")
+        builder.ExportInput(stack.get_input_port(1), "state")
+        builder.ExportOutput(inversion.get_output_port(), "u")
+        builder.BuildInto(self)

@@ -3,7 +3,7 @@ import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.identification import PortSample
-from dacph_drake.kernels.loop import observed_port_torque
+from dacph_drake.kernels.loop import observer_sample
 
 
 class PortObserver(LeafSystem):
@@ -24,12 +24,14 @@ class PortObserver(LeafSystem):
 
     Output ``port_sample`` (identification.PortSample) = [q, p = M qdot_mid,
     qdot_mid, u, tau_obs] of the same interval: u is the input ``u`` held over it
-    (the RHS integrator's output before its update at this sample), so
+    (the RHS integrator's output before its update at this sample; zero when not
+    connected), so
     tau_obs = B~ u - D~ qdot + d holds on every sample. With ``anti_alias_cutoff``
     f > 0, [qdot, u, tau_obs] pass a first-order low-pass at f Hz at the sample rate
     (before the learner samples them at a lower rate).
 
-    Inputs ``state`` (plant state), ``reduced_model`` and ``u``."""
+    Inputs ``state`` (plant state), ``reduced_model`` and ``u``. The sample is one
+    compiled kernel (kernels.loop.observer_sample)."""
 
     def __init__(self, *, num_joints: int, num_positions: int, sample_period: float,
                  noise_std: float, seed: int, anti_alias_cutoff: float = 0.0):
@@ -44,33 +46,33 @@ class PortObserver(LeafSystem):
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._reduced_model = self.DeclareVectorInputPort("reduced_model", 2 * n * n)
         self._u = self.DeclareVectorInputPort("u", n)
+        self._constants = np.array([sample_period, self._anti_alias])
+        self._no_noise, self._no_u = np.zeros(n), np.zeros(n)
         self._tau_index = self.DeclareDiscreteState(n)
-        self._previous_qdot = self.DeclareDiscreteState(n)
-        self._sample_index = self.DeclareDiscreteState(self._layout.size)
+        # Memory: [qdot(k-1) (n), port_sample (5 n)].
+        self._memory_index = self.DeclareDiscreteState(n + self._layout.size)
         self.DeclareStateOutputPort("tau_observed", self._tau_index)
-        self.DeclareStateOutputPort("port_sample", self._sample_index)
+        self.DeclareVectorOutputPort(
+            "port_sample", self._layout.size,
+            lambda context, output: output.SetFromVector(
+                context.get_discrete_state(self._memory_index).get_value()[n:]),
+            prerequisites_of_calc={self.discrete_state_ticket(self._memory_index)})
         self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0, self._UpdateSample)
         self.DeclareInitializationDiscreteUpdateEvent(self._InitializeRates)
 
     def _InitializeRates(self, context, discrete_state):
-        discrete_state.get_mutable_vector(self._previous_qdot).SetFromVector(
-            self._state.Eval(context)[self._nq + 3:])
+        discrete_state.get_mutable_vector(self._memory_index).get_mutable_value()[
+            :self._n] = self._state.Eval(context)[self._nq + 3:]
 
     def _UpdateSample(self, context, discrete_state):
-        x = self._state.Eval(context)
-        qdot = x[self._nq + 3:]
-        tau, p, qdot_mid = observed_port_torque(
-            qdot, context.get_discrete_state(self._previous_qdot).get_value(),
-            self._reduced_model.Eval(context), self._h)
-        if self._noise_std > 0:
-            tau = tau + self._noise_std * self._rng.standard_normal(self._n)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(tau)
-        discrete_state.get_mutable_vector(self._previous_qdot).SetFromVector(qdot)
-        if not self._u.HasValue(context):
-            return
-        L = self._layout
-        sample = context.get_discrete_state(self._sample_index).get_value().copy()
-        sample[L.q], sample[L.p] = x[3:self._nq], p
-        regressed = np.concatenate([qdot_mid, self._u.Eval(context), tau])
-        sample[L.regressed] += self._anti_alias * (regressed - sample[L.regressed])
-        discrete_state.get_mutable_vector(self._sample_index).SetFromVector(sample)
+        n = self._n
+        noise = (self._noise_std * self._rng.standard_normal(n) if self._noise_std > 0
+                 else self._no_noise)
+        sample = observer_sample(
+            self._state.Eval(context),
+            context.get_discrete_state(self._memory_index).get_value(),
+            self._reduced_model.Eval(context),
+            self._u.Eval(context) if self._u.HasValue(context) else self._no_u,
+            noise, self._constants)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
+        discrete_state.get_mutable_vector(self._memory_index).SetFromVector(sample[n:])

@@ -19,8 +19,9 @@ class RhsIntegrator(LeafSystem):
         u    = B_hat^-1 (tau_c^r + D_hat qdot) + u_I
         chi  = max(||e_tau||, chi e^(-h / chi_window), chi_floor)
 
-    tau_obs(k), the observer's held output, was measured at sample k-1, so e_tau
-    compares it with the request of that same instant (the paper's
+    (one compiled kernel, kernels.loop.integrator_sample). tau_obs(k), the
+    observer's held output, was formed at sample k-1 (for the interval before it),
+    so e_tau compares it with the request of that same instant (the paper's
     e_tau = tau_c^r - tau_c^g). Against the current request instead, e_tau would
     also carry the request's own increment over one sample, which the feed-forward
     already delivers: the integrator would wind up on it and no model of the RHS
@@ -67,23 +68,26 @@ class RhsIntegrator(LeafSystem):
         self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
         self._weights = self.DeclareVectorInputPort("weights", network.size)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
-        # Fast group: [u_I (n), e_tau (n), ||e_tau||]; u and chi are groups of their
-        # own, so that their output ports read the state without a Python call.
-        self._fast = self.DeclareDiscreteState(2 * n + 1)
+        # Fast group: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]; u is a
+        # group of its own, so that its output port (read at every integrator stage
+        # by the true RHS) reads the state without a Python call.
+        fast = np.zeros(3 * n + 2)
+        fast[2 * n + 1] = settings.chi_initial
+        self._fast = self.DeclareDiscreteState(fast)
         self._u_index = self.DeclareDiscreteState(n)
-        self._chi_index = self.DeclareDiscreteState([settings.chi_initial])
         # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok, trusted].
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
         self._gains = self.DeclareDiscreteState(self._Refresh(
             np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
             initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
-        self._previous_request = self.DeclareDiscreteState(n)
+        fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareStateOutputPort("u", self._u_index)
-        self.DeclareStateOutputPort("chi", self._chi_index)
+        self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetAtIndex(
+            0, c.get_discrete_state(self._fast).GetAtIndex(2 * n + 1)),
+            prerequisites_of_calc=fast_ticket)
         self.DeclareVectorOutputPort(
             "rhs_log", RhsLog(n).size, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._fast),
-                                   self.discrete_state_ticket(self._chi_index),
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
@@ -120,24 +124,17 @@ class RhsIntegrator(LeafSystem):
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
 
     def _UpdateIntegrator(self, context, discrete_state):
-        tau_request = self._tau_request.Eval(context)
-        fast, u, chi = integrator_sample(
+        n = self._n
+        sample = integrator_sample(
             context.get_discrete_state(self._fast).get_value(),
             context.get_discrete_state(self._gains).get_value(),
-            context.get_discrete_state(self._chi_index).get_value()[0], tau_request,
-            context.get_discrete_state(self._previous_request).get_value(),
-            self._tau_observed.Eval(context), self._state.Eval(context)[self._nq + 3:],
-            self._constants)
-        discrete_state.get_mutable_vector(self._fast).SetFromVector(fast)
-        discrete_state.get_mutable_vector(self._u_index).SetFromVector(u)
-        discrete_state.get_mutable_vector(self._chi_index).SetAtIndex(0, chi)
-        discrete_state.get_mutable_vector(self._previous_request).SetFromVector(
-            tau_request)
+            self._tau_request.Eval(context), self._tau_observed.Eval(context),
+            self._state.Eval(context), self._constants)
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(sample[:3 * n + 2])
+        discrete_state.get_mutable_vector(self._u_index).SetFromVector(sample[3 * n + 2:])
 
     def _CalcLog(self, context, output):
         n = self._n
         fast = context.get_discrete_state(self._fast).get_value()
         gains = context.get_discrete_state(self._gains).get_value()
-        output.SetFromVector(np.concatenate(
-            [fast[n:], context.get_discrete_state(self._chi_index).get_value(),
-             gains[n * n + n:]]))
+        output.SetFromVector(np.concatenate([fast[n:2 * n + 2], gains[n * n + n:]]))
