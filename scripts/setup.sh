@@ -17,3 +17,5 @@ fi
 .venv/bin/pip install -q --upgrade pip
 .venv/bin/pip install -q torch==2.13.0
 .venv/bin/pip install -q -e ".[test,dask,parquet]"
+# Compile the numba kernels of the closed loop once, into their on-disk cache.
+.venv/bin/python -m dacph_drake.kernels

@@ -86,29 +86,41 @@ def reduced_dynamics(q, qdot, coefficients, ranges):
     n = q.shape[0]
     H = mass_matrix_and_derivatives(q, coefficients, ranges)
     Hbb_inv = inverse3(np.ascontiguousarray(H[0, :3, :3]))
-    A = matmul(Hbb_inv, H[0, :3, 3:])
+    A = matmul(Hbb_inv, np.ascontiguousarray(H[0, :3, 3:]))
     W = np.zeros((n + 3, n))
-    W[:3] = -A
     for i in range(n):
+        W[0, i], W[1, i], W[2, i] = -A[0, i], -A[1, i], -A[2, i]
         W[3 + i, i] = 1.0
+    Wt = np.ascontiguousarray(W.T)
     M = np.empty((n, n))
     dM = np.empty((n, n, n))
     dD = np.empty((n, n))
     for k in range(1 + n):
-        HW = matmul(H[k], W)
-        MW = matmul(W.T, HW)
-        if k == 0:
-            M[:, :] = MW
-        else:
-            dM[k - 1] = MW
-            dD[k - 1] = -matvec(HW[:3].T, Hbb_inv[2])
-    Mdot = np.zeros((n, n))
-    G = np.zeros((n, n))
-    for k in range(n):
-        Mdot += qdot[k] * dM[k]
-        G[k] = matvec(dM[k], qdot)
-    C = 0.5 * (Mdot + G.T - G)
-    D = 1.0 - A[2]
+        HW = matmul(np.ascontiguousarray(H[k]), W)
+        MW = matmul(Wt, HW)
+        for i in range(n):
+            for j in range(n):
+                if k == 0:
+                    M[i, j] = MW[i, j]
+                else:
+                    dM[k - 1, i, j] = MW[i, j]
+        if k > 0:
+            for j in range(n):
+                dD[k - 1, j] = -(Hbb_inv[2, 0] * HW[0, j] + Hbb_inv[2, 1] * HW[1, j]
+                                 + Hbb_inv[2, 2] * HW[2, j])
+    # Loops rather than array expressions: each of those compiles into a kernel of
+    # its own and multiplies the one-time compile time.
+    C = np.empty((n, n))
+    D = np.empty(n)
+    for i in range(n):
+        D[i] = 1.0 - A[2, i]
+        for j in range(n):
+            Mdot_ij, G_ij, G_ji = 0.0, 0.0, 0.0
+            for k in range(n):
+                Mdot_ij += qdot[k] * dM[k, i, j]
+                G_ij += dM[i, j, k] * qdot[k]
+                G_ji += dM[j, i, k] * qdot[k]
+            C[i, j] = 0.5 * (Mdot_ij + G_ji - G_ij)
     return M, C, D, dD
 
 

@@ -153,28 +153,48 @@ def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, ra
         alpha_d_dot += a * w * np.cos(w * t)
         alpha_d_ddot -= a * w * w * np.sin(w * t)
     Kd, Lambda, epsilon, eta = gains[0], gains[1], gains[2], gains[3]
-    alpha_error = x[2] + np.sum(q) - alpha_d
-    alpha_error_dot = dot(D, qdot) - alpha_d_dot
-    D_dot = matvec(dD.T, qdot)
-    DDt = dot(D, D)
-    D_pinv = D / DDt
-    D_pinv_dot = D_dot / DDt - D * (2.0 * dot(D, D_dot) / DDt**2)
-    P = np.eye(n) - np.outer(D_pinv, D)
-    P_dot = -(np.outer(D_pinv_dot, D) + np.outer(D_pinv, D_dot))
     U, grad_U, grad_U_dot = potential(q, qdot, geometry, link_of, fraction, radius,
                                       potential_gains)
-    xi, xi_dot = -eta * grad_U, -eta * grad_U_dot
+    # Scalar loops rather than array expressions (each of those compiles into a
+    # kernel of its own). With xi = -eta grad U and P = I - D+ D:
+    # P xi = xi - D+ (D xi), P_dot xi = -(D+_dot (D xi) + D+ (D_dot xi)).
+    D_dot = np.zeros(n)
+    alpha_error = x[2] - alpha_d
+    alpha_error_dot, DDt, D_D_dot = -alpha_d_dot, 0.0, 0.0
+    for i in range(n):
+        for k in range(n):
+            D_dot[i] += dD[k, i] * qdot[k]
+        alpha_error += q[i]
+        alpha_error_dot += D[i] * qdot[i]
+        DDt += D[i] * D[i]
+    D_xi, D_dot_xi, D_xi_dot = 0.0, 0.0, 0.0
+    for i in range(n):
+        D_D_dot += D[i] * D_dot[i]
+        D_xi -= eta * D[i] * grad_U[i]
+        D_dot_xi -= eta * D_dot[i] * grad_U[i]
+        D_xi_dot -= eta * D[i] * grad_U_dot[i]
     task = alpha_d_dot - Lambda * alpha_error
-    nu = D_pinv * task + matvec(P, xi)
-    nu_dot = (D_pinv_dot * task + D_pinv * (alpha_d_ddot - Lambda * alpha_error_dot)
-              + matvec(P_dot, xi) + matvec(P, xi_dot))
-    s = qdot - nu
-    tau = matvec(M, nu_dot) + matvec(C, nu) - Kd * s - chi * np.tanh(s / epsilon)
-    if excitation[0] > 0:
-        tau = tau + excitation[0] * np.sin(excitation[1:] * t)
+    task_dot = alpha_d_ddot - Lambda * alpha_error_dot
+    nu, nu_dot, s = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        D_pinv = D[i] / DDt
+        D_pinv_dot = D_dot[i] / DDt - D[i] * (2.0 * D_D_dot / DDt**2)
+        nu[i] = D_pinv * task - eta * grad_U[i] - D_pinv * D_xi
+        nu_dot[i] = (D_pinv_dot * task + D_pinv * task_dot - eta * grad_U_dot[i]
+                     - D_pinv_dot * D_xi - D_pinv * D_dot_xi - D_pinv * D_xi_dot)
+        s[i] = qdot[i] - nu[i]
+    tau = np.empty(n)
+    V = 0.0
+    for i in range(n):
+        tau[i] = -Kd * s[i] - chi * np.tanh(s[i] / epsilon)
+        for j in range(n):
+            tau[i] += M[i, j] * nu_dot[j] + C[i, j] * nu[j]
+            V += 0.5 * s[i] * M[i, j] * s[j]
+        if excitation[0] > 0:
+            tau[i] += excitation[0] * np.sin(excitation[1 + i] * t)
     log = np.empty(n + 4)
     log[:n] = s
-    log[n], log[n + 1], log[n + 2], log[n + 3] = alpha_error, alpha_d, 0.5 * dot(s, matvec(M, s)), U
+    log[n], log[n + 1], log[n + 2], log[n + 3] = alpha_error, alpha_d, V, U
     return tau, log, M, C
 
 

@@ -26,18 +26,23 @@ def potential(q, qdot, geometry, link_of, fraction, radius, gains):
     half = geometry[0]
     lengths = geometry[3:]
     base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]
-    phi, phidot = np.cumsum(q), np.cumsum(qdot)
+    # Scalar loops rather than array expressions (each of those compiles into a
+    # kernel of its own).
     e = np.empty((n, 2))
     edot = np.empty((n, 2))
+    phi, phidot = 0.0, 0.0
     for i in range(n):
-        e[i, 0], e[i, 1] = np.cos(phi[i]), np.sin(phi[i])
-        edot[i, 0], edot[i, 1] = -phidot[i] * e[i, 1], phidot[i] * e[i, 0]
+        phi += q[i]
+        phidot += qdot[i]
+        e[i, 0], e[i, 1] = np.cos(phi), np.sin(phi)
+        edot[i, 0], edot[i, 1] = -phidot * e[i, 1], phidot * e[i, 0]
     O = np.empty((n, 2))
     Odot = np.zeros((n, 2))
     O[0, 0], O[0, 1] = geometry[1], geometry[2]
     for i in range(1, n):
-        O[i] = O[i - 1] + lengths[i - 1] * e[i - 1]
-        Odot[i] = Odot[i - 1] + lengths[i - 1] * edot[i - 1]
+        for c in range(2):
+            O[i, c] = O[i - 1, c] + lengths[i - 1] * e[i - 1, c]
+            Odot[i, c] = Odot[i - 1, c] + lengths[i - 1] * edot[i - 1, c]
     U = 0.0
     grad = np.zeros(n)
     grad_dot = np.zeros(n)
@@ -45,20 +50,20 @@ def potential(q, qdot, geometry, link_of, fraction, radius, gains):
     for j in range(link_of.shape[0]):
         link = link_of[j]
         reach = fraction[j] * lengths[link]
-        P = O[link] + reach * e[link]
-        Pdot = Odot[link] + reach * edot[link]
-        ex0, ex1 = abs(P[0]) - half, abs(P[1]) - half
+        P0, P1 = O[link, 0] + reach * e[link, 0], O[link, 1] + reach * e[link, 1]
+        Pd0, Pd1 = Odot[link, 0] + reach * edot[link, 0], Odot[link, 1] + reach * edot[link, 1]
+        ex0, ex1 = abs(P0) - half, abs(P1) - half
         out0, out1 = max(ex0, 0.0), max(ex1, 0.0)
         dist = np.sqrt(out0 * out0 + out1 * out1)
         h00 = h01 = h11 = 0.0
         if dist == 0.0:          # inside: the gradient points to the nearest side
             g[0] = g[1] = 0.0
             if ex0 >= ex1:
-                g[0], dist = np.sign(P[0]), ex0
+                g[0], dist = np.sign(P0), ex0
             else:
-                g[1], dist = np.sign(P[1]), ex1
+                g[1], dist = np.sign(P1), ex1
         else:
-            g[0], g[1] = np.sign(P[0]) * out0 / dist, np.sign(P[1]) * out1 / dist
+            g[0], g[1] = np.sign(P0) * out0 / dist, np.sign(P1) * out1 / dist
             if ex0 > 0 and ex1 > 0:       # corner region: curvature of the distance
                 h00, h01, h11 = ((1 - g[0] * g[0]) / dist, -g[0] * g[1] / dist,
                                  (1 - g[1] * g[1]) / dist)
@@ -66,13 +71,13 @@ def potential(q, qdot, geometry, link_of, fraction, radius, gains):
         if rho >= base_margin:
             continue
         f, df, ddf = _firas(rho, base_gain, base_margin)
-        gdot0 = h00 * Pdot[0] + h01 * Pdot[1]
-        gdot1 = h01 * Pdot[0] + h11 * Pdot[1]
-        rho_dot = g[0] * Pdot[0] + g[1] * Pdot[1]
+        gdot0 = h00 * Pd0 + h01 * Pd1
+        gdot1 = h01 * Pd0 + h11 * Pd1
+        rho_dot = g[0] * Pd0 + g[1] * Pd1
         U += f
         for i in range(link + 1):        # dP/dq_i = z x (P - O_i)
-            r0, r1 = P[0] - O[i, 0], P[1] - O[i, 1]
-            rd0, rd1 = Pdot[0] - Odot[i, 0], Pdot[1] - Odot[i, 1]
+            r0, r1 = P0 - O[i, 0], P1 - O[i, 1]
+            rd0, rd1 = Pd0 - Odot[i, 0], Pd1 - Odot[i, 1]
             Jg = r0 * g[1] - r1 * g[0]
             Jg_dot = rd0 * g[1] - rd1 * g[0] + r0 * gdot1 - r1 * gdot0
             grad[i] += df * Jg
