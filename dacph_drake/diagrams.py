@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Dict
 
 import numpy as np
+from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
@@ -16,6 +17,7 @@ from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.reference import OrientationReference
 from dacph_drake.scenario import Excitation, Scenario
+from dacph_drake.simulation import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.lhs_controller import LhsController
@@ -28,7 +30,10 @@ from dacph_drake.systems.true_rhs import TrueRhs
 
 @dataclass
 class ClosedLoop:
+    """A built closed loop: its diagram, the parts a user reads, and
+    CreateSimulator() to run it with the scenario's settings."""
     diagram: Diagram
+    scenario: Scenario              # the scenario it was built from
     plant: object                   # the ground-truth MultibodyPlant
     scene_graph: object
     model: ReducedOrderModel        # the controller's (nominal) reduced model
@@ -38,6 +43,18 @@ class ClosedLoop:
     c_min_nominal: float            # eq. (48) with beta_hat = 1
     loggers: Dict[str, VectorLogSink] = field(default_factory=dict)
     systems: Dict[str, object] = field(default_factory=dict)
+
+    def CreateSimulator(self) -> Simulator:
+        """A Simulator of this loop with the scenario's integrator
+        (scenario.integration_scheme, fixed step periods.rhs) and initial state: the
+        base at the origin, the joints at q0, everything at rest (zero momentum)."""
+        simulator = MakeSimulator(self.diagram, self.scenario.integration_scheme,
+                                  self.scenario.periods.rhs)
+        plant_context = self.plant.GetMyContextFromRoot(simulator.get_mutable_context())
+        self.plant.SetPositions(plant_context,
+                                np.concatenate([[0.0, 0.0, 0.0], self.scenario.q0]))
+        self.plant.SetVelocities(plant_context, np.zeros(self.plant.num_velocities()))
+        return simulator
 
 
 def _RequireRunnableStart(scenario: Scenario, model: ReducedOrderModel) -> None:
@@ -87,7 +104,7 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
     builder.Connect(plant.get_state_output_port(), lhs.GetInputPort("state"))
 
-    loop = ClosedLoop(diagram=None, plant=plant, scene_graph=scene_graph, model=model,
+    loop = ClosedLoop(diagram=None, scenario=scenario, plant=plant, scene_graph=scene_graph, model=model,
                       potential=potential, lambda_min_M=lambda_min,
                       lambda_max_M=lambda_max, c_min_nominal=c_min,
                       systems={"true_rhs": truth, "disturbance": disturbance,

@@ -7,10 +7,6 @@ class ConfigError(ValueError):
     """A setting is invalid. The message names the setting and its allowed range."""
 
 
-class SimulationDiverged(RuntimeError):
-    """A simulation stopped because its state became non-finite or ran away."""
-
-
 def require_positive(name: str, value: float, unit: str = "") -> None:
     """Raises ConfigError unless ``value`` is a finite number > 0."""
     _require(name, value, value > 0, f"> 0{(' ' + unit) if unit else ''}")

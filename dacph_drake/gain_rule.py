@@ -49,11 +49,6 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) ->
     return bool(np.all(ratio >= 1.0 / trust_ratio) and np.all(ratio <= trust_ratio))
 
 
-def discrete_loop_gain(rhs_period: float, c: float) -> float:
-    """g = h c: the per-sample loop gain of every mode when k_p lambda_p = c."""
-    return rhs_period * c
-
-
 def check_period_order(periods) -> None:
     """Refuses periods that break the time-scale separation (RHS faster than LHS,
     LHS no slower than the learner's sampling, sampling no slower than training)."""

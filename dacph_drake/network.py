@@ -6,7 +6,7 @@
     tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
 
 Trained in torch (float64); the fast loops evaluate an exported copy of the weights
-in numpy (``evaluate_exported``), so torch never runs inside them. The output layers
+in numpy (``ExportedNetwork.Evaluate``), so torch never runs inside them. The output layers
 start at zero with biases vec(B0) and softplus^-1(D0): the first estimate is the
 nominal RHS.
 """
@@ -55,7 +55,7 @@ class RhsNetwork(torch.nn.Module):
 
 
     def export(self) -> np.ndarray:
-        """All parameters as one float64 vector (the order evaluate_exported reads)."""
+        """All parameters as one float64 vector (the order ExportedNetwork.Evaluate reads)."""
         return torch.cat([t.detach().reshape(-1) for t in self.parameters()]).numpy()
 
 

@@ -67,10 +67,10 @@ class ReducedOrderModel:
     def __init__(self, plant: MultibodyPlant):
         self._plant = plant
         self._context = plant.CreateDefaultContext()
-        self._coords = ArmCoordinates.FromPlant(plant)
-        n = self._coords.num_joints
-        if not (np.array_equal(self._coords.base_v, np.arange(3))
-                and np.array_equal(self._coords.joint_v, np.arange(3, 3 + n))):
+        coordinates = ArmCoordinates.FromPlant(plant)
+        n = coordinates.num_joints
+        if not (np.array_equal(coordinates.base_v, np.arange(3))
+                and np.array_equal(coordinates.joint_v, np.arange(3, 3 + n))):
             raise ValueError("ReducedOrderModel needs the base joint's velocities "
                              "first and the arm joints after them (plant.py's layout)")
         self._num_joints = n
@@ -94,10 +94,6 @@ class ReducedOrderModel:
         """(coefficients, ranges) of H(q) = coefficients psi(q) for the compiled
         kernels (kernels.arm)."""
         return self._coefficients, self._ranges
-
-    @property
-    def coordinates(self) -> ArmCoordinates:
-        return self._coords
 
     def _FullMassMatrix(self, q_full: np.ndarray) -> np.ndarray:
         self._plant.SetPositions(self._context, q_full)

@@ -21,7 +21,6 @@ from dacph_drake.diagrams import BUILDERS, ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario, save_scenario
-from dacph_drake.simulation import MakeSimulator
 
 MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state
@@ -154,13 +153,10 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
     partial result that often."""
     loop = BUILDERS[controller](scenario)
-    simulator = MakeSimulator(loop.diagram, scenario.integration_scheme,
-                              scenario.periods.rhs)
+    simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant
     plant_context = plant.GetMyContextFromRoot(context)
-    plant.SetPositions(plant_context, np.concatenate([[0.0, 0.0, 0.0], scenario.q0]))
-    plant.SetVelocities(plant_context, np.zeros(plant.num_velocities()))
     problem = {}
     nq = plant.num_positions()
     clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance
