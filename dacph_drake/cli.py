@@ -5,11 +5,8 @@ import sys
 
 import numpy as np
 
+from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed_loop
 from dacph_drake.errors import ConfigError
-
-# The controllers every command accepts (diagrams.BUILDERS; importing it here would
-# load Drake for `dacph --help`).
-CONTROLLERS = ("dac", "dac-nominal", "model-based")
 
 
 def _free_flight(args) -> int:
@@ -55,14 +52,13 @@ def _simulate(args) -> int:
 
 def _diagram(args) -> int:
     from pathlib import Path
-    from dacph_drake.diagrams import BUILDERS
     from dacph_drake.graph import render_diagram
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
     out = Path(args.out) if args.out else Path(args.scenario).parent
-    controllers = [args.controller] if args.controller else list(BUILDERS)
+    controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
-        loop = BUILDERS[controller](scenario)
+        loop = build_closed_loop(controller, scenario)
         stem = out / f"{Path(args.scenario).stem}_{controller.replace('-', '_')}"
         for path in render_diagram(loop.diagram, stem):
             print(path)
@@ -189,7 +185,8 @@ def main(argv=None) -> int:
                                       "built-in name: paper, short")
     sim.add_argument("--out", required=True, help="output directory")
     sim.add_argument("--controller", choices=CONTROLLERS, default="dac",
-                     help="dac-nominal: DAC with the learner off (the ablation)")
+                     help="; ".join(f"{name}: {c.description}"
+                                    for name, c in REGISTRY.items()))
     sim.add_argument("--duration", type=float, default=None,
                      help="[s] (default: the scenario's phases)")
     sim.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
@@ -213,7 +210,7 @@ def main(argv=None) -> int:
                      help="the short scenario (26 s) instead of the paper's")
     rep.add_argument("--animate", action="store_true",
                      help="also write an HTML animation of the DAC run")
-    rep.add_argument("--jobs", type=int, choices=[1, 2, 3], default=1,
+    rep.add_argument("--jobs", type=int, choices=range(1, len(CONTROLLERS) + 1), default=1,
                      help="run the three controllers in this many processes (no "
                           "progress bars above 1)")
     rep.set_defaults(run=_reproduce)

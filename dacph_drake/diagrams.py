@@ -217,6 +217,3 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
     loop.diagram.set_name("model_based_closed_loop")
     return loop
 
-
-BUILDERS = {"dac": build_dac_diagram, "dac-nominal": build_dac_nominal_diagram,
-            "model-based": build_model_based_diagram}

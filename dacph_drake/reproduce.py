@@ -11,6 +11,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from dacph_drake.controllers import NAMES as CONTROLLERS   # reproduce() runs them all
 from dacph_drake.errors import ConfigError
 from dacph_drake.figures import plot_panels
 from dacph_drake.metrics import PHASES, comparison, run_metrics
@@ -18,7 +19,6 @@ from dacph_drake.run import (require_run_files, scenario_fingerprint, simulate,
                              versions)
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
-CONTROLLERS = ("dac", "dac-nominal", "model-based")
 REQUIRED = ("dac", "model-based")       # report() also reads directories without
 #                                         the ablation run
 

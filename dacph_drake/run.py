@@ -17,7 +17,8 @@ from typing import Dict, Optional
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 
-from dacph_drake.diagrams import BUILDERS, ClosedLoop
+from dacph_drake.controllers import build_closed_loop, require_controller
+from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario, save_scenario
@@ -101,7 +102,7 @@ def prepare_out_dir(out_dir) -> Path:
 def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
              out_dir=None, progress: bool = False, interruptible: bool = False,
              checkpoint_seconds: Optional[float] = None) -> RunResult:
-    """Builds the ``controller`` (diagrams.BUILDERS) loop for ``scenario``,
+    """Builds the ``controller`` (controllers.REGISTRY) loop for ``scenario``,
     simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
     given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
     before the simulation starts and locked against a second writer of the same
@@ -113,8 +114,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     redone on resume. With ``checkpoint_seconds`` and out_dir, the logs so far are
     saved every checkpoint_seconds of wall time with status "incomplete", so that a
     crash or kill -9 loses at most that much (every file is replaced atomically)."""
-    if controller not in BUILDERS:
-        raise ConfigError(f"controller = {controller!r}; allowed: {', '.join(BUILDERS)}")
+    require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     if checkpoint_seconds is not None:
@@ -152,7 +152,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
               interruptible: bool, checkpoint=None) -> RunResult:
     """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
     partial result that often."""
-    loop = BUILDERS[controller](scenario)
+    loop = build_closed_loop(controller, scenario)
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant

@@ -26,12 +26,11 @@ import numpy as np
 from pydrake.common import RandomGenerator, schema
 from pydrake.common.yaml import yaml_dump_typed, yaml_load
 
-from dacph_drake.diagrams import BUILDERS
+from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.robot import load_yaml_dataclass
 from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario, load_scenario
 
-CONTROLLERS = tuple(BUILDERS)            # "dac", "model-based"
 
 # The YAML tags of Drake's distributions, and DistributionVariant and
 # DistributionVectorVariantX as Python unions (plus a scalar distribution drawn per
