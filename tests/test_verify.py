@@ -55,7 +55,7 @@ def test_rhs_loop_check_passes_the_nominal_loop():
     (np.eye(2), [900.0, 900.0], 1.5e-3, "spectral radius"),           # RHS period too slow
     (np.eye(2), [-900.0, 900.0], H, "spectral radius"),                # wrong-signed gain
     (np.array([[1.0, 1.0], [1.0, 1.0]]), [900.0, 900.0], H, "DIC"),    # singular B_hat
-    (np.eye(2), [300.0, 300.0], H, "time-scale separation"),          # c below eq. 46
+    (np.eye(2), [300.0, 300.0], H, "time-scale separation"),          # c below eq. 45
 ])
 def test_rhs_loop_check_fails_unstable_cases_with_a_reason(B, K, h, reason):
     check = check_rhs_loop(np.asarray(B), np.asarray(K), h, LAMBDA_LHS, TD)

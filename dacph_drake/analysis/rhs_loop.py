@@ -45,7 +45,7 @@ class RhsLoopCheck:
     lyapunov_residual: float       # ||A^T P A - P + I|| / ||P||
     dic_ok: bool                   # det B != 0 and Re(lambda_p) > 0
     sigma_rhs: float               # min_p k_p Re(lambda_p) [1/s]
-    separation: float              # sigma_rhs / lambda_LHS (eq. 46)
+    separation: float              # sigma_rhs / lambda_LHS (eq. 45)
     ok: bool
     reason: str
 
@@ -60,7 +60,7 @@ def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: floa
       RealDiscreteLyapunovEquation(A, I) gives P > 0;
     - DIC: det B != 0 and Re(lambda_p) > 0 for the eigenvalues of B;
     - time-scale separation: sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS,
-      lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 46)."""
+      lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45)."""
     _, paired, dic_ok = integral_gains(B, 1.0)
     A = rhs_loop_system(B, K, period).A()
     radius = float(np.max(np.abs(np.linalg.eigvals(A))))
