@@ -12,7 +12,7 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
+from dacph_drake.plant import AddFreeFloatingArm, AddStateSplitter, MakeArmPlant
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.reference import OrientationReference
@@ -85,7 +85,7 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
     _RequireRunnableStart(scenario, model)
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     plant.set_name("plant")
-    nq = plant.num_positions()
+    splitter = AddStateSplitter(builder, plant)
     lambda_min, lambda_max = mass_matrix_bounds(model)
     c_min = c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0)
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
@@ -96,18 +96,20 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
     disturbance = builder.AddNamedSystem(
         "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
     lhs = builder.AddNamedSystem("lhs_controller", LhsController(
-        model, potential, reference, scenario.lhs, scenario.periods.lhs, nq, fixed_chi,
-        excitation))
+        model=model, potential=potential, reference=reference, gains=scenario.lhs,
+        period=scenario.periods.lhs, fixed_chi=fixed_chi, excitation=excitation))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
     builder.Connect(disturbance.GetOutputPort("disturbance_model"),
                     truth.GetInputPort("disturbance_model"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
-    builder.Connect(plant.get_state_output_port(), lhs.GetInputPort("state"))
+    for signal in ("base_pose", "q", "qdot"):
+        builder.Connect(splitter.GetOutputPort(signal), lhs.GetInputPort(signal))
 
     loop = ClosedLoop(diagram=None, scenario=scenario, plant=plant, scene_graph=scene_graph, model=model,
                       potential=potential, lambda_min_M=lambda_min,
                       lambda_max_M=lambda_max, c_min_nominal=c_min,
-                      systems={"true_rhs": truth, "disturbance": disturbance,
+                      systems={"state_splitter": splitter, "true_rhs": truth,
+                               "disturbance": disturbance,
                                "lhs_controller": lhs})
     period = scenario.periods.log
     for name, port in [("state", plant.get_state_output_port()),
@@ -137,45 +139,50 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
                          rhs_settings.Td, scenario.lhs.Kd, loop.lambda_min_M,
                          rhs_settings.beta_max),
                      rhs_settings.beta_max)
-    plant, lhs = loop.plant, loop.systems["lhs_controller"]
-    nq = plant.num_positions()
+    lhs, splitter = loop.systems["lhs_controller"], loop.systems["state_splitter"]
+    truth = loop.systems["true_rhs"]
     periods, settings = scenario.periods, scenario.learner
     regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
-        num_joints=loop.model.num_joints, num_positions=nq, sample_period=periods.rhs,
+        num_joints=loop.model.num_joints, sample_period=periods.rhs,
         noise_std=scenario.rhs.observer_noise, seed=scenario.seed,
         anti_alias_cutoff=settings.band[1] if regularized else 0.0))
+    prefilter = (builder.AddNamedSystem("regression_filter", RegressionFilter(
+        settings=settings, num_joints=loop.model.num_joints,
+        period=periods.learner_sample)) if regularized else None)
     learner = builder.AddNamedSystem("learner", RhsLearner(
         model=loop.model, settings=settings, period=periods.learner,
-        sample_period=periods.learner_sample, num_positions=nq,
-        B0=scenario.uncertainty.B0, D0=scenario.uncertainty.D0, seed=scenario.seed,
-        learning=learning))
+        sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
+        D0=scenario.uncertainty.D0, seed=scenario.seed, learning=learning))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        loop.model, learner.exported, scenario.rhs, scenario.lhs.Kd, loop.lambda_min_M,
-        scenario.uncertainty.B0, periods.rhs, periods.learner_sample, nq,
-        learner.initial_weights, scenario.stress))
-    builder.Connect(plant.get_state_output_port(), observer.GetInputPort("state"))
+        model=loop.model, network=learner.exported, settings=scenario.rhs,
+        Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, B0=scenario.uncertainty.B0,
+        period=periods.rhs, model_period=periods.learner_sample,
+        initial_weights=learner.initial_weights, stress=scenario.stress))
+    # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
+    # RHS integrator -> true RHS -> plant; the LHS's request and model feed in.
+    for signal in ("q", "qdot"):
+        builder.Connect(splitter.GetOutputPort(signal), observer.GetInputPort(signal))
     builder.Connect(lhs.GetOutputPort("reduced_model"),
                     observer.GetInputPort("reduced_model"))
     builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
     port_sample = observer.GetOutputPort("port_sample")
-    if regularized:
-        prefilter = builder.AddNamedSystem("regression_filter", RegressionFilter(
-            settings=settings, num_joints=loop.model.num_joints,
-            period=periods.learner_sample))
+    if prefilter is not None:
         builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
         port_sample = prefilter.GetOutputPort("filtered_sample")
         loop.systems["regression_filter"] = prefilter
     builder.Connect(port_sample, learner.GetInputPort("port_sample"))
-    builder.Connect(plant.get_state_output_port(), learner.GetInputPort("state"))
-    builder.Connect(plant.get_state_output_port(), rhs.GetInputPort("state"))
+    for signal in ("q", "qdot"):
+        builder.Connect(splitter.GetOutputPort(signal), learner.GetInputPort(signal))
     builder.Connect(observer.GetOutputPort("tau_observed"),
                     rhs.GetInputPort("tau_observed"))
     builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
     builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
     builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
+    for signal in ("q", "qdot"):
+        builder.Connect(splitter.GetOutputPort(signal), rhs.GetInputPort(signal))
+    builder.Connect(rhs.GetOutputPort("u"), truth.GetInputPort("u"))
     builder.Connect(rhs.GetOutputPort("chi"), lhs.GetInputPort("chi"))
-    builder.Connect(rhs.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
     loop.systems.update(port_observer=observer, learner=learner, rhs_integrator=rhs)
     for name, port in [("u", rhs.GetOutputPort("u")),
                        ("tau_observed", observer.GetOutputPort("tau_observed")),
@@ -203,11 +210,11 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
     builder = DiagramBuilder()
     loop = _BuildCommon(scenario, builder, fixed_chi=scenario.lhs.chi_model_based,
                         excitation=Excitation(amplitude=0.0))
-    plant, lhs = loop.plant, loop.systems["lhs_controller"]
-    inverter = builder.AddNamedSystem("model_based_inverter",
-                                      ModelBasedInverter(scenario, plant.num_positions()))
+    lhs = loop.systems["lhs_controller"]
+    inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(scenario))
     builder.Connect(lhs.GetOutputPort("tau_request"), inverter.GetInputPort("tau_request"))
-    builder.Connect(plant.get_state_output_port(), inverter.GetInputPort("state"))
+    builder.Connect(loop.systems["state_splitter"].GetOutputPort("qdot"),
+                    inverter.GetInputPort("qdot"))
     builder.Connect(inverter.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
     loop.systems["model_based_inverter"] = inverter
     loop.loggers["u"] = LogVectorOutput(inverter.GetOutputPort("u"), builder,

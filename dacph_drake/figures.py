@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 
 from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
 from dacph_drake.metrics import nominal_estimates  # noqa: E402
+from dacph_drake.plant import ArmCoordinates  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
@@ -172,7 +173,6 @@ def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
 
 def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
     n = scenario.robot.num_links
-    nq = 3 + n
     fig, (ax1, ax2, ax3) = _figure(3, scenario)
     for logs, label, ls in [(model_based, "model-based", ":"), (dac, "DAC-pH", "-")]:
         t = logs["time"]
@@ -182,17 +182,18 @@ def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
                      label=f"$u_{k + 1}$ {label}")
     ax1.set_ylabel("u [N m]")
     ax1.legend(fontsize=7, ncol=2)
-    t, x = dac["time"], dac["state"]
+    t = dac["time"]
+    base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(n).Split(dac["state"])
     i = _stride(t)
-    ax2.plot(t[i], x[i, 2], "k-", lw=0.8, label=r"$\theta_0$ (base)")
+    ax2.plot(t[i], base_pose[i, 2], "k-", lw=0.8, label=r"$\theta_0$ (base)")
     for k in range(n):
-        ax2.plot(t[i], x[i, 3 + k], color=f"C{k}", lw=0.8, label=f"$q_{k + 1}$")
+        ax2.plot(t[i], q[i, k], color=f"C{k}", lw=0.8, label=f"$q_{k + 1}$")
     ax2.plot(t[i], dac["lhs_log"][i, LhsLog(n).alpha_desired], "C3--", lw=0.8,
              label=r"$\alpha_d$")
     ax2.set_ylabel("angles [rad]")
     ax2.legend(fontsize=7, ncol=n + 2)
     for k in range(n):
-        ax3.plot(t[i], x[i, nq + 3 + k], color=f"C{k}", lw=0.6,
+        ax3.plot(t[i], qdot[i, k], color=f"C{k}", lw=0.6,
                  label=r"$\dot q_{%d}$" % (k + 1))
     ax3.set_ylabel("joint rates [rad/s]")
     ax3.legend(fontsize=7)

@@ -4,6 +4,7 @@ from typing import Dict
 import numpy as np
 
 from dacph_drake.log_layout import LearnerLog, LhsLog, RhsLog
+from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario
 
@@ -71,7 +72,6 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
     "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
     tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics."""
     n = scenario.robot.num_links
-    nq = 3 + n
     t = logs["time"]
     phases = scenario.phases
     active = t >= phases.linear_start
@@ -80,7 +80,7 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
     alpha_error = lhs[:, L.alpha_error]
     e_tau = (logs["rhs_log"][:, R.e_tau] if "rhs_log" in logs
              else logs["tau_request"] - logs["tau"])
-    state = logs["state"]
+    base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
     potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
     out = {
         "tracking_error_rms": rms(alpha_error[active]),
@@ -90,8 +90,9 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         "control_effort_rms": rms(logs["u"][active]),
         "e_tau_rms": rms(e_tau[active]),
         "sliding_rms": rms(lhs[active, L.s]),
-        "base_attitude_max_excursion": float(np.max(np.abs(state[:, 2] - state[0, 2]))),
-        "min_clearance": float(min(potential.MinClearance(x[3:nq]) for x in state)),
+        "base_attitude_max_excursion": float(np.max(np.abs(base_pose[:, 2]
+                                                            - base_pose[0, 2]))),
+        "min_clearance": float(min(potential.MinClearance(joints) for joints in q)),
     }
     if "estimates" in logs:
         window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \

@@ -22,6 +22,7 @@ from pydrake.multibody.tree import (FixedOffsetFrame, PlanarJoint,
                                     RevoluteJoint, RotationalInertia,
                                     SpatialInertia)
 from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import Selector, SelectorParams
 
 from dacph_drake.robot import RobotParams
 
@@ -62,9 +63,76 @@ class ArmCoordinates:
             joint_q=np.array([j.position_start() for j in joints]),
             joint_v=np.array([j.velocity_start() for j in joints]))
 
+    @staticmethod
+    def ForPlanarArm(num_joints: int) -> "ArmCoordinates":
+        """The layout AddFreeFloatingArm and MakeArmPlant give an arm of
+        ``num_joints`` links (the base's x, y, theta0 first), for reading logged
+        plant states without a plant."""
+        joints = np.arange(3, 3 + num_joints)
+        return ArmCoordinates(base_q=np.arange(3), base_v=np.arange(3), joint_q=joints,
+                              joint_v=joints)
+
     @property
     def num_joints(self) -> int:
         return len(self.joint_v)
+
+    @property
+    def num_positions(self) -> int:
+        return len(self.base_q) + len(self.joint_q)
+
+    def StateIndices(self) -> np.ndarray:
+        """Indices into the plant state x = [positions, velocities] of
+        [theta0, base velocity (3), q (n), qdot (n)], for compiled kernels that read
+        the state whole (kernels.loop.true_torque)."""
+        nq = self.num_positions
+        return np.concatenate([self.base_q[2:3], nq + self.base_v, self.joint_q,
+                               nq + self.joint_v]).astype(np.int64)
+
+    def Split(self, x: np.ndarray):
+        """(base_pose, q, base_velocity, qdot) of plant state(s) x = [positions,
+        velocities] (the last axis)."""
+        v = x[..., self.num_positions:]
+        return (x[..., self.base_q], x[..., self.joint_q], v[..., self.base_v],
+                v[..., self.joint_v])
+
+
+STATE_SIGNALS = ("base_pose", "q", "base_velocity", "qdot")    # AddStateSplitter's
+
+
+def FixStateInputs(system, context, x: np.ndarray) -> None:
+    """Fixes the state inputs that ``system`` has to the plant state x of a planar
+    arm: ``state`` to x itself, STATE_SIGNALS to its parts (a system tested alone,
+    without a plant and a splitter)."""
+    if system.HasInputPort("state"):
+        system.GetInputPort("state").FixValue(context, x)
+    num_joints = (len(x) - 6) // 2
+    for name, value in zip(STATE_SIGNALS, ArmCoordinates.ForPlanarArm(num_joints).Split(x)):
+        if system.HasInputPort(name):
+            system.GetInputPort(name).FixValue(context, value)
+
+
+def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector:
+    """The plant state as named signals, for every system that reads it: a Selector
+    (Drake C++, no Python call per evaluation) named "state_splitter", fed by the
+    plant's state, with outputs ``base_pose`` (x, y, theta0), ``q`` (joint angles),
+    ``base_velocity`` (vx, vy, omega0 in the world frame) and ``qdot`` (joint rates),
+    built from ArmCoordinates: the one place that knows the state's layout."""
+    coordinates = ArmCoordinates.FromPlant(plant)
+    nq = plant.num_positions()
+
+    def output(name, indices):
+        return SelectorParams.OutputPortParams(name=name, selections=[
+            SelectorParams.OutputSelection(input_port_index=0, input_offset=int(i))
+            for i in indices])
+    splitter = builder.AddNamedSystem("state_splitter", Selector(SelectorParams(
+        inputs=[SelectorParams.InputPortParams(name="state",
+                                               size=nq + plant.num_velocities())],
+        outputs=[output("base_pose", coordinates.base_q),
+                 output("q", coordinates.joint_q),
+                 output("base_velocity", nq + coordinates.base_v),
+                 output("qdot", nq + coordinates.joint_v)])))
+    builder.Connect(plant.get_state_output_port(), splitter.get_input_port())
+    return splitter
 
 
 def AddFreeFloatingArm(builder: DiagramBuilder, robot: RobotParams,

@@ -20,6 +20,7 @@ from pydrake.common.yaml import yaml_dump_typed
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario, save_scenario
 
@@ -158,7 +159,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     plant = loop.plant
     plant_context = plant.GetMyContextFromRoot(context)
     problem = {}
-    nq = plant.num_positions()
+    coordinates = ArmCoordinates.FromPlant(plant)
     clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance
 
     def check(t: float):
@@ -168,9 +169,10 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
         x = plant_context.get_continuous_state_vector().CopyToVector()
         if not np.all(np.isfinite(x)):
             return f"non-finite plant state at t = {t:.4f} s"
-        if np.max(np.abs(x[nq:])) > MAX_JOINT_RATE:
+        _, q, base_velocity, qdot = coordinates.Split(x)
+        if max(np.max(np.abs(base_velocity)), np.max(np.abs(qdot))) > MAX_JOINT_RATE:
             return f"runaway: a rate exceeded {MAX_JOINT_RATE} rad/s at t = {t:.4f} s"
-        rho = clearance(x[3:nq])
+        rho = clearance(q)
         if rho <= 0:
             return (f"collision: a link touched the base at t = {t:.4f} s (clearance "
                     f"{rho:.4f} m)")

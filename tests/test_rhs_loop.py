@@ -4,7 +4,7 @@ import pytest
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.network import ExportedNetwork, RhsNetwork
-from dacph_drake.plant import MakeArmPlant
+from dacph_drake.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Scenario
 from dacph_drake.systems.rhs_integrator import RhsIntegrator
@@ -36,11 +36,13 @@ def _Integrator(B_hat_scale):
     network = ExportedNetwork(2, [16, 8], 0.01)
     weights = RhsNetwork(2, [16, 8], B_hat_scale * np.eye(2), [0.1, 0.1], 0.01,
                          0).export()
-    rhs = RhsIntegrator(model, network, Rhs(), 0.5, 0.005093, [1.0, 1.0], 2.5e-4,
-                        1e-2, 5, RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01,
-                                            0).export())
+    rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
+                        lambda_min_M=0.005093, B0=[1.0, 1.0], period=2.5e-4,
+                        model_period=1e-2,
+                        initial_weights=RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1],
+                                                   0.01, 0).export())
     context = rhs.CreateDefaultContext()
-    rhs.GetInputPort("state").FixValue(context, np.zeros(10))
+    FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)
     rhs.GetInputPort("beta_hat").FixValue(context, [1.0])
     return rhs, context
@@ -75,10 +77,11 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     weights = RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01, 0).export()
     h = scenario.periods.rhs
     lambda_min = 0.005093
-    rhs = RhsIntegrator(model, network, Rhs(), 0.5, lambda_min, [1.0, 1.0], h, 1e-2, 5,
-                        weights)
+    rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
+                        lambda_min_M=lambda_min, B0=[1.0, 1.0], period=h,
+                        model_period=1e-2, initial_weights=weights)
     context = rhs.CreateDefaultContext()
-    rhs.GetInputPort("state").FixValue(context, np.zeros(10))
+    FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)
     rhs.GetInputPort("beta_hat").FixValue(context, [1.0])
     tau_request = np.array([0.05, -0.03])

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from dacph_drake.plant import MakeArmPlant
+from dacph_drake.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.reference import OrientationReference
@@ -13,7 +13,6 @@ from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.true_rhs import TrueRhs
 
-NQ = 5
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +44,7 @@ def test_true_rhs_by_phase(model):
     context = truth.CreateDefaultContext()
     q, qdot = np.array([0.5, -0.2]), np.array([0.1, 0.3])
     u, d = np.array([0.2, -0.1]), np.array([0.01, 0.02])
-    truth.GetInputPort("state").FixValue(context, _state(q, qdot, model))
+    FixStateInputs(truth, context, _state(q, qdot, model))
     truth.GetInputPort("u").FixValue(context, u)
     constant = DisturbanceSource(Disturbance(lf_offset=list(d), lf_amplitude=[0.0, 0.0],
                                              hf_amplitude=0.0), start=0.0)
@@ -69,10 +68,10 @@ def test_true_rhs_by_phase(model):
 
 
 def test_model_based_inverter():
-    inverter = ModelBasedInverter(Scenario(), NQ)
+    inverter = ModelBasedInverter(Scenario())
     context = inverter.CreateDefaultContext()
     x = np.arange(10) / 10.0
-    inverter.GetInputPort("state").FixValue(context, x)
+    FixStateInputs(inverter, context, x)
     inverter.GetInputPort("tau_request").FixValue(context, [0.3, -0.4])
     np.testing.assert_allclose(inverter.GetOutputPort("u").Eval(context),
                                np.array([0.3, -0.4]) + 0.1 * x[8:], atol=1e-15)
@@ -82,7 +81,7 @@ def _observe(model, q, qdot, qddot, u=None, h=2.5e-4, cutoff=0.0):
     """A PortObserver sampled twice: at rates qdot - h qddot / 2, then h later at
     qdot + h qddot / 2 (so qdot is the interval's midpoint rate and qddot its
     backward difference), with the reduced model [M, C'] at (q, qdot)."""
-    observer = PortObserver(num_joints=2, num_positions=NQ, sample_period=h,
+    observer = PortObserver(num_joints=2, sample_period=h,
                             noise_std=0.0, seed=0, anti_alias_cutoff=cutoff)
     context = observer.CreateDefaultContext()
     r = model.Evaluate(q, qdot)
@@ -93,7 +92,7 @@ def _observe(model, q, qdot, qddot, u=None, h=2.5e-4, cutoff=0.0):
     state = context.get_mutable_discrete_state()
     for k, event in enumerate((observer._InitializeRates, observer._UpdateSample)):
         rates = qdot + (k - 0.5) * h * qddot
-        observer.GetInputPort("state").FixValue(context, _state(q, rates, model))
+        FixStateInputs(observer, context, _state(q, rates, model))
         event(context, state)
         context.SetDiscreteState(state)
     return observer, context, r
@@ -110,12 +109,13 @@ def test_lhs_controller_equation(model):
     scenario = Scenario()
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
     reference = OrientationReference(scenario.reference, 1.3)
-    lhs = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05)
+    lhs = LhsController(model=model, potential=potential, reference=reference,
+                        gains=scenario.lhs, period=1e-3, fixed_chi=0.05)
     q, qdot = np.array([1.3, 2.2]), np.array([0.3, -0.2])     # potential active here
     x = _state(q, qdot, model)
     x[2] = 0.1
     t, chi = 3.0, 0.02
-    tau, log = lhs.Control(t, x, chi)
+    tau, log = lhs.Control(t, x[2], q, qdot, chi)
     # Independent check of nu and s, and of nu_dot by differencing nu along the flow.
     def nu_of(time, qq, qd):
         r = model.Evaluate(qq, qd)
@@ -190,12 +190,16 @@ def test_lhs_controller_adds_the_excitation(model):
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
     reference = OrientationReference(scenario.reference, 1.3)
     excitation = Excitation(amplitude=2e-3, frequencies=[3.0, 5.0])
-    plain = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05)
-    excited = LhsController(model, potential, reference, scenario.lhs, 1e-3, NQ, 0.05,
-                            excitation)
+    plain = LhsController(model=model, potential=potential, reference=reference,
+                          gains=scenario.lhs, period=1e-3, fixed_chi=0.05)
+    excited = LhsController(model=model, potential=potential, reference=reference,
+                            gains=scenario.lhs, period=1e-3, fixed_chi=0.05,
+                            excitation=excitation)
     x = _state(np.array([0.3, 1.0]), np.array([0.1, -0.1]), model)
     t = 0.37
-    difference = excited.Control(t, x, 0.02)[0] - plain.Control(t, x, 0.02)[0]
+    q, qdot = x[3:5], x[8:]
+    difference = (excited.Control(t, x[2], q, qdot, 0.02)[0]
+                  - plain.Control(t, x[2], q, qdot, 0.02)[0])
     np.testing.assert_allclose(
         difference, 2e-3 * np.sin(2 * np.pi * np.array([3.0, 5.0]) * t), atol=1e-17)
     np.testing.assert_allclose(Excitation(frequencies=[2.0, 8.0]).Frequencies(3),
@@ -211,7 +215,7 @@ def test_port_observer_on_a_known_trajectory():
     at the sample instant it is off by the half-sample delay (over 1 %)."""
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import LogVectorOutput, Sine
-    from dacph_drake.plant import AddFreeFloatingArm
+    from dacph_drake.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
     from dacph_drake.simulation import MakeSimulator
     scenario = Scenario()
     h = scenario.periods.rhs
@@ -222,17 +226,22 @@ def test_port_observer_on_a_known_trajectory():
     source = builder.AddSystem(DisturbanceSource(scenario.disturbance, 0.0))
     u = builder.AddSystem(Sine([0.02, 0.015], [9.0, 13.0], [0.0, 1.0], 2))
     lhs = builder.AddSystem(LhsController(
-        model, BaseRepulsionPotential(scenario.nominal_robot, scenario.potential),
-        OrientationReference(scenario.reference, 1.3), scenario.lhs, scenario.periods.lhs,
-        NQ, 0.05))
-    observer = builder.AddSystem(PortObserver(num_joints=2, num_positions=NQ,
-                                              sample_period=h, noise_std=0.0, seed=0))
+        model=model,
+        potential=BaseRepulsionPotential(scenario.nominal_robot, scenario.potential),
+        reference=OrientationReference(scenario.reference, 1.3), gains=scenario.lhs,
+        period=scenario.periods.lhs, fixed_chi=0.05))
+    observer = builder.AddSystem(PortObserver(num_joints=2, sample_period=h,
+                                              noise_std=0.0, seed=0))
+    splitter = AddStateSplitter(builder, plant)
     builder.Connect(u.get_output_port(0), truth.GetInputPort("u"))
     builder.Connect(source.GetOutputPort("disturbance_model"),
                     truth.GetInputPort("disturbance_model"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
-    for system in (truth, lhs, observer):
-        builder.Connect(plant.get_state_output_port(), system.GetInputPort("state"))
+    builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
+    for system in (lhs, observer):
+        for signal in STATE_SIGNALS:
+            if system.HasInputPort(signal):
+                builder.Connect(splitter.GetOutputPort(signal), system.GetInputPort(signal))
     builder.Connect(lhs.GetOutputPort("reduced_model"), observer.GetInputPort("reduced_model"))
     true_log = LogVectorOutput(truth.GetOutputPort("tau"), builder, h)
     observed_log = LogVectorOutput(observer.GetOutputPort("tau_observed"), builder, h)

@@ -125,15 +125,17 @@ def reduced_dynamics(q, qdot, coefficients, ranges):
 
 
 @njit(cache=True)
-def joint_momentum(x, coefficients, ranges):
-    """p = the joint rows of H(q_full) v at the plant state x = [q_full, v] of a
-    planar arm (base x, y, theta0 first): with the base's world velocity turned into
-    its own frame, p = H(q)[3:] T v, which at zero momentum is M(q) qdot."""
-    n = (x.shape[0] - 6) // 2
-    nq = n + 3
-    H = mass_matrix_and_derivatives(x[3:nq], coefficients, ranges)[0]
-    v = x[nq:].copy()
-    c, s = np.cos(x[2]), np.sin(x[2])
-    v[0] = c * x[nq] + s * x[nq + 1]
-    v[1] = -s * x[nq] + c * x[nq + 1]
+def joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges):
+    """p = the joint rows of H(q_full) v of a planar arm with base angle theta0, base
+    velocity (vx, vy, omega0) in the world frame and joint state (q, qdot): with the
+    base's velocity turned into its own frame, p = H(q)[3:] T v, which at zero
+    momentum is M(q) qdot."""
+    n = q.shape[0]
+    H = mass_matrix_and_derivatives(q, coefficients, ranges)[0]
+    v = np.empty(n + 3)
+    c, s = np.cos(theta0), np.sin(theta0)
+    v[0] = c * base_velocity[0] + s * base_velocity[1]
+    v[1] = -s * base_velocity[0] + c * base_velocity[1]
+    v[2] = base_velocity[2]
+    v[3:] = qdot
     return matvec(H[3:], v)

@@ -59,11 +59,13 @@ def pack_true_rhs(coefficients, ranges, disturbance_model, uncertainty) -> np.nd
 
 
 @njit(cache=True)
-def true_torque(t, x, u, packed):
+def true_torque(t, x, indices, u, packed):
     """tau = B~(x) u - D~(x) qdot + d(t) at time t and plant state x (TrueRhs), with
-    ``packed`` = pack_true_rhs(...)."""
+    x[indices] = [theta0, base velocity (3), q (n), qdot (n)]
+    (plant.ArmCoordinates.StateIndices) and ``packed`` = pack_true_rhs(...)."""
     n = u.shape[0]
-    nq = n + 3
+    arm = x[indices]
+    theta0, base_velocity, q, qdot = arm[0], arm[1:4], arm[4:4 + n], arm[4 + n:]
     N, R = n + 3, n * (n + 1) // 2
     o = 0
     coefficients = packed[o:o + N * N * (1 + 2 * R)].reshape(N * N, 1 + 2 * R)
@@ -81,10 +83,10 @@ def true_torque(t, x, u, packed):
     o += 2 * n
     B_q1_squared = packed[o:o + n * n].reshape(n, n)
     o += n * n
-    p = joint_momentum(x, coefficients, ranges)
-    B, D = true_matrices(t, x[3:nq], p, B0, D0, D_offset, D_linear, B_linear,
+    p = joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges)
+    B, D = true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear,
                          D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1])
-    return matvec(B, u) - D * x[nq + 3:] + disturbance(t, disturbance_model)
+    return matvec(B, u) - D * qdot + disturbance(t, disturbance_model)
 
 
 def pack_lhs(coefficients, ranges, geometry, link_of, fraction, radius,
@@ -101,10 +103,10 @@ def pack_lhs(coefficients, ranges, geometry, link_of, fraction, radius,
 
 
 @njit(cache=True)
-def lhs_sample(t, x, chi, packed):
+def lhs_sample(t, theta0, q, qdot, chi, packed):
     """lhs_control with its constant arguments unpacked from ``packed``
     (pack_lhs), returning one array [tau_c^r (n), log (n + 4), vec(M), vec(C')]."""
-    n = (x.shape[0] - 6) // 2
+    n = q.shape[0]
     N, R = n + 3, n * (n + 1) // 2
     points, terms = int(packed[0]), int(packed[1])
     o = 2
@@ -124,7 +126,8 @@ def lhs_sample(t, x, chi, packed):
     o += 1 + 2 * terms
     gains = packed[o:o + 4]
     excitation = packed[o + 4:o + 5 + n]
-    tau, log, M, C = lhs_control(t, x, chi, coefficients, ranges, geometry, link_of,
+    tau, log, M, C = lhs_control(t, theta0, q, qdot, chi, coefficients, ranges,
+                                 geometry, link_of,
                                  fraction, radius, potential_gains, reference, gains,
                                  excitation)
     out = np.empty(2 * n + 4 + 2 * n * n)
@@ -136,14 +139,13 @@ def lhs_sample(t, x, chi, packed):
 
 
 @njit(cache=True)
-def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, radius,
-                potential_gains, reference, gains, excitation):
-    """(tau_c^r, [s, alpha~, alpha_d, V, U], M, C') at time t and plant state x
-    (LhsController). ``reference`` = [alpha0, amplitudes (m), omegas (m)];
-    ``gains`` = [Kd, Lambda, epsilon, eta]; ``excitation`` = [amplitude, omegas (n)]."""
-    n = (x.shape[0] - 6) // 2
-    nq = n + 3
-    q, qdot = x[3:nq].copy(), x[nq + 3:].copy()
+def lhs_control(t, theta0, q, qdot, chi, coefficients, ranges, geometry, link_of,
+                fraction, radius, potential_gains, reference, gains, excitation):
+    """(tau_c^r, [s, alpha~, alpha_d, V, U], M, C') at time t, base angle theta0 and
+    joint state (q, qdot) (LhsController). ``reference`` = [alpha0, amplitudes (m),
+    omegas (m)]; ``gains`` = [Kd, Lambda, epsilon, eta]; ``excitation`` =
+    [amplitude, omegas (n)]."""
+    n = q.shape[0]
     M, C, D, dD = reduced_dynamics(q, qdot, coefficients, ranges)
     m = (reference.shape[0] - 1) // 2
     alpha_d, alpha_d_dot, alpha_d_ddot = reference[0], 0.0, 0.0
@@ -159,7 +161,7 @@ def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, ra
     # kernel of its own). With xi = -eta grad U and P = I - D+ D:
     # P xi = xi - D+ (D xi), P_dot xi = -(D+_dot (D xi) + D+ (D_dot xi)).
     D_dot = np.zeros(n)
-    alpha_error = x[2] - alpha_d
+    alpha_error = theta0 - alpha_d
     alpha_error_dot, DDt, D_D_dot = -alpha_d_dot, 0.0, 0.0
     for i in range(n):
         for k in range(n):
@@ -199,8 +201,8 @@ def lhs_control(t, x, chi, coefficients, ranges, geometry, link_of, fraction, ra
 
 
 @njit(cache=True)
-def observer_sample(x, memory, model, u, noise, constants):
-    """One port-observer sample (PortObserver) at plant state x, with ``memory`` =
+def observer_sample(q, qdot, memory, model, u, noise, constants):
+    """One port-observer sample (PortObserver) at joint state (q, qdot), with ``memory`` =
     [qdot(k-1) (n), port_sample (5 n)], ``model`` = [vec(M), vec(C')],
     ``constants`` = [h, anti-alias factor a]:
     qddot = (qdot(k) - qdot(k-1)) / h, qdot_mid = (qdot(k) + qdot(k-1)) / 2,
@@ -208,17 +210,15 @@ def observer_sample(x, memory, model, u, noise, constants):
     r], r <- r + a ([qdot_mid, u, tau_obs] - r).
     Returns [tau_obs (n), qdot(k) (n), port_sample (5 n)]."""
     n = u.shape[0]
-    nq = n + 3
     h, a = constants[0], constants[1]
     M = model[:n * n].reshape(n, n)
     C = model[n * n:].reshape(n, n)
-    qdot = x[nq + 3:]
     qdot_mid = 0.5 * (qdot + memory[:n])
     tau = matvec(M, (qdot - memory[:n]) / h) + matvec(C, qdot_mid) + noise
     out = np.empty(7 * n)
     out[:n] = tau
     out[n:2 * n] = qdot
-    out[2 * n:3 * n] = x[3:nq]
+    out[2 * n:3 * n] = q
     out[3 * n:4 * n] = matvec(M, qdot_mid)
     regressed = memory[3 * n:]          # port_sample[2 n:] = [qdot, u, tau_obs]
     for i in range(n):
@@ -229,8 +229,8 @@ def observer_sample(x, memory, model, u, noise, constants):
 
 
 @njit(cache=True)
-def integrator_sample(fast, gains, tau_request, tau_observed, x, constants):
-    """One RHS integrator sample (RhsIntegrator) at plant state x, with
+def integrator_sample(fast, gains, tau_request, tau_observed, qdot, constants):
+    """One RHS integrator sample (RhsIntegrator) at joint rates qdot, with
     ``fast`` = [u_I, e_tau, ||e_tau||, chi, tau_c^r(k-1)], ``gains`` =
     [vec(B_hat^-1), D_hat, K, ...], ``constants`` = [h, chi_decay, chi_floor]:
 
@@ -240,7 +240,6 @@ def integrator_sample(fast, gains, tau_request, tau_observed, x, constants):
 
     Returns [fast after the sample (3 n + 2), u (n)]."""
     n = tau_request.shape[0]
-    nq = n + 3
     h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
     out = np.empty(4 * n + 2)
     e = fast[2 * n + 2:3 * n + 2] - tau_observed
@@ -250,6 +249,6 @@ def integrator_sample(fast, gains, tau_request, tau_observed, x, constants):
     out[2 * n + 1] = max(out[2 * n], fast[2 * n + 1] * chi_decay, chi_floor)
     out[2 * n + 2:3 * n + 2] = tau_request
     out[3 * n + 2:] = (matvec(gains[:n * n].reshape(n, n),
-                              tau_request + gains[n * n:n * n + n] * x[nq + 3:])
+                              tau_request + gains[n * n:n * n + n] * qdot)
                        + out[:n])
     return out

@@ -34,11 +34,11 @@ class RhsLearner(LeafSystem):
     per run, as the package's builders do)."""
 
     def __init__(self, *, model: ReducedOrderModel, settings: Learner, period: float,
-                 sample_period: float, num_positions: int, B0, D0, seed: int,
+                 sample_period: float, B0, D0, seed: int,
                  learning: bool = True):
         super().__init__()
         n = model.num_joints
-        self._n, self._nq, self._model = n, num_positions, model
+        self._n, self._model = n, model
         self._period = period
         self._settings = settings
         self._learning = learning and settings.steps_per_update > 0
@@ -50,7 +50,8 @@ class RhsLearner(LeafSystem):
         self.initial_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
-        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
+        self._q = self.DeclareVectorInputPort("q", n)
+        self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._port_sample = self.DeclareVectorInputPort("port_sample", width - 1)
         self._buffer = self.DeclareDiscreteState(settings.window * width)
         self._count = self.DeclareDiscreteState(1)
@@ -70,7 +71,7 @@ class RhsLearner(LeafSystem):
         self.DeclareVectorOutputPort(
             "estimates", n * n + n, self._CalcEstimates,
             prerequisites_of_calc={self.discrete_state_ticket(self._weights),
-                                   self._state.ticket()})
+                                   self._q.ticket(), self._qdot.ticket()})
         self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0, self._UpdateSample)
         self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._UpdateTraining)
 
@@ -113,8 +114,7 @@ class RhsLearner(LeafSystem):
         discrete_state.get_mutable_vector(self._log).SetFromVector(values)
 
     def _CalcEstimates(self, context, output):
-        x = self._state.Eval(context)
-        q, qdot = x[3:self._nq], x[self._nq + 3:]
+        q, qdot = self._q.Eval(context), self._qdot.Eval(context)
         B, D = self.exported.Evaluate(
             context.get_discrete_state(self._weights).get_value(), q,
             self._model.Momentum(q, qdot))

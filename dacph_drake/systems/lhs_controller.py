@@ -12,7 +12,8 @@ from dacph_drake.scenario import Excitation, LhsGains
 
 
 class LhsController(LeafSystem):
-    """Every ``period`` seconds, from the measured state (q0, q, qdot):
+    """Every ``period`` seconds, from the measured state (inputs ``base_pose`` =
+    (x, y, theta0), ``q``, ``qdot``; alpha = theta0 + q_1 + ... + q_n):
 
         alpha~ = alpha - alpha_d,   D+ = D^T / (D D^T),   P = I - D+ D
         nu     = D+ (alpha_d_dot - Lambda alpha~) + P xi,  xi = -eta grad U(q)
@@ -29,13 +30,12 @@ class LhsController(LeafSystem):
     lambda_min(M) of the log is computed when the log is read."""
 
 
-    def __init__(self, model: ReducedOrderModel, potential: BaseRepulsionPotential,
+    def __init__(self, *, model: ReducedOrderModel, potential: BaseRepulsionPotential,
                  reference: OrientationReference, gains: LhsGains, period: float,
-                 num_positions: int, fixed_chi: float,
-                 excitation: Excitation = Excitation(amplitude=0.0)):
+                 fixed_chi: float, excitation: Excitation = Excitation(amplitude=0.0)):
         super().__init__()
         n = model.num_joints
-        self._n, self._nq = n, num_positions
+        self._n = n
         self._fixed_chi = fixed_chi
         # The kernel's constant arguments (kernels.loop.lhs_sample).
         self._packed = pack_lhs(
@@ -43,7 +43,9 @@ class LhsController(LeafSystem):
             reference.kernel_arguments,
             np.array([gains.Kd, gains.Lambda, gains.epsilon, gains.eta]),
             np.concatenate([[excitation.amplitude], 2 * np.pi * excitation.Frequencies(n)]))
-        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
+        self._base_pose = self.DeclareVectorInputPort("base_pose", 3)
+        self._q = self.DeclareVectorInputPort("q", n)
+        self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._chi = self.DeclareVectorInputPort("chi", 1)
         self._tau_index = self.DeclareDiscreteState(n)
         self._log_index = self.DeclareDiscreteState(n + 4)      # lhs_log but lambda_min
@@ -57,10 +59,11 @@ class LhsController(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
-    def Control(self, t: float, x: np.ndarray, chi: float):
-        """(tau_c^r, lhs_log) at time t and plant state x."""
+    def Control(self, t: float, theta0: float, q: np.ndarray, qdot: np.ndarray,
+                chi: float):
+        """(tau_c^r, lhs_log) at time t, base angle theta0 and joint state (q, qdot)."""
         n = self._n
-        sample = lhs_sample(t, x, chi, self._packed)
+        sample = lhs_sample(t, theta0, q, qdot, chi, self._packed)
         return sample[:n], self._Log(sample[n:2 * n + 4], sample[2 * n + 4:])
 
     def _Log(self, log, model):
@@ -72,7 +75,8 @@ class LhsController(LeafSystem):
         n = self._n
         chi = (self._chi.Eval(context)[0] if self._chi.HasValue(context)
                else self._fixed_chi)
-        sample = lhs_sample(context.get_time(), self._state.Eval(context), chi,
+        sample = lhs_sample(context.get_time(), self._base_pose.Eval(context)[2],
+                            self._q.Eval(context), self._qdot.Eval(context), chi,
                             self._packed)
         discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
         discrete_state.get_mutable_vector(self._log_index).SetFromVector(

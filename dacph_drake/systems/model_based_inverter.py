@@ -8,25 +8,22 @@ from dacph_drake.scenario import Scenario
 
 class ModelBasedInverter(Diagram):
     """u = B0^-1 (tau_c^r + D0 qdot); stateless (output ``u`` depends on the inputs
-    ``tau_request`` and ``state`` only).
+    ``tau_request`` and ``qdot`` only).
 
     It feeds the true RHS, which the integrator evaluates at every stage, so it is
     built from Drake's C++ primitives (no Python call per stage): a Multiplexer
-    stacks [tau_c^r; x] and a MatrixGain applies
-    [B0^-1 | 0 ... 0 B0^-1 diag(D0)], whose last block acts on qdot."""
+    stacks [tau_c^r; qdot] and a MatrixGain applies [B0^-1 | B0^-1 diag(D0)]."""
 
-    def __init__(self, scenario: Scenario, num_positions: int):
+    def __init__(self, scenario: Scenario):
         super().__init__()
         n = scenario.robot.num_links
         B0_inv = np.linalg.inv(np.diag(scenario.uncertainty.B0))
-        gain = np.zeros((n, n + 2 * num_positions))
-        gain[:, :n] = B0_inv
-        gain[:, n + num_positions + 3:] = B0_inv @ np.diag(scenario.uncertainty.D0)
+        gain = np.hstack([B0_inv, B0_inv @ np.diag(scenario.uncertainty.D0)])
         builder = DiagramBuilder()
-        stack = builder.AddNamedSystem("stack", Multiplexer([n, 2 * num_positions]))
+        stack = builder.AddNamedSystem("stack", Multiplexer([n, n]))
         inversion = builder.AddNamedSystem("inversion", MatrixGain(gain))
         builder.Connect(stack.get_output_port(), inversion.get_input_port())
         builder.ExportInput(stack.get_input_port(0), "tau_request")
-        builder.ExportInput(stack.get_input_port(1), "state")
+        builder.ExportInput(stack.get_input_port(1), "qdot")
         builder.ExportOutput(inversion.get_output_port(), "u")
         builder.BuildInto(self)

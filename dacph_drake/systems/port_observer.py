@@ -30,20 +30,21 @@ class PortObserver(LeafSystem):
     f > 0, [qdot, u, tau_obs] pass a first-order low-pass at f Hz at the sample rate
     (before the learner samples them at a lower rate).
 
-    Inputs ``state`` (plant state), ``reduced_model`` and ``u``. The sample is one
+    Inputs ``q``, ``qdot`` (the plant's joint state), ``reduced_model`` and ``u``. The sample is one
     compiled kernel (kernels.loop.observer_sample)."""
 
-    def __init__(self, *, num_joints: int, num_positions: int, sample_period: float,
-                 noise_std: float, seed: int, anti_alias_cutoff: float = 0.0):
+    def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,
+                 seed: int, anti_alias_cutoff: float = 0.0):
         super().__init__()
         n = num_joints
-        self._n, self._nq, self._h = n, num_positions, sample_period
+        self._n, self._h = n, sample_period
         self._rng = np.random.default_rng(seed)
         self._noise_std = noise_std
         self._layout = PortSample(n)
         self._anti_alias = (1.0 - np.exp(-2 * np.pi * anti_alias_cutoff * sample_period)
                             if anti_alias_cutoff > 0 else 1.0)
-        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
+        self._q = self.DeclareVectorInputPort("q", n)
+        self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._reduced_model = self.DeclareVectorInputPort("reduced_model", 2 * n * n)
         self._u = self.DeclareVectorInputPort("u", n)
         self._constants = np.array([sample_period, self._anti_alias])
@@ -62,14 +63,14 @@ class PortObserver(LeafSystem):
 
     def _InitializeRates(self, context, discrete_state):
         discrete_state.get_mutable_vector(self._memory_index).get_mutable_value()[
-            :self._n] = self._state.Eval(context)[self._nq + 3:]
+            :self._n] = self._qdot.Eval(context)
 
     def _UpdateSample(self, context, discrete_state):
         n = self._n
         noise = (self._noise_std * self._rng.standard_normal(n) if self._noise_std > 0
                  else self._no_noise)
         sample = observer_sample(
-            self._state.Eval(context),
+            self._q.Eval(context), self._qdot.Eval(context),
             context.get_discrete_state(self._memory_index).get_value(),
             self._reduced_model.Eval(context),
             self._u.Eval(context) if self._u.HasValue(context) else self._no_u,

@@ -42,18 +42,17 @@ class RhsIntegrator(LeafSystem):
     ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
     from stress.start on.
 
-    Inputs ``tau_request``, ``tau_observed``, ``state``, ``weights``, ``beta_hat``.
+    Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``.
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
     c_min, dic_ok, trusted]."""
 
-    def __init__(self, model: ReducedOrderModel, network: ExportedNetwork,
+    def __init__(self, *, model: ReducedOrderModel, network: ExportedNetwork,
                  settings: Rhs, Kd_max: float, lambda_min_M: float,
                  B0: np.ndarray, period: float, model_period: float,
-                 num_positions: int, initial_weights: np.ndarray,
-                 stress: Stress = Stress()):
+                 initial_weights: np.ndarray, stress: Stress = Stress()):
         super().__init__()
         n = model.num_joints
-        self._n, self._nq = n, num_positions
+        self._n = n
         self._model, self._network = model, network
         self._h, self._h_model = period, model_period
         self._settings = settings
@@ -65,7 +64,8 @@ class RhsIntegrator(LeafSystem):
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._tau_request = self.DeclareVectorInputPort("tau_request", n)
         self._tau_observed = self.DeclareVectorInputPort("tau_observed", n)
-        self._state = self.DeclareVectorInputPort("state", 2 * num_positions)
+        self._q = self.DeclareVectorInputPort("q", n)
+        self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._weights = self.DeclareVectorInputPort("weights", network.size)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
         # Fast group: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]; u is a
@@ -114,11 +114,10 @@ class RhsIntegrator(LeafSystem):
         return gains
 
     def _UpdateModel(self, context, discrete_state):
-        x = self._state.Eval(context)
         beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0
         gains = self._Refresh(context.get_discrete_state(self._gains).get_value(),
-                              self._weights.Eval(context), x[3:self._nq],
-                              x[self._nq + 3:], beta,
+                              self._weights.Eval(context), self._q.Eval(context),
+                              self._qdot.Eval(context), beta,
                               self._stress.B_hat_scale
                               if context.get_time() >= self._stress.start else 1.0)
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
@@ -129,7 +128,7 @@ class RhsIntegrator(LeafSystem):
             context.get_discrete_state(self._fast).get_value(),
             context.get_discrete_state(self._gains).get_value(),
             self._tau_request.Eval(context), self._tau_observed.Eval(context),
-            self._state.Eval(context), self._constants)
+            self._qdot.Eval(context), self._constants)
         discrete_state.get_mutable_vector(self._fast).SetFromVector(sample[:3 * n + 2])
         discrete_state.get_mutable_vector(self._u_index).SetFromVector(sample[3 * n + 2:])
 

@@ -13,7 +13,7 @@ from dacph_drake.uncertainty import TrueRhsModel
 class TrueRhs(LeafSystem):
     """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p), p = M(q) qdot of the true
     robot. Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
-    plant's) and time (the phases and d(t)), so it adds no delay. It feeds the
+    plant's, read through plant.ArmCoordinates) and time (the phases and d(t)), so it adds no delay. It feeds the
     plant's actuation input and runs at every integrator stage, as one compiled
     kernel (kernels.loop.true_torque) that evaluates d(t) from input
     ``disturbance_model`` (DisturbanceSource's constant parameters).
@@ -26,20 +26,18 @@ class TrueRhs(LeafSystem):
         super().__init__()
         n = scenario.robot.num_links
         model = ReducedOrderModel(MakeArmPlant(scenario.robot))
-        nq = model.plant.num_positions()
-        # The layout every controller system reads: base (x, y, theta0) first.
-        assert np.array_equal(ArmCoordinates.FromPlant(model.plant).joint_v,
-                              np.arange(3, nq))
-        self._nq = nq
+        self._coordinates = ArmCoordinates.FromPlant(model.plant)
+        self._indices = self._coordinates.StateIndices()
         self._representation = model.trigonometric_representation
         self._uncertainty = TrueRhsModel(scenario.uncertainty, scenario.phases).kernel_arguments
         self._u = self.DeclareVectorInputPort("u", n)
-        self._state = self.DeclareVectorInputPort("state", 2 * nq)
+        self._state = self.DeclareVectorInputPort(
+            "state", model.plant.num_positions() + model.plant.num_velocities())
         self._disturbance_model = self.DeclareVectorInputPort("disturbance_model",
                                                               3 + 5 * n)
         self._packed = None        # pack_true_rhs(...), once the model is known
-        tickets = {self.time_ticket(), self._u.ticket(), self._state.ticket()}
-        self.DeclareVectorOutputPort("tau", n, self._CalcTau, prerequisites_of_calc=tickets)
+        self.DeclareVectorOutputPort("tau", n, self._CalcTau, prerequisites_of_calc={
+            self.time_ticket(), self._u.ticket(), self._state.ticket()})
         self.DeclareVectorOutputPort(
             "true_matrices", n * n + n, self._CalcMatrices,
             prerequisites_of_calc={self.time_ticket(), self._state.ticket()})
@@ -50,10 +48,14 @@ class TrueRhs(LeafSystem):
                                          self._disturbance_model.Eval(context),
                                          self._uncertainty)
         output.SetFromVector(true_torque(context.get_time(), self._state.Eval(context),
-                                         self._u.Eval(context), self._packed))
+                                         self._indices, self._u.Eval(context),
+                                         self._packed))
 
     def _CalcMatrices(self, context, output):
-        x = self._state.Eval(context)
-        B, D = true_matrices(context.get_time(), x[3:self._nq],
-                             joint_momentum(x, *self._representation), *self._uncertainty)
+        base_pose, q, base_velocity, qdot = self._coordinates.Split(
+            self._state.Eval(context))
+        B, D = true_matrices(context.get_time(), q,
+                             joint_momentum(base_pose[2], base_velocity, q, qdot,
+                                            *self._representation),
+                             *self._uncertainty)
         output.SetFromVector(np.concatenate([B.reshape(-1), D]))
