@@ -8,7 +8,8 @@ from typing import Dict
 import numpy as np
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
+from pydrake.systems.primitives import (ConstantVectorSource, LogVectorOutput,
+                                        VectorLogSink)
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
@@ -77,8 +78,7 @@ def _RequireRunnableStart(scenario: Scenario, model: ReducedOrderModel) -> None:
             f"lhs.min_task_singular_value = {scenario.lhs.min_task_singular_value:g}")
 
 
-def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
-                 excitation: Excitation):
+def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, excitation: Excitation):
     """Plant, true RHS, disturbance and LHS controller; loggers shared by all loops."""
     scenario.Validate()
     model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
@@ -97,7 +97,7 @@ def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, fixed_chi: float,
         "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
     lhs = builder.AddNamedSystem("lhs_controller", LhsController(
         model=model, potential=potential, reference=reference, gains=scenario.lhs,
-        period=scenario.periods.lhs, fixed_chi=fixed_chi, excitation=excitation))
+        period=scenario.periods.lhs, excitation=excitation))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
     builder.Connect(disturbance.GetOutputPort("disturbance_model"),
                     truth.GetInputPort("disturbance_model"))
@@ -131,8 +131,7 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     weights, so the integrator runs on the nominal RHS (B0, D0): the dac-nominal
     ablation, otherwise the same diagram."""
     builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.rhs.chi_initial,
-                        excitation=scenario.excitation)
+    loop = _BuildCommon(scenario, builder, excitation=scenario.excitation)
     rhs_settings = scenario.rhs
     check_rhs_period(scenario.periods, (1 + rhs_settings.c_margin) * loop.c_min_nominal,
                      (1 + rhs_settings.c_margin) * c_lower_bound(
@@ -204,13 +203,15 @@ def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
 
 
 def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
-    """The baseline (SPEC section 7): the same LHS controller with the fixed
-    chi = lhs.chi_model_based and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
+    """The baseline (SPEC section 7): the same LHS controller with chi from a
+    constant source (lhs.chi_model_based) and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
     no integrator, no learning."""
     builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, fixed_chi=scenario.lhs.chi_model_based,
-                        excitation=Excitation(amplitude=0.0))
+    loop = _BuildCommon(scenario, builder, excitation=Excitation(amplitude=0.0))
     lhs = loop.systems["lhs_controller"]
+    chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
+        [scenario.lhs.chi_model_based]))
+    builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
     inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(scenario))
     builder.Connect(lhs.GetOutputPort("tau_request"), inverter.GetInputPort("tau_request"))
     builder.Connect(loop.systems["state_splitter"].GetOutputPort("qdot"),

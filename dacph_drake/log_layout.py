@@ -21,6 +21,29 @@ class RhsLog:
         self.size = 2 * n + 6
 
 
+class RhsState:
+    """The RHS integrator's two discrete-state groups (RhsIntegrator; read by index in
+    kernels.loop.integrator_sample):
+
+    fast, every RHS period:  [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]
+    model, every model period: [vec(B_hat^-1) (n*n), D_hat (n), K (n), c, c_min,
+                                dic_ok, trusted]
+    rhs_log = [fast e_tau .. chi, model K .. trusted] (RhsLog)."""
+
+    def __init__(self, n: int):
+        self.u_I, self.e_tau = slice(0, n), slice(n, 2 * n)
+        self.e_norm, self.chi = 2 * n, 2 * n + 1
+        self.previous_request = slice(2 * n + 2, 3 * n + 2)
+        self.fast_size = 3 * n + 2
+        self.fast_logged = slice(n, 2 * n + 2)
+        self.B_inverse, self.D_hat = slice(0, n * n), slice(n * n, n * n + n)
+        self.K = slice(n * n + n, n * n + 2 * n)
+        self.c, self.c_min, self.dic_ok, self.trusted = range(n * n + 2 * n,
+                                                             n * n + 2 * n + 4)
+        self.model_size = n * n + 2 * n + 4
+        self.model_logged = slice(n * n + n, self.model_size)
+
+
 class LearnerLog:
     """learner_log = [loss, beta_hat, nominal loss, holding]: the fit's weighted
     squared residual, the gain rule's uncertainty estimate, the same residual of the

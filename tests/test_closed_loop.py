@@ -45,7 +45,9 @@ def test_dac_tracks_learns_and_stays_clear(runs):
     # The learner's loss, relative to the nominal RHS's loss on the same window,
     # falls within phases 1 and 2 and ends each well below the prior.
     t = logs["time"]
-    relative = logs["learner_log"][:, 0] / logs["learner_log"][:, 2]
+    learner = LearnerLog()
+    relative = (logs["learner_log"][:, learner.loss]
+                / logs["learner_log"][:, learner.nominal_loss])
     phases = scenario.phases
     for start, end in [(phases.linear_start, phases.nonlinear_start),
                        (phases.nonlinear_start, phases.disturbance_start)]:
@@ -56,7 +58,7 @@ def test_dac_tracks_learns_and_stays_clear(runs):
     assert m["estimation_error_B"] < 0.63 and m["estimation_error_D"] < 0.30
     # Every estimate used before d(t) switches on passed the DIC and trust checks.
     before = t < phases.disturbance_start
-    assert np.all(logs["rhs_log"][before, -1] == 1.0)
+    assert np.all(logs["rhs_log"][before, RhsLog(scenario.robot.num_links).trusted] == 1.0)
 
 
 def test_e_tau_follows_tau_request_at_the_gain_rule_rate(runs):
@@ -68,8 +70,9 @@ def test_e_tau_follows_tau_request_at_the_gain_rule_rate(runs):
     t, rhs = logs["dac"]["time"], logs["dac"]["rhs_log"]
     window = (t >= scenario.phases.linear_start + 0.5) & (t < scenario.disturbance_start)
     ramp = np.gradient(logs["dac"]["tau_request"], t, axis=0)[window]
-    e_rms = np.sqrt(np.mean(rhs[window, n] ** 2))
-    bound = np.sqrt(np.mean(np.sum(ramp**2, axis=1))) / np.max(rhs[window, 2 * n + 3])
+    e_rms = np.sqrt(np.mean(rhs[window, RhsLog(n).e_norm] ** 2))
+    bound = (np.sqrt(np.mean(np.sum(ramp**2, axis=1)))
+             / np.max(rhs[window, RhsLog(n).c_min]))
     assert 0 < e_rms <= bound, (e_rms, bound)
 
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from dacph_drake.log_layout import LearnerLog
+from dacph_drake.log_layout import LearnerLog, RhsLog
 from dacph_drake.metrics import comparison, relative_error_rms, rms, run_metrics
 from dacph_drake.reproduce import metrics_table
 from dacph_drake.scenario import short_scenario
@@ -35,9 +35,10 @@ def _synthetic_logs(scenario, error_amplitude, effort, B_error):
     estimates = truth.copy()
     estimates[:, :n * n] *= 1 + B_error
     rhs = np.zeros((T, 2 * n + 6))
-    rhs[:, 2 * n + 2] = 900.0            # c
-    rhs[:, 2 * n + 3] = 800.0            # c_min
-    rhs[:, -2:] = 1.0
+    R = RhsLog(n)
+    rhs[:, R.c] = 900.0
+    rhs[:, R.c_min] = 800.0
+    rhs[:, [R.dic_ok, R.trusted]] = 1.0
     u = np.zeros((T, n))
     u[:, 0] = effort
     learner = np.zeros((T, LearnerLog().size))

@@ -1,8 +1,10 @@
 """The RHS loop: gain rule, DIC check, and the decay rate of e_tau."""
 import numpy as np
 import pytest
+from pydrake.systems.analysis import Simulator
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
+from dacph_drake.log_layout import RhsState
 from dacph_drake.network import ExportedNetwork, RhsNetwork
 from dacph_drake.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
@@ -45,6 +47,8 @@ def _Integrator(B_hat_scale):
     FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)
     rhs.GetInputPort("beta_hat").FixValue(context, [1.0])
+    for name in ("tau_request", "tau_observed"):
+        rhs.GetInputPort(name).FixValue(context, np.zeros(2))
     return rhs, context
 
 
@@ -53,16 +57,15 @@ def test_integrator_rejects_estimates_outside_dic_or_trust(scale, accepted):
     """A learned B_hat = 0.1 I (within DIC, outside the trust band) or -I (DIC
     violation) leaves B_hat^-1 and K as they were; 1.5 I is adopted."""
     rhs, context = _Integrator(scale)
-    n = 2
-    before = context.get_discrete_state(rhs._gains).get_value().copy()
-    state = context.get_mutable_discrete_state()
-    rhs._UpdateModel(context, state)
-    after = state.get_vector(rhs._gains).get_value()
-    B_inverse, K = after[:n * n].reshape(n, n), after[n * n + n:n * n + 2 * n]
-    dic_ok, trusted = after[-2:]
-    c = after[-4]
+    n, L = 2, RhsState(2)
+    before = rhs.GetModelGroup(context)
+    Simulator(rhs, context).AdvanceTo(1e-4)          # the model refresh at t = 0
+    after = rhs.GetModelGroup(context)
+    B_inverse, K = after[L.B_inverse].reshape(n, n), after[L.K]
+    dic_ok, trusted = after[L.dic_ok], after[L.trusted]
+    c = after[L.c]
     assert trusted == float(accepted) and dic_ok == float(scale > 0)
-    expected_B_inverse = np.eye(n) / scale if accepted else before[:n * n].reshape(n, n)
+    expected_B_inverse = np.eye(n) / scale if accepted else before[L.B_inverse].reshape(n, n)
     assert np.allclose(B_inverse, expected_B_inverse)
     assert np.allclose(K, c / (scale if accepted else 1.0))
 
@@ -88,13 +91,12 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     rhs.GetInputPort("tau_request").FixValue(context, tau_request)
     u_history = [np.zeros(2), np.zeros(2)]
     errors = []
-    state = context.get_mutable_discrete_state()
-    for _ in range(60):
+    simulator = Simulator(rhs, context)
+    for k in range(60):          # one integrator sample (at t = k h) per step
         observed = B_true @ u_history[-2]
         rhs.GetInputPort("tau_observed").FixValue(context, observed)
         errors.append(np.linalg.norm(tau_request - observed))
-        rhs._UpdateIntegrator(context, state)
-        context.SetDiscreteState(state)
+        simulator.AdvanceTo((k + 0.5) * h)
         u_history.append(rhs.GetOutputPort("u").Eval(context).copy())
     errors = np.array(errors)
     assert errors[-1] < 1e-6 * errors[0]

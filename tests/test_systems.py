@@ -110,7 +110,7 @@ def test_lhs_controller_equation(model):
     potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
     reference = OrientationReference(scenario.reference, 1.3)
     lhs = LhsController(model=model, potential=potential, reference=reference,
-                        gains=scenario.lhs, period=1e-3, fixed_chi=0.05)
+                        gains=scenario.lhs, period=1e-3)
     q, qdot = np.array([1.3, 2.2]), np.array([0.3, -0.2])     # potential active here
     x = _state(q, qdot, model)
     x[2] = 0.1
@@ -191,10 +191,9 @@ def test_lhs_controller_adds_the_excitation(model):
     reference = OrientationReference(scenario.reference, 1.3)
     excitation = Excitation(amplitude=2e-3, frequencies=[3.0, 5.0])
     plain = LhsController(model=model, potential=potential, reference=reference,
-                          gains=scenario.lhs, period=1e-3, fixed_chi=0.05)
+                          gains=scenario.lhs, period=1e-3)
     excited = LhsController(model=model, potential=potential, reference=reference,
-                            gains=scenario.lhs, period=1e-3, fixed_chi=0.05,
-                            excitation=excitation)
+                            gains=scenario.lhs, period=1e-3, excitation=excitation)
     x = _state(np.array([0.3, 1.0]), np.array([0.1, -0.1]), model)
     t = 0.37
     q, qdot = x[3:5], x[8:]
@@ -214,7 +213,7 @@ def test_port_observer_on_a_known_trajectory():
     its size (the LHS's M, C' are up to one LHS period old); compared with the torque
     at the sample instant it is off by the half-sample delay (over 1 %)."""
     from pydrake.systems.framework import DiagramBuilder
-    from pydrake.systems.primitives import LogVectorOutput, Sine
+    from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, Sine
     from dacph_drake.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
     from dacph_drake.simulation import MakeSimulator
     scenario = Scenario()
@@ -229,7 +228,9 @@ def test_port_observer_on_a_known_trajectory():
         model=model,
         potential=BaseRepulsionPotential(scenario.nominal_robot, scenario.potential),
         reference=OrientationReference(scenario.reference, 1.3), gains=scenario.lhs,
-        period=scenario.periods.lhs, fixed_chi=0.05))
+        period=scenario.periods.lhs))
+    chi = builder.AddSystem(ConstantVectorSource([0.05]))
+    builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
     observer = builder.AddSystem(PortObserver(num_joints=2, sample_period=h,
                                               noise_std=0.0, seed=0))
     splitter = AddStateSplitter(builder, plant)

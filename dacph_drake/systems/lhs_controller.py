@@ -21,9 +21,8 @@ class LhsController(LeafSystem):
         tau_c^r = M nu_dot + C' nu - K_d s - chi tanh(s / epsilon)
 
     with nu_dot exact: it uses dD/dq from the reduced model and Hess U qdot from the
-    potential (no numerical differentiation). chi comes from input ``chi`` (the RHS
-    loop's bound on ||e_tau||) or is the fixed ``chi`` given here when that input is
-    not connected. Output ``tau_request`` is held between updates; output
+    potential (no numerical differentiation). chi comes from input ``chi``: the RHS
+    loop's bound on ||e_tau|| in DAC, a constant source in the baseline. Output ``tau_request`` is held between updates; output
     ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)];
     output ``reduced_model`` = [vec(M), vec(C')] at the same sample (row-major), for
     the port observer. The update is one compiled kernel (kernels.loop.lhs_sample);
@@ -32,11 +31,10 @@ class LhsController(LeafSystem):
 
     def __init__(self, *, model: ReducedOrderModel, potential: BaseRepulsionPotential,
                  reference: OrientationReference, gains: LhsGains, period: float,
-                 fixed_chi: float, excitation: Excitation = Excitation(amplitude=0.0)):
+                 excitation: Excitation = Excitation(amplitude=0.0)):
         super().__init__()
         n = model.num_joints
         self._n = n
-        self._fixed_chi = fixed_chi
         # The kernel's constant arguments (kernels.loop.lhs_sample).
         self._packed = pack_lhs(
             *model.trigonometric_representation, *potential.kernel_arguments,
@@ -73,8 +71,7 @@ class LhsController(LeafSystem):
 
     def _UpdateControl(self, context, discrete_state):
         n = self._n
-        chi = (self._chi.Eval(context)[0] if self._chi.HasValue(context)
-               else self._fixed_chi)
+        chi = self._chi.Eval(context)[0]
         sample = lhs_sample(context.get_time(), self._base_pose.Eval(context)[2],
                             self._q.Eval(context), self._qdot.Eval(context), chi,
                             self._packed)

@@ -5,7 +5,7 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.kernels.loop import integrator_sample
-from dacph_drake.log_layout import RhsLog
+from dacph_drake.log_layout import RhsLog, RhsState
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Stress
@@ -68,22 +68,24 @@ class RhsIntegrator(LeafSystem):
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._weights = self.DeclareVectorInputPort("weights", network.size)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
-        # Fast group: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]; u is a
-        # group of its own, so that its output port (read at every integrator stage
-        # by the true RHS) reads the state without a Python call.
-        fast = np.zeros(3 * n + 2)
-        fast[2 * n + 1] = settings.chi_initial
+        # The fast and model groups (log_layout.RhsState); u is a group of its own, so
+        # that its output port (read at every integrator stage by the true RHS)
+        # reads the state without a Python call.
+        self._layout = layout = RhsState(n)
+        fast = np.zeros(layout.fast_size)
+        fast[layout.chi] = settings.chi_initial
         self._fast = self.DeclareDiscreteState(fast)
         self._u_index = self.DeclareDiscreteState(n)
-        # Model group: [B_hat^-1 (n*n), D_hat (n), K (n), c, c_min, dic_ok, trusted].
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
+        model = np.zeros(layout.model_size)
+        model[layout.B_inverse] = np.eye(n).reshape(-1)
+        model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [c0, c0, 1.0, 1.0]
         self._gains = self.DeclareDiscreteState(self._Refresh(
-            np.concatenate([np.eye(n).reshape(-1), np.zeros(2 * n), [c0, c0, 1.0, 1.0]]),
-            initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
+            model, initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareStateOutputPort("u", self._u_index)
         self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetAtIndex(
-            0, c.get_discrete_state(self._fast).GetAtIndex(2 * n + 1)),
+            0, c.get_discrete_state(self._fast).GetAtIndex(layout.chi)),
             prerequisites_of_calc=fast_ticket)
         self.DeclareVectorOutputPort(
             "rhs_log", RhsLog(n).size, self._CalcLog,
@@ -92,25 +94,31 @@ class RhsIntegrator(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
 
+    def GetModelGroup(self, context) -> np.ndarray:
+        """The model group (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
+        dic_ok, trusted) in ``context``, for inspection."""
+        return context.get_discrete_state(self._gains).get_value().copy()
+
     def _Refresh(self, gains, weights, q, qdot, beta, B_hat_scale):
         """The model group after one refresh from ``gains`` (see class docstring)."""
-        n = self._n
+        L = self._layout
         gains = gains.copy()
         B_hat, D_hat = self._network.Evaluate(weights, q, self._model.Momentum(q, qdot))
         B_hat = B_hat_scale * B_hat
         c_min = self._c_bound(min(beta, self._settings.beta_max))
-        c = gains[-4]
+        c = gains[L.c]
         c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
         trusted = dic_ok and within_trust(paired, self._B0_eigenvalues,
                                           self._settings.trust_ratio)
         if trusted:
-            gains[:n * n] = np.linalg.inv(B_hat).reshape(-1)
-            gains[n * n:n * n + n] = D_hat
-            gains[n * n + n:n * n + 2 * n] = k
+            gains[L.B_inverse] = np.linalg.inv(B_hat).reshape(-1)
+            gains[L.D_hat] = D_hat
+            gains[L.K] = k
         else:     # keep B_hat^-1, D_hat; K follows c with the kept eigenvalues
-            gains[n * n + n:n * n + 2 * n] *= c / gains[-4]
-        gains[-4:] = [c, c_min, float(dic_ok), float(trusted)]
+            gains[L.K] *= c / gains[L.c]
+        gains[[L.c, L.c_min, L.dic_ok, L.trusted]] = [c, c_min, float(dic_ok),
+                                                      float(trusted)]
         return gains
 
     def _UpdateModel(self, context, discrete_state):
@@ -123,17 +131,17 @@ class RhsIntegrator(LeafSystem):
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
 
     def _UpdateIntegrator(self, context, discrete_state):
-        n = self._n
+        fast_size = self._layout.fast_size
         sample = integrator_sample(
             context.get_discrete_state(self._fast).get_value(),
             context.get_discrete_state(self._gains).get_value(),
             self._tau_request.Eval(context), self._tau_observed.Eval(context),
             self._qdot.Eval(context), self._constants)
-        discrete_state.get_mutable_vector(self._fast).SetFromVector(sample[:3 * n + 2])
-        discrete_state.get_mutable_vector(self._u_index).SetFromVector(sample[3 * n + 2:])
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(sample[:fast_size])
+        discrete_state.get_mutable_vector(self._u_index).SetFromVector(sample[fast_size:])
 
     def _CalcLog(self, context, output):
-        n = self._n
+        L = self._layout
         fast = context.get_discrete_state(self._fast).get_value()
         gains = context.get_discrete_state(self._gains).get_value()
-        output.SetFromVector(np.concatenate([fast[n:2 * n + 2], gains[n * n + n:]]))
+        output.SetFromVector(np.concatenate([fast[L.fast_logged], gains[L.model_logged]]))
