@@ -1,6 +1,7 @@
 """Each LeafSystem alone, with FixValue inputs, against its equation."""
 import numpy as np
 import pytest
+from pydrake.systems.analysis import Simulator
 
 from dacph_drake.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.potential import BaseRepulsionPotential
@@ -78,9 +79,10 @@ def test_model_based_inverter():
 
 
 def _observe(model, q, qdot, qddot, u=None, h=2.5e-4, cutoff=0.0):
-    """A PortObserver sampled twice: at rates qdot - h qddot / 2, then h later at
-    qdot + h qddot / 2 (so qdot is the interval's midpoint rate and qddot its
-    backward difference), with the reduced model [M, C'] at (q, qdot)."""
+    """A PortObserver initialized at rates qdot - h qddot / 2 and sampled once (at
+    t = 0, a one-period simulation) at qdot + h qddot / 2, so that qdot is the
+    interval's midpoint rate and qddot its backward difference; the reduced model
+    [M, C'] at (q, qdot)."""
     observer = PortObserver(num_joints=2, sample_period=h,
                             noise_std=0.0, seed=0, anti_alias_cutoff=cutoff)
     context = observer.CreateDefaultContext()
@@ -89,12 +91,11 @@ def _observe(model, q, qdot, qddot, u=None, h=2.5e-4, cutoff=0.0):
         context, np.concatenate([r.M.reshape(-1), r.C.reshape(-1)]))
     if u is not None:
         observer.GetInputPort("u").FixValue(context, u)
-    state = context.get_mutable_discrete_state()
-    for k, event in enumerate((observer._InitializeRates, observer._UpdateSample)):
-        rates = qdot + (k - 0.5) * h * qddot
-        FixStateInputs(observer, context, _state(q, rates, model))
-        event(context, state)
-        context.SetDiscreteState(state)
+    simulator = Simulator(observer, context)
+    FixStateInputs(observer, context, _state(q, qdot - 0.5 * h * qddot, model))
+    simulator.Initialize()                         # the initialization event
+    FixStateInputs(observer, context, _state(q, qdot + 0.5 * h * qddot, model))
+    simulator.AdvanceTo(0.5 * h)                   # the sample at t = 0
     return observer, context, r
 
 
@@ -171,11 +172,10 @@ def test_regression_filter_is_the_band_pass_cascade():
     rng = np.random.default_rng(3)
     samples = rng.standard_normal((50, 10))
     outputs = []
-    state = context.get_mutable_discrete_state()
-    for sample in samples:
+    simulator = Simulator(system, context)
+    for k, sample in enumerate(samples):          # one filter update (t = k h) a step
         system.GetInputPort("port_sample").FixValue(context, sample)
-        system._UpdateFilter(context, state)
-        context.SetDiscreteState(state)
+        simulator.AdvanceTo((k + 0.5) * h)
         outputs.append(system.GetOutputPort("filtered_sample").Eval(context).copy())
     outputs = np.array(outputs)
     expected = BandPassCascade(*settings.band, *settings.band_sections, h).Filter(
