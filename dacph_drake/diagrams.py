@@ -203,7 +203,7 @@ def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
 
 
 def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
-    """The baseline (SPEC section 7): the same LHS controller with chi from a
+    """The baseline (docs/equations.md, SPEC settings): the same LHS controller with chi from a
     constant source (lhs.chi_model_based) and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
     no integrator, no learning."""
     builder = DiagramBuilder()

@@ -1,4 +1,4 @@
-"""The paper's figures (SPEC section 10) as six panels, from the logs of a DAC run
+"""The paper's figures as six panels, from the logs of a DAC run
 and a model-based run of the same scenario:
 
 (a) uncertainty (= the nominal prior's error), learned estimation error and RHS

@@ -1,4 +1,4 @@
-"""The RHS gain rule (paper eqs. 46-48, SPEC sections 5 and 8) and its discrete-time
+"""The RHS gain rule (paper eqs. 45-48, docs/equations.md E45-E48) and its discrete-time
 realizability check."""
 import numpy as np
 

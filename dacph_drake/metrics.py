@@ -1,4 +1,5 @@
-"""Metrics of SPEC section 9, computed from a run's logs."""
+"""The metrics of a run (the paper's reported quantities and this project's, README
+"Reproducing the paper"), computed from its logs."""
 from typing import Dict
 
 import numpy as np
@@ -28,7 +29,7 @@ PHASES = ("phase1", "phase2", "phase3")
 
 
 def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
-    """Masks of the three uncertainty phases (SPEC section 7): linear, plus nonlinear,
+    """Masks of the three uncertainty phases (docs/equations.md, SPEC settings): linear, plus nonlinear,
     plus disturbance (the last from phases.disturbance_start to the end)."""
     p = scenario.phases
     edges = [p.linear_start, p.nonlinear_start, p.disturbance_start, np.inf]
@@ -43,7 +44,7 @@ def nominal_estimates(scenario: Scenario) -> np.ndarray:
 
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray) -> Dict[str, float]:
-    """Learning's own value over the samples ``mask`` (SPEC section 9): the time-RMS
+    """Learning's own value over the samples ``mask``: the time-RMS
     relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and of the nominal
     prior (B0, D0), their ratio (below 1: learning beats the prior), the share of
     samples whose B_hat the RHS integrator rejected (DIC or trust band), and the

@@ -1,4 +1,4 @@
-"""The physics-informed RHS network (SPEC section 6, paper eqs. for h_B, h_D):
+"""The physics-informed RHS network (docs/equations.md E34-E35):
 
     h_B = MLP_B(X(x)), h_D = MLP_D(X(x)),  X(x) = (q, p / p_scale)
     B_hat(x) = mat(W_B h_B + b_B)                 (n x n)

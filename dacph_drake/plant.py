@@ -1,4 +1,4 @@
-"""The ground-truth free-floating arm as a Drake MultibodyPlant (SPEC section 1).
+"""The ground-truth free-floating arm as a Drake MultibodyPlant (docs/equations.md E6-E11).
 
 Bodies: ``base`` on a PlanarJoint ``base_joint`` (x, y, theta0) w.r.t. the world;
 ``link1`` ... ``linkn`` on RevoluteJoints ``q1`` ... ``qn`` about +z, each driven by an

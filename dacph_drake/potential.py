@@ -1,4 +1,4 @@
-"""Null-space artificial potential field U(q) (Khatib 1985, SPEC section 4).
+"""Null-space artificial potential field U(q) (Khatib 1985, docs/equations.md E24).
 
 U(q) = sum_points f(rho_j(q); k_b, rho_b) + sum_{k>=2} f(pi - |q_k|; k_f, rho_f),
 f(rho; k, rho0) = k / 2 (1 / rho - 1 / rho0)^2 for rho < rho0, else 0 (FIRAS),

@@ -1,5 +1,5 @@
-"""Reduced-order port-Hamiltonian model of a free-floating arm (SPEC section 2, the
-paper's section "Modeling").
+"""Reduced-order port-Hamiltonian model of a free-floating arm (the paper's section
+"Modeling", docs/equations.md E7-E20).
 
 With the base unactuated and the system at zero momentum, the momentum rows of the
 full dynamics give the base velocity from the joint rates,

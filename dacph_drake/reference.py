@@ -1,4 +1,4 @@
-"""Desired end-effector orientation alpha_d(t) (SPEC section 4; not given in the paper):
+"""Desired end-effector orientation alpha_d(t) (not given in the paper; a SPEC setting, docs/equations.md):
 alpha_d(t) = alpha(0) + sum_i a_i sin(2 pi t / T_i), smooth and persistently exciting."""
 import numpy as np
 

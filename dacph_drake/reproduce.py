@@ -1,7 +1,7 @@
 """Reproducing the paper: DAC, its learning ablation (dac-nominal) and the
-model-based baseline on one scenario, the six panels of SPEC section 10, the metrics
+model-based baseline on one scenario, the six panels of the paper's figures, the metrics
 table with the paper's values beside this project's, and the ablation table of
-learning per phase (SPEC section 9)."""
+learning per phase."""
 import json
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
@@ -33,7 +33,7 @@ class TableRow:
 
 
 # The paper's numbers (section "Simulations and Validations") and the metrics of
-# SPEC section 9 it does not report.
+# this project adds.
 PAPER_ROWS = (
     TableRow("tracking_error_reduction", "tracking-error reduction 1 - e_DAC/e_MB", "%",
              0.775, ">= 77.5 %"),

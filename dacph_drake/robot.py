@@ -1,7 +1,7 @@
 """Description of a planar free-floating arm: a base on a free planar joint and a
 serial chain of n revolute links, all moving in the x-y plane, zero gravity.
 
-The paper's robot (SPEC section 1) is the default: base (m, a, I) = (2 kg, 0.245 m
+The paper's robot (docs/equations.md, SPEC settings) is the default: base (m, a, I) = (2 kg, 0.245 m
 square, 0.02 kg m^2) with the shoulder 0.1225 m from its centre on the base x
 axis; two uniform links (1 kg, 0.3464 m, 0.01 kg m^2), centre of mass mid-link.
 
@@ -57,7 +57,7 @@ class RobotParams:
     def Validate(self, name: str = "robot") -> None:
         """Raises ConfigError naming the first invalid field and its allowed range.
 
-        Inertia bounds (mass confined to the body's outline, SPEC section 1):
+        Inertia bounds (mass confined to the body's outline):
           link:  0 < I <= m (c (l - c) + w^2 / 4)   ("rod bound": the along-link part
                  m c (l - c) is the largest inertia of mass on [0, l] with centre c, the
                  across part m w^2 / 4 the largest over the width);

@@ -1,6 +1,6 @@
 """Scenario: every setting of a closed-loop run, loaded from YAML with
-``pydrake.common.yaml.yaml_load_typed`` (SPEC sections 4-8 give the defaults, which
-are the paper's scenario, 1500 s)."""
+``pydrake.common.yaml.yaml_load_typed`` (the defaults are the paper's scenario, 1500 s,
+with the SPEC settings listed in docs/equations.md)."""
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List
@@ -41,7 +41,7 @@ class Phases:
 
 @dataclass
 class LhsGains:
-    """Sliding-mode LHS controller (SPEC section 4): K_d = Kd I, Lambda, epsilon of
+    """Sliding-mode LHS controller (docs/equations.md E23-E25): K_d = Kd I, Lambda, epsilon of
     chi tanh(s / epsilon), eta of xi = -eta grad U. A run must start where the task
     Jacobian's singular value ||D(q0)|| is at least min_task_singular_value (the
     paper's arm has 0.61 to 1.21 over all q)."""
@@ -75,7 +75,7 @@ class Reference:
 
 @dataclass
 class Rhs:
-    """RHS integrator (SPEC section 5): k_p = c / Re(lambda_hat_p), c filtered towards
+    """RHS integrator (docs/equations.md E48): k_p = c / Re(lambda_hat_p), c filtered towards
     (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
     with exponential forgetting over chi_window, never below chi_floor. A learned B_hat
 is used only if it passes the DIC check and lies within trust_ratio of B0 (the
@@ -97,7 +97,7 @@ that this allows, so the discrete loop never runs past the bound it was built fo
 
 @dataclass
 class Periods:
-    """Discrete update periods [s] (SPEC section 8): rhs < lhs < learner.
+    """Discrete update periods [s] (docs/equations.md, SPEC settings): rhs < lhs < learner.
 
     rhs: the integrator and the observer's sampling; lhs: the sliding-mode
     controller and the observer's M, C' refresh; learner_sample: the learner's data
@@ -113,7 +113,7 @@ class Periods:
 
 @dataclass
 class Uncertainty:
-    """Ground-truth RHS (SPEC section 7): B~ = B0 + Delta B, D~ = D0 + Delta D with
+    """Ground-truth RHS (docs/equations.md E19, SPEC settings): B~ = B0 + Delta B, D~ = D0 + Delta D with
     Delta D(p) = diag(D_offset + D_linear * p)            [linear phase on]
                + diag(D_quadratic * p * p)                [nonlinear phase on]
     Delta B(x) = diag(B_linear @ q)                       [linear phase on]
@@ -153,7 +153,7 @@ LEARNER_MODES = ("regularized", "plain")
 
 @dataclass
 class Learner:
-    """Physics-informed network (SPEC section 6), trained online with Adam.
+    """Physics-informed network (docs/equations.md E34-E35), trained online with Adam.
 
     ``mode`` "plain" is the paper's learner: the raw port samples (x, u, qdot,
     tau_obs) of the last ``window`` sampling instants, the loss
@@ -403,7 +403,7 @@ def load_scenario(path) -> Scenario:
 
 
 def paper_scenario() -> Scenario:
-    """The paper's scenario (SPEC section 7, 1500 s): the defaults;
+    """The paper's scenario (1500 s): the defaults;
     diagrams/paper.yaml is its file."""
     return Scenario()
 

@@ -1,4 +1,4 @@
-"""The ground truth's RHS matrices B~(x) and D~(x) (SPEC section 7) by phase."""
+"""The ground truth's RHS matrices B~(x) and D~(x) by phase (docs/equations.md E19, SPEC settings)."""
 import numpy as np
 
 from dacph_drake.scenario import Phases, Uncertainty

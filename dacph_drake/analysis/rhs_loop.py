@@ -1,5 +1,5 @@
 """The discrete RHS loop as a Drake LinearSystem, and its stability certificate
-(paper eqs. 46-48, SPEC sections 5 and 8).
+(paper eqs. 45-48, docs/equations.md E37-E38, E45-E48).
 
 Perturbation model of the loop the DAC diagram closes every RHS period h: the
 integrator u_I(k+1) = u_I(k) + h K e(k) acts on e(k) = tau_c^r - tau_obs(k), and the

@@ -1,4 +1,4 @@
-"""External disturbance source d(t) (SPEC section 7; the paper leaves d(t) open)."""
+"""External disturbance source d(t) (the paper leaves d(t) open; a SPEC setting, docs/equations.md)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

@@ -1,4 +1,4 @@
-"""Online learner of the RHS (paper's physics-informed network, SPEC section 6)."""
+"""Online learner of the RHS (paper's physics-informed network, docs/equations.md E33-E35)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

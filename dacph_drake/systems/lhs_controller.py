@@ -1,5 +1,5 @@
 """LHS model-based controller: Slotine-Li sliding mode with a null-space potential
-field (paper section "LHS Model-Based Control", SPEC section 4)."""
+field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

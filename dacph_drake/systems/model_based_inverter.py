@@ -1,4 +1,4 @@
-"""The model-based baseline's RHS (SPEC section 7): static inversion of the nominal RHS."""
+"""The model-based baseline's RHS (docs/equations.md, SPEC settings): static inversion of the nominal RHS."""
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain, Multiplexer

@@ -1,4 +1,4 @@
-"""Port observer (paper eq. for tau_breve, SPEC section 5)."""
+"""Port observer (docs/equations.md E32)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

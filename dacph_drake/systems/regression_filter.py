@@ -1,4 +1,4 @@
-"""Band-pass prefilter of the learner's port samples (Learner.band, SPEC section 6)."""
+"""Band-pass prefilter of the learner's port samples (Learner.band; a project extension, docs/equations.md E33)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

@@ -1,5 +1,5 @@
 """RHS controller: decentralized integral control around the learned inverse
-feed-forward (paper section "RHS Control and Learning", SPEC section 5)."""
+feed-forward (paper section "RHS Control and Learning", docs/equations.md E36-E38, E48)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 

@@ -1,4 +1,4 @@
-"""The ground truth's actuator: the RHS of the port (paper eq. "RHS", SPEC section 7)."""
+"""The ground truth's actuator: the RHS of the port (docs/equations.md E19)."""
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
