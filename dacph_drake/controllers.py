@@ -1,13 +1,16 @@
 """The controllers every command knows, registered once.
 
-A controller is a function ``build(scenario) -> diagrams.ClosedLoop`` that closes
-the ground truth (plant, true RHS, disturbance) with its own systems. REGISTRY maps
+A controller is a Diagram with a fixed port contract (inputs: named plant signals
+such as ``q``, ``qdot``, ``base_pose``; outputs: ``u`` and the logs it offers), and
+its entry here is a function ``build(scenario) -> diagrams.ClosedLoop`` that calls
+``diagrams.assemble_closed_loop(scenario, name, add)``, where ``add(scenario, loop,
+controller)`` adds the controller's systems to ``controller.builder`` and returns them
+by name (see diagrams.build_model_based_diagram, the shortest). REGISTRY maps
 its name to that function, as "module:function" so that the command line can list
 the names without loading Drake; `dacph simulate --controller`, `dacph diagram`,
 `dacph animate`, `dacph reproduce` (which runs every registered controller), the
 sweep's `controllers:` and `run.simulate` all take their names from here. To add a
-controller, write its builder (see diagrams.build_model_based_diagram) and add one
-entry below."""
+controller, write that function and add one entry below."""
 import importlib
 from dataclasses import dataclass
 

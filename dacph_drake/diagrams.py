@@ -78,49 +78,95 @@ def _RequireRunnableStart(scenario: Scenario, model: ReducedOrderModel) -> None:
             f"lhs.min_task_singular_value = {scenario.lhs.min_task_singular_value:g}")
 
 
-def _BuildCommon(scenario: Scenario, builder: DiagramBuilder, excitation: Excitation):
-    """Plant, true RHS, disturbance and LHS controller; loggers shared by all loops."""
+# A controller is a Diagram with a fixed port contract: its inputs are named plant
+# signals (plant.STATE_SIGNALS, from the state splitter), its outputs are ``u`` (the
+# input of the true RHS) and the logs it offers; assemble_closed_loop logs every
+# output. A controller's entry in controllers.REGISTRY is a function
+# build(scenario) -> ClosedLoop that calls assemble_closed_loop with a function adding
+# the controller's systems to a ControllerBuilder.
+
+
+class ControllerBuilder:
+    """A DiagramBuilder for a controller: Input(port, signal) exports ``port`` as the
+    controller's input ``signal`` (several internal ports may read one signal)."""
+
+    def __init__(self):
+        self.builder = DiagramBuilder()
+        self._inputs = set()
+
+    def Input(self, port, signal: str) -> None:
+        if signal in self._inputs:
+            self.builder.ConnectInput(signal, port)
+        else:
+            self.builder.ExportInput(port, signal)
+            self._inputs.add(signal)
+
+
+def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> ClosedLoop:
+    """The ground truth (plant, state splitter, true RHS, disturbance) closed by the
+    controller that ``add_controller(scenario, loop, controller_builder)`` builds into
+    its ControllerBuilder (returning its named systems); every signal of the
+    ground truth and every output of the controller is logged at periods.log."""
     scenario.Validate()
     model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
     _RequireRunnableStart(scenario, model)
+    builder = DiagramBuilder()
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
     lambda_min, lambda_max = mass_matrix_bounds(model)
-    c_min = c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0)
-    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
-    alpha0 = float(np.sum(scenario.q0))               # base at theta0 = 0
-    reference = OrientationReference(scenario.reference, alpha0)
-
     truth = builder.AddNamedSystem("true_rhs", TrueRhs(scenario))
     disturbance = builder.AddNamedSystem(
         "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
-    lhs = builder.AddNamedSystem("lhs_controller", LhsController(
-        model=model, potential=potential, reference=reference, gains=scenario.lhs,
-        period=scenario.periods.lhs, excitation=excitation))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
     builder.Connect(disturbance.GetOutputPort("disturbance_model"),
                     truth.GetInputPort("disturbance_model"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
-    for signal in ("base_pose", "q", "qdot"):
-        builder.Connect(splitter.GetOutputPort(signal), lhs.GetInputPort(signal))
-
-    loop = ClosedLoop(diagram=None, scenario=scenario, plant=plant, scene_graph=scene_graph, model=model,
-                      potential=potential, lambda_min_M=lambda_min,
-                      lambda_max_M=lambda_max, c_min_nominal=c_min,
-                      systems={"state_splitter": splitter, "true_rhs": truth,
-                               "disturbance": disturbance,
-                               "lhs_controller": lhs})
-    period = scenario.periods.log
-    for name, port in [("state", plant.get_state_output_port()),
-                       ("tau", truth.GetOutputPort("tau")),
-                       ("true_matrices", truth.GetOutputPort("true_matrices")),
-                       ("disturbance", disturbance.GetOutputPort("disturbance")),
-                       ("tau_request", lhs.GetOutputPort("tau_request")),
-                       ("lhs_log", lhs.GetOutputPort("lhs_log"))]:
-        loop.loggers[name] = LogVectorOutput(port, builder, period)
-        loop.loggers[name].set_name(f"log_{name}")
+    loop = ClosedLoop(
+        diagram=None, scenario=scenario, plant=plant, scene_graph=scene_graph,
+        model=model, potential=BaseRepulsionPotential(scenario.nominal_robot,
+                                                      scenario.potential),
+        lambda_min_M=lambda_min, lambda_max_M=lambda_max,
+        c_min_nominal=c_lower_bound(scenario.rhs.Td, scenario.lhs.Kd, lambda_min, 1.0),
+        systems={"state_splitter": splitter, "true_rhs": truth,
+                 "disturbance": disturbance})
+    controller_builder = ControllerBuilder()
+    loop.systems.update(add_controller(scenario, loop, controller_builder))
+    controller = controller_builder.builder.Build()
+    controller.set_name(f"{name}_controller")
+    builder.AddSystem(controller)
+    for i in range(controller.num_input_ports()):
+        port = controller.get_input_port(i)
+        builder.Connect(splitter.GetOutputPort(port.get_name()), port)
+    builder.Connect(controller.GetOutputPort("u"), truth.GetInputPort("u"))
+    logged = [("state", plant.get_state_output_port()), ("tau", truth.GetOutputPort("tau")),
+              ("true_matrices", truth.GetOutputPort("true_matrices")),
+              ("disturbance", disturbance.GetOutputPort("disturbance"))]
+    logged += [(controller.get_output_port(i).get_name(), controller.get_output_port(i))
+               for i in range(controller.num_output_ports())]
+    for signal, port in logged:
+        loop.loggers[signal] = LogVectorOutput(port, builder, scenario.periods.log)
+        loop.loggers[signal].set_name(f"log_{signal}")
+    loop.diagram = builder.Build()
+    loop.diagram.set_name(f"{name}_closed_loop")
     return loop
+
+
+def _AddLhsController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
+                      excitation: Excitation) -> LhsController:
+    """The LHS controller both controllers share, its state inputs exported and its
+    request and log as the controller's outputs ``tau_request`` and ``lhs_log``."""
+    builder = controller.builder
+    lhs = builder.AddNamedSystem("lhs_controller", LhsController(
+        model=loop.model, potential=loop.potential,
+        reference=OrientationReference(scenario.reference,
+                                       float(np.sum(scenario.q0))),   # theta0(0) = 0
+        gains=scenario.lhs, period=scenario.periods.lhs, excitation=excitation))
+    for signal in ("base_pose", "q", "qdot"):
+        controller.Input(lhs.GetInputPort(signal), signal)
+    for output in ("tau_request", "lhs_log"):
+        builder.ExportOutput(lhs.GetOutputPort(output), output)
+    return lhs
 
 
 def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
@@ -130,16 +176,21 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     RegressionFilter). With ``learning`` False the learner keeps its initial
     weights, so the integrator runs on the nominal RHS (B0, D0): the dac-nominal
     ablation, otherwise the same diagram."""
-    builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, excitation=scenario.excitation)
+    return assemble_closed_loop(scenario, "dac" if learning else "dac_nominal",
+                     lambda scenario, loop, controller: _AddDacController(
+                         scenario, loop, controller, learning))
+
+
+def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
+                      learning: bool):
     rhs_settings = scenario.rhs
     check_rhs_period(scenario.periods, (1 + rhs_settings.c_margin) * loop.c_min_nominal,
                      (1 + rhs_settings.c_margin) * c_lower_bound(
                          rhs_settings.Td, scenario.lhs.Kd, loop.lambda_min_M,
                          rhs_settings.beta_max),
                      rhs_settings.beta_max)
-    lhs, splitter = loop.systems["lhs_controller"], loop.systems["state_splitter"]
-    truth = loop.systems["true_rhs"]
+    builder = controller.builder
+    lhs = _AddLhsController(scenario, loop, controller, scenario.excitation)
     periods, settings = scenario.periods, scenario.learner
     regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
@@ -159,9 +210,9 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
         period=periods.rhs, model_period=periods.learner_sample,
         initial_weights=learner.initial_weights, stress=scenario.stress))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
-    # RHS integrator -> true RHS -> plant; the LHS's request and model feed in.
+    # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):
-        builder.Connect(splitter.GetOutputPort(signal), observer.GetInputPort(signal))
+        controller.Input(observer.GetInputPort(signal), signal)
     builder.Connect(lhs.GetOutputPort("reduced_model"),
                     observer.GetInputPort("reduced_model"))
     builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
@@ -169,30 +220,28 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     if prefilter is not None:
         builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
         port_sample = prefilter.GetOutputPort("filtered_sample")
-        loop.systems["regression_filter"] = prefilter
     builder.Connect(port_sample, learner.GetInputPort("port_sample"))
     for signal in ("q", "qdot"):
-        builder.Connect(splitter.GetOutputPort(signal), learner.GetInputPort(signal))
+        controller.Input(learner.GetInputPort(signal), signal)
     builder.Connect(observer.GetOutputPort("tau_observed"),
                     rhs.GetInputPort("tau_observed"))
     builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
     builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
     builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
     for signal in ("q", "qdot"):
-        builder.Connect(splitter.GetOutputPort(signal), rhs.GetInputPort(signal))
-    builder.Connect(rhs.GetOutputPort("u"), truth.GetInputPort("u"))
+        controller.Input(rhs.GetInputPort(signal), signal)
+    builder.ExportOutput(rhs.GetOutputPort("u"), "u")
     builder.Connect(rhs.GetOutputPort("chi"), lhs.GetInputPort("chi"))
-    loop.systems.update(port_observer=observer, learner=learner, rhs_integrator=rhs)
-    for name, port in [("u", rhs.GetOutputPort("u")),
-                       ("tau_observed", observer.GetOutputPort("tau_observed")),
+    for name, port in [("tau_observed", observer.GetOutputPort("tau_observed")),
                        ("rhs_log", rhs.GetOutputPort("rhs_log")),
                        ("learner_log", learner.GetOutputPort("learner_log")),
                        ("estimates", learner.GetOutputPort("estimates"))]:
-        loop.loggers[name] = LogVectorOutput(port, builder, periods.log)
-        loop.loggers[name].set_name(f"log_{name}")
-    loop.diagram = builder.Build()
-    loop.diagram.set_name("dac_closed_loop" if learning else "dac_nominal_closed_loop")
-    return loop
+        builder.ExportOutput(port, name)
+    systems = {"lhs_controller": lhs, "port_observer": observer, "learner": learner,
+               "rhs_integrator": rhs}
+    if prefilter is not None:
+        systems["regression_filter"] = prefilter
+    return systems
 
 
 def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
@@ -203,25 +252,22 @@ def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
 
 
 def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
-    """The baseline (docs/equations.md, SPEC settings): the same LHS controller with chi from a
-    constant source (lhs.chi_model_based) and the static inversion u = B0^-1 (tau_c^r + D0 qdot);
-    no integrator, no learning."""
-    builder = DiagramBuilder()
-    loop = _BuildCommon(scenario, builder, excitation=Excitation(amplitude=0.0))
-    lhs = loop.systems["lhs_controller"]
+    """The baseline (docs/equations.md, SPEC settings): the same LHS controller with
+    chi from a constant source (lhs.chi_model_based) and the static inversion
+    u = B0^-1 (tau_c^r + D0 qdot); no integrator, no learning."""
+    return assemble_closed_loop(scenario, "model_based", _AddModelBasedController)
+
+
+def _AddModelBasedController(scenario: Scenario, loop: ClosedLoop,
+                             controller: ControllerBuilder):
+    builder = controller.builder
+    lhs = _AddLhsController(scenario, loop, controller, Excitation(amplitude=0.0))
     chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
         [scenario.lhs.chi_model_based]))
     builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
     inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(scenario))
     builder.Connect(lhs.GetOutputPort("tau_request"), inverter.GetInputPort("tau_request"))
-    builder.Connect(loop.systems["state_splitter"].GetOutputPort("qdot"),
-                    inverter.GetInputPort("qdot"))
-    builder.Connect(inverter.GetOutputPort("u"), loop.systems["true_rhs"].GetInputPort("u"))
-    loop.systems["model_based_inverter"] = inverter
-    loop.loggers["u"] = LogVectorOutput(inverter.GetOutputPort("u"), builder,
-                                        scenario.periods.log)
-    loop.loggers["u"].set_name("log_u")
-    loop.diagram = builder.Build()
-    loop.diagram.set_name("model_based_closed_loop")
-    return loop
+    controller.Input(inverter.GetInputPort("qdot"), "qdot")
+    builder.ExportOutput(inverter.GetOutputPort("u"), "u")
+    return {"lhs_controller": lhs, "model_based_inverter": inverter}
 

@@ -4,11 +4,12 @@ import shutil
 import subprocess
 from pathlib import Path
 
-_ID = re.compile(r"(digraph _|cluster|\bs)(\d+)")
+_ID = re.compile(r"(digraph _|clusters|cluster|\bs)(\d+)")
 
 
-def diagram_graphviz(diagram, max_depth: int = 1) -> str:
-    """Drake's Graphviz source of ``diagram`` with its process-specific system ids
+def diagram_graphviz(diagram, max_depth: int = 2) -> str:
+    """Drake's Graphviz source of ``diagram`` (two levels deep: the controller
+    sub-diagram shows its systems) with its process-specific system ids
     renumbered in order of appearance and its edges sorted (Drake lists them in no
     fixed order), so equal diagrams give equal text."""
     ids = {}
@@ -18,9 +19,16 @@ def diagram_graphviz(diagram, max_depth: int = 1) -> str:
         return match.group(1) + ids[match.group(2)]
 
     lines = _ID.sub(renumber, diagram.GetGraphvizString(max_depth=max_depth)).split("\n")
-    edge_rows = [i for i, line in enumerate(lines) if " -> " in line]
-    for i, line in zip(edge_rows, sorted(lines[i] for i in edge_rows)):
-        lines[i] = line
+    # Sort each run of consecutive edge lines in place: an edge stays in the
+    # (sub)graph block that declares it, which decides the cluster of its nodes.
+    run = []
+    for i in range(len(lines) + 1):
+        if i < len(lines) and " -> " in lines[i]:
+            run.append(i)
+            continue
+        for row, line in zip(run, sorted(lines[r] for r in run)):
+            lines[row] = line
+        run = []
     return "\n".join(lines)
 
 
