@@ -207,8 +207,8 @@ def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: Controll
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         model=loop.model, network=learner.exported, settings=scenario.rhs,
         Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, B0=scenario.uncertainty.B0,
-        period=periods.rhs, model_period=periods.learner_sample,
-        initial_weights=learner.initial_weights, stress=scenario.stress))
+        D0=scenario.uncertainty.D0, period=periods.rhs,
+        model_period=periods.learner_sample, stress=scenario.stress))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):

@@ -39,10 +39,8 @@ def _Integrator(B_hat_scale):
     weights = RhsNetwork(2, [16, 8], B_hat_scale * np.eye(2), [0.1, 0.1], 0.01,
                          0).export()
     rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
-                        lambda_min_M=0.005093, B0=[1.0, 1.0], period=2.5e-4,
-                        model_period=1e-2,
-                        initial_weights=RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1],
-                                                   0.01, 0).export())
+                        lambda_min_M=0.005093, B0=[1.0, 1.0], D0=[0.1, 0.1],
+                        period=2.5e-4, model_period=1e-2)
     context = rhs.CreateDefaultContext()
     FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)
@@ -81,8 +79,8 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     h = scenario.periods.rhs
     lambda_min = 0.005093
     rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
-                        lambda_min_M=lambda_min, B0=[1.0, 1.0], period=h,
-                        model_period=1e-2, initial_weights=weights)
+                        lambda_min_M=lambda_min, B0=[1.0, 1.0], D0=[0.1, 0.1], period=h,
+                        model_period=1e-2)
     context = rhs.CreateDefaultContext()
     FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)

@@ -47,7 +47,7 @@ class RhsLearner(LeafSystem):
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
         self.exported = ExportedNetwork(n, settings.hidden, settings.momentum_scale)
-        self.initial_weights = self._identifier.Export()
+        initial_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
         self._q = self.DeclareVectorInputPort("q", n)
@@ -56,7 +56,7 @@ class RhsLearner(LeafSystem):
         self._buffer = self.DeclareDiscreteState(settings.window * width)
         self._count = self.DeclareDiscreteState(1)
         self._detector_state = self.DeclareDiscreteState(ChangeDetector.InitialState())
-        self._weights = self.DeclareDiscreteState(self.initial_weights)
+        self._weights = self.DeclareDiscreteState(initial_weights)
         log = LearnerLog()
         initial_log = np.zeros(log.size)
         initial_log[[log.loss, log.nominal_loss]] = np.nan

@@ -48,8 +48,8 @@ class RhsIntegrator(LeafSystem):
 
     def __init__(self, *, model: ReducedOrderModel, network: ExportedNetwork,
                  settings: Rhs, Kd_max: float, lambda_min_M: float,
-                 B0: np.ndarray, period: float, model_period: float,
-                 initial_weights: np.ndarray, stress: Stress = Stress()):
+                 B0: np.ndarray, D0: np.ndarray, period: float, model_period: float,
+                 stress: Stress = Stress()):
         super().__init__()
         n = model.num_joints
         self._n = n
@@ -76,12 +76,17 @@ class RhsIntegrator(LeafSystem):
         fast[layout.chi] = settings.chi_initial
         self._fast = self.DeclareDiscreteState(fast)
         self._u_index = self.DeclareDiscreteState(n)
+        # The model group starts at the nominal RHS (B0, D0) with c = (1 + c_margin)
+        # c_min(beta_hat = 1); an initialization event then refreshes it from the
+        # input ports (the learner's weights at the initial state).
         c0 = (1 + settings.c_margin) * self._c_bound(1.0)
         model = np.zeros(layout.model_size)
-        model[layout.B_inverse] = np.eye(n).reshape(-1)
-        model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [c0, c0, 1.0, 1.0]
-        self._gains = self.DeclareDiscreteState(self._Refresh(
-            model, initial_weights, np.zeros(n), np.zeros(n), beta=1.0, B_hat_scale=1.0))
+        model[layout.B_inverse] = np.diag(1.0 / self._B0_eigenvalues).reshape(-1)
+        model[layout.D_hat] = D0
+        model[layout.K] = integral_gains(np.diag(self._B0_eigenvalues), c0)[0]
+        model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [
+            c0, self._c_bound(1.0), 1.0, 1.0]
+        self._gains = self.DeclareDiscreteState(model)
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         self.DeclareStateOutputPort("u", self._u_index)
         self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetAtIndex(
@@ -93,6 +98,7 @@ class RhsIntegrator(LeafSystem):
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
+        self.DeclareInitializationDiscreteUpdateEvent(self._UpdateModel)
 
     def GetModelGroup(self, context) -> np.ndarray:
         """The model group (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
