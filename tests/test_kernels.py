@@ -82,8 +82,7 @@ def test_true_torque_kernel_matches_the_reference_by_phase():
     reference = TrueRhsModel(scenario.uncertainty, scenario.phases)
     source = DisturbanceSource(scenario.disturbance, scenario.disturbance_start)
     model_vector = source.GetOutputPort("disturbance_model").Eval(source.CreateDefaultContext())
-    packed = pack_true_rhs(*model.trigonometric_representation, model_vector,
-                           reference.kernel_arguments)
+    packed = pack_true_rhs(*model.trigonometric_representation, reference.kernel_arguments)
     rng = np.random.default_rng(4)
     for t in (1.0, 100.0, 600.0, 1200.0, 1234.5):
         q, qdot = rng.uniform(-2, 2, 2), rng.normal(size=2)
@@ -93,7 +92,7 @@ def test_true_torque_kernel_matches_the_reference_by_phase():
         B, D = reference.Matrices(t, q, model.Momentum(q, qdot))
         expected = B @ u - D * qdot + source.Evaluate(t)
         indices = ArmCoordinates.FromPlant(model.plant).StateIndices()
-        np.testing.assert_allclose(true_torque(t, x, indices, u, packed),
+        np.testing.assert_allclose(true_torque(t, x, indices, u, model_vector, packed),
                                    expected, rtol=0, atol=1e-14)
 
 

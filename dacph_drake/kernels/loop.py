@@ -47,22 +47,22 @@ def true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
     return B, D
 
 
-def pack_true_rhs(coefficients, ranges, disturbance_model, uncertainty) -> np.ndarray:
-    """The constant arguments of true_torque as one array (numba's dispatch cost
-    grows with the number of array arguments: 16 of them cost 3 us a call, more
-    than the kernel): [vec(coefficients), vec(ranges), disturbance_model,
+def pack_true_rhs(coefficients, ranges, uncertainty) -> np.ndarray:
+    """The robot's and the uncertainty's constant arguments of true_torque as one
+    array (numba's dispatch cost grows with the number of array arguments: 16 of
+    them cost 3 us a call, more than the kernel): [vec(coefficients), vec(ranges),
     B0, D0, D_offset, D_linear, vec(B_linear), D_quadratic, B_quadratic,
     vec(B_q1_squared), linear_start, nonlinear_start]."""
-    return np.concatenate([np.ravel(a) for a in
-                           (coefficients, ranges, disturbance_model, *uncertainty)]
+    return np.concatenate([np.ravel(a) for a in (coefficients, ranges, *uncertainty)]
                           ).astype(float)
 
 
 @njit(cache=True)
-def true_torque(t, x, indices, u, packed):
+def true_torque(t, x, indices, u, disturbance_model, packed):
     """tau = B~(x) u - D~(x) qdot + d(t) at time t and plant state x (TrueRhs), with
     x[indices] = [theta0, base velocity (3), q (n), qdot (n)]
-    (plant.ArmCoordinates.StateIndices) and ``packed`` = pack_true_rhs(...)."""
+    (plant.ArmCoordinates.StateIndices), d(t) from ``disturbance_model``
+    (disturbance) and ``packed`` = pack_true_rhs(...)."""
     n = u.shape[0]
     arm = x[indices]
     theta0, base_velocity, q, qdot = arm[0], arm[1:4], arm[4:4 + n], arm[4 + n:]
@@ -72,8 +72,6 @@ def true_torque(t, x, indices, u, packed):
     o += N * N * (1 + 2 * R)
     ranges = packed[o:o + R * n].reshape(R, n)
     o += R * n
-    disturbance_model = packed[o:o + 3 + 5 * n]
-    o += 3 + 5 * n
     B0, D0, D_offset, D_linear = (packed[o:o + n], packed[o + n:o + 2 * n],
                                   packed[o + 2 * n:o + 3 * n], packed[o + 3 * n:o + 4 * n])
     o += 4 * n

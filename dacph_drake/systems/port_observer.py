@@ -37,7 +37,7 @@ class PortObserver(LeafSystem):
                  seed: int, anti_alias_cutoff: float = 0.0):
         super().__init__()
         n = num_joints
-        self._n, self._h = n, sample_period
+        self._n = n
         self._rng = np.random.default_rng(seed)
         self._noise_std = noise_std
         self._layout = PortSample(n)

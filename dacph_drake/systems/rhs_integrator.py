@@ -52,9 +52,7 @@ class RhsIntegrator(LeafSystem):
                  stress: Stress = Stress()):
         super().__init__()
         n = model.num_joints
-        self._n = n
         self._model, self._network = model, network
-        self._h, self._h_model = period, model_period
         self._settings = settings
         self._B0_eigenvalues = np.asarray(B0, float)
         self._stress = stress

@@ -30,25 +30,23 @@ class TrueRhs(LeafSystem):
         self._indices = self._coordinates.StateIndices()
         self._representation = model.trigonometric_representation
         self._uncertainty = TrueRhsModel(scenario.uncertainty, scenario.phases).kernel_arguments
+        self._packed = pack_true_rhs(*self._representation, self._uncertainty)
         self._u = self.DeclareVectorInputPort("u", n)
         self._state = self.DeclareVectorInputPort(
             "state", model.plant.num_positions() + model.plant.num_velocities())
         self._disturbance_model = self.DeclareVectorInputPort("disturbance_model",
                                                               3 + 5 * n)
-        self._packed = None        # pack_true_rhs(...), once the model is known
         self.DeclareVectorOutputPort("tau", n, self._CalcTau, prerequisites_of_calc={
-            self.time_ticket(), self._u.ticket(), self._state.ticket()})
+            self.time_ticket(), self._u.ticket(), self._state.ticket(),
+            self._disturbance_model.ticket()})
         self.DeclareVectorOutputPort(
             "true_matrices", n * n + n, self._CalcMatrices,
             prerequisites_of_calc={self.time_ticket(), self._state.ticket()})
 
     def _CalcTau(self, context, output):
-        if self._packed is None:   # the parameters of d(t) are constant
-            self._packed = pack_true_rhs(*self._representation,
-                                         self._disturbance_model.Eval(context),
-                                         self._uncertainty)
         output.SetFromVector(true_torque(context.get_time(), self._state.Eval(context),
                                          self._indices, self._u.Eval(context),
+                                         self._disturbance_model.Eval(context),
                                          self._packed))
 
     def _CalcMatrices(self, context, output):
