@@ -46,11 +46,10 @@ class ClosedLoop:
     systems: Dict[str, object] = field(default_factory=dict)
 
     def CreateSimulator(self) -> Simulator:
-        """A Simulator of this loop with the scenario's integrator
-        (scenario.integration_scheme, fixed step periods.rhs) and initial state: the
-        base at the origin, the joints at q0, everything at rest (zero momentum)."""
-        simulator = MakeSimulator(self.diagram, self.scenario.integration_scheme,
-                                  self.scenario.periods.rhs)
+        """A Simulator of this loop with the scenario's simulator settings
+        (scenario.simulator, Drake's SimulatorConfig) and initial state: the base at
+        the origin, the joints at q0, everything at rest (zero momentum)."""
+        simulator = MakeSimulator(self.diagram, self.scenario.simulator)
         plant_context = self.plant.GetMyContextFromRoot(simulator.get_mutable_context())
         self.plant.SetPositions(plant_context,
                                 np.concatenate([[0.0, 0.0, 0.0], self.scenario.q0]))

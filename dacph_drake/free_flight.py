@@ -9,7 +9,7 @@ from pydrake.systems.primitives import Sine
 
 from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, total_momentum
 from dacph_drake.robot import RobotParams
-from dacph_drake.simulation import MakeSimulator
+from dacph_drake.simulation import FixedStepConfig, MakeSimulator
 
 
 class WorkMeter(LeafSystem):
@@ -50,7 +50,7 @@ def run_free_flight(robot: RobotParams, duration: float, amplitudes, frequencies
     meter = builder.AddSystem(WorkMeter(plant))
     builder.Connect(torque.get_output_port(0), meter.get_input_port(0))
     builder.Connect(plant.get_state_output_port(), meter.get_input_port(1))
-    simulator = MakeSimulator(builder.Build(), integration_scheme, step)
+    simulator = MakeSimulator(builder.Build(), FixedStepConfig(integration_scheme, step))
     context = simulator.get_mutable_context()
     plant_context = plant.GetMyContextFromRoot(context)
     sg_context = scene_graph.GetMyContextFromRoot(context)

@@ -15,7 +15,7 @@ from dacph_drake.controllers import NAMES as CONTROLLERS   # reproduce() runs th
 from dacph_drake.errors import ConfigError
 from dacph_drake.figures import plot_panels
 from dacph_drake.metrics import PHASES, comparison, run_metrics
-from dacph_drake.run import (require_run_files, scenario_fingerprint, simulate,
+from dacph_drake.run import (require_run_files, scenario_fingerprints, simulate,
                              versions)
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
@@ -170,9 +170,9 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
     """ConfigError unless every run (its run_CONTROLLER.json) was made from
     ``scenario`` (the directory's scenario.yaml) and for the same duration. Runs
     saved before run.json recorded these are not checked."""
-    fingerprint = scenario_fingerprint(scenario)
+    fingerprints = scenario_fingerprints(scenario)
     for controller, run in runs.items():
-        if run.get("scenario_fingerprint", fingerprint) != fingerprint:
+        if run.get("scenario_fingerprint", fingerprints[0]) not in fingerprints:
             raise ConfigError(
                 f"{run_dir}: the {controller} run was made from another scenario than "
                 "scenario.yaml (the last run saved there); allowed: runs of one "

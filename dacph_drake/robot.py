@@ -106,11 +106,13 @@ def save_robot(robot: RobotParams, path: str) -> None:
         f.write(yaml_dump_typed(robot))
 
 
-def load_yaml_dataclass(path: str, schema, noted_defaults=()):
+def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
     """yaml_load_typed with one-line errors that name the file: malformed YAML (with
     its line and column), a value of the wrong kind (naming the setting), unknown
     keys. Each top-level section in ``noted_defaults`` that the file leaves out is
-    named in a logged warning (it takes the schema's default)."""
+    named in a logged warning (it takes the schema's default). ``migrate(raw, path)``,
+    if given, returns the parsed file with settings of an older layout moved to
+    their current place (or None when there is nothing to move)."""
     try:
         with open(path) as f:
             raw = yaml.load(f, Loader=_TaggedLoader)
@@ -122,6 +124,8 @@ def load_yaml_dataclass(path: str, schema, noted_defaults=()):
         raise ConfigError(f"{path}: cannot be read ({e}); allowed: a readable YAML "
                           "file") from e
     raw = raw if raw is not None else {}
+    migrated = migrate(raw, path) if migrate is not None else None
+    raw = migrated if migrated is not None else raw
     _check_kinds(raw, schema, f"{path}: ")
     missing = [name for name in noted_defaults
                if not (isinstance(raw, dict) and name in raw)]
@@ -130,6 +134,8 @@ def load_yaml_dataclass(path: str, schema, noted_defaults=()):
             "%s: no %s section; using the defaults (the paper's robot)", path,
             " or ".join(f"{name}:" for name in missing))
     try:
+        if migrated is not None:
+            return yaml_load_typed(schema=schema, data=yaml.safe_dump(migrated))
         return yaml_load_typed(schema=schema, filename=str(path))
     except (RuntimeError, ValueError, TypeError) as e:
         raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e

@@ -12,17 +12,16 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Dict, List, Optional
 
 import numpy as np
-from pydrake.common.yaml import yaml_dump_typed
 
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
-from dacph_drake.scenario import Scenario, save_scenario
+from dacph_drake.scenario import Scenario, save_scenario, saved_forms
 
 MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state
@@ -44,7 +43,14 @@ class RunResult:
 def scenario_fingerprint(scenario: Scenario) -> str:
     """A hash of every setting of ``scenario`` (its YAML form): run.json records it,
     so that report() can refuse runs of different scenarios in one directory."""
-    return hashlib.sha256(yaml_dump_typed(scenario).encode()).hexdigest()[:16]
+    return scenario_fingerprints(scenario)[0]
+
+
+def scenario_fingerprints(scenario: Scenario) -> List[str]:
+    """scenario_fingerprint and the fingerprints the same settings had in the older
+    layouts a saved run may come from (scenario.saved_forms)."""
+    return [hashlib.sha256(text.encode()).hexdigest()[:16]
+            for text in saved_forms(scenario)]
 
 
 def versions() -> Dict[str, str]:

@@ -1,16 +1,21 @@
 """Scenario: every setting of a closed-loop run, loaded from YAML with
 ``pydrake.common.yaml.yaml_load_typed`` (the defaults are the paper's scenario, 1500 s,
 with the SPEC settings listed in docs/equations.md)."""
+import logging
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
+from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.robot import RobotParams, load_yaml_dataclass
+from dacph_drake.simulation import (ERROR_CONTROLLED_SCHEMES, INTEGRATION_SCHEMES,
+                                    FixedStepConfig)
 
 
 @dataclass
@@ -225,7 +230,7 @@ class Stress:
     start: float = 0.0              # [s]
 
 
-@dataclass
+@dataclass(eq=False)
 class Scenario:
     robot: RobotParams = field(default_factory=RobotParams)
     nominal_robot: RobotParams = field(default_factory=RobotParams)
@@ -241,8 +246,16 @@ class Scenario:
     learner: Learner = field(default_factory=Learner)
     excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
-    integration_scheme: str = "runge_kutta2"
+    # Drake's simulator settings for the ground truth's continuous state. The step
+    # taken is min(max_step_size, periods.rhs): the RHS samples end every step.
+    simulator: SimulatorConfig = field(default_factory=FixedStepConfig)
     seed: int = 0
+
+    def __eq__(self, other) -> bool:
+        """Equal settings: the same YAML form (pydrake's SimulatorConfig compares by
+        identity)."""
+        return (isinstance(other, Scenario)
+                and yaml_dump_typed(self) == yaml_dump_typed(other))
 
     @property
     def duration(self) -> float:
@@ -258,7 +271,6 @@ class Scenario:
         (the RHS period is checked against the gain rule when a diagram is built:
         gain_rule.check_rhs_period)."""
         from dacph_drake.gain_rule import check_period_order
-        from dacph_drake.simulation import INTEGRATION_SCHEMES
         if isinstance(self.seed, bool) or not isinstance(self.seed, int):
             raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
                               "integer in [0, 2^32 - 1]")
@@ -372,11 +384,32 @@ class Scenario:
                 f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
                 f"= {L.band} Hz; allowed: inside the band (the learner filters "
                 "everything else out)")
-        if self.integration_scheme not in INTEGRATION_SCHEMES:
-            raise ConfigError(f"integration_scheme = {self.integration_scheme!r}; "
-                              f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+        _validate_simulator(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.
         require_finite_numbers("", self)
+
+
+def _validate_simulator(config: SimulatorConfig) -> None:
+    """ConfigError naming the first simulator.* setting the closed loop cannot run."""
+    if config.integration_scheme not in INTEGRATION_SCHEMES:
+        raise ConfigError(f"simulator.integration_scheme = {config.integration_scheme!r}; "
+                          f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+    require_in_range("simulator.max_step_size", config.max_step_size, 1e-7, 1.0, "s")
+    if config.use_error_control:
+        if config.integration_scheme not in ERROR_CONTROLLED_SCHEMES:
+            raise ConfigError(
+                f"simulator.use_error_control = true with simulator.integration_scheme "
+                f"= {config.integration_scheme!r}, which has no error estimate; allowed: "
+                f"false, or a scheme among {', '.join(ERROR_CONTROLLED_SCHEMES)}")
+        require_in_range("simulator.accuracy", config.accuracy, 1e-12, 1.0)
+    if config.start_time != 0.0:
+        raise ConfigError(f"simulator.start_time = {config.start_time:g} s; allowed: 0 "
+                          "(the phases are times from the start of the run)")
+    require_nonnegative("simulator.target_realtime_rate", config.target_realtime_rate)
+    if config.publish_every_time_step:
+        raise ConfigError("simulator.publish_every_time_step = true; allowed: false (the "
+                          "logs are sampled every periods.log; a publish at every step "
+                          "would add samples between them)")
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"
@@ -397,9 +430,32 @@ def load_scenario(path) -> Scenario:
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
     scenario = load_yaml_dataclass(path, Scenario,
-                                   noted_defaults=("robot", "nominal_robot"))
+                                   noted_defaults=("robot", "nominal_robot"),
+                                   migrate=_move_integration_scheme)
     scenario.Validate()
     return scenario
+
+
+def _move_integration_scheme(raw, path):
+    """Files saved before the scenario embedded Drake's SimulatorConfig have a
+    top-level ``integration_scheme: X``: it is read as ``simulator:
+    {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
+    settings it implied; the rest are the simulator's defaults (FixedStepConfig)."""
+    if not (isinstance(raw, dict) and "integration_scheme" in raw):
+        return None
+    if "simulator" in raw:
+        raise ConfigError(f"{path}: both integration_scheme: and simulator: are set; "
+                          "allowed: simulator: {integration_scheme: ...} only")
+    migrated = dict(raw)
+    migrated["simulator"] = {"integration_scheme": migrated.pop("integration_scheme")}
+    periods = raw.get("periods")
+    if isinstance(periods, dict) and "rhs" in periods:     # the step it implied
+        migrated["simulator"]["max_step_size"] = periods["rhs"]
+    logging.getLogger(__name__).warning(
+        "%s: integration_scheme: is read as simulator: {integration_scheme: %s} (the "
+        "scenario now embeds Drake's SimulatorConfig; save it again to update the file)", path,
+        migrated["simulator"]["integration_scheme"])
+    return migrated
 
 
 def paper_scenario() -> Scenario:
@@ -415,6 +471,22 @@ def short_scenario() -> Scenario:
 
 
 BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
+
+
+def saved_forms(scenario: Scenario) -> List[str]:
+    """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
+    its current form and, where its simulator settings are those an older file's
+    top-level ``integration_scheme: X`` implied (_move_integration_scheme), that
+    older form."""
+    text = yaml_dump_typed(scenario)
+    config = scenario.simulator
+    if yaml_dump_typed(config) != yaml_dump_typed(FixedStepConfig(
+            config.integration_scheme, scenario.periods.rhs)):
+        return [text]
+    older = re.sub(r"^simulator:\n(?:  .*\n)*",
+                   f"integration_scheme: {config.integration_scheme}\n", text,
+                   flags=re.MULTILINE)
+    return [text, older]
 
 
 def save_scenario(scenario: Scenario, path) -> None:

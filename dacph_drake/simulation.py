@@ -1,20 +1,45 @@
-"""Simulator set-up shared by every diagram in the package."""
+"""Simulator set-up shared by every diagram in the package: Drake's SimulatorConfig,
+with the closed loop's default and the schemes it accepts."""
+import copyreg
+
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 
+# Explicit Runge-Kutta schemes: the closed loop's Python systems have no AutoDiff
+# form for an implicit scheme's Jacobian; each of these keeps the free-floating arm's
+# momentum to ~1e-13 at 0.25 ms (tests/test_plant.py).
 INTEGRATION_SCHEMES = ("runge_kutta2", "runge_kutta3", "runge_kutta5")
+# Schemes with an embedded error estimate (use_error_control: true).
+ERROR_CONTROLLED_SCHEMES = ("runge_kutta3", "runge_kutta5")
 
 
-def MakeSimulator(diagram, integration_scheme: str = "runge_kutta3",
-                  step: float = 2.5e-4) -> Simulator:
-    """A Simulator for ``diagram`` with a fixed-step explicit Runge-Kutta integrator.
+def FixedStepConfig(integration_scheme: str = "runge_kutta2",
+                    step: float = 2.5e-4) -> SimulatorConfig:
+    """Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator,
+    as fast as the machine allows (target_realtime_rate 0).
 
     Fixed steps because the closed loop's discrete updates stop the integrator at
-    every RHS sample anyway; at 0.25 ms, RK3 conserves the free-floating arm's
-    momentum to ~1e-13 (tests/test_plant.py).
-    """
+    every RHS sample anyway (the step taken is min(step, periods.rhs))."""
+    return SimulatorConfig(integration_scheme=integration_scheme, max_step_size=step,
+                           use_error_control=False, target_realtime_rate=0.0)
+
+
+def MakeSimulator(diagram, config: SimulatorConfig) -> Simulator:
+    """A Simulator for ``diagram`` with ``config`` applied."""
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(SimulatorConfig(
-        integration_scheme=integration_scheme, max_step_size=step,
-        use_error_control=False, target_realtime_rate=0.0), simulator)
+    ApplySimulatorConfig(config, simulator)
     return simulator
+
+
+def _simulator_config(settings: dict) -> SimulatorConfig:
+    return SimulatorConfig(**settings)
+
+
+def _reduce_simulator_config(config: SimulatorConfig):
+    return _simulator_config, ({f.name: getattr(config, f.name)
+                                for f in SimulatorConfig.__fields__},)
+
+
+# A scenario travels to sweep workers by pickle; pydrake's SimulatorConfig has no
+# pickle support of its own, so it travels as its fields.
+copyreg.pickle(SimulatorConfig, _reduce_simulator_config)

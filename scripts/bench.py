@@ -71,7 +71,7 @@ def _plant_alone_wall(scenario, duration: float) -> float:
     torque = builder.AddSystem(ConstantVectorSource(np.full(plant.num_actuators(), 1e-3)))
     builder.Connect(torque.get_output_port(), plant.get_actuation_input_port())
     diagram = builder.Build()
-    simulator = MakeSimulator(diagram, scenario.integration_scheme, scenario.periods.rhs)
+    simulator = MakeSimulator(diagram, scenario.simulator)
     plant.SetPositions(plant.GetMyContextFromRoot(simulator.get_mutable_context()),
                        np.concatenate([[0.0, 0.0, 0.0], scenario.q0]))
     simulator.Initialize()
@@ -91,7 +91,7 @@ def bench_closed_loop(duration: float, paper_run: Path = None):
         result = simulate(scenario, controller, duration=duration)
         walls[controller] = result.wall_time / duration
     print(f"closed loop, {duration:g} s of the short scenario, RHS step "
-          f"{scenario.periods.rhs * 1e3:.2f} ms ({scenario.integration_scheme}):")
+          f"{scenario.periods.rhs * 1e3:.2f} ms ({scenario.simulator.integration_scheme}):")
     targets = {"plant": "", "model-based": "(target <= 2)", "dac": "(target <= 3)"}
     for name, wall in walls.items():
         print(f"  {name:12s} {wall:6.3f} s wall per simulated s   "

@@ -17,7 +17,7 @@ def test_free_flight_conserves_momentum_and_energy(robot, rng):
 
 
 def test_the_closed_loops_integrator_keeps_the_bookkeeping(robot, rng):
-    """The closed loops integrate with Scenario().integration_scheme (RK2 at 0.25 ms,
+    """The closed loops integrate with Scenario().simulator (RK2 at 0.25 ms,
     chosen for speed, README "Measured figures"): momentum stays at round-off like
     RK3's, and the energy balance closes to 5.8e-6 over 20 s (RK3: 2.3e-7), which
     this bounds at 2e-5."""
@@ -28,9 +28,9 @@ def test_the_closed_loops_integrator_keeps_the_bookkeeping(robot, rng):
                              amplitudes=rng.uniform(0.004, 0.008, n),
                              frequencies=rng.uniform(3, 6, n),
                              q0=rng.uniform(-0.5, 0.5, n),
-                             integration_scheme=scenario.integration_scheme,
-                             step=scenario.periods.rhs)
-    assert scenario.integration_scheme == "runge_kutta2"
+                             integration_scheme=scenario.simulator.integration_scheme,
+                             step=scenario.simulator.max_step_size)
+    assert scenario.simulator.integration_scheme == "runge_kutta2"
     assert result.kinetic_energy > 1e-5
     assert result.max_momentum < 1e-9
     assert abs(result.kinetic_energy - result.work) < 2e-5 * result.kinetic_energy

@@ -247,7 +247,7 @@ def test_port_observer_on_a_known_trajectory():
     true_log = LogVectorOutput(truth.GetOutputPort("tau"), builder, h)
     observed_log = LogVectorOutput(observer.GetOutputPort("tau_observed"), builder, h)
     diagram = builder.Build()
-    simulator = MakeSimulator(diagram, scenario.integration_scheme, h)
+    simulator = MakeSimulator(diagram, scenario.simulator)
     context = simulator.get_mutable_context()
     plant.SetPositions(plant.GetMyContextFromRoot(context), [0, 0, 0, *scenario.q0])
     simulator.AdvanceTo(1.0)

@@ -29,7 +29,8 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.robot import load_yaml_dataclass
-from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario, load_scenario
+from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
+                                  saved_forms)
 
 
 # The YAML tags of Drake's distributions, and DistributionVariant and
@@ -88,8 +89,14 @@ class SweepDefinition:
     def fingerprint(self) -> str:
         """sha256 of the normalized sweep and base scenario: two definitions with the
         same fingerprint sample and run the same trials."""
-        canonical = yaml_dump_typed(self.sweep) + "\n---\n" + yaml_dump_typed(self.scenario)
-        return hashlib.sha256(canonical.encode()).hexdigest()
+        return self.fingerprints()[0]
+
+    def fingerprints(self) -> List[str]:
+        """fingerprint() and the fingerprints of the same settings in the older
+        scenario layouts a saved sweep may come from (scenario.saved_forms)."""
+        sweep = yaml_dump_typed(self.sweep)
+        return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
+                for form in saved_forms(self.scenario)]
 
 
 @dataclass

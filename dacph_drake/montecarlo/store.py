@@ -58,7 +58,7 @@ def read_manifest(out_dir, definition: SweepDefinition) -> Dict:
         raise ConfigError(f"{out_dir} holds no sweep ({MANIFEST} is missing); allowed: a "
                           "sweep's output directory")
     manifest = json.loads(path.read_text())
-    if manifest["fingerprint"] != definition.fingerprint():
+    if manifest["fingerprint"] not in definition.fingerprints():
         raise ConfigError(
             f"{out_dir} holds a different sweep (its sweep.yaml and scenario.yaml differ "
             f"from {definition.source} and its scenario); allowed: the sweep that created "
