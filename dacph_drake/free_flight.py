@@ -54,7 +54,7 @@ def run_free_flight(robot: RobotParams, duration: float, amplitudes, frequencies
     context = simulator.get_mutable_context()
     plant_context = plant.GetMyContextFromRoot(context)
     sg_context = scene_graph.GetMyContextFromRoot(context)
-    plant.SetPositions(plant_context, np.concatenate([[0.0, 0.0, 0.0], q0]))
+    plant.SetPositions(plant_context, ArmCoordinates.FromPlant(plant).Positions(q0))
     worst = {"momentum": 0.0, "clearance": np.inf}
 
     def monitor(root_context):

@@ -80,6 +80,14 @@ class ArmCoordinates:
     def num_positions(self) -> int:
         return len(self.base_q) + len(self.joint_q)
 
+    def Positions(self, q, base_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """The plant's position vector with the joints at ``q`` and the base at
+        ``base_pose`` (x, y, theta0; default the origin)."""
+        positions = np.zeros(self.num_positions)
+        positions[self.base_q] = base_pose
+        positions[self.joint_q] = q
+        return positions
+
     def StateIndices(self) -> np.ndarray:
         """Indices into the plant state x = [positions, velocities] of
         [theta0, base velocity (3), q (n), qdot (n)], for compiled kernels that read

@@ -74,7 +74,7 @@ class ReducedOrderModel:
             raise ValueError("ReducedOrderModel needs the base joint's velocities "
                              "first and the arm joints after them (plant.py's layout)")
         self._num_joints = n
-        self._q_full = np.zeros(plant.num_positions())
+        self._coordinates = coordinates
         self._ones = np.ones(n)
         self._W = np.vstack([np.zeros((3, n)), np.eye(n)])
         self._ee_frame = plant.GetFrameByName(END_EFFECTOR)
@@ -131,8 +131,7 @@ class ReducedOrderModel:
         fit, check = samples[:-8], samples[-8:]
 
         def full_mass_matrix(q):
-            self._q_full[3:] = q
-            return self._FullMassMatrix(self._q_full).reshape(-1)
+            return self._FullMassMatrix(self._coordinates.Positions(q)).reshape(-1)
 
         Psi = np.array([self._Basis(q)[:, 0].copy() for q in fit])
         H = np.array([full_mass_matrix(q) for q in fit])
@@ -150,9 +149,8 @@ class ReducedOrderModel:
     def _DerivativeErrorAgainstAutoDiff(self, q: np.ndarray) -> float:
         ad_plant = self._plant.ToAutoDiffXd()
         ad_context = ad_plant.CreateDefaultContext()
-        q_full = np.zeros(self._plant.num_positions())
-        q_full[3:] = q
-        ad_plant.SetPositions(ad_context, InitializeAutoDiff(q_full))
+        ad_plant.SetPositions(ad_context,
+                              InitializeAutoDiff(self._coordinates.Positions(q)))
         H_ad = ad_plant.CalcMassMatrix(ad_context)
         N = H_ad.shape[0]
         dH_ad = ExtractGradient(H_ad.reshape(-1))[:, 3:].T.reshape(-1, N, N)

@@ -13,7 +13,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.free_flight import run_free_flight
 from dacph_drake.kernels.arm import reduced_dynamics
-from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant
+from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.robot import RobotParams
 from dacph_drake.run import simulate
@@ -73,7 +73,7 @@ def _plant_alone_wall(scenario, duration: float) -> float:
     diagram = builder.Build()
     simulator = MakeSimulator(diagram, scenario.simulator)
     plant.SetPositions(plant.GetMyContextFromRoot(simulator.get_mutable_context()),
-                       np.concatenate([[0.0, 0.0, 0.0], scenario.q0]))
+                       ArmCoordinates.FromPlant(plant).Positions(scenario.q0))
     simulator.Initialize()
     start = time.perf_counter()
     simulator.AdvanceTo(duration)

@@ -1,6 +1,4 @@
 """The ground truth: momentum and energy bookkeeping of the free-floating plant."""
-import numpy as np
-
 from dacph_drake.free_flight import run_free_flight
 
 

@@ -1,5 +1,4 @@
 """Band-pass prefilter of the learner's port samples (Learner.band; a project extension, docs/equations.md E33)."""
-import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.identification import BandPassCascade, PortSample
