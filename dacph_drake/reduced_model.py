@@ -210,10 +210,11 @@ class ReducedOrderModel:
                                          body.default_com())
                 for body in self._link_bodies]
 
-    @staticmethod
-    def EndEffectorAngle(q_full: np.ndarray) -> float:
-        """alpha = theta0 + q1 + ... + qn (unwrapped absolute angle in the plane)."""
-        return float(q_full[2] + np.sum(q_full[3:]))
+    def EndEffectorAngle(self, q_full: np.ndarray) -> float:
+        """alpha = theta0 + q1 + ... + qn (unwrapped absolute angle in the plane) at
+        the plant positions q_full."""
+        theta0 = q_full[self._coordinates.base_q[2]]
+        return float(theta0 + np.sum(q_full[self._coordinates.joint_q]))
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """p = M(q) qdot."""
