@@ -1,7 +1,13 @@
 """A self-contained HTML animation of a run: the ground-truth plant replayed in
 Drake's Meshcat from the logged state, with the desired end-effector orientation
-alpha_d drawn as a red bar at the end effector, viewed top-down (the robot's plane).
+alpha_d (red bar) and the measured one alpha (dark bar) drawn at the end effector,
+viewed top-down (the robot's plane). An overlay names what is drawn and shows the
+simulated time and the current phase while it plays.
 """
+import contextlib
+import html
+import json
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -12,11 +18,29 @@ from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import require_positive
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.plant import END_EFFECTOR, AddFreeFloatingArm
+from dacph_drake.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
+                               AddFreeFloatingArm, ArmCoordinates)
 from dacph_drake.scenario import Scenario
 
 DESIRED_PATH = "/desired_orientation"
-DESIRED_LENGTH = 0.15          # [m] of the bar showing alpha_d
+MEASURED_PATH = "/measured_orientation"
+BAR_LENGTH = 0.15          # [m] of the bars showing alpha_d and alpha
+DESIRED_COLOR = (0.85, 0.1, 0.1, 0.9)
+MEASURED_COLOR = (0.1, 0.1, 0.1, 0.9)
+OVERLAY_BACKGROUND = "#fffbe6"
+
+
+@contextlib.contextmanager
+def quiet_drake_info():
+    """Drake's info messages (such as Meshcat's "listening for connections") off
+    for the block: a file is being written, nobody is meant to connect."""
+    drake_logger = logging.getLogger("drake")
+    level = drake_logger.level
+    drake_logger.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        drake_logger.setLevel(level)
 
 
 def playback_speedup(duration: float, max_playback: float) -> float:
@@ -27,9 +51,10 @@ def playback_speedup(duration: float, max_playback: float) -> float:
 
 def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
                     max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
-    """Replays logs["state"] (plant state, sampled at logs["time"]) and the logged
-    alpha_d (lhs_log) into a Meshcat recording and writes meshcat.StaticHtml() to
-    out_html. Runs longer than ``max_playback`` seconds are sped up to fit."""
+    """Replays logs["state"] (plant state, sampled at logs["time"]), the logged
+    alpha_d (lhs_log) and the measured alpha = theta0 + q1 + ... + qn into a Meshcat
+    recording and writes meshcat.StaticHtml(), with the overlay, to out_html. Runs
+    longer than ``max_playback`` seconds are sped up to fit."""
     require_positive("fps", fps, "frames per second")
     require_positive("max_playback", max_playback, "s")
     t, x = logs["time"], logs["state"]
@@ -37,7 +62,11 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
         raise ValueError("the run has fewer than two logged samples to animate")
     n = scenario.robot.num_links
     alpha_desired = logs["lhs_log"][:, LhsLog(n).alpha_desired]
-    meshcat = meshcat or Meshcat()
+    base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(x)
+    alpha_measured = base_pose[:, 2] + q.sum(axis=1)
+    if meshcat is None:
+        with quiet_drake_info():
+            meshcat = Meshcat()
     builder = DiagramBuilder()
     plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
     visualizer = MeshcatVisualizer.AddToBuilder(
@@ -52,8 +81,10 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     meshcat.Set2dRenderMode(RigidTransform(RotationMatrix(
         np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])), [0, 0, 1.0]),
         -view, view, -view, view)
-    meshcat.SetObject(DESIRED_PATH, Box(DESIRED_LENGTH, 0.008, 0.008),
-                      Rgba(0.85, 0.1, 0.1, 0.9))
+    # alpha_d wide and below, alpha thin on top: both stay visible when they agree.
+    for path, color, width in ((DESIRED_PATH, DESIRED_COLOR, 0.018),
+                               (MEASURED_PATH, MEASURED_COLOR, 0.004)):
+        meshcat.SetObject(path, Box(BAR_LENGTH, width, 0.008), Rgba(*color))
 
     speedup = playback_speedup(t[-1] - t[0], max_playback)
     frames = np.arange(t[0], t[-1] + 1e-12, speedup / fps)
@@ -64,17 +95,64 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
         context.SetTime(playback_time)
         plant.SetPositions(plant_context, x[row, :plant.num_positions()])
         visualizer.ForcedPublish(visualizer_context)
-        X_WE = end_effector.CalcPoseInWorld(plant_context)
-        direction = np.array([np.cos(alpha_desired[row]), np.sin(alpha_desired[row]), 0])
-        meshcat.SetTransform(
-            DESIRED_PATH,
-            RigidTransform(RotationMatrix.MakeZRotation(alpha_desired[row]),
-                           X_WE.translation() + 0.5 * DESIRED_LENGTH * direction
-                           + [0, 0, 0.02]),
-            playback_time)
+        end = end_effector.CalcPoseInWorld(plant_context).translation()
+        for path, alpha, height in ((DESIRED_PATH, alpha_desired[row], 0.02),
+                                    (MEASURED_PATH, alpha_measured[row], 0.03)):
+            direction = np.array([np.cos(alpha), np.sin(alpha), 0.0])
+            meshcat.SetTransform(path, RigidTransform(
+                RotationMatrix.MakeZRotation(alpha),
+                end + 0.5 * BAR_LENGTH * direction + [0, 0, height]), playback_time)
     visualizer.StopRecording()
     visualizer.PublishRecording()
     out = Path(out_html)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(meshcat.StaticHtml())
+    page = meshcat.StaticHtml()
+    out.write_text(page.replace("</body>", _overlay(scenario, t[0], speedup) + "</body>", 1))
     return out
+
+
+def _swatch(rgba) -> str:
+    r, g, b, _ = (int(round(255 * c)) for c in rgba)
+    return (f'<span style="display:inline-block;width:22px;height:8px;margin-right:6px;'
+            f'background:rgb({r},{g},{b})"></span>')
+
+
+def _overlay(scenario: Scenario, start: float, speedup: float) -> str:
+    """The legend, time readout and phase label: an HTML box over the viewer and a
+    script that maps the animation's playback time (viewer.animator.time) to
+    simulated time t = start + speedup * playback time."""
+    entries = [(BASE_COLOR, "base"),
+               *[(LINK_COLORS[k % len(LINK_COLORS)], f"link {k + 1}")
+                 for k in range(scenario.robot.num_links)],
+               (DESIRED_COLOR, "desired end-effector direction &alpha;<sub>d</sub>"),
+               (MEASURED_COLOR, "measured end-effector direction &alpha;")]
+    legend = "".join(f"<div>{_swatch(rgba)}{label}</div>" for rgba, label in entries)
+    p = scenario.phases
+    phases = [[0.0, p.linear_start, "Warm-up: B0, D0"],
+              [p.linear_start, p.nonlinear_start, "Phase 1: linear uncertainty"],
+              [p.nonlinear_start, p.disturbance_start, "Phase 2: + nonlinear"],
+              [p.disturbance_start, float("inf"), "Phase 3: + disturbance d(t)"]]
+    speed = "" if speedup == 1.0 else f" &times;{speedup:.3g} speed"
+    return f"""
+<div id="dacph-overlay" style="position:fixed;top:10px;left:10px;z-index:10;
+  font:13px sans-serif;background:{OVERLAY_BACKGROUND};border:1px solid #888;
+  padding:8px 10px;line-height:1.5">
+  <div style="font-weight:bold;font-size:15px"><span id="dacph-time">t = 0.00 s</span>
+    <span style="font-weight:normal;font-size:12px">{speed}</span></div>
+  <div id="dacph-phase">{html.escape(phases[0][2])}</div>
+  <hr style="border:none;border-top:1px solid #ccc;margin:4px 0">{legend}
+</div>
+<script>
+(function() {{
+  const start = {float(start)!r}, speedup = {float(speedup)!r};
+  const phases = {json.dumps([[a, b if b != float("inf") else 1e300, c] for a, b, c in phases])};
+  function show() {{
+    const t = start + speedup * viewer.animator.time;
+    document.getElementById("dacph-time").textContent = "t = " + t.toFixed(2) + " s";
+    const phase = phases.find(([a, b]) => t >= a && t < b) || phases[phases.length - 1];
+    document.getElementById("dacph-phase").textContent = phase[2];
+  }}
+  setInterval(show, 50);
+}})();
+</script>
+"""

@@ -1,16 +1,19 @@
 """The paper's figures as six panels, from the logs of a DAC run
 and a model-based run of the same scenario:
 
-(a) uncertainty (= the nominal prior's error), learned estimation error and RHS
-    control error (norms)
-(b) true, learned and nominal (prior) entries of B~ and D~
+(a) uncertainty (= the nominal prior's error) against the learned estimation error,
+    and the RHS control error (norms, log axes)
+(b) true, learned and nominal (prior) value of every entry of B~ and D~, one small
+    axis per entry (readable for any number of links)
 (c) zoom on (b) shortly after the nonlinear terms switch on
 (d) RHS gains K, c against its lower bound c_min (eq. 48), chi
-(e) DAC against model-based: alpha~, ||s||, d(t)
-(f) control inputs and states
+(e) DAC against model-based: |alpha~| and ||s|| (log axes), d(t)
+(f) control inputs (DAC, and the model-based input's difference from it) and states
 
-Each panel is written as PNG and PDF; phases are shaded and labelled as in the
-paper, every axis carries its unit."""
+Each panel is written as PNG and PDF. Warm-up and phases are shaded and labelled,
+every axis carries one unit, legends sit outside the data. A series with more
+samples than the figure has pixel columns is drawn as its min/max envelope per
+column, so fast ripple shows as the band it fills, not as overdrawn lines."""
 from pathlib import Path
 from typing import Dict, List
 
@@ -19,6 +22,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 
 from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
 from dacph_drake.metrics import nominal_estimates  # noqa: E402
@@ -28,53 +32,113 @@ from dacph_drake.scenario import Scenario  # noqa: E402
 Logs = Dict[str, np.ndarray]
 PANELS = ("a_uncertainty_and_errors", "b_estimated_entries", "c_zoom_nonlinear",
           "d_rhs_gains", "e_dac_vs_model_based", "f_inputs_and_states")
-_PHASES = (("linear", "#dbe9f6"), ("nonlinear", "#fde9c9"), ("disturbance", "#f6d5d5"))
-_MAX_POINTS = 20000          # per plotted line; longer logs are strided
+WIDTH, DPI = 11.0, 130          # [in], PNG dots per inch
+COLUMNS = 1000                  # envelope columns per axis (about one per pixel)
+LOG_DECADES = 7                 # a log axis spans at most this many decades
+CONTROLLER_STYLES = {"dac": dict(color="C0", ls="-", label="DAC-pH"),
+                     "model-based": dict(color="C1", ls="--", label="model-based")}
+ENTRY_STYLES = {"true": dict(color="k", ls="-", lw=1.0),
+                "learned": dict(color="C0", ls="--", lw=1.0),
+                "nominal": dict(color="0.55", ls=":", lw=1.2)}
 
 
 def _phase_spans(scenario: Scenario):
     p = scenario.phases
-    return [("Phase 1: linear", p.linear_start, p.nonlinear_start, _PHASES[0][1]),
-            ("Phase 2: + nonlinear", p.nonlinear_start, p.disturbance_start, _PHASES[1][1]),
-            ("Phase 3: + disturbance", p.disturbance_start, p.end, _PHASES[2][1])]
+    return [("Warm-up: B0, D0", 0.0, p.linear_start, "#ececec"),
+            ("Phase 1: linear", p.linear_start, p.nonlinear_start, "#dbe9f6"),
+            ("Phase 2: + nonlinear", p.nonlinear_start, p.disturbance_start, "#fde9c9"),
+            ("Phase 3: + disturbance", p.disturbance_start, p.end, "#f6d5d5")]
 
 
-def _shade(ax, scenario: Scenario, label: bool, xlim=None) -> None:
+def _shade(ax, scenario: Scenario, xlim, label: bool) -> None:
+    """Shades warm-up and phases; with ``label``, names each visible one above ax."""
     for text, start, end, color in _phase_spans(scenario):
+        if end <= start:
+            continue
         ax.axvspan(start, end, color=color, alpha=0.6, lw=0, zorder=0)
-        if label and (xlim is None or (start < xlim[1] and end > xlim[0])):
-            mid = 0.5 * (max(start, xlim[0] if xlim else start)
-                         + min(end, xlim[1] if xlim else end))
-            ax.text(mid, 1.02, text, transform=ax.get_xaxis_transform(),
+        visible = (max(start, xlim[0]), min(end, xlim[1]))
+        if not label or visible[1] <= visible[0]:
+            continue
+        if visible[1] - visible[0] > 0.15 * (xlim[1] - xlim[0]):
+            ax.text(0.5 * sum(visible), 1.02, text, transform=ax.get_xaxis_transform(),
                     ha="center", va="bottom", fontsize=8)
+        else:           # a narrow span (the paper's warm-up): its short name, from its start
+            ax.text(visible[0], 1.02, text.split(":")[0], ha="left", va="bottom",
+                    transform=ax.get_xaxis_transform(), fontsize=8)
 
 
-def _stride(t: np.ndarray, xlim=None) -> np.ndarray:
-    """Indices of at most _MAX_POINTS samples inside xlim."""
-    idx = np.arange(len(t)) if xlim is None else np.flatnonzero(
-        (t >= xlim[0]) & (t <= xlim[1]))
-    return idx[::max(1, len(idx) // _MAX_POINTS)]
+def _phase_handles(scenario: Scenario) -> List[Patch]:
+    return [Patch(color=color, alpha=0.6, label=text)
+            for text, start, end, color in _phase_spans(scenario) if end > start]
 
 
-def _figure(rows: int, scenario: Scenario, xlim=None):
-    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.1 * rows + 0.6), sharex=True,
-                             squeeze=False)
+def envelope(t: np.ndarray, y: np.ndarray, xlim, columns: int = COLUMNS):
+    """(t, low, high) of y(t) inside xlim: the samples themselves (low = high = y)
+    when there are at most 2 ``columns`` of them, else the min and max of y over each
+    of ``columns`` equal time intervals, at the interval's centre. NaNs (for
+    example non-positive values masked for a log axis) are left out of min/max."""
+    inside = (t >= xlim[0]) & (t <= xlim[1])
+    t, y = t[inside], y[inside]
+    if len(t) <= 2 * columns:
+        return t, y, y
+    edges = np.linspace(t[0], t[-1], columns + 1)
+    starts = np.unique(np.searchsorted(t, edges[:-1]))
+    with np.errstate(invalid="ignore"):
+        low = np.fmin.reduceat(y, starts)
+        high = np.fmax.reduceat(y, starts)
+    ends = np.append(starts[1:], len(t)) - 1
+    return 0.5 * (t[starts] + t[ends]), low, high
+
+
+def _trace(ax, t, y, xlim, log: bool = False, label=None, alpha=0.6, **style):
+    """Draws y(t) inside xlim as a line, or as its min/max envelope (two edge lines
+    and the band between them) when it has more samples than pixel columns."""
+    y = np.asarray(y, float)
+    if log:
+        y = np.where(y > 0, y, np.nan)
+    tc, low, high = envelope(np.asarray(t), y, xlim)
+    style.setdefault("lw", 0.8)
+    (line,) = ax.plot(tc, high, label=label, **style)
+    if low is not high:
+        ax.plot(tc, low, **{**style, "label": None})
+        ax.fill_between(tc, low, high, color=line.get_color(), alpha=alpha, lw=0)
+    if log:
+        ax.set_yscale("log")
+    return line
+
+
+def _fit_log_axes(fig) -> None:
+    """Each log axis of ``fig`` spans its lines' positive data, at most LOG_DECADES
+    decades below their maximum (a lone exact zero-crossing sample would otherwise
+    stretch it over twenty decades; samples below are drawn to the bottom edge)."""
+    for ax in fig.axes:
+        if ax.get_yscale() != "log" or not ax.lines:
+            continue
+        y = np.concatenate([np.asarray(line.get_ydata(), float) for line in ax.lines])
+        y = y[np.isfinite(y) & (y > 0)]
+        if len(y):
+            top = y.max()
+            ax.set_ylim(max(y.min(), top * 10.0 ** -LOG_DECADES) / 1.5, top * 1.5)
+
+
+def _figure(rows: int, scenario: Scenario, xlim=None, height: float = 2.0):
+    """A column of ``rows`` axes sharing time, shaded by phase, labelled on top."""
+    xlim = xlim or (0.0, scenario.phases.end)
+    fig, axes = plt.subplots(rows, 1, figsize=(WIDTH, height * rows + 0.7),
+                             sharex=True, squeeze=False, layout="constrained")
     axes = axes[:, 0]
     for i, ax in enumerate(axes):
-        _shade(ax, scenario, label=(i == 0), xlim=xlim)
+        _shade(ax, scenario, xlim, label=(i == 0))
         ax.grid(True, lw=0.3)
     axes[-1].set_xlabel("time t [s]")
-    axes[-1].set_xlim(xlim if xlim else (0.0, scenario.phases.end))
-    return fig, axes
+    axes[-1].set_xlim(xlim)
+    return fig, axes, xlim
 
 
-def _save(fig, out: Path, name: str) -> List[Path]:
-    fig.tight_layout()
-    paths = [out / f"{name}.png", out / f"{name}.pdf"]
-    fig.savefig(paths[0], dpi=130)
-    fig.savefig(paths[1])
-    plt.close(fig)
-    return paths
+def _legend_outside(ax, **kwargs) -> None:
+    """The axes' legend to the right of its data area."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+              fontsize=7, **kwargs)
 
 
 def _matrix_norms(logs: Logs, n: int, B0, D0):
@@ -87,117 +151,125 @@ def _matrix_norms(logs: Logs, n: int, B0, D0):
             np.linalg.norm(estimate[:, n * n:] - truth[:, n * n:], axis=1))
 
 
-def _panel_a(dac: Logs, scenario: Scenario, out: Path):
+def _panel_a(dac: Logs, scenario: Scenario):
     n = scenario.robot.num_links
     t = dac["time"]
-    i = _stride(t)
     dB, dD, eB, eD = _matrix_norms(dac, n, scenario.uncertainty.B0, scenario.uncertainty.D0)
-    fig, (ax1, ax2) = _figure(2, scenario)
-    ax1.plot(t[i], dB[i], "C0:", lw=1.2,
-             label=r"$\|B_0 - \tilde B\|_F$ (nominal prior = uncertainty)")
-    ax1.plot(t[i], dD[i], "C1:", lw=1.2,
-             label=r"$\|D_0 - \tilde D\|$ (nominal prior = uncertainty)")
-    ax1.plot(t[i], eB[i], "C0-", lw=0.8, label=r"$\|\hat B - \tilde B\|_F$ (learned)")
-    ax1.plot(t[i], eD[i], "C1-", lw=0.8, label=r"$\|\hat D - \tilde D\|$ (learned)")
-    ax1.set_ylabel("norm [-] / [N m s]")
-    ax1.legend(fontsize=7, ncol=2, loc="upper left")
-    ax2.semilogy(t[i], np.maximum(dac["rhs_log"][i, RhsLog(n).e_norm], 1e-12), "C3-",
-                 lw=0.6)
-    ax2.set_ylabel(r"$\|e_\tau\|$ [N m]")
-    return _save(fig, out, PANELS[0])
+    fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
+    for ax, prior, learned, name, unit in [
+            (ax1, dB, eB, r"\tilde B", "[-]"), (ax2, dD, eD, r"\tilde D", "[N m s]")]:
+        symbol = name[-1]
+        _trace(ax, t, prior, xlim, log=True, color="0.4", ls=":", lw=1.2,
+               label=rf"$\|{symbol}_0 - {name}\|$ (nominal prior = uncertainty)")
+        _trace(ax, t, learned, xlim, log=True, color="C0",
+               label=rf"$\|\hat {symbol} - {name}\|$ (learned)")
+        ax.set_ylabel(f"error of {symbol} {unit}")
+        _legend_outside(ax)
+    _trace(ax3, t, dac["rhs_log"][:, RhsLog(n).e_norm], xlim, log=True, color="C3",
+           label=r"$\|e_\tau\|$ (DAC-pH)")
+    ax3.set_ylabel(r"$\|e_\tau\|$ [N m]")
+    _legend_outside(ax3)
+    return fig
 
 
-def _entries(dac: Logs, scenario: Scenario, out: Path, name: str, xlim=None):
+def _entries(dac: Logs, scenario: Scenario, xlim=None):
+    """One small axis per entry: B_rc in an n x n grid, D_kk in a row below."""
     n = scenario.robot.num_links
     t = dac["time"]
-    i = _stride(t, xlim)
-    fig, axes = _figure(2, scenario, xlim)
-    labels = [(r"$B_{%d%d}$" % (r + 1, c + 1), r * n + c) for r in range(n)
-              for c in range(n)]
-    labels += [(r"$D_{%d%d}$" % (k + 1, k + 1), n * n + k) for k in range(n)]
+    xlim = xlim or (0.0, scenario.phases.end)
+    fig, grid = plt.subplots(n + 1, n, figsize=(WIDTH, 1.7 * (n + 1) + 1.0),
+                             sharex=True, squeeze=False, layout="constrained")
     prior = nominal_estimates(scenario)
-    for ax, group, unit in [(axes[0], labels[:n * n], "[-]"),
-                            (axes[1], labels[n * n:], "[N m s]")]:
-        for color, (label, col) in enumerate(group):
-            ax.plot(t[i], dac["true_matrices"][i, col], color=f"C{color}", lw=1.2,
-                    label=f"true {label}")
-            ax.plot(t[i], dac["estimates"][i, col], color=f"C{color}", lw=0.8, ls="--",
-                    label=f"learned {label}")
-            ax.axhline(prior[col], color=f"C{color}", lw=0.8, ls=":",
-                       label=f"nominal {label}")
-        ax.set_ylabel(f"entries of {'B' if unit == '[-]' else 'D'} {unit}")
-        ax.legend(fontsize=7, ncol=3 * n, loc="upper left")
-    return _save(fig, out, name)
+    cells = [(grid[r, c], r * n + c, r"$B_{%d%d}$ [-]" % (r + 1, c + 1))
+             for r in range(n) for c in range(n)]
+    cells += [(grid[n, k], n * n + k, r"$D_{%d%d}$ [N m s]" % (k + 1, k + 1))
+              for k in range(n)]
+    for ax, column, name in cells:
+        _shade(ax, scenario, xlim, label=False)
+        ax.grid(True, lw=0.3)
+        _trace(ax, t, dac["true_matrices"][:, column], xlim, label="true",
+               **ENTRY_STYLES["true"])
+        _trace(ax, t, dac["estimates"][:, column], xlim, label="learned",
+               **ENTRY_STYLES["learned"])
+        ax.axhline(prior[column], label="nominal (prior)", **ENTRY_STYLES["nominal"])
+        ax.set_ylabel(name, fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in grid[-1]:
+        ax.set_xlabel("time t [s]", fontsize=8)
+    grid[-1, 0].set_xlim(xlim)
+    series = grid[0, 0].get_legend_handles_labels()[0]
+    fig.legend(handles=series + _phase_handles(scenario), loc="outside upper center",
+               ncol=3 + len(_phase_handles(scenario)), fontsize=8)
+    return fig
 
 
-def _panel_d(dac: Logs, scenario: Scenario, out: Path):
+def _panel_d(dac: Logs, scenario: Scenario):
     n = scenario.robot.num_links
     t, rhs, R = dac["time"], dac["rhs_log"], RhsLog(n)
-    i = _stride(t)
-    fig, (ax1, ax2, ax3) = _figure(3, scenario)
+    fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
     for k in range(n):
-        ax1.plot(t[i], rhs[i, R.K][:, k], lw=0.8, label=f"$k_{k + 1}$")
+        _trace(ax1, t, rhs[:, R.K][:, k], xlim, color=f"C{k}", label=f"$k_{k + 1}$")
     ax1.set_ylabel(r"gains $k_p$ [1/s]")
-    ax1.legend(fontsize=7)
-    ax2.plot(t[i], rhs[i, R.c], "C0-", lw=1, label="c")
-    ax2.plot(t[i], rhs[i, R.c_min], "k--", lw=1, label=r"$c_{min}$ (eq. 48)")
+    _legend_outside(ax1)
+    _trace(ax2, t, rhs[:, R.c], xlim, color="C0", lw=1.0, label="c")
+    _trace(ax2, t, rhs[:, R.c_min], xlim, color="k", ls="--", lw=1.0,
+           label=r"$c_{min}$ (eq. 48)")
     ax2.set_ylabel("c [1/s]")
-    ax2.legend(fontsize=7)
-    ax3.semilogy(t[i], rhs[i, R.chi], "C2-", lw=0.8)
+    _legend_outside(ax2)
+    _trace(ax3, t, rhs[:, R.chi], xlim, log=True, color="C2", label=r"$\chi$")
     ax3.set_ylabel(r"$\chi$ [N m]")
-    return _save(fig, out, PANELS[3])
+    _legend_outside(ax3)
+    return fig
 
 
-def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
+def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario):
     n = scenario.robot.num_links
-    fig, (ax1, ax2, ax3) = _figure(3, scenario)
-    for logs, label, style in [(model_based, "model-based", "C1-"), (dac, "DAC-pH", "C0-")]:
-        t = logs["time"]
-        i = _stride(t)
-        ax1.plot(t[i], logs["lhs_log"][i, LhsLog(n).alpha_error], style, lw=0.7,
-                 label=label)
-        ax2.plot(t[i], np.linalg.norm(logs["lhs_log"][i, LhsLog(n).s], axis=1), style,
-                 lw=0.7,
-                 label=label)
-    ax1.set_ylabel(r"$\tilde\alpha$ [rad]")
-    ax1.legend(fontsize=7)
+    layout = LhsLog(n)
+    fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
+    for name, logs in (("model-based", model_based), ("dac", dac)):
+        t, lhs = logs["time"], logs["lhs_log"]
+        _trace(ax1, t, np.abs(lhs[:, layout.alpha_error]), xlim, log=True,
+               **CONTROLLER_STYLES[name])
+        _trace(ax2, t, np.linalg.norm(lhs[:, layout.s], axis=1), xlim, log=True,
+               **CONTROLLER_STYLES[name])
+    ax1.set_ylabel(r"$|\tilde\alpha|$ [rad]")
     ax2.set_ylabel(r"$\|s\|$ [rad/s]")
-    t = dac["time"]
-    i = _stride(t)
+    _legend_outside(ax1)
+    _legend_outside(ax2)
     for k in range(n):
-        ax3.plot(t[i], dac["disturbance"][i, k], lw=0.5, label=f"$d_{k + 1}$")
+        _trace(ax3, dac["time"], dac["disturbance"][:, k], xlim, color=f"C{k + 2}",
+               label=f"$d_{k + 1}$")
     ax3.set_ylabel("d(t) [N m]")
-    ax3.legend(fontsize=7)
-    return _save(fig, out, PANELS[4])
+    _legend_outside(ax3)
+    return fig
 
 
-def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario, out: Path):
+def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario):
     n = scenario.robot.num_links
-    fig, (ax1, ax2, ax3) = _figure(3, scenario)
-    for logs, label, ls in [(model_based, "model-based", ":"), (dac, "DAC-pH", "-")]:
-        t = logs["time"]
-        i = _stride(t)
-        for k in range(n):
-            ax1.plot(t[i], logs["u"][i, k], color=f"C{k}", ls=ls, lw=0.6,
-                     label=f"$u_{k + 1}$ {label}")
-    ax1.set_ylabel("u [N m]")
-    ax1.legend(fontsize=7, ncol=2)
+    fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
     t = dac["time"]
+    for k in range(n):
+        _trace(ax1, t, dac["u"][:, k], xlim, color=f"C{k}", label=f"$u_{k + 1}$")
+        u_model_based = np.interp(t, model_based["time"], model_based["u"][:, k],
+                                  right=np.nan)
+        _trace(ax2, t, u_model_based - dac["u"][:, k], xlim, color=f"C{k}",
+               label=f"$u_{k + 1}$")
+    ax1.set_ylabel("u, DAC-pH [N m]")
+    ax2.set_ylabel("u, model-based\nminus DAC-pH [N m]")
+    _legend_outside(ax1)
+    _legend_outside(ax2)
     base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(n).Split(dac["state"])
-    i = _stride(t)
-    ax2.plot(t[i], base_pose[i, 2], "k-", lw=0.8, label=r"$\theta_0$ (base)")
+    _trace(ax3, t, base_pose[:, 2], xlim, color="k", label=r"$\theta_0$ (base)")
     for k in range(n):
-        ax2.plot(t[i], q[i, k], color=f"C{k}", lw=0.8, label=f"$q_{k + 1}$")
-    ax2.plot(t[i], dac["lhs_log"][i, LhsLog(n).alpha_desired], "C3--", lw=0.8,
-             label=r"$\alpha_d$")
-    ax2.set_ylabel("angles [rad]")
-    ax2.legend(fontsize=7, ncol=n + 2)
-    for k in range(n):
-        ax3.plot(t[i], qdot[i, k], color=f"C{k}", lw=0.6,
-                 label=r"$\dot q_{%d}$" % (k + 1))
-    ax3.set_ylabel("joint rates [rad/s]")
-    ax3.legend(fontsize=7)
-    return _save(fig, out, PANELS[5])
+        _trace(ax3, t, q[:, k], xlim, color=f"C{k}", label=f"$q_{k + 1}$")
+        _trace(ax4, t, qdot[:, k], xlim, color=f"C{k}", label=r"$\dot q_{%d}$" % (k + 1))
+    _trace(ax3, t, dac["lhs_log"][:, LhsLog(n).alpha_desired], xlim, color="C3",
+           ls="--", label=r"$\alpha_d$")
+    ax3.set_ylabel("angles, DAC-pH [rad]")
+    ax4.set_ylabel("joint rates, DAC-pH [rad/s]")
+    _legend_outside(ax3)
+    _legend_outside(ax4)
+    return fig
 
 
 def zoom_window(scenario: Scenario):
@@ -207,13 +279,25 @@ def zoom_window(scenario: Scenario):
     return (start - length / 48, start + length / 12)
 
 
+def make_panels(dac: Logs, model_based: Logs, scenario: Scenario) -> Dict[str, object]:
+    """The six panels as matplotlib figures, by name (PANELS)."""
+    figures = [_panel_a(dac, scenario), _entries(dac, scenario),
+               _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario),
+               _panel_e(dac, model_based, scenario),
+               _panel_f(dac, model_based, scenario)]
+    for fig in figures:
+        _fit_log_axes(fig)
+    return dict(zip(PANELS, figures))
+
+
 def plot_panels(dac: Logs, model_based: Logs, scenario: Scenario, out_dir) -> List[Path]:
     """Writes the six panels (PNG and PDF) into out_dir; returns their paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return (_panel_a(dac, scenario, out)
-            + _entries(dac, scenario, out, PANELS[1])
-            + _entries(dac, scenario, out, PANELS[2], zoom_window(scenario))
-            + _panel_d(dac, scenario, out)
-            + _panel_e(dac, model_based, scenario, out)
-            + _panel_f(dac, model_based, scenario, out))
+    paths = []
+    for name, fig in make_panels(dac, model_based, scenario).items():
+        paths += [out / f"{name}.png", out / f"{name}.pdf"]
+        fig.savefig(paths[-2], dpi=DPI)
+        fig.savefig(paths[-1])
+        plt.close(fig)
+    return paths

@@ -198,14 +198,17 @@ def _PopulateArm(plant: MultibodyPlant, robot: RobotParams) -> None:
         _RegisterGeometry(plant, robot, bodies)
 
 
+BASE_COLOR = (0.75, 0.75, 0.8, 1.0)                          # RGBA of the base's box
+LINK_COLORS = ((0.85, 0.45, 0.1, 1.0), (0.2, 0.45, 0.8, 1.0))  # links alternate
+
+
 def _RegisterGeometry(plant: MultibodyPlant, robot: RobotParams, bodies: List) -> None:
     shapes = [(bodies[0], Box(robot.base.size, robot.base.size, GEOMETRY_DEPTH),
-               RigidTransform(), np.array([0.75, 0.75, 0.8, 1.0]))]
+               RigidTransform(), np.array(BASE_COLOR))]
     for k, link in enumerate(robot.links):
         shapes.append((bodies[k + 1], Box(link.length, link.width, GEOMETRY_DEPTH),
                        RigidTransform([link.length / 2, 0.0, 0.0]),
-                       np.array([0.85, 0.45, 0.1, 1.0]) if k % 2 == 0
-                       else np.array([0.2, 0.45, 0.8, 1.0])))
+                       np.array(LINK_COLORS[k % len(LINK_COLORS)])))
     for body, shape, X_BG, rgba in shapes:
         plant.RegisterVisualGeometry(body, X_BG, shape, body.name() + "_visual", rgba)
 

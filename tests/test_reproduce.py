@@ -92,3 +92,47 @@ def test_animation_shows_the_robot_offline_in_headless_chromium(quick_reproducti
     assert saturated.sum() > 2000, "no coloured links in the screenshot"
     assert red.sum() > 50, "no alpha_d bar in the screenshot"
     assert grey.sum() > 2000, "no base in the screenshot"
+
+
+def test_animation_explains_itself(quick_reproduction, tmp_path):
+    """The overlay names what is drawn and, while the recording plays, shows the
+    simulated time and the phase (read from the page's DOM after 20 s of virtual
+    time; the time has moved on from 0), and the screenshot shows the overlay's box with text in it."""
+    import re
+    import matplotlib.image
+    from dacph_drake.animation import OVERLAY_BACKGROUND
+    _, out = quick_reproduction
+    page = (out / "animation_dac.html").resolve().as_uri()
+    browser = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
+               "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+               "--proxy-server=127.0.0.1:9", "--window-size=800,800",
+               "--virtual-time-budget=20000"]
+    dom = subprocess.run(browser + ["--dump-dom", page], check=True, capture_output=True,
+                         text=True, timeout=120).stdout
+    time_shown = float(re.search(r'id="dacph-time">t = ([0-9.]+) s<', dom).group(1))
+    assert 0.0 < time_shown <= 26.0
+    assert re.search(r'id="dacph-phase">(Warm-up|Phase [123])', dom)
+    for entry in ("base", "link 1", "link 2", "desired end-effector direction",
+                  "measured end-effector direction"):
+        assert entry in dom, entry
+    shot = tmp_path / "shot.png"
+    subprocess.run(browser + [f"--screenshot={shot}", page], check=True,
+                   capture_output=True, timeout=120)
+    image = matplotlib.image.imread(shot)[..., :3]
+    background = np.array([int(OVERLAY_BACKGROUND[i:i + 2], 16) for i in (1, 3, 5)]) / 255
+    box = np.abs(image - background).max(axis=2) < 0.02
+    rows, columns = np.nonzero(box)
+    assert box.sum() > 10_000, "no overlay box in the screenshot"
+    inside = image[rows.min():rows.max(), columns.min():columns.max()]
+    assert (inside.mean(axis=2) < 0.3).sum() > 300, "no text in the overlay"
+
+
+def test_writing_an_animation_starts_no_announced_server(quick_reproduction, tmp_path,
+                                                         caplog, capsys):
+    """Only a file is written: no "Meshcat listening for connections" message."""
+    from dacph_drake.cli import main
+    _, out = quick_reproduction
+    assert main(["animate", str(out), "--out", str(tmp_path / "a.html")]) == 0
+    assert (tmp_path / "a.html").stat().st_size > 100_000
+    captured = capsys.readouterr()
+    assert "listening" not in caplog.text + captured.out + captured.err
