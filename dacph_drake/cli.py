@@ -43,8 +43,8 @@ def _simulate(args) -> int:
         for name, value in run_metrics(result.logs, scenario).items():
             phase = name.split(".")[0]
             reached = phase not in starts or result.final_time > starts[phase]
-            print(f"  {name:32s} {value:.6g}" if reached else
-                  f"  {name:32s} not reached (the run ended at "
+            print(f"  {name:32s} {value:.6g}" if reached and value == value else
+                  f"  {name:32s} n/a, not reached (the run ended at "
                   f"{result.final_time:g} s)")
     print(f"saved to {args.out}")
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
@@ -55,7 +55,7 @@ def _diagram(args) -> int:
     from dacph_drake.graph import render_diagram
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
-    out = Path(args.out) if args.out else Path(args.scenario).parent
+    out = Path(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
         loop = build_closed_loop(controller, scenario)
@@ -66,7 +66,7 @@ def _diagram(args) -> int:
 
 
 def _print_table(summary) -> None:
-    from dacph_drake.reproduce import format_value
+    from dacph_drake.reproduce import NOT_REACHED, format_value
     for row in summary["table"]:
         print(f"  {row['metric']:52s} paper {format_value(row['paper'], row['unit']):>14s}"
               f"   here {format_value(row['this_project'], row['unit']):>14s}")
@@ -74,7 +74,7 @@ def _print_table(summary) -> None:
         print(f"  {'per phase:':52s} {'1':>14s} {'2':>14s} {'3':>14s}")
     for row in summary["ablation"]:
         print(f"  {row['metric']:52s} " + " ".join(
-            f"{format_value(v, row['unit']):>14s}" for v in row["phases"]))
+            f"{format_value(v, row['unit'], NOT_REACHED):>14s}" for v in row["phases"]))
 
 
 def _animate_run(run_dir, controller: str, out=None):
@@ -197,7 +197,8 @@ def main(argv=None) -> int:
     graph.add_argument("scenario")
     graph.add_argument("--controller", choices=CONTROLLERS, default=None,
                        help="default: all")
-    graph.add_argument("--out", default=None, help="default: the scenario's folder")
+    graph.add_argument("--out", default=None,
+                       help="folder for the files (default: the current directory)")
     graph.set_defaults(run=_diagram)
     rep = commands.add_parser(
         "reproduce", help="run DAC, its learning ablation (dac-nominal) and the "

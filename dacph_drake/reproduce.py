@@ -136,13 +136,20 @@ def ablation_markdown(rows: List[Dict], title: str) -> str:
     for row in rows:
         metric = row["metric"].replace("|", "\\|")
         lines.append(f"| {metric} | " + " | ".join(
-            format_value(v, row["unit"]) for v in row["phases"]) + " |")
+            format_value(v, row["unit"], NOT_REACHED) for v in row["phases"]) + " |")
     return "\n".join(lines) + "\n"
 
 
-def format_value(value, unit: str) -> str:
+NOT_REACHED = "n/a (phase not reached)"
+
+
+def format_value(value, unit: str, missing: str = "n/a") -> str:
+    """``value`` with its unit (4 significant digits); None: "not reported"; NaN
+    (no samples to compute it from): ``missing``."""
     if value is None:
         return "not reported"
+    if value != value:
+        return missing
     if unit == "%":
         return f"{100 * value:+.2f} %" if value < 0 else f"{100 * value:.2f} %"
     if unit == "samples":

@@ -7,7 +7,6 @@ import os
 import platform
 import resource
 import signal
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.progress import progress_bar
 from dacph_drake.scenario import Scenario, save_scenario, saved_forms
 
 MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
@@ -66,18 +66,6 @@ def versions() -> Dict[str, str]:
     from dacph_drake import __version__
     out["dacph_drake"] = __version__
     return out
-
-
-def _Progress(fraction: float, start: float, label: str) -> None:
-    width = 30
-    done = int(width * fraction)
-    elapsed = time.perf_counter() - start
-    eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
-    sys.stderr.write(f"\r{label} [{'#' * done}{'.' * (width - done)}] "
-                     f"{100 * fraction:5.1f}%  {elapsed:6.0f} s elapsed, ETA {eta:5.0f} s")
-    if fraction >= 1:
-        sys.stderr.write("\n")
-    sys.stderr.flush()
 
 
 class _Terminated(KeyboardInterrupt):
@@ -187,7 +175,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     simulator.Initialize()
     start = time.perf_counter()
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
-    label = f"{controller:>11s}"
+    bar = progress_bar(duration, f"{controller:>11s}", "s", enabled=progress)
     handle_term = interruptible and threading.current_thread() is threading.main_thread()
     previous_term = signal.signal(signal.SIGTERM, _RaiseTerminated) if handle_term else None
     interrupted = False
@@ -203,7 +191,6 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
 
     last_checkpoint = start
     try:
-        shown = 0
         for k in range(1, chunks + 1):
             try:
                 simulator.AdvanceTo(min(k * MONITOR_PERIOD, duration))
@@ -214,9 +201,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
             if reason:
                 problem["reason"] = reason
                 break
-            if progress and (int(200 * k / chunks) > shown or k == chunks):
-                shown = int(200 * k / chunks)
-                _Progress(k / chunks, start, label)
+            bar.update(context.get_time() - bar.n)
             if checkpoint and time.perf_counter() - last_checkpoint >= checkpoint[0] \
                     and k < chunks:
                 checkpoint[1](result("incomplete", "checkpoint at t = "
@@ -230,10 +215,9 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
         source = "SIGTERM" if isinstance(e, _Terminated) else "SIGINT"
         problem["reason"] = f"interrupted by {source} at t = {context.get_time():.4f} s"
     finally:
+        bar.close()
         if handle_term:
             signal.signal(signal.SIGTERM, previous_term)
-    if progress and problem:
-        sys.stderr.write("\n")
     return result("interrupted" if interrupted else "diverged" if problem else "ok",
                   problem.get("reason", ""))
 

@@ -16,9 +16,22 @@ def test_rendered_graphs_are_in_sync(name, controller):
     loop = build_closed_loop(controller, load_scenario(DIAGRAMS / f"{name}.yaml"))
     stem = DIAGRAMS / f"{name}_{controller.replace('-', '_')}"
     assert stem.with_suffix(".dot").read_text() == diagram_graphviz(loop.diagram), \
-        f"run: dacph diagram diagrams/{name}.yaml"
+        f"run: dacph diagram diagrams/{name}.yaml --out diagrams"
     for suffix in (".svg", ".png"):
         assert stem.with_suffix(suffix).stat().st_size > 1000
     text = stem.with_suffix(".dot").read_text()
     for system in loop.systems:
         assert f"name={system}" in text
+
+
+def test_dacph_diagram_writes_to_the_current_directory(tmp_path, monkeypatch):
+    """Without --out, the files go to the current directory, never next to the
+    scenario file (in a checkout, that would overwrite the committed graphs)."""
+    from dacph_drake.cli import main
+    before = {p.name: p.stat().st_mtime_ns for p in DIAGRAMS.iterdir()}
+    monkeypatch.chdir(tmp_path)
+    assert main(["diagram", str(DIAGRAMS / "short.yaml"), "--controller",
+                 "model-based"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "short_model_based.dot", "short_model_based.png", "short_model_based.svg"]
+    assert {p.name: p.stat().st_mtime_ns for p in DIAGRAMS.iterdir()} == before

@@ -274,3 +274,21 @@ def test_logs_of_a_run_stopped_between_two_loggers_are_cut_to_a_common_length():
     assert {name: len(data) for name, data in logs.items()} == \
         {"state": 268, "estimates": 268, "time": 268}
     np.testing.assert_array_equal(logs["time"], 0.01 * np.arange(268))
+
+
+def test_progress_to_a_log_file_stays_a_few_lines(capsys):
+    """Progress bars (tqdm) written to a non-terminal stderr are redrawn at most once
+    a minute: a run and a 50-trial sweep each leave a handful of lines."""
+    from dacph_drake.montecarlo.runner import _Progress
+    from dacph_drake.run import simulate
+    simulate(short_scenario(), "model-based", duration=2.0, progress=True)
+    err = capsys.readouterr().err
+    segments = [s for s in re.split(r"[\r\n]", err) if s.strip()]
+    assert 1 <= len(segments) <= 4 and "100%" in segments[-1], segments
+    bar = _Progress(50, 0, enabled=True)
+    for trial in range(50):
+        bar.update({"status": "ok" if trial % 10 else "failed"})
+    bar.close()
+    segments = [s for s in re.split(r"[\r\n]", capsys.readouterr().err) if s.strip()]
+    assert 1 <= len(segments) <= 4 and "50/50" in segments[-1], segments
+    assert "failed=5" in segments[-1]

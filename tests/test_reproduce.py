@@ -136,3 +136,10 @@ def test_writing_an_animation_starts_no_announced_server(quick_reproduction, tmp
     assert (tmp_path / "a.html").stat().st_size > 100_000
     captured = capsys.readouterr()
     assert "listening" not in caplog.text + captured.out + captured.err
+
+
+def test_tables_say_which_phases_a_run_never_reached():
+    from dacph_drake.reproduce import NOT_REACHED, ablation_markdown
+    text = ablation_markdown([{"metric": "RMS |x|", "unit": "rad",
+                               "phases": [2e-5, float("nan"), float("nan")]}], "t")
+    assert text.count(NOT_REACHED) == 2 and "nan" not in text and "2e-05 rad" in text

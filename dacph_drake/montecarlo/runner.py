@@ -2,7 +2,6 @@
 an executor (at most one per worker slot in flight), persist each row as it
 arrives, show progress with an ETA."""
 import sys
-import time
 from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Iterator, List, Optional
@@ -12,6 +11,7 @@ from dacph_drake.montecarlo.executors import (default_workers, local_process_poo
                                               stop_local_pool)
 from dacph_drake.montecarlo.store import RowStore, sorted_rows
 from dacph_drake.montecarlo.trial import Trial, failed_row, run_trial
+from dacph_drake.progress import progress_bar
 
 
 def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor] = None,
@@ -31,9 +31,9 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
     label = (f"{type(executor).__name__}, {slots} slots" if executor
              else f"local process pool, {slots} workers")
     store = RowStore(out_dir, definition, versions(), label)
+    bar = _Progress(definition.sweep.trials, len(store.rows), progress)
     try:
         pending = [t for t in range(definition.sweep.trials) if t not in store.rows]
-        bar = _Progress(definition.sweep.trials, len(store.rows), progress)
         tasks = (_task(definition, t, store.out) for t in pending)
 
         def record(row: Dict) -> None:
@@ -46,6 +46,7 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
             _run_on_local_pools(tasks, slots, record)
         return sorted_rows(store.rows)
     finally:
+        bar.close()
         store.close()
 
 
@@ -131,29 +132,19 @@ def _salvage(in_flight: Dict, record) -> List[Trial]:
 
 
 class _Progress:
-    """One stderr line: bar, trials done / total, failed, elapsed, ETA (from this
-    session's rate)."""
+    """The sweep's bar: trials done / total, failed, rate and ETA (from this
+    session's trials)."""
 
     def __init__(self, total: int, done: int, enabled: bool):
-        self._total, self._done, self._enabled = total, done, enabled
-        self._start_done, self._failed = done, 0
-        self._start = time.perf_counter()
         if enabled and done:
             sys.stderr.write(f"resuming: {done} of {total} trials already done\n")
+        self._bar = progress_bar(total, "sweep", "trial", enabled, initial=done)
+        self._failed = 0
 
     def update(self, row: Dict) -> None:
-        self._done += 1
         self._failed += row["status"] != "ok"
-        if not self._enabled:
-            return
-        elapsed = time.perf_counter() - self._start
-        rate = (self._done - self._start_done) / elapsed
-        eta = (self._total - self._done) / rate
-        width = 30
-        filled = int(width * self._done / self._total)
-        sys.stderr.write(f"\rsweep [{'#' * filled}{'.' * (width - filled)}] "
-                         f"{self._done}/{self._total} trials, {self._failed} failed, "
-                         f"{elapsed:6.0f} s elapsed, ETA {eta:6.0f} s")
-        if self._done == self._total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+        self._bar.set_postfix(failed=self._failed, refresh=False)
+        self._bar.update(1)
+
+    def close(self) -> None:
+        self._bar.close()

@@ -1,0 +1,19 @@
+"""Progress bars: tqdm (a widget in Jupyter, a bar with rate and ETA on a terminal).
+When stderr is neither a terminal nor a notebook (a log file, CI), the bar is
+redrawn at most once a minute, so logs stay a bounded number of lines."""
+import sys
+
+from tqdm.auto import tqdm
+
+LOG_REDRAW_PERIOD = 60.0        # [s] between redraws when stderr is not interactive
+
+
+def progress_bar(total: float, desc: str, unit: str, enabled: bool = True,
+                 initial: float = 0) -> tqdm:
+    """A tqdm bar on stderr counting ``unit`` from ``initial`` to ``total``; a no-op
+    bar (same methods) unless ``enabled``."""
+    interactive = tqdm.__module__ == "tqdm.notebook" or sys.stderr.isatty()
+    return tqdm(total=total, initial=initial, desc=desc, unit=unit, disable=not enabled,
+                file=sys.stderr, dynamic_ncols=True,
+                mininterval=0.5 if interactive else LOG_REDRAW_PERIOD,
+                maxinterval=max(10.0, 0.5 if interactive else LOG_REDRAW_PERIOD))
