@@ -1,7 +1,6 @@
-"""A self-contained HTML animation of a run: the ground-truth plant replayed in
-Drake's Meshcat from the logged state, with the desired end-effector orientation
-alpha_d (red bar) and the measured one alpha (dark bar) drawn at the end effector,
-viewed top-down (the robot's plane). An overlay names what is drawn and shows the
+"""The arm in Meshcat: ArmViewer draws a plant state (live during a simulation,
+run.simulate(meshcat=...)), and write_animation replays a run's logs into a
+self-contained HTML file, with an overlay that names what is drawn and shows the
 simulated time and the current phase while it plays.
 """
 import contextlib
@@ -49,61 +48,117 @@ def playback_speedup(duration: float, max_playback: float) -> float:
     return max(1.0, duration / max_playback)
 
 
+class ArmViewer:
+    """The ground-truth arm in Meshcat, viewed top-down (the robot's plane), with
+    the desired end-effector direction alpha_d (wide red bar) and the measured one
+    alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both stay visible when
+    they agree). Draw() shows one plant state, live or into a recording."""
+
+    def __init__(self, scenario: Scenario, meshcat: Meshcat, view: float,
+                 fps: float = 30.0):
+        """``view``: half-width of the square shown [m]; ``fps``: the
+        visualizer's publish rate."""
+        self.meshcat = meshcat
+        self._coordinates = ArmCoordinates.ForPlanarArm(scenario.robot.num_links)
+        builder = DiagramBuilder()
+        self._plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
+        self.visualizer = MeshcatVisualizer.AddToBuilder(
+            builder, scene_graph, meshcat,
+            MeshcatVisualizerParams(publish_period=1.0 / fps))
+        diagram = builder.Build()
+        self._context = diagram.CreateDefaultContext()
+        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
+        self._visualizer_context = self.visualizer.GetMyContextFromRoot(self._context)
+        self._end_effector = self._plant.GetFrameByName(END_EFFECTOR)
+        meshcat.Set2dRenderMode(RigidTransform(RotationMatrix(
+            np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])), [0, 0, 1.0]),
+            -view, view, -view, view)
+        for path, color, width in ((DESIRED_PATH, DESIRED_COLOR, 0.018),
+                                   (MEASURED_PATH, MEASURED_COLOR, 0.004)):
+            meshcat.SetObject(path, Box(BAR_LENGTH, width, 0.008), Rgba(*color))
+
+    @staticmethod
+    def Reach(scenario: Scenario) -> float:
+        """Distance from the base's centre to the arm's stretched-out tip [m]."""
+        return (scenario.robot.base.size / 2
+                + sum(link.length for link in scenario.robot.links))
+
+    def Draw(self, x: np.ndarray, alpha_desired: float, time: float = None) -> None:
+        """Shows plant state ``x`` and alpha_d; with ``time``, as the frame of a
+        recording at that playback time."""
+        self._context.SetTime(time or 0.0)
+        self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
+        self.visualizer.ForcedPublish(self._visualizer_context)
+        base_pose, q, _, _ = self._coordinates.Split(x)
+        end = self._end_effector.CalcPoseInWorld(self._plant_context).translation()
+        for path, alpha, height in ((DESIRED_PATH, alpha_desired, 0.02),
+                                    (MEASURED_PATH, base_pose[2] + q.sum(), 0.03)):
+            direction = np.array([np.cos(alpha), np.sin(alpha), 0.0])
+            pose = RigidTransform(RotationMatrix.MakeZRotation(alpha),
+                                  end + 0.5 * BAR_LENGTH * direction + [0, 0, height])
+            if time is None:
+                self.meshcat.SetTransform(path, pose)
+            else:
+                self.meshcat.SetTransform(path, pose, time)
+
+
+class LiveView:
+    """Draws a closed loop's ground truth into ``meshcat`` while it simulates:
+    Update(root_context) after each advance draws the plant state and alpha_d (from
+    the controller's lhs_log output, if it has one) at most ``fps`` times per
+    simulated second, and sets Meshcat's simulation time."""
+
+    def __init__(self, loop, meshcat: Meshcat, fps: float = 30.0):
+        scenario = loop.scenario
+        self._viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
+        self._loop, self._period, self._next = loop, 1.0 / fps, 0.0
+        self._lhs_log = loop.loggers.get("lhs_log")
+        self._alpha_desired = LhsLog(scenario.robot.num_links).alpha_desired
+
+    def Update(self, root_context) -> None:
+        t = root_context.get_time()
+        if t < self._next:
+            return
+        self._next = t + self._period
+        plant = self._loop.plant
+        x = plant.GetMyContextFromRoot(root_context).get_continuous_state_vector(
+            ).CopyToVector()
+        if self._lhs_log is not None:
+            logger_context = self._lhs_log.GetMyContextFromRoot(root_context)
+            alpha_desired = self._lhs_log.get_input_port().Eval(logger_context)[
+                self._alpha_desired]
+        else:
+            base_pose, q, _, _ = ArmCoordinates.FromPlant(plant).Split(x)
+            alpha_desired = base_pose[2] + q.sum()
+        self._viewer.meshcat.SetSimulationTime(t)
+        self._viewer.Draw(x, alpha_desired)
+
+
 def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
                     max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
-    """Replays logs["state"] (plant state, sampled at logs["time"]), the logged
-    alpha_d (lhs_log) and the measured alpha = theta0 + q1 + ... + qn into a Meshcat
-    recording and writes meshcat.StaticHtml(), with the overlay, to out_html. Runs
-    longer than ``max_playback`` seconds are sped up to fit."""
+    """Replays logs["state"] (plant state, sampled at logs["time"]) and the logged
+    alpha_d (lhs_log) through an ArmViewer into a Meshcat recording and writes
+    meshcat.StaticHtml(), with the overlay, to out_html. Runs longer than
+    ``max_playback`` seconds are sped up to fit."""
     require_positive("fps", fps, "frames per second")
     require_positive("max_playback", max_playback, "s")
     t, x = logs["time"], logs["state"]
     if len(t) < 2:
         raise ValueError("the run has fewer than two logged samples to animate")
-    n = scenario.robot.num_links
-    alpha_desired = logs["lhs_log"][:, LhsLog(n).alpha_desired]
-    base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(x)
-    alpha_measured = base_pose[:, 2] + q.sum(axis=1)
+    alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.num_links).alpha_desired]
     if meshcat is None:
         with quiet_drake_info():
             meshcat = Meshcat()
-    builder = DiagramBuilder()
-    plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
-    visualizer = MeshcatVisualizer.AddToBuilder(
-        builder, scene_graph, meshcat, MeshcatVisualizerParams(publish_period=1.0 / fps))
-    diagram = builder.Build()
-    context = diagram.CreateDefaultContext()
-    plant_context = plant.GetMyContextFromRoot(context)
-    visualizer_context = visualizer.GetMyContextFromRoot(context)
-    end_effector = plant.GetFrameByName(END_EFFECTOR)
-    reach = scenario.robot.base.size / 2 + sum(link.length for link in scenario.robot.links)
-    view = 1.2 * reach + float(np.max(np.abs(x[:, :2])))
-    meshcat.Set2dRenderMode(RigidTransform(RotationMatrix(
-        np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])), [0, 0, 1.0]),
-        -view, view, -view, view)
-    # alpha_d wide and below, alpha thin on top: both stay visible when they agree.
-    for path, color, width in ((DESIRED_PATH, DESIRED_COLOR, 0.018),
-                               (MEASURED_PATH, MEASURED_COLOR, 0.004)):
-        meshcat.SetObject(path, Box(BAR_LENGTH, width, 0.008), Rgba(*color))
-
+    view = 1.2 * ArmViewer.Reach(scenario) + float(np.max(np.abs(x[:, :2])))
+    viewer = ArmViewer(scenario, meshcat, view, fps)
     speedup = playback_speedup(t[-1] - t[0], max_playback)
     frames = np.arange(t[0], t[-1] + 1e-12, speedup / fps)
     rows = np.minimum(np.searchsorted(t, frames), len(t) - 1)
-    visualizer.StartRecording(set_transforms_while_recording=False)
+    viewer.visualizer.StartRecording(set_transforms_while_recording=False)
     for row in rows:
-        playback_time = (t[row] - t[0]) / speedup
-        context.SetTime(playback_time)
-        plant.SetPositions(plant_context, x[row, :plant.num_positions()])
-        visualizer.ForcedPublish(visualizer_context)
-        end = end_effector.CalcPoseInWorld(plant_context).translation()
-        for path, alpha, height in ((DESIRED_PATH, alpha_desired[row], 0.02),
-                                    (MEASURED_PATH, alpha_measured[row], 0.03)):
-            direction = np.array([np.cos(alpha), np.sin(alpha), 0.0])
-            meshcat.SetTransform(path, RigidTransform(
-                RotationMatrix.MakeZRotation(alpha),
-                end + 0.5 * BAR_LENGTH * direction + [0, 0, height]), playback_time)
-    visualizer.StopRecording()
-    visualizer.PublishRecording()
+        viewer.Draw(x[row], alpha_desired[row], time=(t[row] - t[0]) / speedup)
+    viewer.visualizer.StopRecording()
+    viewer.visualizer.PublishRecording()
     out = Path(out_html)
     out.parent.mkdir(parents=True, exist_ok=True)
     page = meshcat.StaticHtml()

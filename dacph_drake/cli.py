@@ -6,7 +6,7 @@ import sys
 import numpy as np
 
 from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed_loop
-from dacph_drake.errors import ConfigError
+from dacph_drake.errors import ConfigError, require_nonnegative
 
 
 def _free_flight(args) -> int:
@@ -31,9 +31,19 @@ def _simulate(args) -> int:
     from dacph_drake.run import simulate
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
+    if args.realtime_rate is not None:
+        require_nonnegative("--realtime-rate", args.realtime_rate)
+        scenario.simulator.target_realtime_rate = args.realtime_rate
+    meshcat = None
+    if args.meshcat:
+        from pydrake.geometry import Meshcat
+        from dacph_drake.animation import quiet_drake_info
+        with quiet_drake_info():
+            meshcat = Meshcat()
+        print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
     result = simulate(scenario, args.controller, duration=args.duration,
                       out_dir=args.out, progress=True, interruptible=True,
-                      checkpoint_seconds=args.checkpoint)
+                      checkpoint_seconds=args.checkpoint, meshcat=meshcat)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
     if result.final_time > scenario.phases.linear_start:
@@ -47,6 +57,9 @@ def _simulate(args) -> int:
                   f"  {name:32s} n/a, not reached (the run ended at "
                   f"{result.final_time:g} s)")
     print(f"saved to {args.out}")
+    if meshcat is not None and sys.stdin.isatty():
+        input(f"Meshcat still shows the run at {meshcat.web_url()}; press Enter to "
+              "close it. ")
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
 
@@ -192,6 +205,12 @@ def main(argv=None) -> int:
     sim.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
                      help="save the logs so far every SECONDS of wall time (status "
                           "'incomplete' until the run ends; default 60)")
+    sim.add_argument("--meshcat", action="store_true",
+                     help="show the robot live in a Meshcat browser window (the URL is "
+                          "printed)")
+    sim.add_argument("--realtime-rate", type=float, default=None, metavar="RATE",
+                     help="pace the simulation at RATE x real time (sets "
+                          "simulator.target_realtime_rate; 0: as fast as possible)")
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
     graph.add_argument("scenario")

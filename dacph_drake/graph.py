@@ -32,12 +32,17 @@ def diagram_graphviz(diagram, max_depth: int = 2) -> str:
     return "\n".join(lines)
 
 
-def render_diagram(diagram, stem) -> list:
-    """Writes stem.dot, stem.svg and stem.png; returns their paths."""
+def _dot() -> str:
     dot = shutil.which("dot")
     if dot is None:
         raise RuntimeError("graphviz's 'dot' program is not installed; run "
                            "scripts/setup.sh (it installs graphviz)")
+    return dot
+
+
+def render_diagram(diagram, stem) -> list:
+    """Writes stem.dot, stem.svg and stem.png; returns their paths."""
+    dot = _dot()
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     source = stem.with_suffix(".dot")
@@ -48,3 +53,10 @@ def render_diagram(diagram, stem) -> list:
         subprocess.run([dot, f"-T{fmt}", str(source), "-o", str(target)], check=True)
         paths.append(target)
     return paths
+
+
+def diagram_svg(diagram, max_depth: int = 2) -> str:
+    """The diagram's graph as SVG text (for a notebook:
+    IPython.display.SVG(diagram_svg(loop.diagram)))."""
+    return subprocess.run([_dot(), "-Tsvg"], input=diagram_graphviz(diagram, max_depth),
+                          capture_output=True, text=True, check=True).stdout

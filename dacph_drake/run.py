@@ -15,6 +15,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from dacph_drake.animation import LiveView
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
@@ -96,7 +97,7 @@ def prepare_out_dir(out_dir) -> Path:
 
 def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
              out_dir=None, progress: bool = False, interruptible: bool = False,
-             checkpoint_seconds: Optional[float] = None) -> RunResult:
+             checkpoint_seconds: Optional[float] = None, meshcat=None) -> RunResult:
     """Builds the ``controller`` (controllers.REGISTRY) loop for ``scenario``,
     simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
     given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
@@ -108,7 +109,10 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     "interrupted"; sweeps and pools leave it off so that an interrupted trial is
     redone on resume. With ``checkpoint_seconds`` and out_dir, the logs so far are
     saved every checkpoint_seconds of wall time with status "incomplete", so that a
-    crash or kill -9 loses at most that much (every file is replaced atomically)."""
+    crash or kill -9 loses at most that much (every file is replaced atomically).
+    With ``meshcat`` (a pydrake Meshcat), the ground truth is drawn there while it
+    simulates (animation.LiveView; scenario.simulator.target_realtime_rate paces
+    it); the diagram and the results are the same as without."""
     require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
@@ -121,7 +125,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
                       lambda partial: save_run(partial, scenario, out_dir, compress=False))
     try:
         result = _Simulate(scenario, controller, duration, progress, interruptible,
-                           checkpoint)
+                           checkpoint, meshcat)
         if out_dir is not None:
             save_run(result, scenario, out_dir)
     finally:
@@ -144,10 +148,11 @@ def _LockRun(out: Path, controller: str):
 
 
 def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bool,
-              interruptible: bool, checkpoint=None) -> RunResult:
+              interruptible: bool, checkpoint=None, meshcat=None) -> RunResult:
     """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
-    partial result that often."""
+    partial result that often; ``meshcat`` gets a LiveView."""
     loop = build_closed_loop(controller, scenario)
+    live_view = LiveView(loop, meshcat) if meshcat is not None else None
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant
@@ -201,6 +206,8 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
             if reason:
                 problem["reason"] = reason
                 break
+            if live_view is not None:
+                live_view.Update(context)
             bar.update(context.get_time() - bar.n)
             if checkpoint and time.perf_counter() - last_checkpoint >= checkpoint[0] \
                     and k < chunks:

@@ -292,3 +292,24 @@ def test_progress_to_a_log_file_stays_a_few_lines(capsys):
     segments = [s for s in re.split(r"[\r\n]", capsys.readouterr().err) if s.strip()]
     assert 1 <= len(segments) <= 4 and "50/50" in segments[-1], segments
     assert "failed=5" in segments[-1]
+
+
+def test_live_meshcat_shows_the_run_without_changing_it():
+    """simulate(meshcat=...) draws the robot and both orientation bars into Meshcat
+    while it runs; the logs are bit for bit those of a run without it."""
+    from pydrake.geometry import Meshcat
+    from dacph_drake.animation import DESIRED_PATH, MEASURED_PATH, quiet_drake_info
+    from dacph_drake.run import simulate
+    with quiet_drake_info():
+        meshcat = Meshcat()
+    watched = simulate(short_scenario(), "model-based", duration=0.5, meshcat=meshcat)
+    for path in ("/drake/visualizer", DESIRED_PATH, MEASURED_PATH):
+        assert meshcat.HasPath(path), path
+    plain = simulate(short_scenario(), "model-based", duration=0.5)
+    for name, log in plain.logs.items():
+        assert np.array_equal(log, watched.logs[name]), name
+
+
+def test_realtime_rate_setting_is_checked(capsys):
+    assert main(["simulate", "short", "--out", "x", "--realtime-rate", "-1"]) == 2
+    assert "--realtime-rate = -1.0 is out of range; allowed: >= 0" in capsys.readouterr().err
