@@ -125,6 +125,9 @@ def test_short_scenario_passes_every_check(quick_reproduction, tmp_path):
     assert report["checks"]["lhs_envelope"]["samples_checked"] > 1000
     for name in ("verification.md", "verification.json", "verification.png"):
         assert (tmp_path / name).stat().st_size > 500
+    text = (tmp_path / "verification.md").read_text()
+    assert "- first_failure_time: none" in text          # a passing run has none
+    assert "None" not in text and "nan" not in text
 
 
 def _stress_run(scale, trust_ratio, out_dir=None):

@@ -195,7 +195,10 @@ _UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time
 
 
 def _Item(key: str, value) -> str:
-    """One line of verification.md: floats to 4 significant digits, with units."""
+    """One line of verification.md: floats to 4 significant digits, with units; an
+    empty or absent value (no failure, nothing evaluated) as "none"."""
+    if value is None or value == "" or (isinstance(value, float) and value != value):
+        return f"- {key}: none"
     if isinstance(value, float):
         value = f"{value:.4g}"
     elif isinstance(value, list) and all(isinstance(v, float) for v in value):
