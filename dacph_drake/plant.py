@@ -54,12 +54,24 @@ class ArmCoordinates:
 
     @staticmethod
     def FromPlant(plant: MultibodyPlant) -> "ArmCoordinates":
-        base = plant.GetJointByName(BASE_JOINT)
-        n = plant.num_actuators()
-        joints = [plant.GetJointByName(joint_name(k)) for k in range(n)]
+        """The layout of a finalized free-floating plant: the base joint is the one
+        joint on the world (the planar arms' PlanarJoint: x, y, theta0; a robot from
+        a file's quaternion floating joint: qw, qx, qy, qz, x, y, z and omega_W,
+        v_W), the arm's joints are the actuated ones, in actuator order."""
+        on_world = [plant.get_joint(i) for i in plant.GetJointIndices()
+                    if plant.get_joint(i).parent_body().index()
+                    == plant.world_body().index()]
+        if len(on_world) != 1:
+            raise ValueError(f"a free-floating plant has one joint on the world (its "
+                             f"base's); this one has {len(on_world)}")
+        base = on_world[0]
+        joints = [plant.get_joint_actuator(i).joint()
+                  for i in plant.GetJointActuatorIndices()]
         return ArmCoordinates(
-            base_q=np.arange(base.position_start(), base.position_start() + 3),
-            base_v=np.arange(base.velocity_start(), base.velocity_start() + 3),
+            base_q=np.arange(base.position_start(),
+                             base.position_start() + base.num_positions()),
+            base_v=np.arange(base.velocity_start(),
+                             base.velocity_start() + base.num_velocities()),
             joint_q=np.array([j.position_start() for j in joints]),
             joint_v=np.array([j.velocity_start() for j in joints]))
 

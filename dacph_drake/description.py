@@ -1,0 +1,83 @@
+"""Free-floating manipulators from robot description files (URDF, SDF) with Drake's
+Parser: the root body becomes a free 6-DOF base (Drake's quaternion floating joint,
+so nq = nv + 1), every revolute joint of the arm is actuated, gravity is zero.
+
+The project ships its own descriptions (Drake's bundled models are fetched from the
+internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
+from pathlib import Path
+
+from pydrake.geometry import SceneGraph
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
+from pydrake.multibody.tree import RevoluteJoint
+from pydrake.systems.framework import DiagramBuilder
+
+from dacph_drake.errors import ConfigError
+
+MODELS = Path(__file__).resolve().parent / "models"
+# scripts/make_spatial_models.py writes them.
+SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
+                  "satellite_6dof": MODELS / "satellite_6dof.urdf"}
+
+
+def robot_description(name_or_path) -> Path:
+    """The description file of a shipped robot (SPATIAL_ROBOTS) or a path to a
+    .urdf / .sdf file (ConfigError naming what is allowed otherwise)."""
+    if str(name_or_path) in SPATIAL_ROBOTS:
+        return SPATIAL_ROBOTS[str(name_or_path)]
+    path = Path(name_or_path)
+    if path.suffix not in (".urdf", ".sdf") or not path.is_file():
+        raise ConfigError(f"robot description {str(name_or_path)!r}: no such .urdf or "
+                          f".sdf file; allowed: a file, or one of "
+                          f"{', '.join(SPATIAL_ROBOTS)}")
+    return path
+
+
+def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
+    """Parses the description into ``plant`` (not finalized), actuates each
+    revolute joint the file leaves unactuated (in the file's joint order; no effort
+    limit) and switches gravity off."""
+    path = robot_description(name_or_path)
+    try:
+        Parser(plant).AddModels(str(path))
+    except RuntimeError as e:
+        raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
+    joints = [plant.get_joint(i) for i in plant.GetJointIndices()
+              if isinstance(plant.get_joint(i), RevoluteJoint)]
+    if not joints:
+        raise ConfigError(f"{path} has no revolute joint; allowed: an arm of revolute "
+                          "joints on a free base")
+    actuated = {plant.get_joint_actuator(i).joint().index()
+                for i in plant.GetJointActuatorIndices()}     # by the file's transmissions
+    for joint in joints:
+        if joint.index() not in actuated:
+            plant.AddJointActuator(f"tau_{joint.name()}", joint)
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
+
+
+def AddRobotFromDescription(builder: DiagramBuilder, name_or_path
+                            ) -> "tuple[MultibodyPlant, SceneGraph]":
+    """The finalized continuous plant of the description, with its visual geometry
+    registered with a SceneGraph (for Meshcat), added to ``builder``."""
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    PopulateFromDescription(plant, name_or_path)
+    plant.Finalize()
+    _RequireFreeFloating(plant, name_or_path)
+    return plant, scene_graph
+
+
+def MakeRobotPlant(name_or_path) -> MultibodyPlant:
+    """A finalized plant of the description without geometry, for a controller's
+    internal model."""
+    plant = MultibodyPlant(time_step=0.0)
+    PopulateFromDescription(plant, name_or_path)
+    plant.Finalize()
+    _RequireFreeFloating(plant, name_or_path)
+    return plant
+
+
+def _RequireFreeFloating(plant: MultibodyPlant, name_or_path) -> None:
+    floating = plant.GetFloatingBaseBodies()
+    if len(floating) != 1:
+        raise ConfigError(f"{name_or_path}: {len(floating)} free bodies; allowed: one "
+                          "root body (the base), the arm attached to it by joints")

@@ -1,0 +1,254 @@
+"""Free-floating robots from description files (a free quaternion base, nq != nv) and
+the reduced model of any free-floating plant (floating_model.FloatingBaseModel):
+the physics tests of the planar model, for the shipped 3-DOF and 6-DOF spatial
+robots and, against the planar closed form, for the planar arms."""
+import numpy as np
+import pytest
+from pydrake.math import RollPitchYaw
+from pydrake.multibody.tree import JacobianWrtVariable
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import Sine
+
+from dacph_drake.description import (SPATIAL_ROBOTS, AddRobotFromDescription,
+                                     MakeRobotPlant)
+from dacph_drake.errors import ConfigError
+from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.plant import MakeArmPlant
+from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.simulation import FixedStepConfig, MakeSimulator
+
+
+@pytest.fixture(scope="module", params=list(SPATIAL_ROBOTS))
+def spatial(request):
+    return request.param, FloatingBaseModel(MakeRobotPlant(request.param))
+
+
+def _zero_momentum_state(model, rng, scale=1.0):
+    """Random joints, a random base pose, joint rates and the base twist that
+    makes the momentum zero."""
+    n = model.num_joints
+    q = rng.uniform(-np.pi, np.pi, n)
+    quaternion = rng.standard_normal(4)
+    base = np.concatenate([quaternion / np.linalg.norm(quaternion),
+                           rng.uniform(-1, 1, 3)])
+    qdot = scale * rng.uniform(-1, 1, n)
+    return q, base, qdot, model.BaseVelocity(q, qdot, base)
+
+
+def test_robots_from_files_have_a_free_quaternion_base(spatial):
+    name, model = spatial
+    plant, n = model.plant, int(name[10])
+    assert model.num_joints == n == plant.num_actuators()
+    assert (plant.num_positions(), plant.num_velocities()) == (7 + n, 6 + n)
+    assert plant.gravity_field().gravity_vector().tolist() == [0.0, 0.0, 0.0]
+    assert list(model.coordinates.base_q) == list(range(7))
+
+
+def test_bad_descriptions_are_named(tmp_path):
+    with pytest.raises(ConfigError, match="no such .urdf or .sdf file; allowed: a file, "
+                                          "or one of satellite_3dof, satellite_6dof"):
+        MakeRobotPlant("satellite_9dof")
+    fixed = tmp_path / "fixed.urdf"
+    fixed.write_text('<robot name="r"><link name="a"/></robot>')
+    with pytest.raises(ConfigError, match="no revolute joint"):
+        MakeRobotPlant(fixed)
+
+
+def test_momentum_is_conserved_in_free_flight_with_random_torques(spatial, rng):
+    """From rest, with sinusoidal joint torques for 4 s (RK5 at 0.25 ms; amplitude
+    M_kk(q0) times 1-3 rad/s^2, joint rates reach a few rad/s): the spatial
+    momentum about the world origin stays zero to 1e-9."""
+    name, model = spatial
+    builder = DiagramBuilder()
+    plant, _ = AddRobotFromDescription(builder, name)
+    n = plant.num_actuators()
+    q0 = rng.uniform(-1, 1, n)
+    amplitudes = np.diag(model.MassMatrix(q0)) * rng.uniform(1.0, 3.0, n)
+    torque = builder.AddSystem(Sine(amplitudes, rng.uniform(0.3, 1.0, n),
+                                    rng.uniform(0, np.pi, n), n))
+    builder.Connect(torque.get_output_port(0), plant.get_actuation_input_port())
+    simulator = MakeSimulator(builder.Build(), FixedStepConfig("runge_kutta5"))
+    context = plant.GetMyContextFromRoot(simulator.get_mutable_context())
+    plant.SetPositions(context, model.FullPositions(q0))
+    worst = 0.0
+    for t in np.linspace(0.2, 4.0, 20):
+        simulator.AdvanceTo(t)
+        h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
+        worst = max(worst, np.max(np.abs(h.get_coeffs())))
+    speed = np.max(np.abs(plant.GetVelocities(context)[model.coordinates.joint_v]))
+    assert 0.1 < speed < 20                           # the arm did move
+    assert worst < 1e-9
+
+
+def test_plant_accelerations_follow_the_reduced_dynamics(spatial, rng):
+    """At any zero-momentum state, the plant's joint accelerations are
+    M^-1 (tau - C' qdot), whatever the base's pose."""
+    _, model = spatial
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    joint_v = model.coordinates.joint_v
+    for _ in range(5):
+        q, base, qdot, v_base = _zero_momentum_state(model, rng)
+        tau = rng.uniform(-1, 1, model.num_joints)
+        plant.SetPositions(context, model.FullPositions(q, base))
+        plant.SetVelocities(context, np.concatenate([v_base, qdot]))
+        plant.get_actuation_input_port().FixValue(context, tau)
+        accelerations = plant.EvalTimeDerivatives(context).get_generalized_velocity(
+            ).CopyToVector()
+        M = model.MassMatrix(q)
+        qddot = np.linalg.solve(M, tau - model.Coriolis(q, qdot) @ qdot)
+        np.testing.assert_allclose(accelerations[joint_v], qddot, rtol=1e-9,
+                                   atol=1e-9 * np.max(np.abs(qddot)))
+        h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
+        assert np.max(np.abs(h.get_coeffs())) < 1e-12
+
+
+def test_mass_matrix_derivatives_and_skew_symmetry(spatial, rng):
+    """dM/dq (AutoDiff through the Schur complement) against central differences;
+    Mdot - 2 C' is skew-symmetric; M is symmetric positive definite."""
+    _, model = spatial
+    n = model.num_joints
+    for _ in range(3):
+        q, _, qdot, _ = _zero_momentum_state(model, rng)
+        M, dM = model.MassMatrixAndDerivatives(q)
+        np.testing.assert_allclose(M, model.MassMatrix(q), atol=1e-13)
+        assert np.allclose(M, M.T, atol=1e-13) and np.linalg.eigvalsh(M).min() > 0
+        h = 1e-6
+        for k in range(n):
+            step = np.zeros(n)
+            step[k] = h
+            fd = (model.MassMatrix(q + step) - model.MassMatrix(q - step)) / (2 * h)
+            np.testing.assert_allclose(dM[k], fd, atol=1e-8 * max(1.0, np.abs(M).max()))
+        Mdot = np.tensordot(qdot, dM, axes=(0, 0))
+        N = Mdot - 2 * model.Coriolis(q, qdot)
+        np.testing.assert_allclose(N, -N.T, atol=1e-12 * np.abs(Mdot).max() + 1e-15)
+
+
+def test_the_reduced_model_is_blind_to_the_base_pose(spatial, rng):
+    """M(q) is a property of the arm's shape: the base's pose changes H but not its
+    Schur complement; the GJM maps qdot to the true end-effector twist."""
+    _, model = spatial
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    end_effector = plant.GetFrameByName("end_effector")
+    q, base, qdot, v_base = _zero_momentum_state(model, rng)
+    plant.SetPositions(context, model.FullPositions(q, base))
+    H = plant.CalcMassMatrix(context)
+    b, m = model.coordinates.base_v, model.coordinates.joint_v
+    schur = H[np.ix_(m, m)] - H[np.ix_(m, b)] @ np.linalg.solve(H[np.ix_(b, b)],
+                                                                H[np.ix_(b, m)])
+    np.testing.assert_allclose(schur, model.MassMatrix(q), atol=1e-12)
+    plant.SetVelocities(context, np.concatenate([v_base, qdot]))
+    J = plant.CalcJacobianSpatialVelocity(context, JacobianWrtVariable.kV,
+                                          end_effector, np.zeros(3),
+                                          plant.world_frame(), plant.world_frame())
+    np.testing.assert_allclose(
+        model.GeneralizedJacobian(q, end_effector, base_positions=base) @ qdot,
+        J @ plant.GetVelocities(context), atol=1e-12)
+
+
+def test_a_closed_joint_loop_turns_the_base(rng):
+    """Nonholonomy: the 3-DOF arm driven around a closed loop in joint space by
+    computed torque (reduced model) comes back to its shape with the base turned;
+    the plant's base attitude equals the integral of the GJM's base rows
+    (omega_b = -[H_bb^-1 H_bm]_omega qdot) along the same path."""
+    model = FloatingBaseModel(MakeRobotPlant("satellite_3dof"))
+    n, period = model.num_joints, 4.0
+    center, radius = np.array([0.3, 0.6, -1.2]), 0.5
+
+    def path(t):
+        phase = 2 * np.pi * t / period
+        w = 2 * np.pi / period
+        q = center + radius * np.array([np.cos(phase) - 1, np.sin(phase), np.sin(phase)])
+        qdot = radius * w * np.array([-np.sin(phase), np.cos(phase), np.cos(phase)])
+        qddot = -radius * w * w * np.array([np.cos(phase), np.sin(phase), np.sin(phase)])
+        return q, qdot, qddot
+
+    builder = DiagramBuilder()
+    plant, _ = AddRobotFromDescription(builder, "satellite_3dof")
+    from pydrake.systems.framework import LeafSystem
+
+    class ComputedTorque(LeafSystem):
+        def __init__(self):
+            super().__init__()
+            self._state = self.DeclareVectorInputPort("state", plant.num_multibody_states())
+            self.DeclareVectorOutputPort("tau", n, self._CalcTau)
+
+        def _CalcTau(self, context, output):
+            x = self._state.Eval(context)
+            q = x[model.coordinates.joint_q]
+            qdot = x[plant.num_positions() + model.coordinates.joint_v]
+            q_d, qdot_d, qddot_d = path(context.get_time())
+            command = qddot_d + 400 * (q_d - q) + 40 * (qdot_d - qdot)
+            output.SetFromVector(model.MassMatrix(q) @ command
+                                 + model.Coriolis(q, qdot) @ qdot)
+
+    tracker = builder.AddSystem(ComputedTorque())
+    builder.Connect(plant.get_state_output_port(), tracker.get_input_port())
+    builder.Connect(tracker.get_output_port(), plant.get_actuation_input_port())
+    simulator = MakeSimulator(builder.Build(), FixedStepConfig("runge_kutta3", 1e-3))
+    context = plant.GetMyContextFromRoot(simulator.get_mutable_context())
+    q0, qdot0, _ = path(0.0)
+    plant.SetPositions(context, model.FullPositions(q0))
+    plant.SetVelocities(context, np.concatenate([model.BaseVelocity(q0, qdot0), qdot0]))
+    simulator.AdvanceTo(period)
+    np.testing.assert_allclose(plant.GetPositions(context)[model.coordinates.joint_q],
+                               q0, atol=1e-6)                     # back to its shape
+    R_plant = plant.GetFreeBodyPose(context, plant.GetBodyByName("base")).rotation()
+    # The same attitude from omega_b along the path (RK4 on the rotation matrix).
+    R, steps = np.eye(3), 4000
+    dt = period / steps
+
+    def omega(t, R):
+        q, qdot, _ = path(t)
+        base = np.concatenate([RotationToQuaternion(R), np.zeros(3)])
+        return model.BaseVelocity(q, qdot, base)[:3]
+
+    for i in range(steps):
+        t = i * dt
+        k1 = omega(t, R)
+        R1 = Rodrigues(k1 * dt / 2) @ R
+        k2 = omega(t + dt / 2, R1)
+        R2 = Rodrigues(k2 * dt / 2) @ R
+        k3 = omega(t + dt / 2, R2)
+        R3 = Rodrigues(k3 * dt) @ R
+        k4 = omega(t + dt, R3)
+        R = Rodrigues((k1 + 2 * k2 + 2 * k3 + k4) * dt / 6) @ R
+    turned = RollPitchYaw(R_plant).vector()
+    assert np.max(np.abs(turned)) > 1e-3                   # the base did turn
+    np.testing.assert_allclose(R_plant.matrix(), R, atol=1e-6)
+
+
+def Rodrigues(rotation_vector):
+    angle = np.linalg.norm(rotation_vector)
+    if angle < 1e-15:
+        return np.eye(3)
+    k = rotation_vector / angle
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def RotationToQuaternion(R):
+    from pydrake.math import RotationMatrix
+    quaternion = RotationMatrix(R).ToQuaternion()
+    return np.array([quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()])
+
+
+@pytest.mark.parametrize("links", [2, 3])
+def test_planar_closed_form_equals_the_generic_model(links, rng):
+    """For the planar arms, the compiled closed form (ReducedOrderModel) and the
+    generic model from the plant agree on M, C' and the base velocity."""
+    from conftest import three_link_robot
+    from dacph_drake.robot import RobotParams
+    robot = RobotParams() if links == 2 else three_link_robot()
+    plant = MakeArmPlant(robot)
+    closed_form, generic = ReducedOrderModel(plant), FloatingBaseModel(plant)
+    for _ in range(5):
+        q, qdot = rng.uniform(-np.pi, np.pi, links), rng.uniform(-1, 1, links)
+        reduced = closed_form.Evaluate(q, qdot)
+        np.testing.assert_allclose(generic.MassMatrix(q), reduced.M, atol=1e-12)
+        np.testing.assert_allclose(generic.Coriolis(q, qdot), reduced.C, atol=1e-10)
+        base = np.array([0.1, -0.2, 0.7])
+        np.testing.assert_allclose(
+            generic.BaseVelocity(q, qdot, base),
+            closed_form.BaseVelocity(generic.FullPositions(q, base), qdot), atol=1e-12)
