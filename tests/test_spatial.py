@@ -252,3 +252,29 @@ def test_planar_closed_form_equals_the_generic_model(links, rng):
         np.testing.assert_allclose(
             generic.BaseVelocity(q, qdot, base),
             closed_form.BaseVelocity(generic.FullPositions(q, base), qdot), atol=1e-12)
+
+
+@pytest.mark.parametrize("links", [2, 3])
+def test_inertia_bound_search_finds_the_grids_minimum(links):
+    """The multi-start search reaches the 73^n grid's inf lambda_min(M) or below
+    (the grid only samples), within 0.5 %."""
+    from conftest import three_link_robot
+    from dacph_drake.inertia_bound import search_inertia_bound
+    from dacph_drake.reduced_model import mass_matrix_bounds
+    from dacph_drake.robot import RobotParams
+    plant = MakeArmPlant(RobotParams() if links == 2 else three_link_robot())
+    grid, _ = mass_matrix_bounds(ReducedOrderModel(plant))
+    bound = search_inertia_bound(FloatingBaseModel(plant))
+    assert grid * 0.995 < bound.smallest_found <= grid
+    assert bound.lambda_min == pytest.approx(0.95 * bound.smallest_found)
+
+
+def test_inertia_bound_of_a_spatial_arm_is_below_every_sample(spatial, rng):
+    from dacph_drake.inertia_bound import search_inertia_bound
+    _, model = spatial
+    bound = search_inertia_bound(model)
+    samples = rng.uniform(-np.pi, np.pi, (500, model.num_joints))
+    sampled = min(np.linalg.eigvalsh(model.MassMatrix(q))[0] for q in samples)
+    assert bound.smallest_found <= sampled and bound.starts_at_minimum >= 2
+    assert np.linalg.eigvalsh(model.MassMatrix(bound.argmin))[0] == pytest.approx(
+        bound.smallest_found, rel=1e-12)

@@ -1,0 +1,54 @@
+"""The RHS gain rule at scale: inf_q lambda_min(M) by multi-start search
+(dacph_drake.inertia_bound) for the planar arms and the shipped spatial robots, and
+the decay rate c_min (eq. 48) and RHS period it asks for at the default scenario's
+gains (Td, Kd, rhs.beta_max, rhs.c_margin).
+
+    .venv/bin/python scripts/spatial_gain_rule.py
+"""
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import three_link_robot  # noqa: E402
+
+from dacph_drake.description import SPATIAL_ROBOTS, MakeRobotPlant  # noqa: E402
+from dacph_drake.floating_model import FloatingBaseModel  # noqa: E402
+from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound  # noqa: E402
+from dacph_drake.inertia_bound import search_inertia_bound  # noqa: E402
+from dacph_drake.plant import MakeArmPlant  # noqa: E402
+from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
+from dacph_drake.robot import RobotParams  # noqa: E402
+from dacph_drake.scenario import Scenario  # noqa: E402
+
+
+def main() -> None:
+    scenario = Scenario()
+    Td, Kd, rhs = scenario.rhs.Td, scenario.lhs.Kd, scenario.rhs
+    robots = [("planar 2-link (paper)", MakeArmPlant(RobotParams()), True),
+              ("planar 3-link (tests)", MakeArmPlant(three_link_robot()), True)]
+    robots += [(name, MakeRobotPlant(name), False) for name in SPATIAL_ROBOTS]
+    print(f"gain rule at Td = {Td:g}, Kd = {Kd:g}, beta_max = {rhs.beta_max:g}, "
+          f"c_margin = {rhs.c_margin:g}; search: 24 starts, 5 % safety margin")
+    print(f"| robot | n | grid inf lambda_min (73^n) | searched | starts within 0.1 % | "
+          f"search time | c_min (beta = 1) | RHS period needed | RHS rate |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, plant, planar in robots:
+        model = FloatingBaseModel(plant)
+        grid = "-"
+        if planar:
+            start = time.perf_counter()
+            lo, _ = mass_matrix_bounds(ReducedOrderModel(plant))
+            grid = f"{lo:.5g} kg m^2 ({time.perf_counter() - start:.1f} s)"
+        bound = search_inertia_bound(model)
+        c_nominal = c_lower_bound(Td, Kd, bound.lambda_min, 1.0)
+        c_largest = (1 + rhs.c_margin) * c_lower_bound(Td, Kd, bound.lambda_min,
+                                                       rhs.beta_max)
+        period = WELL_DAMPED_LOOP_GAIN / c_largest
+        print(f"| {name} | {model.num_joints} | {grid} | {bound.smallest_found:.5g} kg m^2 "
+              f"| {bound.starts_at_minimum}/{bound.starts} | {bound.seconds:.1f} s | "
+              f"{c_nominal:.0f} 1/s | {period * 1e6:.1f} us | {1e-3 / period:.1f} kHz |")
+
+
+if __name__ == "__main__":
+    main()
