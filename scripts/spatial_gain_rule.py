@@ -30,8 +30,8 @@ def main() -> None:
     robots += [(name, MakeRobotPlant(name), False) for name in SPATIAL_ROBOTS]
     print(f"gain rule at Td = {Td:g}, Kd = {Kd:g}, beta_max = {rhs.beta_max:g}, "
           f"c_margin = {rhs.c_margin:g}; search: 24 starts, 5 % safety margin")
-    print(f"| robot | n | grid inf lambda_min (73^n) | searched | starts within 0.1 % | "
-          f"search time | c_min (beta = 1) | RHS period needed | RHS rate |")
+    print("| robot | n | grid inf lambda_min (73^n) | searched | starts within 0.1 % | "
+          "search time | c_min (beta = 1) | RHS period needed | RHS rate |")
     print("|---|---|---|---|---|---|---|---|---|")
     for name, plant, planar in robots:
         model = FloatingBaseModel(plant)
