@@ -107,8 +107,10 @@ def _interrupt_simulate(out, sig, extra=(), after=1.0):
     started = threading.Event()
 
     def watch():
-        for chunk in iter(lambda: process.stderr.read(64), b""):
-            if b"elapsed" in chunk:
+        seen = b""
+        for chunk in iter(lambda: process.stderr.read1(64), b""):
+            seen = seen[-64:] + chunk
+            if b"%|" in seen:                   # the progress bar (tqdm) is drawn
                 started.set()
     threading.Thread(target=watch, daemon=True).start()
     assert started.wait(300), "the simulation did not start"
