@@ -8,13 +8,8 @@ MODELS = Path(__file__).resolve().parents[1] / "dacph_drake" / "models"
 def cyl_inertia(m, r, L):     # cylinder along its local z
     return m * (3 * r * r + L * L) / 12, m * (3 * r * r + L * L) / 12, m * r * r / 2
 
-def link_xml(name, m, r, L, axis_along, color):
-    # geometry: cylinder of length L along `axis_along` ('x' or 'z'), starting at the joint
-    ixx_c, iyy_c, izz_c = cyl_inertia(m, r, L)
-    if axis_along == "z":
-        xyz, rpy, I = f"0 0 {L/2:g}", "0 0 0", (ixx_c, iyy_c, izz_c)
-    else:  # along x: rotate the cylinder's z onto x
-        xyz, rpy, I = f"{L/2:g} 0 0", f"0 {np.pi/2:.6f} 0", (izz_c, ixx_c, iyy_c)
+def link_xml(name, m, I, xyz, visual):
+    """A link: mass m, principal inertia I = (ixx, iyy, izz) at xyz, its visual."""
     return f"""  <link name="{name}">
     <inertial>
       <origin xyz="{xyz}" rpy="0 0 0"/>
@@ -22,12 +17,22 @@ def link_xml(name, m, r, L, axis_along, color):
       <inertia ixx="{I[0]:.6g}" ixy="0" ixz="0" iyy="{I[1]:.6g}" iyz="0" izz="{I[2]:.6g}"/>
     </inertial>
     <visual>
-      <origin xyz="{xyz}" rpy="{rpy}"/>
-      <geometry><cylinder radius="{r:g}" length="{L:g}"/></geometry>
-      <material name="{color}"/>
+{visual}
     </visual>
   </link>
 """
+
+
+def cylinder_link_xml(name, m, r, L, axis_along, color):
+    """A cylinder of length L along ``axis_along`` ('x' or 'z'), from the joint."""
+    ixx_c, iyy_c, izz_c = cyl_inertia(m, r, L)
+    if axis_along == "z":
+        xyz, rpy, I = f"0 0 {L/2:g}", "0 0 0", (ixx_c, iyy_c, izz_c)
+    else:  # along x: rotate the cylinder's z onto x
+        xyz, rpy, I = f"{L/2:g} 0 0", f"0 {np.pi/2:.6f} 0", (izz_c, ixx_c, iyy_c)
+    return link_xml(name, m, I, xyz, f"""      <origin xyz="{xyz}" rpy="{rpy}"/>
+      <geometry><cylinder radius="{r:g}" length="{L:g}"/></geometry>
+      <material name="{color}"/>""")
 
 def joint_xml(k, parent, child, xyz, axis):
     return f"""  <joint name="joint{k}" type="continuous">
@@ -45,23 +50,15 @@ def robot(name, base_size, base_mass, links, comment):
            '  <material name="base"><color rgba="0.75 0.75 0.8 1"/></material>\n',
            '  <material name="orange"><color rgba="0.85 0.45 0.1 1"/></material>\n',
            '  <material name="blue"><color rgba="0.2 0.45 0.8 1"/></material>\n',
-           f"""  <link name="base">
-    <inertial>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <mass value="{base_mass:g}"/>
-      <inertia ixx="{Ib:.6g}" ixy="0" ixz="0" iyy="{Ib:.6g}" iyz="0" izz="{Ib:.6g}"/>
-    </inertial>
-    <visual>
-      <geometry><box size="{a:g} {a:g} {a:g}"/></geometry>
-      <material name="base"/>
-    </visual>
-  </link>
-"""]
+           link_xml("base", base_mass, (Ib, Ib, Ib), "0 0 0",
+                    f"""      <geometry><box size="{a:g} {a:g} {a:g}"/></geometry>
+      <material name="base"/>""")]
     parent, offset = "base", f"0 0 {a/2:g}"
     for k, (m, r, L, along, axis) in enumerate(links):
         child = f"link{k + 1}"
         out.append(joint_xml(k + 1, parent, child, offset, axis))
-        out.append(link_xml(child, m, r, L, along, "orange" if k % 2 == 0 else "blue"))
+        out.append(cylinder_link_xml(child, m, r, L, along,
+                                     "orange" if k % 2 == 0 else "blue"))
         parent = child
         offset = f"0 0 {L:g}" if along == "z" else f"{L:g} 0 0"
     out.append(f"""  <link name="end_effector"/>
