@@ -1,0 +1,99 @@
+"""LHS controller of a spatial arm: the sliding-mode law of LhsController with the 3D
+end-effector attitude as its task (attitude.py) and the damping scaled to the
+inertia (spatial_scenario.AttitudeGains)."""
+import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis, Quaternion
+from pydrake.math import RotationMatrix
+from pydrake.systems.framework import LeafSystem
+
+from dacph_drake.attitude import attitude_error, reference_rates
+from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.plant import END_EFFECTOR
+from dacph_drake.spatial_scenario import AttitudeGains, AttitudeReference
+
+ATTITUDE_LOG_SIZE = 6           # [e (3), |e|, ||s||, V = s^T M s / 2]
+NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
+
+
+class AttitudeController(LeafSystem):
+    """Every ``period`` seconds, from the measured state (inputs ``base_pose`` =
+    (qw, qx, qy, qz, x, y, z), ``base_velocity`` = (omega_W, v_W), ``q``, ``qdot``):
+
+        e   = attitude_error(R_WE, R_d(t)),   D = angular rows of the end effector's GJM
+        nu  = D^+ (omega_d - Lambda e)        (D^+ damped; xi = 0 for now)
+        s   = qdot - nu
+        tau = M nu_dot + C' nu - damping_rate M s
+
+    so that V = s^T M s / 2 has dV/dt = -2 damping_rate V (Mdot - 2C' skew). nu_dot
+    is the central difference of nu along the current motion (q +- h qdot, the base
+    turned by +- h omega_b, t +- h; h = NU_DOT_STEP). Output ``tau_request`` is held
+    between updates; ``attitude_log`` = [e (3), |e|, ||s||, V]."""
+
+    def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
+                 gains: AttitudeGains, period: float, q0):
+        super().__init__()
+        n = model.num_joints
+        self._model, self._reference, self._gains = model, reference, gains
+        self._context = model.plant.CreateDefaultContext()
+        self._end_effector = model.plant.GetFrameByName(END_EFFECTOR)
+        model.plant.SetPositions(self._context, model.FullPositions(q0))
+        self._R_d0 = reference.Start(self._end_effector.CalcPoseInWorld(
+            self._context).rotation())
+        self._base_pose = self.DeclareVectorInputPort("base_pose", 7)
+        self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6)
+        self._q = self.DeclareVectorInputPort("q", n)
+        self._qdot = self.DeclareVectorInputPort("qdot", n)
+        self._tau_index = self.DeclareDiscreteState(n)
+        self._log_index = self.DeclareDiscreteState(ATTITUDE_LOG_SIZE)
+        self.DeclareStateOutputPort("tau_request", self._tau_index)
+        self.DeclareStateOutputPort("attitude_log", self._log_index)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
+        self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
+
+    def DesiredAttitude(self, t: float):
+        """(R_d(t), omega_d(t))."""
+        return self._reference.At(self._R_d0, t)
+
+    def _ReferenceRates(self, t: float, q, base_pose):
+        """(nu, e) at time t, joints q, base pose (quaternion, position)."""
+        self._model.plant.SetPositions(self._context,
+                                       self._model.FullPositions(q, base_pose))
+        R_WE = self._end_effector.CalcPoseInWorld(self._context).rotation()
+        R_d, omega_d = self.DesiredAttitude(t)
+        e = attitude_error(R_WE, R_d)
+        D = self._model.GeneralizedJacobian(q, self._end_effector,
+                                            base_positions=base_pose)[:3]
+        nu = reference_rates(D, omega_d, e, self._gains.Lambda,
+                             np.zeros(self._model.num_joints), self._gains.task_damping)
+        return nu, e
+
+    @staticmethod
+    def _Turned(base_pose, rotation_vector):
+        """The base pose with its attitude turned by ``rotation_vector`` (world)."""
+        angle = np.linalg.norm(rotation_vector)
+        turn = (RotationMatrix(AngleAxis(angle, rotation_vector / angle)) if angle > 0
+                else RotationMatrix())
+        quaternion = Quaternion(base_pose[:4] / np.linalg.norm(base_pose[:4]))
+        turned = (turn @ RotationMatrix(quaternion)).ToQuaternion()
+        return np.concatenate([[turned.w(), turned.x(), turned.y(), turned.z()],
+                               base_pose[4:]])
+
+    def _UpdateControl(self, context, discrete_state):
+        t = context.get_time()
+        base_pose = self._base_pose.Eval(context)
+        omega_base = self._base_velocity.Eval(context)[:3]
+        q, qdot = self._q.Eval(context), self._qdot.Eval(context)
+        nu, e = self._ReferenceRates(t, q, base_pose)
+        h = NU_DOT_STEP
+        nu_plus, _ = self._ReferenceRates(t + h, q + h * qdot,
+                                          self._Turned(base_pose, h * omega_base))
+        nu_minus, _ = self._ReferenceRates(t - h, q - h * qdot,
+                                           self._Turned(base_pose, -h * omega_base))
+        nu_dot = (nu_plus - nu_minus) / (2 * h)
+        M = self._model.MassMatrix(q)
+        s = qdot - nu
+        tau = (M @ nu_dot + self._model.Coriolis(q, qdot) @ nu
+               - self._gains.damping_rate * M @ s)
+        discrete_state.set_value(self._tau_index, tau)
+        discrete_state.set_value(self._log_index, np.concatenate(
+            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s]]))
