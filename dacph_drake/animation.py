@@ -15,6 +15,7 @@ from pydrake.geometry import (Box, Meshcat, MeshcatVisualizer,
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
+from dacph_drake.description import AddRobotFromDescription
 from dacph_drake.errors import require_positive
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
@@ -25,6 +26,9 @@ DESIRED_PATH = "/desired_orientation"
 MEASURED_PATH = "/measured_orientation"
 BAR_LENGTH = 0.15          # [m] of the bars showing alpha_d and alpha
 DESIRED_COLOR = (0.85, 0.1, 0.1, 0.9)
+DESIRED_TRIAD, MEASURED_TRIAD = "/desired_attitude", "/measured_attitude"
+TRIADS = {DESIRED_TRIAD: (0.25, 0.03, 0.35),      # length, width [m], opacity
+          MEASURED_TRIAD: (0.2, 0.008, 1.0)}
 MEASURED_COLOR = (0.1, 0.1, 0.1, 0.9)
 OVERLAY_BACKGROUND = "#fffbe6"
 
@@ -140,54 +144,139 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     alpha_d (lhs_log) through an ArmViewer into a Meshcat recording and writes
     meshcat.StaticHtml(), with the overlay, to out_html. Runs longer than
     ``max_playback`` seconds are sped up to fit."""
-    require_positive("fps", fps, "frames per second")
-    require_positive("max_playback", max_playback, "s")
-    t, x = logs["time"], logs["state"]
-    if len(t) < 2:
-        raise ValueError("the run has fewer than two logged samples to animate")
+    t, x = _RequireReplayable(logs, fps, max_playback)
     alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.num_links).alpha_desired]
-    if meshcat is None:
-        with quiet_drake_info():
-            meshcat = Meshcat()
+    meshcat = meshcat or _FileMeshcat()
     view = 1.2 * ArmViewer.Reach(scenario) + float(np.max(np.abs(x[:, :2])))
     viewer = ArmViewer(scenario, meshcat, view, fps)
-    speedup = playback_speedup(t[-1] - t[0], max_playback)
-    frames = np.arange(t[0], t[-1] + 1e-12, speedup / fps)
-    rows = np.minimum(np.searchsorted(t, frames), len(t) - 1)
-    viewer.visualizer.StartRecording(set_transforms_while_recording=False)
-    for row in rows:
-        viewer.Draw(x[row], alpha_desired[row], time=(t[row] - t[0]) / speedup)
-    viewer.visualizer.StopRecording()
-    viewer.visualizer.PublishRecording()
-    out = Path(out_html)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    page = meshcat.StaticHtml()
-    out.write_text(page.replace("</body>", _overlay(scenario, t[0], speedup) + "</body>", 1))
-    return out
-
-
-def _swatch(rgba) -> str:
-    r, g, b, _ = (int(round(255 * c)) for c in rgba)
-    return (f'<span style="display:inline-block;width:22px;height:8px;margin-right:6px;'
-            f'background:rgb({r},{g},{b})"></span>')
-
-
-def _overlay(scenario: Scenario, start: float, speedup: float) -> str:
-    """The legend, time readout and phase label: an HTML box over the viewer and a
-    script that maps the animation's playback time (viewer.animator.time) to
-    simulated time t = start + speedup * playback time."""
+    speedup = _Record(viewer.visualizer, t, fps, max_playback,
+                      lambda row, time: viewer.Draw(x[row], alpha_desired[row], time))
     entries = [(BASE_COLOR, "base"),
                *[(LINK_COLORS[k % len(LINK_COLORS)], f"link {k + 1}")
                  for k in range(scenario.robot.num_links)],
                (DESIRED_COLOR, "desired end-effector direction &alpha;<sub>d</sub>"),
                (MEASURED_COLOR, "measured end-effector direction &alpha;")]
-    legend = "".join(f"<div>{_swatch(rgba)}{label}</div>" for rgba, label in entries)
     p = scenario.phases
     phases = [[0.0, p.linear_start, "Warm-up: B0, D0"],
               [p.linear_start, p.nonlinear_start, "Phase 1: linear uncertainty"],
               [p.nonlinear_start, p.disturbance_start, "Phase 2: + nonlinear"],
               [p.disturbance_start, float("inf"), "Phase 3: + disturbance d(t)"]]
+    return _WritePage(meshcat, out_html, _overlay(entries, phases, t[0], speedup))
+
+
+class SpatialViewer:
+    """A robot from a description file in Meshcat (perspective view), with the
+    desired end-effector attitude R_d (thick translucent triad) and the measured one
+    (thin triad) at the end effector; triad axes x, y, z in red, green, blue."""
+
+    def __init__(self, description, meshcat: Meshcat, fps: float = 30.0):
+        self.meshcat = meshcat
+        builder = DiagramBuilder()
+        self._plant, scene_graph = AddRobotFromDescription(builder, description)
+        self.visualizer = MeshcatVisualizer.AddToBuilder(
+            builder, scene_graph, meshcat,
+            MeshcatVisualizerParams(publish_period=1.0 / fps))
+        self._context = builder.Build().CreateDefaultContext()
+        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
+        self._visualizer_context = self.visualizer.GetMyContextFromRoot(self._context)
+        self._end_effector = self._plant.GetFrameByName(END_EFFECTOR)
+        for path, (length, width, opacity) in TRIADS.items():
+            for axis in range(3):
+                color = np.eye(3)[axis]
+                child = f"{path}/{'xyz'[axis]}"
+                meshcat.SetObject(child, Box(*np.where(np.eye(3)[axis] > 0, length,
+                                                       width)),
+                                  Rgba(*color, opacity))
+                meshcat.SetTransform(child, RigidTransform(0.5 * length * np.eye(3)[axis]))
+
+    def Draw(self, x: np.ndarray, R_d: RotationMatrix, time: float = None) -> None:
+        """Shows plant state ``x`` and R_d; with ``time``, as the frame of a
+        recording at that playback time."""
+        self._context.SetTime(time or 0.0)
+        self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
+        self.visualizer.ForcedPublish(self._visualizer_context)
+        X_WE = self._end_effector.CalcPoseInWorld(self._plant_context)
+        for path, R in ((DESIRED_TRIAD, R_d), (MEASURED_TRIAD, X_WE.rotation())):
+            pose = RigidTransform(R, X_WE.translation())
+            if time is None:
+                self.meshcat.SetTransform(path, pose)
+            else:
+                self.meshcat.SetTransform(path, pose, time)
+
+
+def write_spatial_animation(loop, logs, out_html, fps: float = 30.0,
+                            max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
+    """Replays a spatial loop's logs["state"] (sampled at logs["time"]) with
+    R_d(t) of its controller through a SpatialViewer into a self-contained HTML
+    file with a legend and the simulated time (spatial_diagrams.SpatialLoop)."""
+    t, x = _RequireReplayable(logs, fps, max_playback)
+    meshcat = meshcat or _FileMeshcat()
+    viewer = SpatialViewer(loop.scenario.robot, meshcat, fps)
+    speedup = _Record(viewer.visualizer, t, fps, max_playback, lambda row, time: viewer.Draw(
+        x[row], loop.controller.DesiredAttitude(t[row])[0], time))
+    odd_even = [", ".join(str(k + 1) for k in range(first, loop.model.num_joints, 2))
+                for first in (0, 1)]
+    entries = [(BASE_COLOR, "base"), (LINK_COLORS[0], f"links {odd_even[0]}"),
+               (LINK_COLORS[1], f"links {odd_even[1]}"),
+               ((1.0, 0.0, 0.0, 0.35), "desired attitude R<sub>d</sub>: thick triad "
+                "(x red, y green, z blue)"),
+               ((1.0, 0.0, 0.0, 1.0), "measured end-effector attitude: thin triad")]
+    return _WritePage(meshcat, out_html, _overlay(entries, None, t[0], speedup))
+
+
+def _RequireReplayable(logs, fps: float, max_playback: float):
+    require_positive("fps", fps, "frames per second")
+    require_positive("max_playback", max_playback, "s")
+    t, x = logs["time"], logs["state"]
+    if len(t) < 2:
+        raise ValueError("the run has fewer than two logged samples to animate")
+    return t, x
+
+
+def _FileMeshcat() -> Meshcat:
+    """A Meshcat for writing a file: nobody is meant to connect, so its server's
+    "listening" message is not shown."""
+    with quiet_drake_info():
+        return Meshcat()
+
+
+def _Record(visualizer, t: np.ndarray, fps: float, max_playback: float, draw) -> float:
+    """Records draw(row, playback time) for the logged rows nearest each frame into
+    ``visualizer``'s recording and publishes it; returns the speed-up (simulated
+    seconds per playback second)."""
+    speedup = playback_speedup(t[-1] - t[0], max_playback)
+    frames = np.arange(t[0], t[-1] + 1e-12, speedup / fps)
+    rows = np.minimum(np.searchsorted(t, frames), len(t) - 1)
+    visualizer.StartRecording(set_transforms_while_recording=False)
+    for row in rows:
+        draw(row, (t[row] - t[0]) / speedup)
+    visualizer.StopRecording()
+    visualizer.PublishRecording()
+    return speedup
+
+
+def _WritePage(meshcat: Meshcat, out_html, overlay: str) -> Path:
+    out = Path(out_html)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(meshcat.StaticHtml().replace("</body>", overlay + "</body>", 1))
+    return out
+
+
+def _swatch(rgba) -> str:
+    r, g, b = (int(round(255 * c)) for c in rgba[:3])
+    return (f'<span style="display:inline-block;width:22px;height:8px;margin-right:6px;'
+            f'background:rgba({r},{g},{b},{rgba[3]:g})"></span>')
+
+
+def _overlay(entries, phases, start: float, speedup: float) -> str:
+    """The legend (``entries``: (rgba, label)), time readout and phase label
+    (``phases``: [start, end, name] rows, or None): an HTML box over the viewer and a
+    script that maps the animation's playback time (viewer.animator.time) to
+    simulated time t = start + speedup * playback time."""
+    legend = "".join(f"<div>{_swatch(rgba)}{label}</div>" for rgba, label in entries)
+    phases = phases or [[float("-inf"), float("inf"), ""]]
     speed = "" if speedup == 1.0 else f" &times;{speedup:.3g} speed"
+    bounded = [[max(a, -1e300), min(b, 1e300), c] for a, b, c in phases]
     return f"""
 <div id="dacph-overlay" style="position:fixed;top:10px;left:10px;z-index:10;
   font:13px sans-serif;background:{OVERLAY_BACKGROUND};border:1px solid #888;
@@ -200,7 +289,7 @@ def _overlay(scenario: Scenario, start: float, speedup: float) -> str:
 <script>
 (function() {{
   const start = {float(start)!r}, speedup = {float(speedup)!r};
-  const phases = {json.dumps([[a, b if b != float("inf") else 1e300, c] for a, b, c in phases])};
+  const phases = {json.dumps(bounded)};
   function show() {{
     const t = start + speedup * viewer.animator.time;
     document.getElementById("dacph-time").textContent = "t = " + t.toFixed(2) + " s";

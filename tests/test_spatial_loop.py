@@ -39,3 +39,36 @@ def test_six_dof_arm_tracks_a_3d_attitude_reference():
 def test_bad_spatial_settings_are_named(change, message):
     with pytest.raises(ConfigError, match=message):
         build_spatial_model_based_diagram(SpatialScenario(**change))
+
+
+def test_spatial_run_replays_in_3d_offline(tmp_path):
+    """The 6-DOF run as a self-contained HTML file: the robot (coloured links), both
+    attitude triads and the overlay with the simulated time, in headless Chromium
+    with the network blocked."""
+    import re
+    import subprocess
+    import matplotlib.image
+    from test_reproduce import _chromium
+    from dacph_drake.animation import write_spatial_animation
+    scenario = SpatialScenario(duration=1.0)
+    loop = build_spatial_model_based_diagram(scenario)
+    simulator = loop.CreateSimulator()
+    simulator.AdvanceTo(scenario.duration)
+    log = loop.loggers["state"].FindLog(simulator.get_context())
+    page = write_spatial_animation(loop, {"time": log.sample_times(),
+                                          "state": log.data().T}, tmp_path / "a.html")
+    browser = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
+               "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+               "--proxy-server=127.0.0.1:9", "--window-size=800,800",
+               "--virtual-time-budget=8000"]
+    dom = subprocess.run(browser + ["--dump-dom", page.resolve().as_uri()], check=True,
+                         capture_output=True, text=True, timeout=120).stdout
+    assert 0.0 < float(re.search(r'id="dacph-time">t = ([0-9.]+) s<', dom).group(1)) <= 1.0
+    assert "desired attitude" in dom and "measured end-effector attitude" in dom
+    shot = tmp_path / "shot.png"
+    subprocess.run(browser + [f"--screenshot={shot}", page.resolve().as_uri()],
+                   check=True, capture_output=True, timeout=120)
+    image = matplotlib.image.imread(shot)[..., :3]
+    orange = (image[..., 0] > 0.7) & (image[..., 1] > 0.3) & (image[..., 1] < 0.6) & \
+        (image[..., 2] < 0.3)
+    assert orange.sum() > 200, "no links in the screenshot"
