@@ -6,7 +6,7 @@ The project ships its own descriptions (Drake's bundled models are fetched from 
 internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
 from pathlib import Path
 
-from pydrake.geometry import SceneGraph
+from pydrake.geometry import Role, SceneGraph
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.multibody.tree import RevoluteJoint
@@ -55,12 +55,19 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
 
 
-def AddRobotFromDescription(builder: DiagramBuilder, name_or_path
+def AddRobotFromDescription(builder: DiagramBuilder, name_or_path,
+                            collision_geometry: bool = False
                             ) -> "tuple[MultibodyPlant, SceneGraph]":
     """The finalized continuous plant of the description, with its visual geometry
-    registered with a SceneGraph (for Meshcat), added to ``builder``."""
+    registered with a SceneGraph (for Meshcat), added to ``builder``. Its collision
+    geometry is dropped unless ``collision_geometry``: the ground truth, like the
+    planar one, has no contact (a controller's clearance potential queries its own
+    copy, spatial_potential.BaseClearancePotential)."""
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
     PopulateFromDescription(plant, name_or_path)
+    if not collision_geometry:
+        for geometry in scene_graph.model_inspector().GetAllGeometryIds(Role.kProximity):
+            scene_graph.RemoveRole(plant.get_source_id(), geometry, Role.kProximity)
     plant.Finalize()
     _RequireFreeFloating(plant, name_or_path)
     return plant, scene_graph

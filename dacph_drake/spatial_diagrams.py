@@ -14,6 +14,7 @@ from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.plant import AddStateSplitter
 from dacph_drake.simulation import MakeSimulator
+from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import SpatialScenario
 from dacph_drake.systems.attitude_controller import AttitudeController
 
@@ -45,9 +46,13 @@ def build_spatial_model_based_diagram(scenario: SpatialScenario) -> SpatialLoop:
     plant, _ = AddRobotFromDescription(builder, scenario.robot)
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
+    potential = (BaseClearancePotential(
+        description=scenario.robot, model=model, gain=scenario.potential.gain,
+        margin=scenario.potential.margin) if scenario.potential.gain > 0 else None)
     controller = builder.AddNamedSystem("attitude_controller", AttitudeController(
         model=model, reference=scenario.reference, gains=scenario.gains,
-        period=scenario.lhs_period, q0=scenario.q0))
+        period=scenario.lhs_period, q0=scenario.q0, potential=potential,
+        eta=scenario.potential.eta))
     for signal in ("base_pose", "base_velocity", "q", "qdot"):
         builder.Connect(splitter.GetOutputPort(signal), controller.GetInputPort(signal))
     builder.Connect(controller.GetOutputPort("tau_request"),

@@ -54,12 +54,23 @@ class AttitudeGains:
 
 
 @dataclass
+class ClearancePotential:
+    """The null-space potential (spatial_potential.BaseClearancePotential):
+    U = gain / 2 sum_k max(0, margin - phi_k)^2 over the link-base signed distances,
+    xi = -eta grad U; gain = 0 switches it off."""
+    gain: float = 1.0
+    margin: float = 0.1             # [m]
+    eta: float = 20.0               # [1/s]
+
+
+@dataclass
 class SpatialScenario:
     robot: str = "satellite_6dof"   # a shipped robot or a .urdf/.sdf path
     q0: List[float] = field(default_factory=lambda: [0.3, -0.8, 1.6, 0.2, 0.6, -0.3])
     duration: float = 8.0           # [s]
     reference: AttitudeReference = field(default_factory=AttitudeReference)
     gains: AttitudeGains = field(default_factory=AttitudeGains)
+    potential: ClearancePotential = field(default_factory=ClearancePotential)
     lhs_period: float = 1e-3        # [s]
     log_period: float = 1e-2        # [s]
     simulator: SimulatorConfig = field(default_factory=FixedStepConfig)
@@ -84,6 +95,9 @@ class SpatialScenario:
         require_positive("gains.Lambda", self.gains.Lambda, "1/s")
         require_positive("gains.damping_rate", self.gains.damping_rate, "1/s")
         require_nonnegative("gains.task_damping", self.gains.task_damping)
+        require_nonnegative("potential.gain", self.potential.gain)
+        require_positive("potential.margin", self.potential.margin, "m")
+        require_nonnegative("potential.eta", self.potential.eta, "1/s")
         require_positive("lhs_period", self.lhs_period, "s")
         if self.gains.damping_rate * self.lhs_period > 0.5:
             raise ConfigError(

@@ -8,8 +8,10 @@ MODELS = Path(__file__).resolve().parents[1] / "dacph_drake" / "models"
 def cyl_inertia(m, r, L):     # cylinder along its local z
     return m * (3 * r * r + L * L) / 12, m * (3 * r * r + L * L) / 12, m * r * r / 2
 
-def link_xml(name, m, I, xyz, visual):
-    """A link: mass m, principal inertia I = (ixx, iyy, izz) at xyz, its visual."""
+def link_xml(name, m, I, xyz, shape, material):
+    """A link: mass m, principal inertia I = (ixx, iyy, izz) at xyz; ``shape`` (origin
+    and geometry) is both its visual and its collision geometry (the controller's
+    clearance potential queries it; the ground truth drops it)."""
     return f"""  <link name="{name}">
     <inertial>
       <origin xyz="{xyz}" rpy="0 0 0"/>
@@ -17,8 +19,12 @@ def link_xml(name, m, I, xyz, visual):
       <inertia ixx="{I[0]:.6g}" ixy="0" ixz="0" iyy="{I[1]:.6g}" iyz="0" izz="{I[2]:.6g}"/>
     </inertial>
     <visual>
-{visual}
+{shape}
+      <material name="{material}"/>
     </visual>
+    <collision>
+{shape}
+    </collision>
   </link>
 """
 
@@ -31,8 +37,7 @@ def cylinder_link_xml(name, m, r, L, axis_along, color):
     else:  # along x: rotate the cylinder's z onto x
         xyz, rpy, I = f"{L/2:g} 0 0", f"0 {np.pi/2:.6f} 0", (izz_c, ixx_c, iyy_c)
     return link_xml(name, m, I, xyz, f"""      <origin xyz="{xyz}" rpy="{rpy}"/>
-      <geometry><cylinder radius="{r:g}" length="{L:g}"/></geometry>
-      <material name="{color}"/>""")
+      <geometry><cylinder radius="{r:g}" length="{L:g}"/></geometry>""", color)
 
 def joint_xml(k, parent, child, xyz, axis):
     return f"""  <joint name="joint{k}" type="continuous">
@@ -51,8 +56,8 @@ def robot(name, base_size, base_mass, links, comment):
            '  <material name="orange"><color rgba="0.85 0.45 0.1 1"/></material>\n',
            '  <material name="blue"><color rgba="0.2 0.45 0.8 1"/></material>\n',
            link_xml("base", base_mass, (Ib, Ib, Ib), "0 0 0",
-                    f"""      <geometry><box size="{a:g} {a:g} {a:g}"/></geometry>
-      <material name="base"/>""")]
+                    f"""      <geometry><box size="{a:g} {a:g} {a:g}"/></geometry>""",
+                    "base")]
     parent, offset = "base", f"0 0 {a/2:g}"
     for k, (m, r, L, along, axis) in enumerate(links):
         child = f"link{k + 1}"

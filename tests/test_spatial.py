@@ -357,3 +357,34 @@ def test_the_attitude_law_tracks_a_3d_reference_on_the_six_dof_arm():
     expected = errors[0] * np.exp(-Lambda * dt * np.arange(len(errors)))
     assert np.all(errors <= 1.05 * expected + 2e-4)          # first-order decay
     assert errors[-1] < 1e-3 * errors[0]
+
+
+def test_clearance_potential_gradient_matches_the_motion(rng):
+    """grad U (from the witness points' GJMs) against the central difference of U
+    along a zero-momentum motion: joints q +- h v, the base moved and turned by
+    +- h times the twist zero momentum gives it."""
+    from pydrake.common.eigen_geometry import AngleAxis, Quaternion
+    from pydrake.math import RotationMatrix
+    from dacph_drake.spatial_potential import BaseClearancePotential
+    model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
+    potential = BaseClearancePotential(description="satellite_6dof", model=model,
+                                       gain=1.0, margin=0.1)
+    q = np.array([0.3, -0.8, 2.1, 0.2, 0.6, -0.3])        # 4.4 cm from the base
+    base = np.array([1.0, 0, 0, 0, 0.1, -0.2, 0.3])
+    clearance = potential.Evaluate(q, base)
+    assert 0 < clearance.min_distance < 0.1 and clearance.U > 0
+
+    def moved(sign, v, h=1e-6):
+        twist = model.BaseVelocity(q, v, base)
+        turn = RotationMatrix(AngleAxis(h * np.linalg.norm(twist[:3]),
+                                        twist[:3] / np.linalg.norm(twist[:3])))
+        R = (turn if sign > 0 else turn.inverse()) @ RotationMatrix(Quaternion(base[:4]))
+        quaternion = R.ToQuaternion()
+        pose = np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(),
+                                quaternion.z()], base[4:] + sign * h * twist[3:]])
+        return potential.Evaluate(q + sign * h * v, pose).U
+
+    for _ in range(3):
+        v = rng.standard_normal(model.num_joints)
+        along = (moved(+1, v) - moved(-1, v)) / 2e-6
+        assert clearance.gradient @ v == pytest.approx(along, rel=1e-5, abs=1e-9)

@@ -9,9 +9,10 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.attitude import attitude_error, reference_rates
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.plant import END_EFFECTOR
+from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import AttitudeGains, AttitudeReference
 
-ATTITUDE_LOG_SIZE = 6           # [e (3), |e|, ||s||, V = s^T M s / 2]
+ATTITUDE_LOG_SIZE = 7           # [e (3), |e|, ||s||, V = s^T M s / 2, clearance]
 NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
 
 
@@ -20,20 +21,24 @@ class AttitudeController(LeafSystem):
     (qw, qx, qy, qz, x, y, z), ``base_velocity`` = (omega_W, v_W), ``q``, ``qdot``):
 
         e   = attitude_error(R_WE, R_d(t)),   D = angular rows of the end effector's GJM
-        nu  = D^+ (omega_d - Lambda e)        (D^+ damped; xi = 0 for now)
+        nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
         s   = qdot - nu
         tau = M nu_dot + C' nu - damping_rate M s
 
     so that V = s^T M s / 2 has dV/dt = -2 damping_rate V (Mdot - 2C' skew). nu_dot
     is the central difference of nu along the current motion (q +- h qdot, the base
-    turned by +- h omega_b, t +- h; h = NU_DOT_STEP). Output ``tau_request`` is held
-    between updates; ``attitude_log`` = [e (3), |e|, ||s||, V]."""
+    turned by +- h omega_b, t +- h; h = NU_DOT_STEP). U is the link-base clearance
+    potential (``potential``: spatial_potential.BaseClearancePotential, or None).
+    Output ``tau_request`` is held between updates; ``attitude_log`` = [e (3), |e|,
+    ||s||, V, smallest link-base distance [m] (inf without a potential)]."""
 
     def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
-                 gains: AttitudeGains, period: float, q0):
+                 gains: AttitudeGains, period: float, q0,
+                 potential: BaseClearancePotential = None, eta: float = 0.0):
         super().__init__()
         n = model.num_joints
         self._model, self._reference, self._gains = model, reference, gains
+        self._potential, self._eta = potential, eta
         self._context = model.plant.CreateDefaultContext()
         self._end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         model.plant.SetPositions(self._context, model.FullPositions(q0))
@@ -55,7 +60,7 @@ class AttitudeController(LeafSystem):
         return self._reference.At(self._R_d0, t)
 
     def _ReferenceRates(self, t: float, q, base_pose):
-        """(nu, e) at time t, joints q, base pose (quaternion, position)."""
+        """(nu, e, clearance) at time t, joints q, base pose (quaternion, position)."""
         self._model.plant.SetPositions(self._context,
                                        self._model.FullPositions(q, base_pose))
         R_WE = self._end_effector.CalcPoseInWorld(self._context).rotation()
@@ -63,9 +68,13 @@ class AttitudeController(LeafSystem):
         e = attitude_error(R_WE, R_d)
         D = self._model.GeneralizedJacobian(q, self._end_effector,
                                             base_positions=base_pose)[:3]
-        nu = reference_rates(D, omega_d, e, self._gains.Lambda,
-                             np.zeros(self._model.num_joints), self._gains.task_damping)
-        return nu, e
+        xi, clearance = np.zeros(self._model.num_joints), np.inf
+        if self._potential is not None:
+            potential = self._potential.Evaluate(q, base_pose)
+            xi, clearance = -self._eta * potential.gradient, potential.min_distance
+        nu = reference_rates(D, omega_d, e, self._gains.Lambda, xi,
+                             self._gains.task_damping)
+        return nu, e, clearance
 
     @staticmethod
     def _Turned(base_pose, rotation_vector):
@@ -83,12 +92,12 @@ class AttitudeController(LeafSystem):
         base_pose = self._base_pose.Eval(context)
         omega_base = self._base_velocity.Eval(context)[:3]
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        nu, e = self._ReferenceRates(t, q, base_pose)
+        nu, e, clearance = self._ReferenceRates(t, q, base_pose)
         h = NU_DOT_STEP
-        nu_plus, _ = self._ReferenceRates(t + h, q + h * qdot,
-                                          self._Turned(base_pose, h * omega_base))
-        nu_minus, _ = self._ReferenceRates(t - h, q - h * qdot,
-                                           self._Turned(base_pose, -h * omega_base))
+        nu_plus = self._ReferenceRates(t + h, q + h * qdot,
+                                       self._Turned(base_pose, h * omega_base))[0]
+        nu_minus = self._ReferenceRates(t - h, q - h * qdot,
+                                        self._Turned(base_pose, -h * omega_base))[0]
         nu_dot = (nu_plus - nu_minus) / (2 * h)
         M = self._model.MassMatrix(q)
         s = qdot - nu
@@ -96,4 +105,4 @@ class AttitudeController(LeafSystem):
                - self._gains.damping_rate * M @ s)
         discrete_state.set_value(self._tau_index, tau)
         discrete_state.set_value(self._log_index, np.concatenate(
-            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s]]))
+            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, clearance]]))

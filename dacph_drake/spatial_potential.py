@@ -1,0 +1,82 @@
+"""The null-space potential of a spatial arm: keeps every link off the base, from
+SceneGraph's signed distances between the description's collision geometries
+(the planar arms' potential.BaseRepulsionPotential measures link outlines in closed
+form instead).
+
+    U(q) = gain / 2 sum_k max(0, margin - phi_k(q))^2,
+    grad U = -gain sum_k max(0, margin - phi_k) grad phi_k,
+    grad phi_k = (J_bar_A(p_A) - J_bar_B(p_B))_v^T nhat_BA,
+
+phi_k the signed distance between link k and the base, p_A, p_B its witness points
+on the link and on the base, nhat_BA the unit normal from the base towards the link,
+J_bar the translational rows of the generalized Jacobians (the base moves too: zero
+momentum). Link pairs joined to the base by a joint are filtered by Drake."""
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+from pydrake.systems.framework import DiagramBuilder
+
+from dacph_drake.description import PopulateFromDescription
+from dacph_drake.floating_model import FloatingBaseModel
+
+
+@dataclass
+class Clearance:
+    U: float                # [J-like units of gain * m^2]
+    gradient: np.ndarray    # dU/dq
+    min_distance: float     # smallest link-base signed distance [m] (inf beyond query)
+
+
+class BaseClearancePotential:
+    """U(q) at a base pose for the robot ``description`` (module docstring); its
+    own plant and SceneGraph (with collision geometry), scratch context made once."""
+
+    def __init__(self, *, description, model: FloatingBaseModel, gain: float,
+                 margin: float, query_distance: float = 1.0):
+        builder = DiagramBuilder()
+        self._plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+        PopulateFromDescription(self._plant, description)
+        self._plant.Finalize()
+        self._context = builder.Build().CreateDefaultContext()
+        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
+        self._inspector = scene_graph.model_inspector()
+        self._model, self._gain, self._margin = model, gain, margin
+        self._query_distance = max(query_distance, margin)
+        base = self._plant.get_body(next(iter(self._plant.GetFloatingBaseBodies())))
+        self._base_geometries = set(self._plant.GetCollisionGeometriesForBody(base))
+
+    def _BodyFrame(self, geometry):
+        """The model plant's frame of the body owning ``geometry`` and the
+        geometry's pose in that body."""
+        body = self._plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry))
+        return (self._model.plant.GetBodyByName(body.name()).body_frame(),
+                self._inspector.GetPoseInFrame(geometry))
+
+    def Evaluate(self, q, base_pose) -> Clearance:
+        self._plant.SetPositions(self._plant_context,
+                                 self._model.FullPositions(q, base_pose))
+        query = self._plant.get_geometry_query_input_port().Eval(self._plant_context)
+        pairs = query.ComputeSignedDistancePairwiseClosestPoints(self._query_distance)
+        U, gradient, nearest = 0.0, np.zeros(self._model.num_joints), np.inf
+        for pair in pairs:
+            if (pair.id_A in self._base_geometries) == (pair.id_B in self._base_geometries):
+                continue                                   # not a link-base pair
+            link, base = (pair.id_A, pair.id_B) if pair.id_B in self._base_geometries \
+                else (pair.id_B, pair.id_A)
+            sign = 1.0 if link == pair.id_A else -1.0      # nhat points base -> link
+            nhat = sign * pair.nhat_BA_W
+            p_link, p_base = ((pair.p_ACa, pair.p_BCb) if link == pair.id_A
+                              else (pair.p_BCb, pair.p_ACa))
+            nearest = min(nearest, pair.distance)
+            depth = self._margin - pair.distance
+            if depth <= 0:
+                continue
+            J = []
+            for geometry, p_G in ((link, p_link), (base, p_base)):
+                frame, X_BG = self._BodyFrame(geometry)
+                J.append(self._model.GeneralizedJacobian(
+                    q, frame, X_BG.multiply(p_G), base_positions=base_pose)[3:])
+            U += 0.5 * self._gain * depth**2
+            gradient -= self._gain * depth * (J[0] - J[1]).T @ nhat
+        return Clearance(U=U, gradient=gradient, min_distance=nearest)
