@@ -14,6 +14,16 @@ def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float
     return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(max(beta_hat, 1.0)) / 5)
 
 
+def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
+    """Eq. (48) for an LHS damping scaled to the inertia, K_d = damping_rate M(q)
+    (spatial_scenario.AttitudeGains): the paper's fastest LHS sliding rate
+    2 lambda_max(K_d) / inf_q lambda_min(M) bounds dV/dt = -s^T K_d s against
+    V = s^T M s / 2; with K_d = damping_rate M it is exactly 2 damping_rate
+    (dV/dt = -2 damping_rate V), so c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5)
+    whatever the arm's inertia: a light wrist no longer asks for a fast RHS loop."""
+    return c_lower_bound(Td, damping_rate, 1.0, beta_hat)
+
+
 def integral_gains(B_hat: np.ndarray, c: float):
     """k_p = c / Re(lambda_hat_p) and the DIC check.
 

@@ -1,7 +1,8 @@
 """The RHS gain rule at scale: inf_q lambda_min(M) by multi-start search
 (dacph_drake.inertia_bound) for the planar arms and the shipped spatial robots, and
 the decay rate c_min (eq. 48) and RHS period it asks for at the default scenario's
-gains (Td, Kd, rhs.beta_max, rhs.c_margin).
+gains (Td, Kd, rhs.beta_max, rhs.c_margin), and with the LHS damping scaled to the
+inertia instead (K_d = damping_rate M, the spatial loop's AttitudeGains).
 
     .venv/bin/python scripts/spatial_gain_rule.py
 """
@@ -14,12 +15,14 @@ from conftest import three_link_robot  # noqa: E402
 
 from dacph_drake.description import SPATIAL_ROBOTS, MakeRobotPlant  # noqa: E402
 from dacph_drake.floating_model import FloatingBaseModel  # noqa: E402
-from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound  # noqa: E402
+from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,  # noqa: E402
+                                   inertia_scaled_c_lower_bound)
 from dacph_drake.inertia_bound import search_inertia_bound  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
 from dacph_drake.robot import RobotParams  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
+from dacph_drake.spatial_scenario import AttitudeGains  # noqa: E402
 
 
 def main() -> None:
@@ -30,8 +33,10 @@ def main() -> None:
     robots += [(name, MakeRobotPlant(name), False) for name in SPATIAL_ROBOTS]
     print(f"gain rule at Td = {Td:g}, Kd = {Kd:g}, beta_max = {rhs.beta_max:g}, "
           f"c_margin = {rhs.c_margin:g}; search: 24 starts, 5 % safety margin")
+    damping_rate = AttitudeGains().damping_rate
     print("| robot | n | grid inf lambda_min (73^n) | searched | starts within 0.1 % | "
-          "search time | c_min (beta = 1) | RHS period needed | RHS rate |")
+          "search time | c_min (beta = 1) | RHS period needed | with K_d = "
+          f"{damping_rate:g} M: c_min, RHS period |")
     print("|---|---|---|---|---|---|---|---|---|")
     for name, plant, planar in robots:
         model = FloatingBaseModel(plant)
@@ -45,9 +50,13 @@ def main() -> None:
         c_largest = (1 + rhs.c_margin) * c_lower_bound(Td, Kd, bound.lambda_min,
                                                        rhs.beta_max)
         period = WELL_DAMPED_LOOP_GAIN / c_largest
+        scaled = inertia_scaled_c_lower_bound(Td, damping_rate, 1.0)
+        scaled_period = WELL_DAMPED_LOOP_GAIN / ((1 + rhs.c_margin) * (
+            inertia_scaled_c_lower_bound(Td, damping_rate, rhs.beta_max)))
         print(f"| {name} | {model.num_joints} | {grid} | {bound.smallest_found:.5g} kg m^2 "
               f"| {bound.starts_at_minimum}/{bound.starts} | {bound.seconds:.1f} s | "
-              f"{c_nominal:.0f} 1/s | {period * 1e6:.1f} us | {1e-3 / period:.1f} kHz |")
+              f"{c_nominal:.0f} 1/s | {period * 1e6:.1f} us ({1e-3 / period:.1f} kHz) | "
+              f"{scaled:.0f} 1/s, {scaled_period * 1e3:.2f} ms |")
 
 
 if __name__ == "__main__":
