@@ -83,9 +83,9 @@ six = [(4.0, 0.06, 0.20, "z", "0 0 1"),     # shoulder yaw
        (1.5, 0.04, 0.12, "x", "1 0 0"),     # wrist roll
        (1.2, 0.04, 0.12, "x", "0 1 0"),     # wrist pitch
        (0.8, 0.035, 0.10, "x", "1 0 0")]    # wrist roll, tool flange
-three = [(4.0, 0.06, 0.20, "z", "0 0 1"),
-         (6.0, 0.05, 0.70, "x", "0 1 0"),
-         (5.0, 0.045, 0.60, "x", "0 1 0")]
+three = [(4.0, 0.06, 0.20, "z", "0 0 1"),     # shoulder yaw
+         (6.0, 0.05, 0.70, "x", "0 1 0"),     # shoulder pitch, upper arm
+         (5.0, 0.045, 0.60, "x", "1 0 0")]    # forearm roll: a full 3D orientation
 open(MODELS / "satellite_6dof.urdf", "w").write(robot(
     "satellite_6dof", 1.0, 250.0, six,
     "A free-floating satellite (1 m cube, 250 kg) with a 6-DOF arm of cylinders "
@@ -93,5 +93,6 @@ open(MODELS / "satellite_6dof.urdf", "w").write(robot(
     "The base has no joint: Drake makes it a free 6-DOF (quaternion) body."))
 open(MODELS / "satellite_3dof.urdf", "w").write(robot(
     "satellite_3dof", 1.0, 250.0, three,
-    "The 6-DOF example's first three joints (shoulder yaw-pitch, elbow pitch), "
-    "for fast tests; written for dacph-drake."))
+    "A 3-DOF variant for fast tests (shoulder yaw-pitch, forearm roll: the end "
+    "effector's attitude has all three degrees of freedom away from a vertical upper "
+    "arm); written for dacph-drake."))
