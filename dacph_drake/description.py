@@ -13,6 +13,8 @@ from pydrake.multibody.tree import RevoluteJoint
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
+from dacph_drake.robot import RobotParams
 
 MODELS = Path(__file__).resolve().parent / "models"
 # scripts/make_spatial_models.py writes them.
@@ -33,15 +35,49 @@ def robot_description(name_or_path) -> Path:
     return path
 
 
+def planar_arm_urdf(robot: RobotParams) -> str:
+    """The URDF of a planar arm (robot.RobotParams): the same bodies, inertias, joint
+    and frame names as plant.AddFreeFloatingArm builds directly (a planar joint
+    for the base, continuous z-axis joints, the end effector a massless link)."""
+    def inertial(mass, com, ixx, iyy, izz):
+        return (f'<inertial><origin xyz="{com!r} 0 0"/><mass value="{mass!r}"/>'
+                f'<inertia ixx="{ixx!r}" ixy="0" ixz="0" iyy="{iyy!r}" iyz="0" '
+                f'izz="{izz!r}"/></inertial>')
+    base = robot.base
+    parts = [f'<robot name="planar_arm"><link name="base">'
+             f'{inertial(base.mass, 0.0, base.inertia / 2, base.inertia / 2, base.inertia)}'
+             f'</link><joint name="{BASE_JOINT}" type="planar"><parent link="world"/>'
+             '<child link="base"/><axis xyz="0 0 1"/></joint>']
+    parent, offset = "base", base.shoulder_offset
+    for k, link in enumerate(robot.links):
+        along = min(link.inertia, link.mass * link.com * (link.length - link.com))
+        parts.append(f'<link name="{link_name(k)}">'
+                     f'{inertial(link.mass, link.com, link.inertia - along, along, link.inertia)}'
+                     f'</link><joint name="{joint_name(k)}" type="continuous">'
+                     f'<parent link="{parent}"/><child link="{link_name(k)}"/>'
+                     f'<origin xyz="{offset!r} 0 0"/><axis xyz="0 0 1"/></joint>')
+        parent, offset = link_name(k), link.length
+    parts.append(f'<link name="{END_EFFECTOR}"/><joint name="{END_EFFECTOR}_weld" '
+                 f'type="fixed"><parent link="{parent}"/><child link="{END_EFFECTOR}"/>'
+                 f'<origin xyz="{offset!r} 0 0"/></joint></robot>')
+    return "".join(parts)
+
+
 def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
-    """Parses the description into ``plant`` (not finalized), actuates each
-    revolute joint the file leaves unactuated (in the file's joint order; no effort
-    limit) and switches gravity off."""
-    path = robot_description(name_or_path)
-    try:
-        Parser(plant).AddModels(str(path))
-    except RuntimeError as e:
-        raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
+    """Parses the description (a shipped name, a .urdf/.sdf path, or a planar
+    RobotParams through planar_arm_urdf) into ``plant`` (not finalized), actuates
+    each revolute joint the description leaves unactuated (in its joint order; no
+    effort limit) and switches gravity off."""
+    if isinstance(name_or_path, RobotParams):
+        name_or_path.Validate()
+        Parser(plant).AddModelsFromString(planar_arm_urdf(name_or_path), "urdf")
+        path = "the planar arm's description"
+    else:
+        path = robot_description(name_or_path)
+        try:
+            Parser(plant).AddModels(str(path))
+        except RuntimeError as e:
+            raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
     joints = [plant.get_joint(i) for i in plant.GetJointIndices()
               if isinstance(plant.get_joint(i), RevoluteJoint)]
     if not joints:
@@ -84,6 +120,8 @@ def MakeRobotPlant(name_or_path) -> MultibodyPlant:
 
 
 def _RequireFreeFloating(plant: MultibodyPlant, name_or_path) -> None:
+    if isinstance(name_or_path, RobotParams):
+        return                                  # its base is on a planar joint
     floating = plant.GetFloatingBaseBodies()
     if len(floating) != 1:
         raise ConfigError(f"{name_or_path}: {len(floating)} free bodies; allowed: one "

@@ -388,3 +388,28 @@ def test_clearance_potential_gradient_matches_the_motion(rng):
         v = rng.standard_normal(model.num_joints)
         along = (moved(+1, v) - moved(-1, v)) / 2e-6
         assert clearance.gradient @ v == pytest.approx(along, rel=1e-5, abs=1e-9)
+
+
+def test_planar_arms_through_the_description_path(robot, rng):
+    """RobotParams generates its URDF (description.planar_arm_urdf): the plant parsed
+    from it is the one plant.py builds (same layout, mass matrix, end-effector pose),
+    and its generic reduced model equals the planar closed form."""
+    from dacph_drake.plant import END_EFFECTOR, ArmCoordinates
+    parsed, built = MakeRobotPlant(robot), MakeArmPlant(robot)
+    for a, b in zip(vars(ArmCoordinates.FromPlant(parsed)).values(),
+                    vars(ArmCoordinates.FromPlant(built)).values()):
+        assert np.array_equal(a, b)
+    contexts = [parsed.CreateDefaultContext(), built.CreateDefaultContext()]
+    for _ in range(5):
+        x = rng.uniform(-np.pi, np.pi, built.num_positions())
+        poses, masses = [], []
+        for plant, context in zip((parsed, built), contexts):
+            plant.SetPositions(context, x)
+            masses.append(plant.CalcMassMatrix(context))
+            poses.append(plant.GetFrameByName(END_EFFECTOR).CalcPoseInWorld(
+                context).GetAsMatrix4())
+        np.testing.assert_allclose(masses[0], masses[1], atol=1e-14)
+        np.testing.assert_allclose(poses[0], poses[1], atol=1e-14)
+    q = rng.uniform(-np.pi, np.pi, robot.num_links)
+    np.testing.assert_allclose(FloatingBaseModel(parsed).MassMatrix(q),
+                               ReducedOrderModel(built).Evaluate(q, 0 * q).M, atol=1e-12)

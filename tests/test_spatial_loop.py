@@ -150,3 +150,13 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
     assert main(["spatial", "satellite_9dof", "--out", str(out)]) == 2
     assert "allowed: a YAML file or a built-in name (satellite_6dof, satellite_3dof)" \
         in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["satellite_6dof", "satellite_3dof"])
+def test_shipped_spatial_scenario_files_are_the_built_ins(name):
+    from pathlib import Path
+    from pydrake.common.yaml import yaml_dump_typed
+    from dacph_drake.spatial_run import BUILT_IN_SPATIAL_SCENARIOS, load_spatial_scenario
+    path = Path(__file__).resolve().parents[1] / "diagrams" / f"{name}.yaml"
+    assert yaml_dump_typed(load_spatial_scenario(path)) == yaml_dump_typed(
+        BUILT_IN_SPATIAL_SCENARIOS[name]())
