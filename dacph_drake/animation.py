@@ -107,35 +107,51 @@ class ArmViewer:
 
 
 class LiveView:
-    """Draws a closed loop's ground truth into ``meshcat`` while it simulates:
-    Update(root_context) after each advance draws the plant state and alpha_d (from
-    the controller's lhs_log output, if it has one) at most ``fps`` times per
-    simulated second, and sets Meshcat's simulation time."""
+    """Draws a closed loop's ground truth into Meshcat while it simulates:
+    Update(root_context) after each advance calls ``draw(root_context, x, t)`` with
+    the plant state x at most ``fps`` times per simulated second and sets Meshcat's
+    simulation time. ForPlanarLoop and ForSpatialLoop make one for a loop."""
 
-    def __init__(self, loop, meshcat: Meshcat, fps: float = 30.0):
+    def __init__(self, plant, meshcat: Meshcat, draw, fps: float = 30.0):
+        self._plant, self._meshcat, self._draw = plant, meshcat, draw
+        self._period, self._next = 1.0 / fps, 0.0
+
+    @staticmethod
+    def ForPlanarLoop(loop, meshcat: Meshcat, fps: float = 30.0) -> "LiveView":
+        """An ArmViewer with alpha_d from the controller's lhs_log output (the
+        measured direction where the controller has none)."""
         scenario = loop.scenario
-        self._viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
-        self._loop, self._period, self._next = loop, 1.0 / fps, 0.0
-        self._lhs_log = loop.loggers.get("lhs_log")
-        self._alpha_desired = LhsLog(scenario.robot.num_links).alpha_desired
+        viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
+        lhs_log = loop.loggers.get("lhs_log")
+        column = LhsLog(scenario.robot.num_links).alpha_desired
+        coordinates = ArmCoordinates.FromPlant(loop.plant)
+
+        def draw(root_context, x, t):
+            if lhs_log is not None:
+                alpha_desired = lhs_log.get_input_port().Eval(
+                    lhs_log.GetMyContextFromRoot(root_context))[column]
+            else:
+                base_pose, q, _, _ = coordinates.Split(x)
+                alpha_desired = base_pose[2] + q.sum()
+            viewer.Draw(x, alpha_desired)
+        return LiveView(loop.plant, meshcat, draw, fps)
+
+    @staticmethod
+    def ForSpatialLoop(loop, meshcat: Meshcat, fps: float = 30.0) -> "LiveView":
+        """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
+        viewer = SpatialViewer(loop.scenario.robot, meshcat, fps)
+        return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
+            x, loop.controller.DesiredAttitude(t)[0]), fps)
 
     def Update(self, root_context) -> None:
         t = root_context.get_time()
         if t < self._next:
             return
         self._next = t + self._period
-        plant = self._loop.plant
-        x = plant.GetMyContextFromRoot(root_context).get_continuous_state_vector(
+        x = self._plant.GetMyContextFromRoot(root_context).get_continuous_state_vector(
             ).CopyToVector()
-        if self._lhs_log is not None:
-            logger_context = self._lhs_log.GetMyContextFromRoot(root_context)
-            alpha_desired = self._lhs_log.get_input_port().Eval(logger_context)[
-                self._alpha_desired]
-        else:
-            base_pose, q, _, _ = ArmCoordinates.FromPlant(plant).Split(x)
-            alpha_desired = base_pose[2] + q.sum()
-        self._viewer.meshcat.SetSimulationTime(t)
-        self._viewer.Draw(x, alpha_desired)
+        self._meshcat.SetSimulationTime(t)
+        self._draw(root_context, x, t)
 
 
 def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,

@@ -31,16 +31,7 @@ def _simulate(args) -> int:
     from dacph_drake.run import simulate
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
-    if args.realtime_rate is not None:
-        require_nonnegative("--realtime-rate", args.realtime_rate)
-        scenario.simulator.target_realtime_rate = args.realtime_rate
-    meshcat = None
-    if args.meshcat:
-        from pydrake.geometry import Meshcat
-        from dacph_drake.animation import quiet_drake_info
-        with quiet_drake_info():
-            meshcat = Meshcat()
-        print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
+    meshcat = _LiveViewing(args, scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
                       out_dir=args.out, progress=True, interruptible=True,
                       checkpoint_seconds=args.checkpoint, meshcat=meshcat)
@@ -57,9 +48,7 @@ def _simulate(args) -> int:
                   f"  {name:32s} n/a, not reached (the run ended at "
                   f"{result.final_time:g} s)")
     print(f"saved to {args.out}")
-    if meshcat is not None and sys.stdin.isatty():
-        input(f"Meshcat still shows the run at {meshcat.web_url()}; press Enter to "
-              "close it. ")
+    _KeepViewerOpen(meshcat)
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
 
@@ -82,7 +71,9 @@ def _spatial(args) -> int:
     from pathlib import Path
     from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
     scenario = load_spatial_scenario(args.scenario)
-    result = simulate_spatial(scenario, args.duration, out_dir=args.out, progress=True)
+    meshcat = _LiveViewing(args, scenario)
+    result = simulate_spatial(scenario, args.duration, out_dir=args.out, progress=True,
+                              meshcat=meshcat)
     print(f"{scenario.robot}: {result.status}"
           f"{': ' + result.reason if result.reason else ''} ({result.final_time:.2f} s "
           f"simulated in {result.wall_time:.1f} s)")
@@ -94,6 +85,7 @@ def _spatial(args) -> int:
         loop = build_spatial_model_based_diagram(scenario)
         print(write_spatial_animation(loop, result.logs, Path(args.out) / "animation.html"))
     print(f"saved to {args.out}")
+    _KeepViewerOpen(meshcat)
     return 0 if result.status == "ok" else 1
 
 
@@ -203,6 +195,37 @@ def _sweep(args) -> int:
     return 0
 
 
+def _AddLiveViewing(command) -> None:
+    command.add_argument("--meshcat", action="store_true",
+                         help="show the robot live in a Meshcat browser window (the URL "
+                              "is printed)")
+    command.add_argument("--realtime-rate", type=float, default=None, metavar="RATE",
+                         help="pace the simulation at RATE x real time (sets "
+                              "simulator.target_realtime_rate; 0: as fast as possible)")
+
+
+def _LiveViewing(args, scenario):
+    """Applies --realtime-rate to the scenario; with --meshcat, a Meshcat whose URL is
+    printed (else None)."""
+    if args.realtime_rate is not None:
+        require_nonnegative("--realtime-rate", args.realtime_rate)
+        scenario.simulator.target_realtime_rate = args.realtime_rate
+    if not args.meshcat:
+        return None
+    from pydrake.geometry import Meshcat
+    from dacph_drake.animation import quiet_drake_info
+    with quiet_drake_info():
+        meshcat = Meshcat()
+    print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
+    return meshcat
+
+
+def _KeepViewerOpen(meshcat) -> None:
+    if meshcat is not None and sys.stdin.isatty():
+        input(f"Meshcat still shows the run at {meshcat.web_url()}; press Enter to "
+              "close it. ")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -224,12 +247,7 @@ def main(argv=None) -> int:
     sim.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
                      help="save the logs so far every SECONDS of wall time (status "
                           "'incomplete' until the run ends; default 60)")
-    sim.add_argument("--meshcat", action="store_true",
-                     help="show the robot live in a Meshcat browser window (the URL is "
-                          "printed)")
-    sim.add_argument("--realtime-rate", type=float, default=None, metavar="RATE",
-                     help="pace the simulation at RATE x real time (sets "
-                          "simulator.target_realtime_rate; 0: as fast as possible)")
+    _AddLiveViewing(sim)
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
     graph.add_argument("scenario")
@@ -297,6 +315,7 @@ def main(argv=None) -> int:
                      help="[s] (default: the scenario's)")
     spa.add_argument("--animate", action="store_true",
                      help="also write the 3D replay (animation.html)")
+    _AddLiveViewing(spa)
     spa.set_defaults(run=_spatial)
     args = parser.parse_args(argv)
     logging.basicConfig(format="dacph: note: %(message)s", level=logging.WARNING)

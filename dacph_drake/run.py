@@ -152,7 +152,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
     partial result that often; ``meshcat`` gets a LiveView."""
     loop = build_closed_loop(controller, scenario)
-    live_view = LiveView(loop, meshcat) if meshcat is not None else None
+    live_view = LiveView.ForPlanarLoop(loop, meshcat) if meshcat is not None else None
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant

@@ -12,6 +12,7 @@ from typing import Dict
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 
+from dacph_drake.animation import LiveView
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
@@ -53,15 +54,17 @@ class SpatialRunResult:
 
 
 def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=None,
-                     progress: bool = False) -> SpatialRunResult:
+                     progress: bool = False, meshcat=None) -> SpatialRunResult:
     """Simulates the loop for ``duration`` (default: the scenario's), checking the
-    state every CHECK_PERIOD; with ``out_dir``, saves the run there."""
+    state every CHECK_PERIOD; with ``out_dir``, saves the run there; with
+    ``meshcat``, draws it there while it simulates (animation.LiveView)."""
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     loop = build_spatial_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant_context = loop.plant.GetMyContextFromRoot(context)
+    live_view = LiveView.ForSpatialLoop(loop, meshcat) if meshcat is not None else None
     simulator.Initialize()
     bar = progress_bar(duration, "spatial", "s", enabled=progress)
     start, reason = time.perf_counter(), ""
@@ -75,6 +78,8 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
             if not np.all(np.isfinite(loop.plant.GetPositionsAndVelocities(plant_context))):
                 reason = f"non-finite plant state at t = {context.get_time():.4f} s"
                 break
+            if live_view is not None:
+                live_view.Update(context)
             bar.update(context.get_time() - bar.n)
     finally:
         bar.close()

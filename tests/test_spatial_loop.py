@@ -160,3 +160,18 @@ def test_shipped_spatial_scenario_files_are_the_built_ins(name):
     path = Path(__file__).resolve().parents[1] / "diagrams" / f"{name}.yaml"
     assert yaml_dump_typed(load_spatial_scenario(path)) == yaml_dump_typed(
         BUILT_IN_SPATIAL_SCENARIOS[name]())
+
+
+def test_live_meshcat_shows_a_spatial_run_without_changing_it():
+    from pydrake.geometry import Meshcat
+    from dacph_drake.animation import DESIRED_TRIAD, MEASURED_TRIAD, quiet_drake_info
+    from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
+    with quiet_drake_info():
+        meshcat = Meshcat()
+    scenario = load_spatial_scenario("satellite_3dof")
+    watched = simulate_spatial(scenario, duration=0.3, meshcat=meshcat)
+    for path in ("/drake/visualizer", DESIRED_TRIAD, MEASURED_TRIAD):
+        assert meshcat.HasPath(path), path
+    plain = simulate_spatial(scenario, duration=0.3)
+    for name, log in plain.logs.items():
+        assert np.array_equal(log, watched.logs[name]), name
