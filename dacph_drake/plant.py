@@ -134,9 +134,11 @@ def FixStateInputs(system, context, x: np.ndarray) -> None:
 def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector:
     """The plant state as named signals, for every system that reads it: a Selector
     (Drake C++, no Python call per evaluation) named "state_splitter", fed by the
-    plant's state, with outputs ``base_pose`` (x, y, theta0), ``q`` (joint angles),
-    ``base_velocity`` (vx, vy, omega0 in the world frame) and ``qdot`` (joint rates),
-    built from ArmCoordinates: the one place that knows the state's layout."""
+    plant's state, with outputs ``base_pose`` (the base joint's coordinates: x, y,
+    theta0 for the planar arms; qw, qx, qy, qz, x, y, z for a free base from a
+    description file), ``q`` (joint angles), ``base_velocity`` (vx, vy, omega0, or
+    omega_W, v_W, in the world frame) and ``qdot`` (joint rates), built from
+    ArmCoordinates: the one place that knows the state's layout."""
     coordinates = ArmCoordinates.FromPlant(plant)
     nq = plant.num_positions()
 
