@@ -13,8 +13,8 @@ from pydrake.systems.primitives import (ConstantVectorSource, LogVectorOutput,
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.plant import (AddFreeFloatingArm, AddStateSplitter, ArmCoordinates,
-                               MakeArmPlant)
+from dacph_drake.plant import (AddFreeFloatingArm, AddStateSplitter, MakeArmPlant,
+                               SetArmAtRest)
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.reference import OrientationReference
@@ -51,10 +51,8 @@ class ClosedLoop:
         (scenario.simulator, Drake's SimulatorConfig) and initial state: the base at
         the origin, the joints at q0, everything at rest (zero momentum)."""
         simulator = MakeSimulator(self.diagram, self.scenario.simulator)
-        plant_context = self.plant.GetMyContextFromRoot(simulator.get_mutable_context())
-        self.plant.SetPositions(plant_context, ArmCoordinates.FromPlant(
-            self.plant).Positions(self.scenario.q0))
-        self.plant.SetVelocities(plant_context, np.zeros(self.plant.num_velocities()))
+        SetArmAtRest(self.plant, self.plant.GetMyContextFromRoot(
+            simulator.get_mutable_context()), self.scenario.q0)
         return simulator
 
 

@@ -36,7 +36,6 @@ class FloatingBaseModel:
         self._ad_plant = plant.ToAutoDiffXd()
         self._ad_context = self._ad_plant.CreateDefaultContext()
         self.coordinates = ArmCoordinates.FromPlant(plant)
-        self._default_positions = plant.GetDefaultPositions()
         n = self.num_joints
         self._selector = np.zeros((plant.num_positions(), n))   # d q_full / d q
         self._selector[self.coordinates.joint_q, np.arange(n)] = 1.0
@@ -51,12 +50,8 @@ class FloatingBaseModel:
 
     def FullPositions(self, q, base_positions=None) -> np.ndarray:
         """The plant's positions: joints at q, the base at ``base_positions`` (the
-        base joint's own coordinates; default: the plant's default pose)."""
-        positions = self._default_positions.copy()
-        if base_positions is not None:
-            positions[self.coordinates.base_q] = base_positions
-        positions[self.coordinates.joint_q] = q
-        return positions
+        base joint's own coordinates; default: the origin), ArmCoordinates.Positions."""
+        return self.coordinates.Positions(q, base_positions)
 
     def _Blocks(self, H: np.ndarray):
         b, m = self.coordinates.base_v, self.coordinates.joint_v

@@ -7,7 +7,8 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import Sine
 
-from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, total_momentum
+from dacph_drake.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
+                               total_momentum)
 from dacph_drake.robot import RobotParams
 from dacph_drake.simulation import FixedStepConfig, MakeSimulator
 
@@ -54,7 +55,7 @@ def run_free_flight(robot: RobotParams, duration: float, amplitudes, frequencies
     context = simulator.get_mutable_context()
     plant_context = plant.GetMyContextFromRoot(context)
     sg_context = scene_graph.GetMyContextFromRoot(context)
-    plant.SetPositions(plant_context, ArmCoordinates.FromPlant(plant).Positions(q0))
+    SetArmAtRest(plant, plant_context, q0)
     worst = {"momentum": 0.0, "clearance": np.inf}
 
     def monitor(root_context):

@@ -44,13 +44,16 @@ def link_name(k: int) -> str:
 class ArmCoordinates:
     """Where the base and the joints sit in a plant's q and v vectors.
 
-    ``base_v`` lists the PlanarJoint's velocities (vx, vy, omega0) in the world frame,
-    ``joint_v`` the arm's joint rates qdot; likewise ``base_q`` / ``joint_q``.
+    ``base_v`` lists the base joint's velocities in the world frame (a PlanarJoint's
+    vx, vy, omega0; a free base's omega_W, v_W), ``joint_v`` the arm's joint rates
+    qdot; likewise ``base_q`` / ``joint_q``. ``base_origin`` is the base joint's
+    coordinates at the origin (zeros; a free base's identity quaternion).
     """
     base_q: np.ndarray
     base_v: np.ndarray
     joint_q: np.ndarray
     joint_v: np.ndarray
+    base_origin: np.ndarray
 
     @staticmethod
     def FromPlant(plant: MultibodyPlant) -> "ArmCoordinates":
@@ -73,7 +76,8 @@ class ArmCoordinates:
             base_v=np.arange(base.velocity_start(),
                              base.velocity_start() + base.num_velocities()),
             joint_q=np.array([j.position_start() for j in joints]),
-            joint_v=np.array([j.velocity_start() for j in joints]))
+            joint_v=np.array([j.velocity_start() for j in joints]),
+            base_origin=np.array(base.default_positions()))
 
     @staticmethod
     def ForPlanarArm(num_joints: int) -> "ArmCoordinates":
@@ -82,7 +86,7 @@ class ArmCoordinates:
         plant states without a plant."""
         joints = np.arange(3, 3 + num_joints)
         return ArmCoordinates(base_q=np.arange(3), base_v=np.arange(3), joint_q=joints,
-                              joint_v=joints)
+                              joint_v=joints, base_origin=np.zeros(3))
 
     @property
     def num_joints(self) -> int:
@@ -92,11 +96,11 @@ class ArmCoordinates:
     def num_positions(self) -> int:
         return len(self.base_q) + len(self.joint_q)
 
-    def Positions(self, q, base_pose=(0.0, 0.0, 0.0)) -> np.ndarray:
+    def Positions(self, q, base_pose=None) -> np.ndarray:
         """The plant's position vector with the joints at ``q`` and the base at
-        ``base_pose`` (x, y, theta0; default the origin)."""
+        ``base_pose`` (the base joint's coordinates; default: base_origin)."""
         positions = np.zeros(self.num_positions)
-        positions[self.base_q] = base_pose
+        positions[self.base_q] = self.base_origin if base_pose is None else base_pose
         positions[self.joint_q] = q
         return positions
 
@@ -114,6 +118,13 @@ class ArmCoordinates:
         v = x[..., self.num_positions:]
         return (x[..., self.base_q], x[..., self.joint_q], v[..., self.base_v],
                 v[..., self.joint_v])
+
+
+def SetArmAtRest(plant: MultibodyPlant, plant_context, q0) -> None:
+    """The base at the origin, the joints at q0, everything at rest (zero
+    momentum): the initial state of every run."""
+    plant.SetPositions(plant_context, ArmCoordinates.FromPlant(plant).Positions(q0))
+    plant.SetVelocities(plant_context, np.zeros(plant.num_velocities()))
 
 
 STATE_SIGNALS = ("base_pose", "q", "base_velocity", "qdot")    # AddStateSplitter's

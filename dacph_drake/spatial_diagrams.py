@@ -12,7 +12,7 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
 from dacph_drake.floating_model import FloatingBaseModel
-from dacph_drake.plant import AddStateSplitter
+from dacph_drake.plant import AddStateSplitter, SetArmAtRest
 from dacph_drake.simulation import MakeSimulator
 from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import SpatialScenario
@@ -32,8 +32,8 @@ class SpatialLoop:
         """A Simulator with the scenario's settings, the arm at rest at q0 and the
         base at the origin (zero momentum)."""
         simulator = MakeSimulator(self.diagram, self.scenario.simulator)
-        context = self.plant.GetMyContextFromRoot(simulator.get_mutable_context())
-        self.plant.SetPositions(context, self.model.FullPositions(self.scenario.q0))
+        SetArmAtRest(self.plant, self.plant.GetMyContextFromRoot(
+            simulator.get_mutable_context()), self.scenario.q0)
         return simulator
 
 

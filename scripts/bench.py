@@ -13,7 +13,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.free_flight import run_free_flight
 from dacph_drake.kernels.arm import reduced_dynamics
-from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
+from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.robot import RobotParams
 from dacph_drake.run import simulate
@@ -72,8 +72,8 @@ def _plant_alone_wall(scenario, duration: float) -> float:
     builder.Connect(torque.get_output_port(), plant.get_actuation_input_port())
     diagram = builder.Build()
     simulator = MakeSimulator(diagram, scenario.simulator)
-    plant.SetPositions(plant.GetMyContextFromRoot(simulator.get_mutable_context()),
-                       ArmCoordinates.FromPlant(plant).Positions(scenario.q0))
+    SetArmAtRest(plant, plant.GetMyContextFromRoot(simulator.get_mutable_context()),
+                 scenario.q0)
     simulator.Initialize()
     start = time.perf_counter()
     simulator.AdvanceTo(duration)

@@ -42,6 +42,8 @@ def test_robots_from_files_have_a_free_quaternion_base(spatial):
     assert (plant.num_positions(), plant.num_velocities()) == (7 + n, 6 + n)
     assert plant.gravity_field().gravity_vector().tolist() == [0.0, 0.0, 0.0]
     assert list(model.coordinates.base_q) == list(range(7))
+    positions = model.coordinates.Positions(np.ones(n))   # the base at the origin
+    assert positions[:7].tolist() == [1.0, 0, 0, 0, 0, 0, 0] and np.all(positions[7:] == 1)
 
 
 def test_bad_descriptions_are_named(tmp_path):
