@@ -12,12 +12,13 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import (Box, Meshcat, MeshcatVisualizer,
                               MeshcatVisualizerParams, Rgba)
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.description import AddRobotFromDescription
 from dacph_drake.errors import require_positive
-from dacph_drake.log_layout import LhsLog
+from dacph_drake.log_layout import AttitudeLog, LhsLog
 from dacph_drake.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
 from dacph_drake.scenario import Scenario
@@ -52,28 +53,55 @@ def playback_speedup(duration: float, max_playback: float) -> float:
     return max(1.0, duration / max_playback)
 
 
-class ArmViewer:
-    """The ground-truth arm in Meshcat, viewed top-down (the robot's plane), with
-    the desired end-effector direction alpha_d (wide red bar) and the measured one
-    alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both stay visible when
-    they agree). Draw() shows one plant state, live or into a recording."""
+class _RobotViewer:
+    """A plant's geometry in Meshcat through a MeshcatVisualizer (publishing at
+    ``fps``), drawn one plant state at a time: live, or as the frame of a recording
+    at a playback time. ``add_plant(builder)`` returns (plant, scene_graph)."""
+
+    def __init__(self, meshcat: Meshcat, fps: float, add_plant):
+        self.meshcat = meshcat
+        builder = DiagramBuilder()
+        self._plant, scene_graph = add_plant(builder)
+        self.visualizer = MeshcatVisualizer.AddToBuilder(
+            builder, scene_graph, meshcat,
+            MeshcatVisualizerParams(publish_period=1.0 / fps))
+        self._context = builder.Build().CreateDefaultContext()
+        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
+        self._visualizer_context = self.visualizer.GetMyContextFromRoot(self._context)
+        self._end_effector = self._plant.GetFrameByName(END_EFFECTOR)
+
+    @property
+    def num_joints(self) -> int:
+        return self._plant.num_actuators()
+
+    def _Publish(self, x: np.ndarray, time: float) -> RigidTransform:
+        """Draws plant state ``x`` (at playback ``time``, None: live); returns the
+        end effector's pose X_WE."""
+        self._context.SetTime(time or 0.0)
+        self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
+        self.visualizer.ForcedPublish(self._visualizer_context)
+        return self._end_effector.CalcPoseInWorld(self._plant_context)
+
+    def _Place(self, path: str, pose: RigidTransform, time: float) -> None:
+        if time is None:
+            self.meshcat.SetTransform(path, pose)
+        else:
+            self.meshcat.SetTransform(path, pose, time)
+
+
+class ArmViewer(_RobotViewer):
+    """The ground-truth planar arm in Meshcat, viewed top-down (the robot's plane),
+    with the desired end-effector direction alpha_d (wide red bar) and the measured
+    one alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both stay visible
+    when they agree). Draw() shows one plant state, live or into a recording."""
 
     def __init__(self, scenario: Scenario, meshcat: Meshcat, view: float,
                  fps: float = 30.0):
         """``view``: half-width of the square shown [m]; ``fps``: the
         visualizer's publish rate."""
-        self.meshcat = meshcat
+        super().__init__(meshcat, fps,
+                         lambda builder: AddFreeFloatingArm(builder, scenario.robot))
         self._coordinates = ArmCoordinates.ForPlanarArm(scenario.robot.num_links)
-        builder = DiagramBuilder()
-        self._plant, scene_graph = AddFreeFloatingArm(builder, scenario.robot)
-        self.visualizer = MeshcatVisualizer.AddToBuilder(
-            builder, scene_graph, meshcat,
-            MeshcatVisualizerParams(publish_period=1.0 / fps))
-        diagram = builder.Build()
-        self._context = diagram.CreateDefaultContext()
-        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
-        self._visualizer_context = self.visualizer.GetMyContextFromRoot(self._context)
-        self._end_effector = self._plant.GetFrameByName(END_EFFECTOR)
         meshcat.Set2dRenderMode(RigidTransform(RotationMatrix(
             np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])), [0, 0, 1.0]),
             -view, view, -view, view)
@@ -90,20 +118,14 @@ class ArmViewer:
     def Draw(self, x: np.ndarray, alpha_desired: float, time: float = None) -> None:
         """Shows plant state ``x`` and alpha_d; with ``time``, as the frame of a
         recording at that playback time."""
-        self._context.SetTime(time or 0.0)
-        self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
-        self.visualizer.ForcedPublish(self._visualizer_context)
+        end = self._Publish(x, time).translation()
         base_pose, q, _, _ = self._coordinates.Split(x)
-        end = self._end_effector.CalcPoseInWorld(self._plant_context).translation()
         for path, alpha, height in ((DESIRED_PATH, alpha_desired, 0.02),
                                     (MEASURED_PATH, base_pose[2] + q.sum(), 0.03)):
             direction = np.array([np.cos(alpha), np.sin(alpha), 0.0])
-            pose = RigidTransform(RotationMatrix.MakeZRotation(alpha),
-                                  end + 0.5 * BAR_LENGTH * direction + [0, 0, height])
-            if time is None:
-                self.meshcat.SetTransform(path, pose)
-            else:
-                self.meshcat.SetTransform(path, pose, time)
+            self._Place(path, RigidTransform(
+                RotationMatrix.MakeZRotation(alpha),
+                end + 0.5 * BAR_LENGTH * direction + [0, 0, height]), time)
 
 
 class LiveView:
@@ -180,57 +202,44 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     return _WritePage(meshcat, out_html, _overlay(entries, phases, t[0], speedup))
 
 
-class SpatialViewer:
+class SpatialViewer(_RobotViewer):
     """A robot from a description file in Meshcat (perspective view), with the
     desired end-effector attitude R_d (thick translucent triad) and the measured one
     (thin triad) at the end effector; triad axes x, y, z in red, green, blue."""
 
     def __init__(self, description, meshcat: Meshcat, fps: float = 30.0):
-        self.meshcat = meshcat
-        builder = DiagramBuilder()
-        self._plant, scene_graph = AddRobotFromDescription(builder, description)
-        self.visualizer = MeshcatVisualizer.AddToBuilder(
-            builder, scene_graph, meshcat,
-            MeshcatVisualizerParams(publish_period=1.0 / fps))
-        self._context = builder.Build().CreateDefaultContext()
-        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
-        self._visualizer_context = self.visualizer.GetMyContextFromRoot(self._context)
-        self._end_effector = self._plant.GetFrameByName(END_EFFECTOR)
+        super().__init__(meshcat, fps,
+                         lambda builder: AddRobotFromDescription(builder, description))
         for path, (length, width, opacity) in TRIADS.items():
-            for axis in range(3):
-                color = np.eye(3)[axis]
+            for axis, unit in enumerate(np.eye(3)):
                 child = f"{path}/{'xyz'[axis]}"
-                meshcat.SetObject(child, Box(*np.where(np.eye(3)[axis] > 0, length,
-                                                       width)),
-                                  Rgba(*color, opacity))
-                meshcat.SetTransform(child, RigidTransform(0.5 * length * np.eye(3)[axis]))
+                meshcat.SetObject(child, Box(*(width + (length - width) * unit)),
+                                  Rgba(*unit, opacity))
+                meshcat.SetTransform(child, RigidTransform(0.5 * length * unit))
 
     def Draw(self, x: np.ndarray, R_d: RotationMatrix, time: float = None) -> None:
         """Shows plant state ``x`` and R_d; with ``time``, as the frame of a
         recording at that playback time."""
-        self._context.SetTime(time or 0.0)
-        self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
-        self.visualizer.ForcedPublish(self._visualizer_context)
-        X_WE = self._end_effector.CalcPoseInWorld(self._plant_context)
+        X_WE = self._Publish(x, time)
         for path, R in ((DESIRED_TRIAD, R_d), (MEASURED_TRIAD, X_WE.rotation())):
-            pose = RigidTransform(R, X_WE.translation())
-            if time is None:
-                self.meshcat.SetTransform(path, pose)
-            else:
-                self.meshcat.SetTransform(path, pose, time)
+            self._Place(path, RigidTransform(R, X_WE.translation()), time)
 
 
-def write_spatial_animation(loop, logs, out_html, fps: float = 30.0,
+def write_spatial_animation(robot, logs, out_html, fps: float = 30.0,
                             max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
-    """Replays a spatial loop's logs["state"] (sampled at logs["time"]) with
-    R_d(t) of its controller through a SpatialViewer into a self-contained HTML
-    file with a legend and the simulated time (spatial_diagrams.SpatialLoop)."""
+    """Replays a spatial run's logs["state"] (sampled at logs["time"]) with the
+    logged R_d (attitude_log) through a SpatialViewer of ``robot`` (its
+    description) into a self-contained HTML file with a legend and the simulated
+    time."""
     t, x = _RequireReplayable(logs, fps, max_playback)
+    desired = logs["attitude_log"][:, AttitudeLog().desired]
     meshcat = meshcat or _FileMeshcat()
-    viewer = SpatialViewer(loop.scenario.robot, meshcat, fps)
+    viewer = SpatialViewer(robot, meshcat, fps)
     speedup = _Record(viewer.visualizer, t, fps, max_playback, lambda row, time: viewer.Draw(
-        x[row], loop.controller.DesiredAttitude(t[row])[0], time))
-    odd_even = [", ".join(str(k + 1) for k in range(first, loop.model.num_joints, 2))
+        x[row], RotationMatrix(Quaternion(desired[row] / np.linalg.norm(desired[row]))),
+        time))
+    num_joints = viewer.num_joints
+    odd_even = [", ".join(str(k + 1) for k in range(first, num_joints, 2))
                 for first in (0, 1)]
     entries = [(BASE_COLOR, "base"), (LINK_COLORS[0], f"links {odd_even[0]}"),
                (LINK_COLORS[1], f"links {odd_even[1]}"),

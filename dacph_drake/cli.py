@@ -81,9 +81,8 @@ def _spatial(args) -> int:
         print(f"  {name:32s} {value:.4g}")
     if args.animate:
         from dacph_drake.animation import write_spatial_animation
-        from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
-        loop = build_spatial_model_based_diagram(scenario)
-        print(write_spatial_animation(loop, result.logs, Path(args.out) / "animation.html"))
+        print(write_spatial_animation(scenario.robot, result.logs,
+                                      Path(args.out) / "animation.html"))
     print(f"saved to {args.out}")
     _KeepViewerOpen(meshcat)
     return 0 if result.status == "ok" else 1

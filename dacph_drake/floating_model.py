@@ -86,12 +86,16 @@ class FloatingBaseModel:
         """C'(q, qdot) with C'_ij = sum_k Gamma_ijk qdot_k and
         Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2, so that Mdot - 2 C'
         is skew-symmetric."""
-        _, dM = self.MassMatrixAndDerivatives(q)
+        return self.MassAndCoriolis(q, qdot)[1]
+
+    def MassAndCoriolis(self, q, qdot):
+        """(M(q), C'(q, qdot)) from one AutoDiff evaluation of H."""
+        M, dM = self.MassMatrixAndDerivatives(q)
         qdot = np.asarray(qdot, float)
         Mdot = np.tensordot(qdot, dM, axes=(0, 0))       # sum_k dM_ij/dq_k qdot_k
         second = np.einsum("jik,k->ij", dM, qdot)          # sum_k dM_ik/dq_j qdot_k
         third = np.einsum("ijk,k->ij", dM, qdot)           # sum_k dM_jk/dq_i qdot_k
-        return 0.5 * (Mdot + second - third)
+        return M, 0.5 * (Mdot + second - third)
 
     def BaseVelocity(self, q, qdot, base_positions=None) -> np.ndarray:
         """The base joint's velocities implied by zero momentum,

@@ -1,5 +1,5 @@
 """Column layout of the controllers' logs, shared by the systems that write them
-(LhsController, RhsIntegrator, RhsLearner) and the metrics, figures and checks that read them."""
+(LhsController, RhsIntegrator, RhsLearner, AttitudeController) and the metrics, figures and checks that read them."""
 
 
 class LhsLog:
@@ -53,3 +53,14 @@ class LearnerLog:
     def __init__(self):
         self.loss, self.beta_hat, self.nominal_loss, self.holding = range(4)
         self.size = 4
+
+
+class AttitudeLog:
+    """attitude_log = [e (3), |e|, ||s||, V = s^T M s / 2, smallest link-base distance,
+    R_d as a quaternion (w, x, y, z)] (AttitudeController, spatial robots)."""
+
+    def __init__(self):
+        self.e = slice(0, 3)
+        self.e_norm, self.s_norm, self.lyapunov_V, self.clearance = 3, 4, 5, 6
+        self.desired = slice(7, 11)
+        self.size = 11

@@ -17,7 +17,6 @@ import numpy as np
 
 from dacph_drake.animation import LiveView
 from dacph_drake.controllers import build_closed_loop, require_controller
-from dacph_drake.diagrams import ClosedLoop
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
@@ -157,7 +156,6 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     context = simulator.get_mutable_context()
     plant = loop.plant
     plant_context = plant.GetMyContextFromRoot(context)
-    problem = {}
     coordinates = ArmCoordinates.FromPlant(plant)
     clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance
 
@@ -179,7 +177,6 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
 
     simulator.Initialize()
     start = time.perf_counter()
-    chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
     bar = progress_bar(duration, f"{controller:>11s}", "s", enabled=progress)
     handle_term = interruptible and threading.current_thread() is threading.main_thread()
     previous_term = signal.signal(signal.SIGTERM, _RaiseTerminated) if handle_term else None
@@ -189,48 +186,65 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
         return RunResult(controller=controller, status=status, reason=reason,
                          final_time=context.get_time(),
                          wall_time=time.perf_counter() - start,
-                         logs=_CollectLogs(loop, context),
+                         logs=collect_logs(loop, context),
                          peak_memory_mib=resource.getrusage(
                              resource.RUSAGE_SELF).ru_maxrss / 1024,
                          duration=duration)
 
     last_checkpoint = start
+
+    def after_chunk(last: bool) -> None:
+        nonlocal last_checkpoint
+        if live_view is not None:
+            live_view.Update(context)
+        bar.update(context.get_time() - bar.n)
+        if checkpoint and time.perf_counter() - last_checkpoint >= checkpoint[0] \
+                and not last:
+            checkpoint[1](result("incomplete", "checkpoint at t = "
+                                 f"{context.get_time():.4f} s; the run had not "
+                                 "finished"))
+            last_checkpoint = time.perf_counter()
+
+    reason = ""
     try:
-        for k in range(1, chunks + 1):
-            try:
-                simulator.AdvanceTo(min(k * MONITOR_PERIOD, duration))
-            except RuntimeError as e:
-                problem.setdefault("reason", str(e).splitlines()[0])
-                break
-            reason = check(context.get_time())
-            if reason:
-                problem["reason"] = reason
-                break
-            if live_view is not None:
-                live_view.Update(context)
-            bar.update(context.get_time() - bar.n)
-            if checkpoint and time.perf_counter() - last_checkpoint >= checkpoint[0] \
-                    and k < chunks:
-                checkpoint[1](result("incomplete", "checkpoint at t = "
-                                     f"{context.get_time():.4f} s; the run had not "
-                                     "finished"))
-                last_checkpoint = time.perf_counter()
+        reason = advance_in_chunks(simulator, duration, check, after_chunk)
     except KeyboardInterrupt as e:
         if not interruptible:
             raise
         interrupted = True
         source = "SIGTERM" if isinstance(e, _Terminated) else "SIGINT"
-        problem["reason"] = f"interrupted by {source} at t = {context.get_time():.4f} s"
+        reason = f"interrupted by {source} at t = {context.get_time():.4f} s"
     finally:
         bar.close()
         if handle_term:
             signal.signal(signal.SIGTERM, previous_term)
-    return result("interrupted" if interrupted else "diverged" if problem else "ok",
-                  problem.get("reason", ""))
+    return result("interrupted" if interrupted else "diverged" if reason else "ok",
+                  reason)
 
 
-def _CollectLogs(loop: ClosedLoop, context) -> Dict[str, np.ndarray]:
-    """Every logger's samples, cut to the samples all of them hold: a run stopped
+def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
+    """Advances ``simulator`` to ``duration`` in steps of MONITOR_PERIOD of simulated
+    time; after each, ``check(t)`` gives the reason to stop (or None) and
+    ``after_chunk(last)`` runs (last: the final step). Returns why the run stopped
+    early (a RuntimeError of the simulation, such as a failed callback, included),
+    or "" when it reached ``duration``."""
+    context = simulator.get_context()
+    chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
+    for k in range(1, chunks + 1):
+        try:
+            simulator.AdvanceTo(min(k * MONITOR_PERIOD, duration))
+        except RuntimeError as e:
+            return str(e).splitlines()[0]
+        reason = check(context.get_time())
+        if reason:
+            return reason
+        after_chunk(k == chunks)
+    return ""
+
+
+def collect_logs(loop, context) -> Dict[str, np.ndarray]:
+    """Every logger's samples of a loop (ClosedLoop, spatial_diagrams.SpatialLoop),
+    with "time", cut to the samples all of them hold: a run stopped
     inside the loggers' publish at one instant (SIGINT, a failed callback) has some
     loggers one sample ahead of the others."""
     logs, times = {}, None

@@ -14,12 +14,13 @@ from pydrake.common.yaml import yaml_dump_typed
 
 from dacph_drake.animation import LiveView
 from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
+from dacph_drake.run import advance_in_chunks, collect_logs
 from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
 from dacph_drake.spatial_scenario import SpatialScenario
 
-CHECK_PERIOD = 0.01             # [s] of simulated time between state checks
 SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
 BUILT_IN_SPATIAL_SCENARIOS = {
     "satellite_6dof": SpatialScenario,
@@ -56,8 +57,9 @@ class SpatialRunResult:
 def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=None,
                      progress: bool = False, meshcat=None) -> SpatialRunResult:
     """Simulates the loop for ``duration`` (default: the scenario's), checking the
-    state every CHECK_PERIOD; with ``out_dir``, saves the run there; with
-    ``meshcat``, draws it there while it simulates (animation.LiveView)."""
+    state every run.MONITOR_PERIOD (run.advance_in_chunks); with ``out_dir``, saves
+    the run there; with ``meshcat``, draws it there while it simulates
+    (animation.LiveView)."""
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     loop = build_spatial_model_based_diagram(scenario)
@@ -67,26 +69,23 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
     live_view = LiveView.ForSpatialLoop(loop, meshcat) if meshcat is not None else None
     simulator.Initialize()
     bar = progress_bar(duration, "spatial", "s", enabled=progress)
-    start, reason = time.perf_counter(), ""
+    start = time.perf_counter()
+
+    def check(t: float):
+        if not np.all(np.isfinite(loop.plant.GetPositionsAndVelocities(plant_context))):
+            return f"non-finite plant state at t = {t:.4f} s"
+        return None
+
+    def after_chunk(last: bool) -> None:
+        if live_view is not None:
+            live_view.Update(context)
+        bar.update(context.get_time() - bar.n)
+
     try:
-        for k in range(1, int(np.ceil(duration / CHECK_PERIOD - 1e-9)) + 1):
-            try:
-                simulator.AdvanceTo(min(k * CHECK_PERIOD, duration))
-            except RuntimeError as e:
-                reason = str(e).splitlines()[0]
-                break
-            if not np.all(np.isfinite(loop.plant.GetPositionsAndVelocities(plant_context))):
-                reason = f"non-finite plant state at t = {context.get_time():.4f} s"
-                break
-            if live_view is not None:
-                live_view.Update(context)
-            bar.update(context.get_time() - bar.n)
+        reason = advance_in_chunks(simulator, duration, check, after_chunk)
     finally:
         bar.close()
-    logs = {name: logger.FindLog(context) for name, logger in loop.loggers.items()}
-    count = min(log.num_samples() for log in logs.values())
-    logs = {**{name: log.data().T[:count].copy() for name, log in logs.items()},
-            "time": logs["state"].sample_times()[:count].copy()}
+    logs = collect_logs(loop, context)
     result = SpatialRunResult(status="diverged" if reason else "ok", reason=reason,
                               final_time=context.get_time(),
                               wall_time=time.perf_counter() - start, logs=logs,
@@ -100,9 +99,10 @@ def spatial_metrics(loop, logs) -> Dict[str, float]:
     """Attitude error |e| (final, RMS and max after SETTLING_TIME) [rad], the
     smallest link-base distance [m] (nan without the potential, which measures it),
     and the largest |spatial momentum| over the logged states."""
-    t, error = logs["time"], logs["attitude_log"][:, 3]
+    layout = AttitudeLog()
+    t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
     settled = t >= SETTLING_TIME
-    clearance = logs["attitude_log"][:, 6]
+    clearance = logs["attitude_log"][:, layout.clearance]
     context = loop.plant.CreateDefaultContext()
     momentum = 0.0
     for x in logs["state"]:

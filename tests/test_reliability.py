@@ -265,14 +265,14 @@ def test_logs_of_a_run_stopped_between_two_loggers_are_cut_to_a_common_length():
     sample more than others, and the metrics would index them with a mask of the
     wrong length. The saved logs hold only the samples every logger has."""
     from types import SimpleNamespace
-    from dacph_drake.run import _CollectLogs
+    from dacph_drake.run import collect_logs
 
     def logger(rows):
         log = SimpleNamespace(data=lambda: np.arange(2.0 * rows).reshape(2, rows),
                               sample_times=lambda: 0.01 * np.arange(rows))
         return SimpleNamespace(FindLog=lambda context: log)
     loop = SimpleNamespace(loggers={"state": logger(269), "estimates": logger(268)})
-    logs = _CollectLogs(loop, None)
+    logs = collect_logs(loop, None)
     assert {name: len(data) for name, data in logs.items()} == \
         {"state": 268, "estimates": 268, "time": 268}
     np.testing.assert_array_equal(logs["time"], 0.01 * np.arange(268))

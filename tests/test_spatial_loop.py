@@ -4,6 +4,8 @@ import numpy as np
 import pytest
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.run import collect_logs
 from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
 from dacph_drake.spatial_scenario import SpatialScenario
 
@@ -20,7 +22,7 @@ def test_six_dof_arm_tracks_a_3d_attitude_reference():
     simulator.AdvanceTo(scenario.duration)
     log = loop.loggers["attitude_log"].FindLog(simulator.get_context())
     t, data = log.sample_times(), log.data().T
-    error, s_norm = data[:, 3], data[:, 4]
+    error, s_norm = data[:, AttitudeLog().e_norm], data[:, AttitudeLog().s_norm]
     assert error[0] == pytest.approx(2 * np.sin(scenario.reference.initial_error / 2))
     bound = 1.1 * error[0] * np.exp(-scenario.gains.Lambda * (t - 0.1)) + 1e-4
     assert np.all(error <= bound), t[np.argmax(error > bound)]
@@ -54,9 +56,8 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     loop = build_spatial_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(scenario.duration)
-    log = loop.loggers["state"].FindLog(simulator.get_context())
-    page = write_spatial_animation(loop, {"time": log.sample_times(),
-                                          "state": log.data().T}, tmp_path / "a.html")
+    logs = collect_logs(loop, simulator.get_context())
+    page = write_spatial_animation(scenario.robot, logs, tmp_path / "a.html")
     browser = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
                "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
                "--proxy-server=127.0.0.1:9", "--window-size=800,800",
@@ -96,7 +97,8 @@ def test_the_clearance_potential_keeps_the_arm_off_the_base():
         joints, base = loop.model.coordinates.joint_q, loop.model.coordinates.base_q
         clearance = np.array([measure.Evaluate(x[joints], x[base]).min_distance
                               for x in states])
-        error = loop.loggers["attitude_log"].FindLog(context).data().T[:, 3]
+        error = loop.loggers["attitude_log"].FindLog(context).data().T[
+            :, AttitudeLog().e_norm]
         runs[gain] = clearance, error
     (with_potential, error_with), (without, error_without) = runs[1.0], runs[0.0]
     assert with_potential[0] == pytest.approx(0.0439, abs=1e-3)
@@ -120,7 +122,7 @@ def test_inertia_scaled_damping_sets_the_lhs_rate_the_gain_rule_uses():
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(scenario.duration)
     log = loop.loggers["attitude_log"].FindLog(simulator.get_context())
-    t, V = log.sample_times(), log.data()[5]
+    t, V = log.sample_times(), log.data()[AttitudeLog().lyapunov_V]
     rate = -np.polyfit(t, np.log(V), 1)[0]
     assert rate == pytest.approx(2 * scenario.gains.damping_rate, rel=0.03)
     rhs = Rhs()

@@ -8,11 +8,11 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.attitude import attitude_error, reference_rates
 from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.plant import END_EFFECTOR
 from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import AttitudeGains, AttitudeReference
 
-ATTITUDE_LOG_SIZE = 7           # [e (3), |e|, ||s||, V = s^T M s / 2, clearance]
 NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
 
 
@@ -29,8 +29,9 @@ class AttitudeController(LeafSystem):
     is the central difference of nu along the current motion (q +- h qdot, the base
     turned by +- h omega_b, t +- h; h = NU_DOT_STEP). U is the link-base clearance
     potential (``potential``: spatial_potential.BaseClearancePotential, or None).
-    Output ``tau_request`` is held between updates; ``attitude_log`` = [e (3), |e|,
-    ||s||, V, smallest link-base distance [m] (inf without a potential)]."""
+    Output ``tau_request`` is held between updates; ``attitude_log``
+    (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, smallest link-base distance [m]
+    (inf without a potential), R_d(t) as a quaternion], which a replay reads."""
 
     def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
                  gains: AttitudeGains, period: float, q0,
@@ -49,7 +50,7 @@ class AttitudeController(LeafSystem):
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._tau_index = self.DeclareDiscreteState(n)
-        self._log_index = self.DeclareDiscreteState(ATTITUDE_LOG_SIZE)
+        self._log_index = self.DeclareDiscreteState(AttitudeLog().size)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareStateOutputPort("attitude_log", self._log_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
@@ -60,7 +61,8 @@ class AttitudeController(LeafSystem):
         return self._reference.At(self._R_d0, t)
 
     def _ReferenceRates(self, t: float, q, base_pose):
-        """(nu, e, clearance) at time t, joints q, base pose (quaternion, position)."""
+        """(nu, e, clearance, R_d) at time t, joints q, base pose (quaternion,
+        position)."""
         self._model.plant.SetPositions(self._context,
                                        self._model.FullPositions(q, base_pose))
         R_WE = self._end_effector.CalcPoseInWorld(self._context).rotation()
@@ -74,7 +76,7 @@ class AttitudeController(LeafSystem):
             xi, clearance = -self._eta * potential.gradient, potential.min_distance
         nu = reference_rates(D, omega_d, e, self._gains.Lambda, xi,
                              self._gains.task_damping)
-        return nu, e, clearance
+        return nu, e, clearance, R_d
 
     @staticmethod
     def _Turned(base_pose, rotation_vector):
@@ -92,17 +94,18 @@ class AttitudeController(LeafSystem):
         base_pose = self._base_pose.Eval(context)
         omega_base = self._base_velocity.Eval(context)[:3]
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        nu, e, clearance = self._ReferenceRates(t, q, base_pose)
+        nu, e, clearance, R_d = self._ReferenceRates(t, q, base_pose)
         h = NU_DOT_STEP
         nu_plus = self._ReferenceRates(t + h, q + h * qdot,
                                        self._Turned(base_pose, h * omega_base))[0]
         nu_minus = self._ReferenceRates(t - h, q - h * qdot,
                                         self._Turned(base_pose, -h * omega_base))[0]
         nu_dot = (nu_plus - nu_minus) / (2 * h)
-        M = self._model.MassMatrix(q)
+        M, C = self._model.MassAndCoriolis(q, qdot)
         s = qdot - nu
-        tau = (M @ nu_dot + self._model.Coriolis(q, qdot) @ nu
-               - self._gains.damping_rate * M @ s)
+        tau = M @ nu_dot + C @ nu - self._gains.damping_rate * M @ s
         discrete_state.set_value(self._tau_index, tau)
+        desired = R_d.ToQuaternion()
         discrete_state.set_value(self._log_index, np.concatenate(
-            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, clearance]]))
+            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, clearance,
+                 desired.w(), desired.x(), desired.y(), desired.z()]]))
