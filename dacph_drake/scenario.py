@@ -14,8 +14,7 @@ from pydrake.systems.analysis import SimulatorConfig
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.robot import RobotParams, load_yaml_dataclass
-from dacph_drake.simulation import (ERROR_CONTROLLED_SCHEMES, INTEGRATION_SCHEMES,
-                                    FixedStepConfig)
+from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
 
 @dataclass
@@ -384,32 +383,9 @@ class Scenario:
                 f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
                 f"= {L.band} Hz; allowed: inside the band (the learner filters "
                 "everything else out)")
-        _validate_simulator(self.simulator)
+        validate_simulator_config(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.
         require_finite_numbers("", self)
-
-
-def _validate_simulator(config: SimulatorConfig) -> None:
-    """ConfigError naming the first simulator.* setting the closed loop cannot run."""
-    if config.integration_scheme not in INTEGRATION_SCHEMES:
-        raise ConfigError(f"simulator.integration_scheme = {config.integration_scheme!r}; "
-                          f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
-    require_in_range("simulator.max_step_size", config.max_step_size, 1e-7, 1.0, "s")
-    if config.use_error_control:
-        if config.integration_scheme not in ERROR_CONTROLLED_SCHEMES:
-            raise ConfigError(
-                f"simulator.use_error_control = true with simulator.integration_scheme "
-                f"= {config.integration_scheme!r}, which has no error estimate; allowed: "
-                f"false, or a scheme among {', '.join(ERROR_CONTROLLED_SCHEMES)}")
-        require_in_range("simulator.accuracy", config.accuracy, 1e-12, 1.0)
-    if config.start_time != 0.0:
-        raise ConfigError(f"simulator.start_time = {config.start_time:g} s; allowed: 0 "
-                          "(the phases are times from the start of the run)")
-    require_nonnegative("simulator.target_realtime_rate", config.target_realtime_rate)
-    if config.publish_every_time_step:
-        raise ConfigError("simulator.publish_every_time_step = true; allowed: false (the "
-                          "logs are sampled every periods.log; a publish at every step "
-                          "would add samples between them)")
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"

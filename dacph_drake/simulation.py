@@ -5,6 +5,8 @@ import copyreg
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 
+from dacph_drake.errors import ConfigError, require_in_range, require_nonnegative
+
 # Explicit Runge-Kutta schemes: the closed loop's Python systems have no AutoDiff
 # form for an implicit scheme's Jacobian; each of these keeps the free-floating arm's
 # momentum to ~1e-13 at 0.25 ms (tests/test_plant.py).
@@ -22,6 +24,30 @@ def FixedStepConfig(integration_scheme: str = "runge_kutta2",
     every RHS sample anyway (the step taken is min(step, periods.rhs))."""
     return SimulatorConfig(integration_scheme=integration_scheme, max_step_size=step,
                            use_error_control=False, target_realtime_rate=0.0)
+
+
+def validate_simulator_config(config: SimulatorConfig) -> None:
+    """ConfigError naming the first simulator.* setting a closed loop cannot run
+    (a scenario's ``simulator:``)."""
+    if config.integration_scheme not in INTEGRATION_SCHEMES:
+        raise ConfigError(f"simulator.integration_scheme = {config.integration_scheme!r}; "
+                          f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+    require_in_range("simulator.max_step_size", config.max_step_size, 1e-7, 1.0, "s")
+    if config.use_error_control:
+        if config.integration_scheme not in ERROR_CONTROLLED_SCHEMES:
+            raise ConfigError(
+                f"simulator.use_error_control = true with simulator.integration_scheme "
+                f"= {config.integration_scheme!r}, which has no error estimate; allowed: "
+                f"false, or a scheme among {', '.join(ERROR_CONTROLLED_SCHEMES)}")
+        require_in_range("simulator.accuracy", config.accuracy, 1e-12, 1.0)
+    if config.start_time != 0.0:
+        raise ConfigError(f"simulator.start_time = {config.start_time:g} s; allowed: 0 "
+                          "(the phases are times from the start of the run)")
+    require_nonnegative("simulator.target_realtime_rate", config.target_realtime_rate)
+    if config.publish_every_time_step:
+        raise ConfigError("simulator.publish_every_time_step = true; allowed: false (the "
+                          "logs are sampled at the log period; a publish at every step "
+                          "would add samples between them)")
 
 
 def MakeSimulator(diagram, config: SimulatorConfig) -> Simulator:

@@ -12,7 +12,7 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
-from dacph_drake.simulation import FixedStepConfig
+from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
 
 @dataclass
@@ -106,3 +106,4 @@ class SpatialScenario:
                 "sampled sliding-mode loop stays well damped)")
         require_in_range("log_period", self.log_period, self.lhs_period, self.duration,
                          "s")
+        validate_simulator_config(self.simulator)

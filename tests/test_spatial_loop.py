@@ -2,12 +2,14 @@
 quaternion base) tracks a turning 3D end-effector attitude reference."""
 import numpy as np
 import pytest
+from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.run import collect_logs
 from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
-from dacph_drake.spatial_scenario import SpatialScenario
+from dacph_drake.spatial_scenario import (AttitudeGains, ClearancePotential,
+                                          SpatialScenario)
 
 
 def test_six_dof_arm_tracks_a_3d_attitude_reference():
@@ -37,6 +39,11 @@ def test_six_dof_arm_tracks_a_3d_attitude_reference():
     (dict(q0=[0.1, 0.2]), r"q0 has 2 entries; allowed: 6"),
     (dict(lhs_period=0.05), r"gains.damping_rate = 20 1/s with lhs_period = 0.05 s"),
     (dict(robot="satellite_9dof"), r"no such .urdf or .sdf file"),
+    (dict(log_period=100.0), r"log_period = 100.0 is out of range; allowed: in \[0.001, 8\] s"),
+    (dict(gains=AttitudeGains(task_damping=-1.0)), r"gains.task_damping = -1.0"),
+    (dict(potential=ClearancePotential(margin=0.0)), r"potential.margin = 0.0"),
+    (dict(simulator=SimulatorConfig(integration_scheme="radau3")),
+     r"simulator.integration_scheme = 'radau3'; allowed: runge_kutta2"),
 ])
 def test_bad_spatial_settings_are_named(change, message):
     with pytest.raises(ConfigError, match=message):
