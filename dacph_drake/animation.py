@@ -3,7 +3,6 @@ run.simulate(meshcat=...)), and write_animation replays a run's logs into a
 self-contained HTML file, with an overlay that names what is drawn and shows the
 simulated time and the current phase while it plays.
 """
-import contextlib
 import html
 import json
 import logging
@@ -32,19 +31,6 @@ TRIADS = {DESIRED_TRIAD: (0.25, 0.03, 0.35),      # length, width [m], opacity
           MEASURED_TRIAD: (0.2, 0.008, 1.0)}
 MEASURED_COLOR = (0.1, 0.1, 0.1, 0.9)
 OVERLAY_BACKGROUND = "#fffbe6"
-
-
-@contextlib.contextmanager
-def quiet_drake_info():
-    """Drake's info messages (such as Meshcat's "listening for connections") off
-    for the block: a file is being written, nobody is meant to connect."""
-    drake_logger = logging.getLogger("drake")
-    level = drake_logger.level
-    drake_logger.setLevel(logging.WARNING)
-    try:
-        yield
-    finally:
-        drake_logger.setLevel(level)
 
 
 def playback_speedup(duration: float, max_playback: float) -> float:
@@ -184,7 +170,7 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     ``max_playback`` seconds are sped up to fit."""
     t, x = _RequireReplayable(logs, fps, max_playback)
     alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.num_links).alpha_desired]
-    meshcat = meshcat or _FileMeshcat()
+    meshcat = meshcat or QuietMeshcat()
     view = 1.2 * ArmViewer.Reach(scenario) + float(np.max(np.abs(x[:, :2])))
     viewer = ArmViewer(scenario, meshcat, view, fps)
     speedup = _Record(viewer.visualizer, t, fps, max_playback,
@@ -233,7 +219,7 @@ def write_spatial_animation(robot, logs, out_html, fps: float = 30.0,
     time."""
     t, x = _RequireReplayable(logs, fps, max_playback)
     desired = logs["attitude_log"][:, AttitudeLog().desired]
-    meshcat = meshcat or _FileMeshcat()
+    meshcat = meshcat or QuietMeshcat()
     viewer = SpatialViewer(robot, meshcat, fps)
     speedup = _Record(viewer.visualizer, t, fps, max_playback, lambda row, time: viewer.Draw(
         x[row], RotationMatrix(Quaternion(desired[row] / np.linalg.norm(desired[row]))),
@@ -258,11 +244,17 @@ def _RequireReplayable(logs, fps: float, max_playback: float):
     return t, x
 
 
-def _FileMeshcat() -> Meshcat:
-    """A Meshcat for writing a file: nobody is meant to connect, so its server's
-    "listening" message is not shown."""
-    with quiet_drake_info():
+def QuietMeshcat() -> Meshcat:
+    """A Meshcat without Drake's "listening for connections" message (when a file is
+    written nobody is meant to connect; the CLI prints its own line with the URL):
+    Drake's info messages are off while it starts."""
+    drake_logger = logging.getLogger("drake")
+    level = drake_logger.level
+    drake_logger.setLevel(logging.WARNING)
+    try:
         return Meshcat()
+    finally:
+        drake_logger.setLevel(level)
 
 
 def _Record(visualizer, t: np.ndarray, fps: float, max_playback: float, draw) -> float:

@@ -211,10 +211,8 @@ def _LiveViewing(args, scenario):
         scenario.simulator.target_realtime_rate = args.realtime_rate
     if not args.meshcat:
         return None
-    from pydrake.geometry import Meshcat
-    from dacph_drake.animation import quiet_drake_info
-    with quiet_drake_info():
-        meshcat = Meshcat()
+    from dacph_drake.animation import QuietMeshcat
+    meshcat = QuietMeshcat()
     print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
     return meshcat
 

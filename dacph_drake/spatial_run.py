@@ -17,7 +17,7 @@ from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
-from dacph_drake.run import advance_in_chunks, collect_logs
+from dacph_drake.run import advance_in_chunks, collect_logs, prepare_out_dir
 from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
 from dacph_drake.spatial_scenario import SpatialScenario
 
@@ -62,6 +62,8 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
     (animation.LiveView)."""
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
+    if out_dir is not None:
+        prepare_out_dir(out_dir)           # checked before any time is spent
     loop = build_spatial_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()

@@ -299,11 +299,9 @@ def test_progress_to_a_log_file_stays_a_few_lines(capsys):
 def test_live_meshcat_shows_the_run_without_changing_it():
     """simulate(meshcat=...) draws the robot and both orientation bars into Meshcat
     while it runs; the logs are bit for bit those of a run without it."""
-    from pydrake.geometry import Meshcat
-    from dacph_drake.animation import DESIRED_PATH, MEASURED_PATH, quiet_drake_info
+    from dacph_drake.animation import DESIRED_PATH, MEASURED_PATH, QuietMeshcat
     from dacph_drake.run import simulate
-    with quiet_drake_info():
-        meshcat = Meshcat()
+    meshcat = QuietMeshcat()
     watched = simulate(short_scenario(), "model-based", duration=0.5, meshcat=meshcat)
     for path in ("/drake/visualizer", DESIRED_PATH, MEASURED_PATH):
         assert meshcat.HasPath(path), path

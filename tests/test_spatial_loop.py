@@ -172,11 +172,9 @@ def test_shipped_spatial_scenario_files_are_the_built_ins(name):
 
 
 def test_live_meshcat_shows_a_spatial_run_without_changing_it():
-    from pydrake.geometry import Meshcat
-    from dacph_drake.animation import DESIRED_TRIAD, MEASURED_TRIAD, quiet_drake_info
+    from dacph_drake.animation import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
     from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
-    with quiet_drake_info():
-        meshcat = Meshcat()
+    meshcat = QuietMeshcat()
     scenario = load_spatial_scenario("satellite_3dof")
     watched = simulate_spatial(scenario, duration=0.3, meshcat=meshcat)
     for path in ("/drake/visualizer", DESIRED_TRIAD, MEASURED_TRIAD):
@@ -184,3 +182,11 @@ def test_live_meshcat_shows_a_spatial_run_without_changing_it():
     plain = simulate_spatial(scenario, duration=0.3)
     for name, log in plain.logs.items():
         assert np.array_equal(log, watched.logs[name]), name
+
+
+def test_dacph_spatial_checks_out_before_simulating(tmp_path, capsys):
+    from dacph_drake.cli import main
+    taken = tmp_path / "file"
+    taken.write_text("")
+    assert main(["spatial", "satellite_3dof", "--out", str(taken)]) == 2
+    assert "is an existing file; allowed: a directory" in capsys.readouterr().err
