@@ -73,12 +73,13 @@ def _spatial(args) -> int:
     scenario = load_spatial_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
     result = simulate_spatial(scenario, args.duration, out_dir=args.out, progress=True,
-                              meshcat=meshcat)
+                              meshcat=meshcat, controller=args.controller)
     print(f"{scenario.robot}: {result.status}"
           f"{': ' + result.reason if result.reason else ''} ({result.final_time:.2f} s "
           f"simulated in {result.wall_time:.1f} s)")
     for name, value in result.metrics.items():
-        print(f"  {name:32s} {value:.4g}")
+        print(f"  {name:44s} {value:.4g}" if value == value else
+              f"  {name:44s} n/a, not reached")
     if args.animate:
         from dacph_drake.animation import write_spatial_animation
         print(write_spatial_animation(scenario.robot, result.logs,
@@ -144,16 +145,22 @@ def _verify(args) -> int:
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.run import simulate
     from dacph_drake.scenario import load_scenario
+    from dacph_drake.spatial_run import (is_spatial_scenario, load_spatial_scenario,
+                                         simulate_spatial)
     target = Path(args.target)
     if target.is_dir():
         run_dir = target
     else:
-        scenario = load_scenario(args.target)
+        spatial = is_spatial_scenario(args.target)
+        scenario = (load_spatial_scenario if spatial else load_scenario)(args.target)
         if not args.out:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        simulate(scenario, "dac", out_dir=run_dir, progress=True)
+        if spatial:
+            simulate_spatial(scenario, out_dir=run_dir, progress=True, controller="dac")
+        else:
+            simulate(scenario, "dac", out_dir=run_dir, progress=True)
     report = verify_run(run_dir)
     for name, check in report["checks"].items():
         detail = check.get("reason") or check.get("first_failure") or ""
@@ -282,8 +289,10 @@ def main(argv=None) -> int:
     ver = commands.add_parser(
         "verify", help="check the paper's Lyapunov claims on a DAC run (exit 1 on a "
                        "failed check)")
-    ver.add_argument("target", help="a run directory (holding logs_dac.npz), or a "
-                                    "scenario YAML / built-in name to simulate first")
+    ver.add_argument("target", help="a run directory (a planar DAC run, or a spatial "
+                                    "one saved by dacph spatial --controller dac), or a "
+                                    "scenario YAML / built-in name (planar or spatial) "
+                                    "to simulate first")
     ver.add_argument("--out", default=None, help="where to save the run of a scenario")
     ver.set_defaults(run=_verify)
     swp = commands.add_parser(
@@ -302,14 +311,16 @@ def main(argv=None) -> int:
                           "so far")
     swp.set_defaults(run=_sweep)
     spa = commands.add_parser(
-        "spatial", help="a spatial robot (URDF/SDF) tracking a 3D end-effector attitude: "
-                        "the model-based LHS loop (the spatial DAC loop is not built yet)")
+        "spatial", help="a spatial robot (URDF/SDF) tracking a 3D end-effector "
+                        "attitude with DAC-pH (or the ablation, or the baseline)")
     spa.add_argument("scenario", nargs="?", default="satellite_6dof",
                      help="spatial scenario YAML or a built-in name: satellite_6dof "
                           "(default), satellite_3dof")
     spa.add_argument("--out", required=True, help="output directory")
     spa.add_argument("--duration", type=float, default=None,
                      help="[s] (default: the scenario's)")
+    spa.add_argument("--controller", default="dac", choices=CONTROLLERS,
+                     help="default: dac")
     spa.add_argument("--animate", action="store_true",
                      help="also write the 3D replay (animation.html)")
     _AddLiveViewing(spa)

@@ -32,16 +32,29 @@ REGISTRY = {
                               "the LHS controller with u = B0^-1 (tau_c^r + D0 qdot)"),
 }
 NAMES = tuple(REGISTRY)
+# The same controllers for spatial robots (spatial_diagrams.py; `dacph spatial
+# --controller`), each returning a spatial_diagrams.SpatialLoop.
+SPATIAL_REGISTRY = {
+    "dac": Controller("dacph_drake.spatial_diagrams:build_spatial_dac_diagram",
+                      REGISTRY["dac"].description),
+    "dac-nominal": Controller(
+        "dacph_drake.spatial_diagrams:build_spatial_dac_nominal_diagram",
+        REGISTRY["dac-nominal"].description),
+    "model-based": Controller(
+        "dacph_drake.spatial_diagrams:build_spatial_model_based_diagram",
+        REGISTRY["model-based"].description),
+}
 
 
-def require_controller(name: str) -> Controller:
+def require_controller(name: str, registry=REGISTRY) -> Controller:
     """The registered controller ``name`` (ConfigError listing the names otherwise)."""
-    if name not in REGISTRY:
-        raise ConfigError(f"controller = {name!r}; allowed: {', '.join(NAMES)}")
-    return REGISTRY[name]
+    if name not in registry:
+        raise ConfigError(f"controller = {name!r}; allowed: {', '.join(registry)}")
+    return registry[name]
 
 
-def build_closed_loop(name: str, scenario):
-    """The ClosedLoop of controller ``name`` for ``scenario``."""
-    module, function = require_controller(name).builder.split(":")
+def build_closed_loop(name: str, scenario, registry=REGISTRY):
+    """The loop of controller ``name`` for ``scenario`` (a ClosedLoop; a
+    SpatialLoop with registry=SPATIAL_REGISTRY)."""
+    module, function = require_controller(name, registry).builder.split(":")
     return getattr(importlib.import_module(module), function)(scenario)

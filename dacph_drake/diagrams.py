@@ -113,13 +113,7 @@ def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> Close
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
     lambda_min, lambda_max = mass_matrix_bounds(model)
-    truth = builder.AddNamedSystem("true_rhs", TrueRhs(scenario))
-    disturbance = builder.AddNamedSystem(
-        "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
-    builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
-    builder.Connect(disturbance.GetOutputPort("disturbance_model"),
-                    truth.GetInputPort("disturbance_model"))
-    builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
+    truth, disturbance = AddActuation(builder, plant, TrueRhs(scenario), scenario)
     loop = ClosedLoop(
         diagram=None, scenario=scenario, plant=plant, scene_graph=scene_graph,
         model=model, potential=BaseRepulsionPotential(scenario.nominal_robot,
@@ -130,6 +124,34 @@ def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> Close
                  "disturbance": disturbance})
     controller_builder = ControllerBuilder()
     loop.systems.update(add_controller(scenario, loop, controller_builder))
+    loop.loggers.update(CloseLoop(builder, controller_builder, name, plant, splitter,
+                                  truth, disturbance, scenario.periods.log))
+    loop.diagram = builder.Build()
+    loop.diagram.set_name(f"{name}_closed_loop")
+    return loop
+
+
+def AddActuation(builder: DiagramBuilder, plant, truth, scenario):
+    """Adds the true RHS ``truth`` (TrueRhs or SpatialTrueRhs) as "true_rhs" and the
+    DisturbanceSource of ``scenario`` as "disturbance", wired plant state -> truth ->
+    plant actuation. Returns (truth, disturbance)."""
+    truth = builder.AddNamedSystem("true_rhs", truth)
+    disturbance = builder.AddNamedSystem(
+        "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
+    builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
+    builder.Connect(disturbance.GetOutputPort("disturbance_model"),
+                    truth.GetInputPort("disturbance_model"))
+    builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
+    return truth, disturbance
+
+
+def CloseLoop(builder: DiagramBuilder, controller_builder: ControllerBuilder, name: str,
+              plant, splitter, truth, disturbance, log_period: float
+              ) -> Dict[str, VectorLogSink]:
+    """Builds the controller (``{name}_controller``) into ``builder``, feeds its
+    inputs from the state splitter's signals of the same names and its output ``u``
+    to the true RHS ``truth``, and logs every log_period: the plant's state, tau and true_matrices of the truth, d(t), and every output
+    of the controller. Returns the loggers by signal name."""
     controller = controller_builder.builder.Build()
     controller.set_name(f"{name}_controller")
     builder.AddSystem(controller)
@@ -137,17 +159,17 @@ def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> Close
         port = controller.get_input_port(i)
         builder.Connect(splitter.GetOutputPort(port.get_name()), port)
     builder.Connect(controller.GetOutputPort("u"), truth.GetInputPort("u"))
-    logged = [("state", plant.get_state_output_port()), ("tau", truth.GetOutputPort("tau")),
+    logged = [("state", plant.get_state_output_port()),
+              ("tau", truth.GetOutputPort("tau")),
               ("true_matrices", truth.GetOutputPort("true_matrices")),
               ("disturbance", disturbance.GetOutputPort("disturbance"))]
     logged += [(controller.get_output_port(i).get_name(), controller.get_output_port(i))
                for i in range(controller.num_output_ports())]
+    loggers = {}
     for signal, port in logged:
-        loop.loggers[signal] = LogVectorOutput(port, builder, scenario.periods.log)
-        loop.loggers[signal].set_name(f"log_{signal}")
-    loop.diagram = builder.Build()
-    loop.diagram.set_name(f"{name}_closed_loop")
-    return loop
+        loggers[signal] = LogVectorOutput(port, builder, log_period)
+        loggers[signal].set_name(f"log_{signal}")
+    return loggers
 
 
 def _AddLhsController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
@@ -181,30 +203,48 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
 
 def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
                       learning: bool):
-    rhs_settings = scenario.rhs
-    check_rhs_period(scenario.periods, (1 + rhs_settings.c_margin) * loop.c_min_nominal,
-                     (1 + rhs_settings.c_margin) * c_lower_bound(
-                         rhs_settings.Td, scenario.lhs.Kd, loop.lambda_min_M,
-                         rhs_settings.beta_max),
-                     rhs_settings.beta_max)
-    builder = controller.builder
     lhs = _AddLhsController(scenario, loop, controller, scenario.excitation)
-    periods, settings = scenario.periods, scenario.learner
+    return {"lhs_controller": lhs, **AddRhsChain(
+        scenario, loop.model, controller, lhs, Kd_max=scenario.lhs.Kd,
+        lambda_min_M=loop.lambda_min_M, learning=learning)}
+
+
+def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: float,
+                lambda_min_M: float, learning: bool,
+                rhs_period_name: str = "periods.rhs") -> Dict[str, object]:
+    """The DAC controller's RHS side, shared by planar and spatial robots: the port
+    observer, the regression filter (regularized mode), the learner and the RHS
+    integrator, wired to the LHS controller ``lhs`` (its outputs ``reduced_model``
+    and ``tau_request``, its input ``chi``) and to the controller's inputs q, qdot;
+    exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``, ``estimates``.
+    ``scenario`` has the sections rhs, periods, learner, uncertainty, stress and
+    seed (Scenario, SpatialScenario); ``model`` has num_joints and Momentum(q, qdot).
+    The gain rule (eq. 48) uses Kd_max / lambda_min_M, the LHS's fastest rate over 2;
+    the RHS period is checked for the largest c it allows
+    (gain_rule.check_rhs_period; ``rhs_period_name`` names the setting in its
+    error). Returns the named systems."""
+    rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
+    check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
+                         rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
+                     (1 + rhs_settings.c_margin) * c_lower_bound(
+                         rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
+                     rhs_settings.beta_max, rhs_period_name)
+    builder = controller.builder
     regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
-        num_joints=loop.model.num_joints, sample_period=periods.rhs,
-        noise_std=scenario.rhs.observer_noise, seed=scenario.seed,
+        num_joints=model.num_joints, sample_period=periods.rhs,
+        noise_std=rhs_settings.observer_noise, seed=scenario.seed,
         anti_alias_cutoff=settings.band[1] if regularized else 0.0))
     prefilter = (builder.AddNamedSystem("regression_filter", RegressionFilter(
-        settings=settings, num_joints=loop.model.num_joints,
+        settings=settings, num_joints=model.num_joints,
         period=periods.learner_sample)) if regularized else None)
     learner = builder.AddNamedSystem("learner", RhsLearner(
-        model=loop.model, settings=settings, period=periods.learner,
+        model=model, settings=settings, period=periods.learner,
         sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
         D0=scenario.uncertainty.D0, seed=scenario.seed, learning=learning))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        model=loop.model, network=learner.exported, settings=scenario.rhs,
-        Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, B0=scenario.uncertainty.B0,
+        model=model, network=learner.exported, settings=rhs_settings,
+        Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,
         D0=scenario.uncertainty.D0, period=periods.rhs,
         model_period=periods.learner_sample, stress=scenario.stress))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
@@ -235,8 +275,7 @@ def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: Controll
                        ("learner_log", learner.GetOutputPort("learner_log")),
                        ("estimates", learner.GetOutputPort("estimates"))]:
         builder.ExportOutput(port, name)
-    systems = {"lhs_controller": lhs, "port_observer": observer, "learner": learner,
-               "rhs_integrator": rhs}
+    systems = {"port_observer": observer, "learner": learner, "rhs_integrator": rhs}
     if prefilter is not None:
         systems["regression_filter"] = prefilter
     return systems

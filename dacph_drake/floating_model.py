@@ -97,6 +97,10 @@ class FloatingBaseModel:
         third = np.einsum("ijk,k->ij", dM, qdot)           # sum_k dM_jk/dq_i qdot_k
         return M, 0.5 * (Mdot + second - third)
 
+    def Momentum(self, q, qdot) -> np.ndarray:
+        """p = M(q) qdot, the port's momentum at zero total momentum."""
+        return self.MassMatrix(q) @ np.asarray(qdot, float)
+
     def BaseVelocity(self, q, qdot, base_positions=None) -> np.ndarray:
         """The base joint's velocities implied by zero momentum,
         v_b = -H_bb^-1 H_bm qdot, at the base pose given."""

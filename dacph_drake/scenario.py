@@ -269,7 +269,6 @@ class Scenario:
         """Raises ConfigError naming the first invalid setting and its allowed range
         (the RHS period is checked against the gain rule when a diagram is built:
         gain_rule.check_rhs_period)."""
-        from dacph_drake.gain_rule import check_period_order
         if isinstance(self.seed, bool) or not isinstance(self.seed, int):
             raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
                               "integer in [0, 2^32 - 1]")
@@ -300,92 +299,103 @@ class Scenario:
                               "same length")
         for i, T in enumerate(self.reference.periods):
             require_positive(f"reference.periods[{i}]", T, "s")
-        require_positive("rhs.Td", self.rhs.Td)
-        require_nonnegative("rhs.c_margin", self.rhs.c_margin)
-        for name in ("c_time_constant", "chi_window", "chi_floor", "chi_initial"):
-            require_positive(f"rhs.{name}", getattr(self.rhs, name))
-        require_nonnegative("rhs.observer_noise", self.rhs.observer_noise, "N m")
-        require_in_range("rhs.trust_ratio", self.rhs.trust_ratio, 1.0, 10.0)
-        require_in_range("rhs.beta_max", self.rhs.beta_max, 1.0, 1e6)
-        require_positive("stress.B_hat_scale", self.stress.B_hat_scale)
-        require_nonnegative("stress.start", self.stress.start, "s")
-        for name in ("rhs", "lhs", "learner", "learner_sample", "log"):
-            require_positive(f"periods.{name}", getattr(self.periods, name), "s")
-        check_period_order(self.periods)
-        if self.periods.log > self.duration:
-            raise ConfigError(f"periods.log = {self.periods.log:g} s is longer than the "
-                              f"run ({self.duration:g} s, the phases' total); allowed: "
-                              "at most the run's duration")
-        u = self.uncertainty
-        for name in ("B0", "D0", "D_offset", "D_linear", "D_quadratic", "B_quadratic"):
-            _require_length(f"uncertainty.{name}", getattr(u, name), n)
-        for name in ("B_linear", "B_q1_squared"):
-            matrix = getattr(u, name)
-            if len(matrix) != n or any(len(row) != n for row in matrix):
-                raise ConfigError(f"uncertainty.{name} must be a {n} x {n} matrix")
-        for i, b in enumerate(u.B0):
-            require_positive(f"uncertainty.B0[{i}]", b)
-        for i, d in enumerate(u.D0):
-            require_nonnegative(f"uncertainty.D0[{i}]", d)
-        require_nonnegative("uncertainty.linear_scale", u.linear_scale)
-        require_nonnegative("uncertainty.nonlinear_scale", u.nonlinear_scale)
-        d = self.disturbance
-        for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
-            _require_length(f"disturbance.{name}", getattr(d, name), n)
-        require_nonnegative("disturbance.scale", d.scale)
-        require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
-        L = self.learner
-        if L.mode not in LEARNER_MODES:
-            raise ConfigError(f"learner.mode = {L.mode!r}; allowed: "
-                              f"{', '.join(LEARNER_MODES)}")
-        if len(L.hidden) == 0:
-            raise ConfigError("learner.hidden is empty; allowed: at least one layer")
-        for i, width in enumerate(L.hidden):
-            require_in_range(f"learner.hidden[{i}]", width, 1, 4096)
-        require_positive("learner.learning_rate", L.learning_rate)
-        require_in_range("learner.window", L.window, 2, 10**6)
-        require_in_range("learner.steps_per_update", L.steps_per_update, 0, 10**4)
-        require_in_range("learner.beta1", L.beta1, 0.0, 0.999999)
-        require_in_range("learner.beta2", L.beta2, 0.0, 0.999999)
-        require_positive("learner.eps", L.eps)
-        require_positive("learner.momentum_scale", L.momentum_scale)
-        nyquist = 0.5 / self.periods.learner_sample
-        _require_length("learner.band", L.band, 2, "[low, high] in Hz")
-        require_in_range("learner.band[0]", L.band[0], 0.0, nyquist,
-                         "Hz (0: no high-pass; at most the Nyquist frequency of "
-                         "periods.learner_sample)")
-        require_in_range("learner.band[1]", L.band[1], L.band[0], nyquist,
-                         "Hz (above band[0], at most the Nyquist frequency of "
-                         "periods.learner_sample)")
-        _require_length("learner.band_sections", L.band_sections, 2,
-                        "[high-pass, low-pass] section counts")
-        for i, count in enumerate(L.band_sections):
-            require_in_range(f"learner.band_sections[{i}]", count, 0, 16)
-        require_positive("learner.forgetting", L.forgetting, "s")
-        require_nonnegative("learner.prior_weight", L.prior_weight)
-        require_in_range("learner.change_ratio", L.change_ratio, 1.0, 1e6)
-        require_nonnegative("learner.change_floor", L.change_floor)
-        require_nonnegative("learner.change_hold", L.change_hold, "s")
-        E = self.excitation
-        require_nonnegative("excitation.amplitude", E.amplitude, "N m")
-        _require_length("excitation.frequencies", E.frequencies, 2,
-                        "[first, last] in Hz")
-        require_in_range("excitation.frequencies[0]", E.frequencies[0], 1e-3,
-                         0.5 / self.periods.lhs, "Hz (at most the Nyquist frequency "
-                         "of periods.lhs)")
-        require_in_range("excitation.frequencies[1]", E.frequencies[1],
-                         E.frequencies[0], 0.5 / self.periods.lhs,
-                         "Hz (at least frequencies[0], at most the Nyquist frequency "
-                         "of periods.lhs)")
-        if E.amplitude > 0 and L.mode == "regularized" and not (
-                L.band[0] < E.frequencies[0] and E.frequencies[1] < L.band[1]):
-            raise ConfigError(
-                f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
-                f"= {L.band} Hz; allowed: inside the band (the learner filters "
-                "everything else out)")
+        validate_port_settings(self, n)
         validate_simulator_config(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.
         require_finite_numbers("", self)
+
+
+def validate_port_settings(scenario, n: int,
+                           period_name=lambda key: f"periods.{key}") -> None:
+    """ConfigError naming the first invalid setting of the port's RHS chain (rhs,
+    stress, periods, uncertainty, disturbance, learner, excitation) of a scenario
+    with ``n`` joints; planar and spatial scenarios share these sections.
+    ``period_name(key)`` is how the scenario names its period ``key``."""
+    from dacph_drake.gain_rule import check_period_order
+    require_positive("rhs.Td", scenario.rhs.Td)
+    require_nonnegative("rhs.c_margin", scenario.rhs.c_margin)
+    for name in ("c_time_constant", "chi_window", "chi_floor", "chi_initial"):
+        require_positive(f"rhs.{name}", getattr(scenario.rhs, name))
+    require_nonnegative("rhs.observer_noise", scenario.rhs.observer_noise, "N m")
+    require_in_range("rhs.trust_ratio", scenario.rhs.trust_ratio, 1.0, 10.0)
+    require_in_range("rhs.beta_max", scenario.rhs.beta_max, 1.0, 1e6)
+    require_positive("stress.B_hat_scale", scenario.stress.B_hat_scale)
+    require_nonnegative("stress.start", scenario.stress.start, "s")
+    periods = scenario.periods
+    for key in ("rhs", "lhs", "learner", "learner_sample", "log"):
+        require_positive(period_name(key), getattr(periods, key), "s")
+    check_period_order(periods, period_name)
+    if periods.log > scenario.duration:
+        raise ConfigError(f"{period_name('log')} = {periods.log:g} s is longer than "
+                          f"the run ({scenario.duration:g} s); allowed: at most the "
+                          "run's duration")
+    u = scenario.uncertainty
+    for name in ("B0", "D0", "D_offset", "D_linear", "D_quadratic", "B_quadratic"):
+        _require_length(f"uncertainty.{name}", getattr(u, name), n)
+    for name in ("B_linear", "B_q1_squared"):
+        matrix = getattr(u, name)
+        if len(matrix) != n or any(len(row) != n for row in matrix):
+            raise ConfigError(f"uncertainty.{name} must be a {n} x {n} matrix")
+    for i, b in enumerate(u.B0):
+        require_positive(f"uncertainty.B0[{i}]", b)
+    for i, d in enumerate(u.D0):
+        require_nonnegative(f"uncertainty.D0[{i}]", d)
+    require_nonnegative("uncertainty.linear_scale", u.linear_scale)
+    require_nonnegative("uncertainty.nonlinear_scale", u.nonlinear_scale)
+    d = scenario.disturbance
+    for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
+        _require_length(f"disturbance.{name}", getattr(d, name), n)
+    require_nonnegative("disturbance.scale", d.scale)
+    require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
+    L = scenario.learner
+    if L.mode not in LEARNER_MODES:
+        raise ConfigError(f"learner.mode = {L.mode!r}; allowed: "
+                          f"{', '.join(LEARNER_MODES)}")
+    if len(L.hidden) == 0:
+        raise ConfigError("learner.hidden is empty; allowed: at least one layer")
+    for i, width in enumerate(L.hidden):
+        require_in_range(f"learner.hidden[{i}]", width, 1, 4096)
+    require_positive("learner.learning_rate", L.learning_rate)
+    require_in_range("learner.window", L.window, 2, 10**6)
+    require_in_range("learner.steps_per_update", L.steps_per_update, 0, 10**4)
+    require_in_range("learner.beta1", L.beta1, 0.0, 0.999999)
+    require_in_range("learner.beta2", L.beta2, 0.0, 0.999999)
+    require_positive("learner.eps", L.eps)
+    require_positive("learner.momentum_scale", L.momentum_scale)
+    nyquist = 0.5 / periods.learner_sample
+    _require_length("learner.band", L.band, 2, "[low, high] in Hz")
+    require_in_range("learner.band[0]", L.band[0], 0.0, nyquist,
+                     "Hz (0: no high-pass; at most the Nyquist frequency of "
+                     f"{period_name('learner_sample')})")
+    require_in_range("learner.band[1]", L.band[1], L.band[0], nyquist,
+                     "Hz (above band[0], at most the Nyquist frequency of "
+                     f"{period_name('learner_sample')})")
+    _require_length("learner.band_sections", L.band_sections, 2,
+                    "[high-pass, low-pass] section counts")
+    for i, count in enumerate(L.band_sections):
+        require_in_range(f"learner.band_sections[{i}]", count, 0, 16)
+    require_positive("learner.forgetting", L.forgetting, "s")
+    require_nonnegative("learner.prior_weight", L.prior_weight)
+    require_in_range("learner.change_ratio", L.change_ratio, 1.0, 1e6)
+    require_nonnegative("learner.change_floor", L.change_floor)
+    require_nonnegative("learner.change_hold", L.change_hold, "s")
+    E = scenario.excitation
+    require_nonnegative("excitation.amplitude", E.amplitude, "N m")
+    _require_length("excitation.frequencies", E.frequencies, 2,
+                    "[first, last] in Hz")
+    require_in_range("excitation.frequencies[0]", E.frequencies[0], 1e-3,
+                     0.5 / periods.lhs, "Hz (at most the Nyquist frequency "
+                     f"of {period_name('lhs')})")
+    require_in_range("excitation.frequencies[1]", E.frequencies[1],
+                     E.frequencies[0], 0.5 / periods.lhs,
+                     "Hz (at least frequencies[0], at most the Nyquist frequency "
+                     f"of {period_name('lhs')})")
+    if E.amplitude > 0 and L.mode == "regularized" and not (
+            L.band[0] < E.frequencies[0] and E.frequencies[1] < L.band[1]):
+        raise ConfigError(
+            f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
+            f"= {L.band} Hz; allowed: inside the band (the learner filters "
+            "everything else out)")
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"

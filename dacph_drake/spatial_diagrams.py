@@ -1,22 +1,28 @@
-"""Closed loops of spatial robots (description files). Today: the model-based LHS
-loop, the ground truth (a MultibodyPlant from the description, free quaternion
-base) driven by the AttitudeController's torque directly (nominal RHS: B = I,
-D = 0, no disturbance). The DAC loop for spatial robots (RHS integrator, port
-observer, learner) is not built yet."""
+"""Closed loops of spatial robots (description files): ``build_spatial_dac_diagram``,
+``build_spatial_dac_nominal_diagram`` (the learning ablation) and
+``build_spatial_model_based_diagram`` (the baseline), each returning a SpatialLoop.
+The ground truth is a MultibodyPlant from the description (free quaternion base)
+driven through the port's true RHS (SpatialTrueRhs) with the disturbance d(t); the
+controllers are the planar loops' with the AttitudeController as their LHS: the
+same RHS chain (diagrams.AddRhsChain) and the same static inversion."""
 from dataclasses import dataclass, field
 from typing import Dict
 
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
+from pydrake.systems.primitives import ConstantVectorSource, VectorLogSink
 
 from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
+from dacph_drake.diagrams import AddActuation, AddRhsChain, CloseLoop, ControllerBuilder
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.plant import AddStateSplitter, SetArmAtRest
+from dacph_drake.scenario import Excitation
 from dacph_drake.simulation import MakeSimulator
 from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import SpatialScenario
 from dacph_drake.systems.attitude_controller import AttitudeController
+from dacph_drake.systems.model_based_inverter import ModelBasedInverter
+from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
 
 
 @dataclass
@@ -25,8 +31,9 @@ class SpatialLoop:
     scenario: SpatialScenario
     plant: object                   # the ground truth
     model: FloatingBaseModel        # the controller's model (of the same description)
-    controller: AttitudeController
+    controller: AttitudeController  # the LHS controller
     loggers: Dict[str, VectorLogSink] = field(default_factory=dict)
+    systems: Dict[str, object] = field(default_factory=dict)
 
     def CreateSimulator(self) -> Simulator:
         """A Simulator with the scenario's settings, the arm at rest at q0 and the
@@ -37,31 +44,91 @@ class SpatialLoop:
         return simulator
 
 
-def build_spatial_model_based_diagram(scenario: SpatialScenario) -> SpatialLoop:
-    """plant -> state splitter -> AttitudeController -> plant actuation; the
-    plant's state and the controller's attitude_log logged every log_period."""
+def assemble_spatial_closed_loop(scenario: SpatialScenario, name: str,
+                                 add_controller) -> SpatialLoop:
+    """plant -> state splitter -> controller -> true RHS (+ d(t)) -> plant; the
+    controller is what ``add_controller(scenario, model, controller_builder)`` builds
+    (returning its named systems, the AttitudeController as
+    "attitude_controller"); logged as diagrams.CloseLoop logs."""
     model = FloatingBaseModel(MakeRobotPlant(scenario.robot))
     scenario.Validate(model.num_joints)
     builder = DiagramBuilder()
     plant, _ = AddRobotFromDescription(builder, scenario.robot)
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
+    truth, disturbance = AddActuation(builder, plant, SpatialTrueRhs(
+        plant=MakeRobotPlant(scenario.robot), uncertainty=scenario.uncertainty,
+        phases=scenario.phases), scenario)
+    controller_builder = ControllerBuilder()
+    systems = add_controller(scenario, model, controller_builder)
+    loggers = CloseLoop(builder, controller_builder, name, plant, splitter, truth,
+                        disturbance, scenario.log_period)
+    diagram = builder.Build()
+    diagram.set_name(f"{name}_closed_loop")
+    return SpatialLoop(diagram=diagram, scenario=scenario, plant=plant, model=model,
+                       controller=systems["attitude_controller"], loggers=loggers,
+                       systems={"state_splitter": splitter, "true_rhs": truth,
+                                "disturbance": disturbance, **systems})
+
+
+def _AddAttitudeController(scenario: SpatialScenario, model: FloatingBaseModel,
+                           controller: ControllerBuilder,
+                           excitation: Excitation) -> AttitudeController:
+    """The LHS both controllers share, its state inputs exported and its request
+    and log as the controller's outputs ``tau_request`` and ``attitude_log``."""
+    builder = controller.builder
     potential = (BaseClearancePotential(
         description=scenario.robot, model=model, gain=scenario.potential.gain,
         margin=scenario.potential.margin) if scenario.potential.gain > 0 else None)
-    controller = builder.AddNamedSystem("attitude_controller", AttitudeController(
+    lhs = builder.AddNamedSystem("attitude_controller", AttitudeController(
         model=model, reference=scenario.reference, gains=scenario.gains,
         period=scenario.lhs_period, q0=scenario.q0, potential=potential,
-        eta=scenario.potential.eta))
+        eta=scenario.potential.eta, excitation=excitation))
     for signal in ("base_pose", "base_velocity", "q", "qdot"):
-        builder.Connect(splitter.GetOutputPort(signal), controller.GetInputPort(signal))
-    builder.Connect(controller.GetOutputPort("tau_request"),
-                    plant.get_actuation_input_port())
-    loggers = {"state": LogVectorOutput(plant.get_state_output_port(), builder,
-                                        scenario.log_period),
-               "attitude_log": LogVectorOutput(controller.GetOutputPort("attitude_log"),
-                                               builder, scenario.log_period)}
-    diagram = builder.Build()
-    diagram.set_name("spatial_model_based_closed_loop")
-    return SpatialLoop(diagram=diagram, scenario=scenario, plant=plant, model=model,
-                       controller=controller, loggers=loggers)
+        controller.Input(lhs.GetInputPort(signal), signal)
+    for output in ("tau_request", "attitude_log"):
+        builder.ExportOutput(lhs.GetOutputPort(output), output)
+    return lhs
+
+
+def build_spatial_dac_diagram(scenario: SpatialScenario,
+                              learning: bool = True) -> SpatialLoop:
+    """The DAC-pH loop on a spatial robot: the AttitudeController (chi from the RHS
+    loop, plus scenario.excitation) and the RHS chain of the planar loops. With
+    K_d = damping_rate M(q) the gain rule's LHS rate lambda_max(K_d) /
+    inf lambda_min(M) is damping_rate for every arm
+    (gain_rule.inertia_scaled_c_lower_bound). ``learning`` False: the dac-nominal
+    ablation (the learner keeps B0, D0)."""
+    def add(scenario, model, controller):
+        lhs = _AddAttitudeController(scenario, model, controller, scenario.excitation)
+        return {"attitude_controller": lhs, **AddRhsChain(
+            scenario, model, controller, lhs, Kd_max=scenario.gains.damping_rate,
+            lambda_min_M=1.0, learning=learning, rhs_period_name="rhs_period")}
+    return assemble_spatial_closed_loop(
+        scenario, "spatial_dac" if learning else "spatial_dac_nominal", add)
+
+
+def build_spatial_dac_nominal_diagram(scenario: SpatialScenario) -> SpatialLoop:
+    """The learning ablation: build_spatial_dac_diagram without learning."""
+    return build_spatial_dac_diagram(scenario, learning=False)
+
+
+def build_spatial_model_based_diagram(scenario: SpatialScenario) -> SpatialLoop:
+    """The baseline: the AttitudeController with chi = gains.chi_model_based and the
+    static inversion u = B0^-1 (tau_c^r + D0 qdot) (ModelBasedInverter); no
+    integrator, no learning. On the default scenario's nominal ground truth the
+    inversion is exact: the plant receives the LHS's request."""
+    def add(scenario, model, controller):
+        builder = controller.builder
+        lhs = _AddAttitudeController(scenario, model, controller, Excitation(amplitude=0.0))
+        chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
+            [scenario.gains.chi_model_based]))
+        builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
+        inverter = builder.AddNamedSystem("model_based_inverter",
+                                          ModelBasedInverter(scenario))
+        builder.Connect(lhs.GetOutputPort("tau_request"),
+                        inverter.GetInputPort("tau_request"))
+        controller.Input(inverter.GetInputPort("qdot"), "qdot")
+        builder.ExportOutput(inverter.GetOutputPort("u"), "u")
+        return {"attitude_controller": lhs, "model_based_inverter": inverter}
+    return assemble_spatial_closed_loop(scenario, "spatial_model_based", add)

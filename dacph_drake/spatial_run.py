@@ -1,7 +1,8 @@
-"""Running the spatial model-based attitude loop (spatial_diagrams.py) as a user
-does (`dacph spatial`): built-in and YAML scenarios, a progress bar, a stop with a
-reason when the state turns non-finite, the metrics, and the saved run
-(logs.npz, scenario.yaml, run.json, optionally the 3D replay)."""
+"""Running a spatial robot's closed loop (spatial_diagrams.py: DAC, its learning
+ablation, the model-based baseline) as a user does (`dacph spatial`): built-in and
+YAML scenarios, a progress bar, a stop with a reason when the state turns
+non-finite, the metrics, and the saved run (logs.npz, scenario.yaml, run.json,
+optionally the 3D replay), which `dacph verify` reads."""
 import json
 import os
 import time
@@ -13,19 +14,50 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 
 from dacph_drake.animation import LiveView
+from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
 from dacph_drake.errors import ConfigError, require_positive
-from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.log_layout import AttitudeLog, RhsLog
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
 from dacph_drake.run import advance_in_chunks, collect_logs, prepare_out_dir
-from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
+from dacph_drake.scenario import Disturbance, Phases, Uncertainty
 from dacph_drake.spatial_scenario import SpatialScenario
 
 SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
-BUILT_IN_SPATIAL_SCENARIOS = {
-    "satellite_6dof": SpatialScenario,
-    "satellite_3dof": lambda: SpatialScenario(robot="satellite_3dof", q0=[0.3, -0.8, 1.6]),
-}
+
+
+def satellite_6dof_scenario() -> SpatialScenario:
+    """The 6-DOF example (diagrams/satellite_6dof.yaml): 2 s warm-up on the nominal
+    RHS, then 4 s each of linear uncertainty, nonlinear uncertainty and the
+    disturbance (SpatialScenario's uncertainty and disturbance, switched on)."""
+    scenario = SpatialScenario(duration=14.0, phases=Phases(
+        warmup=2.0, linear=4.0, nonlinear=4.0, disturbance=4.0))
+    scenario.uncertainty.linear_scale = scenario.uncertainty.nonlinear_scale = 1.0
+    scenario.disturbance.scale = 1.0
+    return scenario
+
+
+def satellite_3dof_scenario() -> SpatialScenario:
+    """The 3-DOF variant (diagrams/satellite_3dof.yaml) with the same phases and an
+    uncertainty of the same form sized to its joints (shoulder yaw p ~ 0.3, pitch
+    p ~ 1.1, forearm roll p ~ 5e-4 kg m^2/s)."""
+    return SpatialScenario(
+        robot="satellite_3dof", q0=[0.3, -0.8, 1.6], duration=14.0,
+        phases=Phases(warmup=2.0, linear=4.0, nonlinear=4.0, disturbance=4.0),
+        uncertainty=Uncertainty(
+            B0=[1.0] * 3, D0=[0.2, 0.2, 0.01], D_offset=[0.04, 0.05, 0.002],
+            D_linear=[0.15, 0.05, 0.1], D_quadratic=[0.1, -0.01, 1.0],
+            B_linear=[[-0.1, 0.0, 0.0], [0.05, 0.15, 0.0], [0.0, 0.0, 0.1]],
+            B_quadratic=[0.5, 0.02, 5.0],
+            B_q1_squared=[[0.0, -0.1, 0.0], [0.4, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        disturbance=Disturbance(lf_offset=[0.03, -0.02, 0.002],
+                                lf_amplitude=[0.02, 0.02, 0.002],
+                                lf_frequency=[0.05, 0.07, 0.09],
+                                hf_direction=[1.0, -1.0, 0.1]))
+
+
+BUILT_IN_SPATIAL_SCENARIOS = {"satellite_6dof": satellite_6dof_scenario,
+                              "satellite_3dof": satellite_3dof_scenario}
 
 
 def load_spatial_scenario(path) -> SpatialScenario:
@@ -40,12 +72,27 @@ def load_spatial_scenario(path) -> SpatialScenario:
     return load_yaml_dataclass(path, SpatialScenario)
 
 
+def is_spatial_scenario(path) -> bool:
+    """Whether ``path`` names a spatial scenario: a built-in spatial name, or a YAML
+    file whose ``robot:`` is a description (a name or a path, not a planar arm's
+    parameters)."""
+    if str(path) in BUILT_IN_SPATIAL_SCENARIOS and not Path(path).is_file():
+        return True
+    try:
+        import yaml
+        raw = yaml.safe_load(Path(path).read_text())
+    except (OSError, ValueError, yaml.YAMLError):
+        return False
+    return isinstance(raw, dict) and isinstance(raw.get("robot"), str)
+
+
 def save_spatial_scenario(scenario: SpatialScenario, path) -> None:
     Path(path).write_text(yaml_dump_typed(scenario))
 
 
 @dataclass
 class SpatialRunResult:
+    controller: str                 # a name in controllers.SPATIAL_REGISTRY
     status: str                     # "ok" or "diverged"
     reason: str
     final_time: float
@@ -55,16 +102,19 @@ class SpatialRunResult:
 
 
 def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=None,
-                     progress: bool = False, meshcat=None) -> SpatialRunResult:
-    """Simulates the loop for ``duration`` (default: the scenario's), checking the
-    state every run.MONITOR_PERIOD (run.advance_in_chunks); with ``out_dir``, saves
-    the run there; with ``meshcat``, draws it there while it simulates
-    (animation.LiveView)."""
+                     progress: bool = False, meshcat=None,
+                     controller: str = "model-based") -> SpatialRunResult:
+    """Simulates the loop of ``controller`` (controllers.SPATIAL_REGISTRY; the
+    default is the one this function ran before the spatial DAC loop existed; `dacph
+    spatial` runs dac unless told otherwise) for
+    ``duration`` (default: the scenario's), checking the state every
+    run.MONITOR_PERIOD (run.advance_in_chunks); with ``out_dir``, saves the run
+    there; with ``meshcat``, draws it there while it simulates (animation.LiveView)."""
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     if out_dir is not None:
         prepare_out_dir(out_dir)           # checked before any time is spent
-    loop = build_spatial_model_based_diagram(scenario)
+    loop = build_closed_loop(controller, scenario, SPATIAL_REGISTRY)
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant_context = loop.plant.GetMyContextFromRoot(context)
@@ -88,7 +138,8 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
     finally:
         bar.close()
     logs = collect_logs(loop, context)
-    result = SpatialRunResult(status="diverged" if reason else "ok", reason=reason,
+    result = SpatialRunResult(controller=controller,
+                              status="diverged" if reason else "ok", reason=reason,
                               final_time=context.get_time(),
                               wall_time=time.perf_counter() - start, logs=logs,
                               metrics=spatial_metrics(loop, logs))
@@ -98,10 +149,14 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
 
 
 def spatial_metrics(loop, logs) -> Dict[str, float]:
-    """Attitude error |e| (final, RMS and max after SETTLING_TIME) [rad], the
-    smallest link-base distance [m] (nan without the potential, which measures it),
-    and the largest |spatial momentum| over the logged states."""
+    """Attitude error |e| (final, RMS and max after SETTLING_TIME, RMS per phase of
+    the scenario) [rad], the smallest link-base distance [m] (nan without the
+    potential, which measures it), the largest |spatial momentum| over the logged
+    states, and for DAC loops the RMS of ||e_tau|| [N m] and the learned / nominal
+    ratio of the RMS errors of B and D (as metrics.py defines them for the planar
+    runs) per phase. A phase the run did not reach is nan."""
     layout = AttitudeLog()
+    scenario = loop.scenario
     t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
     settled = t >= SETTLING_TIME
     clearance = logs["attitude_log"][:, layout.clearance]
@@ -113,14 +168,37 @@ def spatial_metrics(loop, logs) -> Dict[str, float]:
             loop.plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3)
                                                             ).get_coeffs()))))
     nan = float("nan")
-    return {"attitude_error_final": float(error[-1]) if len(error) else nan,
-            "attitude_error_rms_settled": (float(np.sqrt(np.mean(error[settled]**2)))
-                                           if settled.any() else nan),
-            "attitude_error_max_settled": (float(np.max(error[settled]))
-                                           if settled.any() else nan),
-            "min_clearance": (float(np.min(clearance)) if np.all(np.isfinite(clearance))
-                              and len(clearance) else nan),
-            "max_momentum": momentum}
+    metrics = {
+        "attitude_error_final": float(error[-1]) if len(error) else nan,
+        "attitude_error_rms_settled": (float(np.sqrt(np.mean(error[settled]**2)))
+                                       if settled.any() else nan),
+        "attitude_error_max_settled": (float(np.max(error[settled]))
+                                       if settled.any() else nan),
+        "min_clearance": (float(np.min(clearance)) if np.all(np.isfinite(clearance))
+                          and len(clearance) else nan),
+        "max_momentum": momentum}
+    phases = scenario.phases
+    starts = [SETTLING_TIME, phases.linear_start, phases.nonlinear_start,
+              scenario.disturbance_start, np.inf]
+    n = loop.model.num_joints
+    for k, phase in enumerate(("warmup", "linear", "nonlinear", "disturbance")):
+        inside = (t >= starts[k]) & (t < starts[k + 1])
+        metrics[f"{phase}.attitude_error_rms"] = (
+            float(np.sqrt(np.mean(error[inside]**2))) if inside.any() else nan)
+        if "rhs_log" not in logs or phase == "warmup":
+            continue
+        metrics[f"{phase}.e_tau_rms"] = (float(np.sqrt(np.mean(
+            logs["rhs_log"][inside, RhsLog(n).e_norm]**2))) if inside.any() else nan)
+        estimates, truth = logs["estimates"][inside], logs["true_matrices"][inside]
+        nominal = np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
+                                  scenario.uncertainty.D0])
+        for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
+            learned = np.sum((estimates[:, columns] - truth[:, columns])**2, axis=1)
+            prior = np.sum((nominal[columns] - truth[:, columns])**2, axis=1)
+            metrics[f"{phase}.{name}_error_learned_over_nominal"] = (
+                float(np.sqrt(np.mean(learned) / np.mean(prior)))
+                if inside.any() and np.mean(prior) > 0 else nan)
+    return metrics
 
 
 def save_spatial_run(result: SpatialRunResult, scenario: SpatialScenario, out_dir) -> Path:
@@ -132,9 +210,28 @@ def save_spatial_run(result: SpatialRunResult, scenario: SpatialScenario, out_di
     os.replace(out / "logs.npz.tmp", out / "logs.npz")
     save_spatial_scenario(scenario, out / "scenario.yaml.tmp")
     os.replace(out / "scenario.yaml.tmp", out / "scenario.yaml")
-    meta = {"status": result.status, "reason": result.reason,
+    meta = {"controller": result.controller, "status": result.status,
+            "reason": result.reason,
             "final_time": result.final_time, "wall_time": result.wall_time,
             "metrics": result.metrics}
     (out / "run.json.tmp").write_text(json.dumps(meta, indent=2))
     os.replace(out / "run.json.tmp", out / "run.json")
     return out
+
+
+def load_spatial_run(run_dir, controller: str = None):
+    """(logs, scenario, run.json) of a run saved by save_spatial_run; with
+    ``controller``, a ConfigError unless the run is of that controller."""
+    run_dir = Path(run_dir)
+    for name in ("scenario.yaml", "logs.npz", "run.json"):
+        if not (run_dir / name).is_file():
+            raise ConfigError(f"{run_dir}: {name} is missing; allowed: a run directory "
+                              "saved by dacph spatial")
+    meta = json.loads((run_dir / "run.json").read_text())
+    if controller is not None and meta.get("controller", "model-based") != controller:
+        raise ConfigError(f"{run_dir}: a {meta.get('controller', 'model-based')} run; "
+                          f"allowed: a {controller} run (dacph spatial --controller "
+                          f"{controller})")
+    with np.load(run_dir / "logs.npz") as data:
+        logs = {k: data[k] for k in data.files}
+    return logs, load_spatial_scenario(run_dir / "scenario.yaml"), meta

@@ -1,17 +1,22 @@
 """SpatialScenario: the settings of a closed loop on a spatial free-floating robot
 (a description file, description.py) tracking a 3D end-effector attitude
-reference. Today it drives the model-based LHS loop (spatial_diagrams.py); the RHS
-loop and the learner for spatial robots are not built yet."""
+reference (spatial_diagrams.py: the DAC loop, its learning ablation and the
+model-based baseline). The port's RHS chain (true RHS, integrator, observer,
+learner) takes the planar scenario's sections (scenario.py: rhs, uncertainty,
+disturbance, learner, excitation, stress, phases), sized for the robot's joints."""
 from dataclasses import dataclass, field
 from typing import List
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
+from dacph_drake.scenario import (Disturbance, Excitation, Learner, Periods, Phases,
+                                  Rhs, Stress, Uncertainty, validate_port_settings)
 from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
 
@@ -44,13 +49,26 @@ class AttitudeReference:
 @dataclass
 class AttitudeGains:
     """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi with a damped pseudo-inverse
-    (``task_damping`` mu), and the sliding-mode law tau = M nu_dot + C' nu -
-    damping_rate M s: the damping is scaled to the inertia (K_d = damping_rate M(q)),
-    so every joint's s decays at the same rate whatever its inertia (a light wrist
-    with a constant K_d would need a far faster controller than a heavy shoulder)."""
+    (``task_damping`` mu), and the sliding-mode law
+
+        tau = M nu_dot + C' nu - damping_rate M s - chi tanh(diag(M) s / phi),
+        phi = epsilon + chi / boundary_rate:
+
+    the damping is scaled to the inertia (K_d = damping_rate M(q)), so every joint's
+    s decays at the same rate whatever its inertia (a light wrist with a constant
+    K_d would need a far faster controller than a heavy shoulder), and so is the
+    robust term's boundary layer, whose thickness phi follows chi (Slotine and Li's
+    balance condition, Applied Nonlinear Control, sec. 7.2): its slope adds at most
+    boundary_rate [1/s] to any joint's rate, whatever chi and the inertia (the
+    paper's fixed tanh(s / epsilon) would add chi / (epsilon M_ii), a stiff sampled
+    loop for a 5e-4 kg m^2 wrist or a large chi). chi comes from the RHS loop in DAC
+    (its bound on ||e_tau||) and is ``chi_model_based`` in the baseline."""
     Lambda: float = 2.0             # [1/s]
     damping_rate: float = 20.0      # [1/s]
     task_damping: float = 1e-3      # mu [-]
+    epsilon: float = 1e-3           # [N m s]
+    boundary_rate: float = 20.0     # [1/s]
+    chi_model_based: float = 0.0    # [N m]
 
 
 @dataclass
@@ -63,7 +81,32 @@ class ClearancePotential:
     eta: float = 20.0               # [1/s]
 
 
-@dataclass
+def _six_dof_uncertainty() -> Uncertainty:
+    """The ground truth's RHS of satellite_6dof, the paper's form (scenario.Uncertainty)
+    sized to each joint: dampings and momentum terms scaled to the joint's inertia and
+    momentum (shoulder p ~ 0.8, wrist p ~ 0.02 kg m^2/s on the shipped reference)."""
+    pair = np.array([[-0.1, 0.0], [0.05, 0.15]])
+    coupling = np.zeros((6, 6))
+    coupling[:2, :2] = [[0.0, -0.1], [0.4, 0.0]]
+    return Uncertainty(
+        B0=[1.0] * 6, D0=[0.2, 0.2, 0.1, 0.01, 0.01, 0.005],
+        D_offset=[0.04, 0.05, 0.02, 0.002, 0.003, 0.001],
+        D_linear=[0.05, 0.15, 0.1, 0.1, 0.1, 0.1],
+        D_quadratic=[-0.01, 0.1, 0.1, 1.0, -1.0, 1.0],
+        B_linear=np.kron(np.eye(3), pair).tolist(),
+        B_quadratic=[0.02, -0.5, 0.5, 5.0, -5.0, 5.0],
+        B_q1_squared=coupling.tolist(), linear_scale=0.0, nonlinear_scale=0.0)
+
+
+def _six_dof_disturbance() -> Disturbance:
+    return Disturbance(
+        scale=0.0, lf_offset=[0.03, -0.02, 0.02, -0.002, 0.002, -0.001],
+        lf_amplitude=[0.02, 0.02, 0.01, 0.002, 0.002, 0.001],
+        lf_frequency=[0.05, 0.07, 0.06, 0.08, 0.09, 0.1],
+        hf_direction=[1.0, -1.0, 0.5, -0.1, 0.1, -0.05])
+
+
+@dataclass(eq=False)
 class SpatialScenario:
     robot: str = "satellite_6dof"   # a shipped robot or a .urdf/.sdf path
     q0: List[float] = field(default_factory=lambda: [0.3, -0.8, 1.6, 0.2, 0.6, -0.3])
@@ -71,9 +114,50 @@ class SpatialScenario:
     reference: AttitudeReference = field(default_factory=AttitudeReference)
     gains: AttitudeGains = field(default_factory=AttitudeGains)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
-    lhs_period: float = 1e-3        # [s]
-    log_period: float = 1e-2        # [s]
+    # The port's RHS chain (scenario.py's sections). By default the uncertainty
+    # and the disturbance are scaled to zero (the ground truth is the nominal RHS,
+    # B0 u - D0 qdot); the shipped scenarios (spatial_run.BUILT_IN_SPATIAL_SCENARIOS)
+    # switch them on at the phases' starts.
+    phases: Phases = field(default_factory=lambda: Phases(
+        warmup=2.0, linear=2.0, nonlinear=2.0, disturbance=2.0))
+    uncertainty: Uncertainty = field(default_factory=_six_dof_uncertainty)
+    disturbance: Disturbance = field(default_factory=_six_dof_disturbance)
+    # chi forgets over 0.25 s (the planar default is 2 s): the arm starts at rest
+    # with a 0.3 rad error, and the sliding mode's first request (73 N m at the
+    # 6-DOF shoulder) passes through e_tau once, at the observer's one-sample
+    # pairing; a 2 s window would keep chi near 30 N m for seconds.
+    rhs: Rhs = field(default_factory=lambda: Rhs(chi_window=0.25))
+    learner: Learner = field(default_factory=lambda: Learner(momentum_scale=0.5,
+                                                              prior_weight=1e-2))
+    excitation: Excitation = field(default_factory=Excitation)
+    stress: Stress = field(default_factory=Stress)
+    # Discrete periods [s]: RHS integrator and observer < LHS < learner sampling <
+    # training (the gain rule with K_d = damping_rate M asks for rhs <= 1.25 ms).
+    rhs_period: float = 5e-4
+    lhs_period: float = 1e-3
+    learner_sample_period: float = 1e-2
+    learner_period: float = 0.1
+    log_period: float = 1e-2
     simulator: SimulatorConfig = field(default_factory=FixedStepConfig)
+    seed: int = 0
+
+    def __eq__(self, other) -> bool:
+        """Equal settings: the same YAML form (SimulatorConfig compares by identity)."""
+        return (isinstance(other, SpatialScenario)
+                and yaml_dump_typed(self) == yaml_dump_typed(other))
+
+    @property
+    def periods(self) -> Periods:
+        """The discrete periods as the planar scenario's Periods (the RHS chain's
+        systems read them from there)."""
+        return Periods(rhs=self.rhs_period, lhs=self.lhs_period,
+                       learner=self.learner_period,
+                       learner_sample=self.learner_sample_period, log=self.log_period)
+
+    @property
+    def disturbance_start(self) -> float:
+        return (self.disturbance.start if self.disturbance.start >= 0
+                else self.phases.disturbance_start)
 
     def Validate(self, num_joints: int) -> None:
         """ConfigError naming the first invalid setting and its allowed range."""
@@ -106,4 +190,21 @@ class SpatialScenario:
                 "sampled sliding-mode loop stays well damped)")
         require_in_range("log_period", self.log_period, self.lhs_period, self.duration,
                          "s")
+        require_positive("gains.epsilon", self.gains.epsilon, "N m s")
+        require_positive("gains.boundary_rate", self.gains.boundary_rate, "1/s")
+        if (self.gains.damping_rate + self.gains.boundary_rate) * self.lhs_period > 0.5:
+            raise ConfigError(
+                f"gains.damping_rate + gains.boundary_rate = "
+                f"{self.gains.damping_rate + self.gains.boundary_rate:g} 1/s with "
+                f"lhs_period = {self.lhs_period:g} s; allowed: their sum * lhs_period "
+                "<= 0.5 (the sampled sliding-mode loop stays well damped)")
+        require_nonnegative("gains.chi_model_based", self.gains.chi_model_based, "N m")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
+            raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
+                              "integer in [0, 2^32 - 1]")
+        require_in_range("seed", self.seed, 0, 2**32 - 1)
+        for name in ("warmup", "linear", "nonlinear", "disturbance"):
+            require_nonnegative(f"phases.{name}", getattr(self.phases, name), "s")
+        validate_port_settings(self, num_joints, lambda key: f"{key}_period")
         validate_simulator_config(self.simulator)
+        require_finite_numbers("", self)

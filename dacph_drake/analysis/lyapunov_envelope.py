@@ -23,12 +23,73 @@ s^T tau_pe <= lambda_min(K_d) ||s||^2 / 2 + a^2 / (2 lambda_min(K_d)) then gives
     upper:  Vdot <= -(r_slow / 2) V + delta + a^2 / (2 lambda_min(K_d))
 
 and in the lower bound ||e_tau|| becomes ||e_tau|| + a.
+
+The spatial arms' LHS (systems.attitude_controller) has K_d = r M(q) and the
+robust term chi tanh(w_i s_i), w_i = M_ii / phi, phi = epsilon + chi / b (the
+boundary rate b). The same steps give, with lambda = inf_q lambda_min(M) and
+m = sup_q max_i M_ii (M_ii >= lambda):
+
+    upper:  Vdot <= -2 r V + n kappa chi phi / lambda  (excitation: -r V and
+            a^2 / (2 r lambda) by Young with k = r lambda)
+    lower:  Vdot >= -(3 r + 2 (chi / phi) m / lambda) V - e^2 / (2 r lambda)
+
+EnvelopeConstants holds either form; envelope_bounds uses it.
 """
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 KAPPA = 0.2785          # max_x x (1 - tanh x)
+
+
+@dataclass
+class EnvelopeConstants:
+    """The envelope's constants (module docstring): rate_slow and rate_fast (the
+    paper's), the damping part of the lower rate (``damping_low``), Young's weights
+    for e_tau (``young_e``) and for the excitation (``young_a``), and the boundary
+    layer's (effective thickness for the slack, slope factor) as affine functions
+    of chi: layer(chi) = layer_base + layer_per_chi chi, slope(chi) = slope_gain
+    chi / layer_slope(chi)."""
+    rate_slow: float
+    rate_fast: float
+    damping_low: float
+    young_e: float
+    young_a: float
+    n: int
+    layer_base: float
+    layer_per_chi: float
+    slope_scale: float          # lower-bound tanh rate = 2 slope_scale chi / layer
+
+    @staticmethod
+    def ForConstantDamping(Kd_min: float, Kd_max: float, lambda_min_M: float,
+                           lambda_max_M: float, epsilon: float, n: int
+                           ) -> "EnvelopeConstants":
+        """The planar LHS: K_d between Kd_min and Kd_max, tanh(s / epsilon)."""
+        return EnvelopeConstants(
+            rate_slow=2 * Kd_min / lambda_max_M, rate_fast=2 * Kd_max / lambda_min_M,
+            damping_low=3 * Kd_max / lambda_min_M, young_e=Kd_max, young_a=Kd_min,
+            n=n, layer_base=epsilon, layer_per_chi=0.0,
+            slope_scale=1.0 / lambda_min_M)
+
+    @staticmethod
+    def ForInertiaScaled(damping_rate: float, lambda_min_M: float,
+                         max_diagonal_M: float, epsilon: float, boundary_rate: float,
+                         n: int) -> "EnvelopeConstants":
+        """The spatial LHS: K_d = damping_rate M, tanh(M_ii s_i / phi),
+        phi = epsilon + chi / boundary_rate (the slack's layer is phi / lambda)."""
+        r, lam = damping_rate, lambda_min_M
+        return EnvelopeConstants(
+            rate_slow=2 * r, rate_fast=2 * r, damping_low=3 * r, young_e=r * lam,
+            young_a=r * lam, n=n, layer_base=epsilon / lam,
+            layer_per_chi=1.0 / (boundary_rate * lam),
+            slope_scale=max_diagonal_M / lam**2)
+
+    def Layer(self, chi):
+        return self.layer_base + self.layer_per_chi * chi
+
+    def TanhRate(self, chi):
+        """2 chi / epsilon / lambda (planar), 2 (chi / phi) m / lambda (spatial)."""
+        return 2 * self.slope_scale * chi / self.Layer(chi)
 
 
 @dataclass
@@ -48,16 +109,14 @@ class EnvelopeCheck:
 
 
 def envelope_bounds(V: np.ndarray, dt: np.ndarray, e_norm: np.ndarray, chi: np.ndarray,
-                    Kd_min: float, Kd_max: float, lambda_min_M: float,
-                    lambda_max_M: float, epsilon: float, n: int,
-                    excitation_norm: float = 0.0):
+                    constants: EnvelopeConstants, excitation_norm: float = 0.0):
     """(lower, upper) bound for V[1:] from V[:-1] over the steps dt (module
     docstring); ``excitation_norm`` is a, the bound on ||tau_pe||."""
-    a = excitation_norm
-    r_slow = 2 * Kd_min / lambda_max_M / (2 if a > 0 else 1)
-    r_low = (3 * Kd_max + 2 * chi[:-1] / epsilon) / lambda_min_M
-    delta = n * KAPPA * chi[:-1] * epsilon + a**2 / (2 * Kd_min)
-    e2 = (np.maximum(e_norm[:-1], e_norm[1:]) + a) ** 2 / (2 * Kd_max)
+    a, c = excitation_norm, constants
+    r_slow = c.rate_slow / (2 if a > 0 else 1)
+    r_low = c.damping_low + c.TanhRate(chi[:-1])
+    delta = c.n * KAPPA * chi[:-1] * c.Layer(chi[:-1]) + a**2 / (2 * c.young_a)
+    e2 = (np.maximum(e_norm[:-1], e_norm[1:]) + a) ** 2 / (2 * c.young_e)
     decay_slow, decay_low = np.exp(-r_slow * dt), np.exp(-r_low * dt)
     upper = V[:-1] * decay_slow + delta / r_slow * (1 - decay_slow)
     lower = V[:-1] * decay_low - e2 / r_low * (1 - decay_low)
@@ -68,13 +127,21 @@ def check_lyapunov_envelope(t, V, e_norm, chi, Kd_min: float, Kd_max: float,
                             lambda_min_M: float, lambda_max_M: float, epsilon: float,
                             n: int, required_fraction: float = 0.99,
                             excitation_norm: float = 0.0) -> EnvelopeCheck:
+    """check_envelope for the planar LHS (EnvelopeConstants.ForConstantDamping)."""
+    return check_envelope(t, V, e_norm, chi, EnvelopeConstants.ForConstantDamping(
+        Kd_min, Kd_max, lambda_min_M, lambda_max_M, epsilon, n), required_fraction,
+        excitation_norm)
+
+
+def check_envelope(t, V, e_norm, chi, constants: EnvelopeConstants,
+                   required_fraction: float = 0.99,
+                   excitation_norm: float = 0.0) -> EnvelopeCheck:
     """Fraction of the logged intervals (where ||e_tau|| <= chi) on which V stays
     inside the envelope, and the worst relative violation; ``ok`` when the fraction
     reaches ``required_fraction``. ``excitation_norm``: the bound a on the
     excitation's ||tau_pe|| (0 without excitation)."""
     t, V, e_norm, chi = map(np.asarray, (t, V, e_norm, chi))
-    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, Kd_min, Kd_max,
-                                   lambda_min_M, lambda_max_M, epsilon, n,
+    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants,
                                    excitation_norm)
     checked = (e_norm[:-1] <= chi[:-1]) & (e_norm[1:] <= chi[1:])
     slack = 1e-12 * np.maximum(V[:-1], 1e-30)            # round-off of V itself
@@ -89,8 +156,8 @@ def check_lyapunov_envelope(t, V, e_norm, chi, Kd_min: float, Kd_max: float,
         f"V inside the envelope on {100 * fraction:.2f} % of the intervals "
         f"(required {100 * required_fraction:.0f} %); worst at t = {t[worst + 1]:.3f} s")
     return EnvelopeCheck(
-        rate_slow=2 * Kd_min / lambda_max_M, rate_fast=2 * Kd_max / lambda_min_M,
-        rate_low=float((3 * Kd_max + 2 * np.max(chi) / epsilon) / lambda_min_M),
+        rate_slow=constants.rate_slow, rate_fast=constants.rate_fast,
+        rate_low=float(constants.damping_low + constants.TanhRate(np.max(chi))),
         samples_checked=int(checked.sum()), fraction_inside=fraction,
         worst_violation=float(violation[worst]) if checked.any() else float("nan"),
         worst_time=float(t[worst + 1]), ok=bool(ok), reason=reason)

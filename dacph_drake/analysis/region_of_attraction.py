@@ -10,7 +10,15 @@ Polynomial model (its assumptions are part of the certificate):
     C'(q, s) = sum_k s_k Gamma_k(q).
 
 With the candidate V = s^T M(q) s / 2, the certified region is {V(s) <= rho}; it
-contains the ball ||s|| <= sqrt(2 rho / lambda_max(M(q)))."""
+contains the ball ||s|| <= sqrt(2 rho / lambda_max(M(q))).
+
+A spatial arm's LHS (attitude_region_of_attraction) has K_d = damping_rate M(q)
+and the robust term chi tanh(w_i s_i) with w_i = M_ii / phi up to 2000 s/rad (a
+cubic Taylor polynomial would hold only for |s_i| < 1e-3 rad/s). Its certificate
+drops the robust term instead: s_i tanh(w_i s_i) >= 0, so it only lowers
+dV/dt = s^T M sdot, and a region certified without it holds with it:
+
+    M(q) sdot = -C'(q, s) s - damping_rate M s."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -41,16 +49,41 @@ ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; tanh replaced by its 
 
 def sliding_region_of_attraction(model: ReducedOrderModel, q: np.ndarray, Kd: float,
                                  chi: float, epsilon: float) -> RegionCertificate:
+    """The planar LHS: K_d = Kd I, tanh(s / epsilon)."""
     n = model.num_joints
     M = model.Evaluate(q, np.zeros(n)).M
     Gamma = [model.Evaluate(q, np.eye(n)[k]).C for k in range(n)]
+    return _Region(q, M, Gamma, Kd * np.eye(n), chi, np.full(n, 1.0 / epsilon))
+
+
+SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust term "
+                       "dropped (dissipative for every chi); candidate "
+                       "V = s^T M(q) s / 2")
+
+
+def attitude_region_of_attraction(model, q: np.ndarray,
+                                  damping_rate: float) -> RegionCertificate:
+    """A spatial arm's LHS (``model``: floating_model.FloatingBaseModel) with
+    K_d = damping_rate M(q), for every chi (module docstring)."""
+    n = model.num_joints
+    M = model.MassMatrix(q)
+    Gamma = [model.Coriolis(q, np.eye(n)[k]) for k in range(n)]
+    region = _Region(q, M, Gamma, damping_rate * M, 0.0, np.zeros(n))
+    region.assumptions = SPATIAL_ASSUMPTIONS
+    return region
+
+
+def _Region(q, M, Gamma, K_d, chi: float, weights) -> RegionCertificate:
+    """The certificate for M sdot = -C'(q, s) s - K_d s - chi (x - x^3 / 3),
+    x = weights * s, C'(q, s) = sum_k s_k Gamma[k]."""
+    n = M.shape[0]
     s = MakeVectorVariable(n, "s")
     # numpy's object-array arithmetic on symbolic expressions reports stale
     # floating-point status flags as warnings; nothing numeric happens here.
     with np.errstate(invalid="ignore", divide="ignore"):
-        x = s / epsilon
+        x = s * weights
         C_s = sum(s[k] * Gamma[k] for k in range(n))
-        force = C_s @ s + Kd * s + chi * (x - x**3 / 3)
+        force = C_s @ s + K_d @ s + chi * (x - x**3 / 3)
         dynamics = -np.linalg.solve(M, np.eye(n)) @ force
         V = 0.5 * s.dot(M @ s)
     system = SymbolicVectorSystem(state=s, dynamics=dynamics)

@@ -13,6 +13,9 @@
 3. A region-of-attraction certificate of the sliding dynamics at the initial
    configuration (region_of_attraction), checked to contain s(0).
 The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
+Planar runs (Scenario) and spatial runs (SpatialScenario, `dacph spatial`) are
+checked alike; a spatial run's LHS has K_d = damping_rate M and the
+inertia-scaled boundary layer (EnvelopeConstants.ForInertiaScaled).
 """
 import json
 from dataclasses import dataclass, field
@@ -26,11 +29,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
-    check_lyapunov_envelope, envelope_bounds)
-from dacph_drake.analysis.region_of_attraction import \
-    sliding_region_of_attraction  # noqa: E402
+    EnvelopeConstants, check_envelope, envelope_bounds)
+from dacph_drake.analysis.region_of_attraction import (  # noqa: E402
+    attitude_region_of_attraction, sliding_region_of_attraction)
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
-from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
+from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
                                        mass_matrix_bounds)
@@ -64,7 +67,7 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     """check_rhs_loop on every ``every``-th logged sample with the gains K in effect
     and B from logs[B_column] ("estimates": the learner's, scaled as the stress
     setting asks; "true_matrices": the ground truth's)."""
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     learned = B_column == "estimates"
     series = LoopSeries()
@@ -86,31 +89,85 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     return series
 
 
-def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
-                out_dir=None) -> Dict:
-    """All checks on the logs of a DAC run; writes verification.{md,json} and plots
-    into out_dir when given. Returns the report dictionary (``ok`` is the verdict)."""
+@dataclass
+class LhsSide:
+    """What the checks need of a run's LHS: V = s^T M s / 2 and ||s(0)|| from its
+    log, the envelope's constants, the LHS rate lambda_LHS of eq. (45) and the
+    region-of-attraction certificate at q0."""
+    V: np.ndarray
+    s0_norm: float
+    constants: EnvelopeConstants
+    lambda_lhs: float
+    region: object
+    settings: Dict
+
+
+def _PlanarLhs(logs, scenario: Scenario) -> LhsSide:
     n = scenario.robot.num_links
     model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
     lambda_min_M, lambda_max_M = mass_matrix_bounds(model)
     Kd, epsilon = scenario.lhs.Kd, scenario.lhs.epsilon
-    lambda_lhs = 2 * Kd / lambda_min_M
-    t, lhs, rhs = logs["time"], logs["lhs_log"], logs["rhs_log"]
-    L, R = LhsLog(n), RhsLog(n)
-    V, e_norm, chi = lhs[:, L.lyapunov_V], rhs[:, R.e_norm], rhs[:, R.chi]
+    L = LhsLog(n)
+    return LhsSide(
+        V=logs["lhs_log"][:, L.lyapunov_V],
+        s0_norm=float(np.linalg.norm(logs["lhs_log"][0, L.s])),
+        constants=EnvelopeConstants.ForConstantDamping(Kd, Kd, lambda_min_M,
+                                                       lambda_max_M, epsilon, n),
+        lambda_lhs=2 * Kd / lambda_min_M,
+        region=sliding_region_of_attraction(model, np.asarray(scenario.q0), Kd,
+                                            scenario.rhs.chi_initial, epsilon),
+        settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M})
+
+
+# Configurations sampled for sup_q max_i M_ii of a spatial arm, and the margin on
+# the largest sample. It enters only the envelope's lower bound (a faster allowed
+# decay), so an underestimate can flag a false violation, never hide one.
+DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
+
+
+def _SpatialLhs(logs, scenario) -> LhsSide:
+    from dacph_drake.description import MakeRobotPlant
+    from dacph_drake.floating_model import FloatingBaseModel
+    from dacph_drake.inertia_bound import search_inertia_bound
+    model = FloatingBaseModel(MakeRobotPlant(scenario.robot))
+    n, gains = model.num_joints, scenario.gains
+    lambda_min_M = search_inertia_bound(model).lambda_min
+    samples = np.random.default_rng(0).uniform(-np.pi, np.pi, (DIAGONAL_SAMPLES, n))
+    max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
+        float(np.max(np.diag(model.MassMatrix(q)))) for q in samples)
+    L = AttitudeLog()
+    return LhsSide(
+        V=logs["attitude_log"][:, L.lyapunov_V],
+        s0_norm=float(logs["attitude_log"][0, L.s_norm]),
+        constants=EnvelopeConstants.ForInertiaScaled(
+            gains.damping_rate, lambda_min_M, max_diagonal_M, gains.epsilon,
+            gains.boundary_rate, n),
+        lambda_lhs=2 * gains.damping_rate,
+        region=attitude_region_of_attraction(model, np.asarray(scenario.q0),
+                                             gains.damping_rate),
+        settings={"inf_lambda_min_M": lambda_min_M,
+                  "sup_max_diagonal_M": max_diagonal_M})
+
+
+def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
+                out_dir=None) -> Dict:
+    """All checks on the logs of a DAC run of ``scenario`` (a Scenario or a
+    SpatialScenario); writes verification.{md,json} and plots into out_dir when
+    given. Returns the report dictionary (``ok`` is the verdict)."""
+    n = len(scenario.q0)
+    lhs = _PlanarLhs(logs, scenario) if isinstance(scenario, Scenario) else \
+        _SpatialLhs(logs, scenario)
+    t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
+    e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
     # The learner's excitation tau_pe enters the s dynamics as a known input.
     excitation_norm = scenario.excitation.amplitude * np.sqrt(n)
-    envelope = check_lyapunov_envelope(t, V, e_norm, chi, Kd, Kd, lambda_min_M,
-                                       lambda_max_M, epsilon, n,
-                                       excitation_norm=excitation_norm)
+    envelope = check_envelope(t, lhs.V, e_norm, chi, lhs.constants,
+                              excitation_norm=excitation_norm)
     per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))
-    learned = _rhs_series(logs, scenario, lambda_lhs, "estimates", per_update)
-    truth = _rhs_series(logs, scenario, lambda_lhs, "true_matrices", 1)
+    learned = _rhs_series(logs, scenario, lhs.lambda_lhs, "estimates", per_update)
+    truth = _rhs_series(logs, scenario, lhs.lambda_lhs, "true_matrices", 1)
     rejected = np.flatnonzero(rhs[:, R.trusted] < 0.5)
-    region = sliding_region_of_attraction(model, np.asarray(scenario.q0), Kd,
-                                          scenario.rhs.chi_initial, epsilon)
-    s0 = float(np.linalg.norm(lhs[0, L.s]))
     checks = {
         "run_finished": {"ok": run_meta.get("status") == "ok",
                          "status": run_meta.get("status"),
@@ -119,8 +176,8 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
         "lhs_envelope": envelope.as_dict(),
         "rhs_loop_learned": learned.summary(),
         "rhs_loop_truth": truth.summary(),
-        "region_of_attraction": {**region.as_dict(), "s0_norm": s0,
-                                 "ok": s0 <= region.radius},
+        "region_of_attraction": {**lhs.region.as_dict(), "s0_norm": lhs.s0_norm,
+                                 "ok": lhs.s0_norm <= lhs.region.radius},
     }
     estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
                  "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
@@ -129,18 +186,22 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
                            "excitation_norm": excitation_norm,
-                           "lambda_lhs": lambda_lhs, "rhs_period": scenario.periods.rhs,
-                           "inf_lambda_min_M": lambda_min_M,
-                           "sup_lambda_max_M": lambda_max_M}}
+                           "lambda_lhs": lhs.lambda_lhs,
+                           "rhs_period": scenario.periods.rhs, **lhs.settings}}
     if out_dir is not None:
-        _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario,
-               (Kd, lambda_min_M, lambda_max_M, epsilon, n, excitation_norm))
+        _write(report, out_dir, t, lhs.V, e_norm, chi, learned, truth,
+               lhs.constants, excitation_norm)
     return report
 
 
 def verify_run(run_dir, out_dir=None) -> Dict:
-    """verify_logs on the DAC run saved in run_dir (by ``dacph simulate`` or
-    ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
+    """verify_logs on the DAC run saved in run_dir (by ``dacph simulate``,
+    ``dacph reproduce`` or ``dacph spatial --controller dac``); the report goes to
+    out_dir (default: run_dir)."""
+    if (Path(run_dir) / "logs.npz").is_file():
+        from dacph_drake.spatial_run import load_spatial_run
+        logs, scenario, meta = load_spatial_run(run_dir, controller="dac")
+        return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
     run_dir = require_run_files(run_dir, ["dac"])
     scenario = load_scenario(run_dir / "scenario.yaml")
     with np.load(run_dir / "logs_dac.npz") as data:
@@ -149,17 +210,17 @@ def verify_run(run_dir, out_dir=None) -> Dict:
     return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
 
 
-def _write(report, out_dir, t, V, e_norm, chi, learned, truth, scenario, constants):
+def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants,
+           excitation_norm):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "verification.json").write_text(json.dumps(report, indent=2))
-    Kd, lambda_min_M, lambda_max_M, epsilon, n, excitation_norm = constants
-    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, Kd, Kd, lambda_min_M,
-                                   lambda_max_M, epsilon, n, excitation_norm)
+    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants,
+                                   excitation_norm)
     fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     axes[0].semilogy(t, np.maximum(V, 1e-30), "k-", lw=0.8, label="V = s^T M s / 2")
     axes[0].semilogy(t[1:], np.maximum(upper, 1e-30), "C3--", lw=0.6,
-                     label="upper bound (rate 2 lambda_min(K_d) / sup lambda_max(M), "
+                     label=f"upper bound (rate {constants.rate_slow:.3g} 1/s, "
                            "halved with excitation)")
     axes[0].set_ylabel("V [J]")
     axes[0].legend(fontsize=7)

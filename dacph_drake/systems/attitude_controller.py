@@ -1,6 +1,6 @@
 """LHS controller of a spatial arm: the sliding-mode law of LhsController with the 3D
-end-effector attitude as its task (attitude.py) and the damping scaled to the
-inertia (spatial_scenario.AttitudeGains)."""
+end-effector attitude as its task (attitude.py) and the damping and the robust
+term's boundary layer scaled to the inertia (spatial_scenario.AttitudeGains)."""
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis, Quaternion
 from pydrake.math import RotationMatrix
@@ -10,6 +10,7 @@ from dacph_drake.attitude import attitude_error, reference_rates
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.plant import END_EFFECTOR
+from dacph_drake.scenario import Excitation
 from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import AttitudeGains, AttitudeReference
 
@@ -23,23 +24,32 @@ class AttitudeController(LeafSystem):
         e   = attitude_error(R_WE, R_d(t)),   D = angular rows of the end effector's GJM
         nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
         s   = qdot - nu
-        tau = M nu_dot + C' nu - damping_rate M s
+        tau = M nu_dot + C' nu - damping_rate M s - chi tanh(diag(M) s / phi)
+              + tau_pe(t),   phi = epsilon + chi / boundary_rate
 
-    so that V = s^T M s / 2 has dV/dt = -2 damping_rate V (Mdot - 2C' skew). nu_dot
+    so that V = s^T M s / 2 has dV/dt = -2 damping_rate V - chi s^T tanh(...) + s^T
+    (e_tau + tau_pe) (Mdot - 2C' skew), with chi from input ``chi`` (the RHS loop's
+    bound on ||e_tau|| in DAC, a constant in the baseline) and tau_pe the
+    learner's excitation (``excitation``, scenario.Excitation). nu_dot
     is the central difference of nu along the current motion (q +- h qdot, the base
     turned by +- h omega_b, t +- h; h = NU_DOT_STEP). U is the link-base clearance
     potential (``potential``: spatial_potential.BaseClearancePotential, or None).
     Output ``tau_request`` is held between updates; ``attitude_log``
     (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, smallest link-base distance [m]
-    (inf without a potential), R_d(t) as a quaternion], which a replay reads."""
+    (inf without a potential), R_d(t) as a quaternion], which a replay reads;
+    ``reduced_model`` = [vec(M), vec(C')] of the same sample (row-major), for the
+    port observer."""
 
     def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
                  gains: AttitudeGains, period: float, q0,
-                 potential: BaseClearancePotential = None, eta: float = 0.0):
+                 potential: BaseClearancePotential = None, eta: float = 0.0,
+                 excitation: Excitation = Excitation(amplitude=0.0)):
         super().__init__()
         n = model.num_joints
         self._model, self._reference, self._gains = model, reference, gains
         self._potential, self._eta = potential, eta
+        self._excitation_amplitude = excitation.amplitude
+        self._excitation_omega = 2 * np.pi * excitation.Frequencies(n)
         self._context = model.plant.CreateDefaultContext()
         self._end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         model.plant.SetPositions(self._context, model.FullPositions(q0))
@@ -49,10 +59,13 @@ class AttitudeController(LeafSystem):
         self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6)
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
+        self._chi = self.DeclareVectorInputPort("chi", 1)
         self._tau_index = self.DeclareDiscreteState(n)
         self._log_index = self.DeclareDiscreteState(AttitudeLog().size)
+        self._model_index = self.DeclareDiscreteState(2 * n * n)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareStateOutputPort("attitude_log", self._log_index)
+        self.DeclareStateOutputPort("reduced_model", self._model_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
@@ -103,8 +116,15 @@ class AttitudeController(LeafSystem):
         nu_dot = (nu_plus - nu_minus) / (2 * h)
         M, C = self._model.MassAndCoriolis(q, qdot)
         s = qdot - nu
-        tau = M @ nu_dot + C @ nu - self._gains.damping_rate * M @ s
+        chi = self._chi.Eval(context)[0]
+        tau = (M @ nu_dot + C @ nu - self._gains.damping_rate * M @ s
+               - chi * np.tanh(np.diag(M) * s / (self._gains.epsilon
+                                                 + chi / self._gains.boundary_rate)))
+        if self._excitation_amplitude > 0:
+            tau += self._excitation_amplitude * np.sin(self._excitation_omega * t)
         discrete_state.set_value(self._tau_index, tau)
+        discrete_state.set_value(self._model_index,
+                                 np.concatenate([M.reshape(-1), C.reshape(-1)]))
         desired = R_d.ToQuaternion()
         discrete_state.set_value(self._log_index, np.concatenate(
             [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, clearance,

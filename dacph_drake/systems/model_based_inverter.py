@@ -12,11 +12,13 @@ class ModelBasedInverter(Diagram):
 
     It feeds the true RHS, which the integrator evaluates at every stage, so it is
     built from Drake's C++ primitives (no Python call per stage): a Multiplexer
-    stacks [tau_c^r; qdot] and a MatrixGain applies [B0^-1 | B0^-1 diag(D0)]."""
+    stacks [tau_c^r; qdot] and a MatrixGain applies [B0^-1 | B0^-1 diag(D0)].
+    ``scenario``: any scenario with an ``uncertainty`` section (Scenario,
+    SpatialScenario)."""
 
     def __init__(self, scenario: Scenario):
         super().__init__()
-        n = scenario.robot.num_links
+        n = len(scenario.uncertainty.B0)
         B0_inv = np.linalg.inv(np.diag(scenario.uncertainty.B0))
         gain = np.hstack([B0_inv, B0_inv @ np.diag(scenario.uncertainty.D0)])
         builder = DiagramBuilder()

@@ -31,17 +31,8 @@ class TrueRhs(LeafSystem):
         self._representation = model.trigonometric_representation
         self._uncertainty = TrueRhsModel(scenario.uncertainty, scenario.phases).kernel_arguments
         self._packed = pack_true_rhs(*self._representation, self._uncertainty)
-        self._u = self.DeclareVectorInputPort("u", n)
-        self._state = self.DeclareVectorInputPort(
-            "state", model.plant.num_positions() + model.plant.num_velocities())
-        self._disturbance_model = self.DeclareVectorInputPort("disturbance_model",
-                                                              3 + 5 * n)
-        self.DeclareVectorOutputPort("tau", n, self._CalcTau, prerequisites_of_calc={
-            self.time_ticket(), self._u.ticket(), self._state.ticket(),
-            self._disturbance_model.ticket()})
-        self.DeclareVectorOutputPort(
-            "true_matrices", n * n + n, self._CalcMatrices,
-            prerequisites_of_calc={self.time_ticket(), self._state.ticket()})
+        self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
+            self, n, model.plant.num_positions() + model.plant.num_velocities())
 
     def _CalcTau(self, context, output):
         output.SetFromVector(true_torque(context.get_time(), self._state.Eval(context),
@@ -57,3 +48,20 @@ class TrueRhs(LeafSystem):
                                             *self._representation),
                              *self._uncertainty)
         output.SetFromVector(np.concatenate([B.reshape(-1), D]))
+
+
+def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int):
+    """The ports every true RHS has (TrueRhs, SpatialTrueRhs): inputs ``u`` (n),
+    ``state`` (the plant's, ``state_size``) and ``disturbance_model``
+    (DisturbanceSource's parameters); outputs ``tau`` (n, system._CalcTau) and
+    ``true_matrices`` (n * n + n, system._CalcMatrices), each depending only on
+    time and the inputs it reads. Returns the three input ports."""
+    u = system.DeclareVectorInputPort("u", n)
+    state = system.DeclareVectorInputPort("state", state_size)
+    disturbance_model = system.DeclareVectorInputPort("disturbance_model", 3 + 5 * n)
+    system.DeclareVectorOutputPort("tau", n, system._CalcTau, prerequisites_of_calc={
+        system.time_ticket(), u.ticket(), state.ticket(), disturbance_model.ticket()})
+    system.DeclareVectorOutputPort(
+        "true_matrices", n * n + n, system._CalcMatrices,
+        prerequisites_of_calc={system.time_ticket(), state.ticket()})
+    return u, state, disturbance_model

@@ -1,0 +1,57 @@
+"""The ground truth's actuator for a robot from a description file: the RHS of the
+port (docs/equations.md E19), as TrueRhs is for the planar arms."""
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import LeafSystem
+
+from dacph_drake.kernels.loop import disturbance, true_matrices
+from dacph_drake.plant import ArmCoordinates
+from dacph_drake.scenario import Phases, Uncertainty
+from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
+from dacph_drake.uncertainty import TrueRhsModel
+
+
+class SpatialTrueRhs(LeafSystem):
+    """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p) and p the joint rows of
+    H(q_full) v, which at zero momentum is M(q) qdot exactly (the base rows of H v
+    are the conserved momentum). B~, D~ (uncertainty.TrueRhsModel) and d(t)
+    (DisturbanceSource's parameters, input ``disturbance_model``) are the planar
+    ground truth's compiled kernels, which hold for any number of joints.
+
+    Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
+    plant's) and time, so it adds no delay; it feeds the plant's actuation input.
+    Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics.
+    ``plant`` is a finalized copy of the ground truth (its scratch context is made
+    here)."""
+
+    def __init__(self, *, plant: MultibodyPlant, uncertainty: Uncertainty,
+                 phases: Phases):
+        super().__init__()
+        self._plant = plant
+        self._context = plant.CreateDefaultContext()
+        coordinates = ArmCoordinates.FromPlant(plant)
+        self._q_index = coordinates.joint_q
+        self._v_index = coordinates.joint_v
+        self._nq = plant.num_positions()
+        n = coordinates.num_joints
+        self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
+        self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
+            self, n, plant.num_positions() + plant.num_velocities())
+
+    def _Matrices(self, context):
+        """(B~, diag D~, qdot) at the context's time and input state."""
+        x = self._state.Eval(context)
+        self._plant.SetPositionsAndVelocities(self._context, x)
+        v = x[self._nq:]
+        p = (self._plant.CalcMassMatrix(self._context) @ v)[self._v_index]
+        B, D = true_matrices(context.get_time(), x[self._q_index], p, *self._uncertainty)
+        return B, D, v[self._v_index]
+
+    def _CalcTau(self, context, output):
+        B, D, qdot = self._Matrices(context)
+        output.SetFromVector(B @ self._u.Eval(context) - D * qdot + disturbance(
+            context.get_time(), self._disturbance_model.Eval(context)))
+
+    def _CalcMatrices(self, context, output):
+        B, D, _ = self._Matrices(context)
+        output.SetFromVector(np.concatenate([B.reshape(-1), D]))
