@@ -54,13 +54,17 @@ def _simulate(args) -> int:
 
 def _diagram(args) -> int:
     from pathlib import Path
+    from dacph_drake.controllers import SPATIAL_REGISTRY
     from dacph_drake.graph import render_diagram
     from dacph_drake.scenario import load_scenario
-    scenario = load_scenario(args.scenario)
+    from dacph_drake.spatial_run import is_spatial_scenario, load_spatial_scenario
+    spatial = is_spatial_scenario(args.scenario)
+    scenario = (load_spatial_scenario if spatial else load_scenario)(args.scenario)
+    registry = SPATIAL_REGISTRY if spatial else REGISTRY
     out = Path(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
-        loop = build_closed_loop(controller, scenario)
+        loop = build_closed_loop(controller, scenario, registry)
         stem = out / f"{Path(args.scenario).stem}_{controller.replace('-', '_')}"
         for path in render_diagram(loop.diagram, stem):
             print(path)
@@ -71,6 +75,9 @@ def _spatial(args) -> int:
     from pathlib import Path
     from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
     scenario = load_spatial_scenario(args.scenario)
+    if args.panels and args.controller != "dac":
+        raise ConfigError(f"--panels with --controller {args.controller}; allowed: "
+                          "--controller dac (the panels compare it with the baseline)")
     meshcat = _LiveViewing(args, scenario)
     result = simulate_spatial(scenario, args.duration, out_dir=args.out, progress=True,
                               meshcat=meshcat, controller=args.controller)
@@ -80,6 +87,16 @@ def _spatial(args) -> int:
     for name, value in result.metrics.items():
         print(f"  {name:44s} {value:.4g}" if value == value else
               f"  {name:44s} n/a, not reached")
+    if args.panels and result.status == "ok":
+        from dacph_drake.figures import plot_panels
+        baseline = simulate_spatial(scenario, args.duration, progress=True,
+                                    controller="model-based")
+        print(f"model-based baseline: {baseline.status}"
+              f"{': ' + baseline.reason if baseline.reason else ''}")
+        for path in plot_panels(result.logs, baseline.logs, scenario,
+                                Path(args.out) / "panels"):
+            if path.suffix == ".png":
+                print(path)
     if args.animate:
         from dacph_drake.animation import write_spatial_animation
         print(write_spatial_animation(scenario.robot, result.logs,
@@ -323,6 +340,10 @@ def main(argv=None) -> int:
                      help="default: dac")
     spa.add_argument("--animate", action="store_true",
                      help="also write the 3D replay (animation.html)")
+    spa.add_argument("--panels", action="store_true",
+                     help="also run the model-based baseline and write the panels "
+                          "(DIR/panels: learned against nominal B and D, the RHS "
+                          "loop, DAC against the baseline)")
     _AddLiveViewing(spa)
     spa.set_defaults(run=_spatial)
     args = parser.parse_args(argv)

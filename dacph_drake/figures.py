@@ -10,6 +10,10 @@ and a model-based run of the same scenario:
 (e) DAC against model-based: |alpha~| and ||s|| (log axes), d(t)
 (f) control inputs (DAC, and the model-based input's difference from it) and states
 
+A spatial robot's runs (SpatialScenario) get (a)-(d) and, in place of (e) and (f),
+(e) DAC against model-based: the attitude error |e|, ||s||, the smallest link-base
+    distance, d(t).
+
 Each panel is written as PNG and PDF. Warm-up and phases are shaded and labelled,
 every axis carries one unit, legends sit outside the data. A series with more
 samples than the figure has pixel columns is drawn as its min/max envelope per
@@ -24,7 +28,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
+from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
 from dacph_drake.metrics import nominal_estimates  # noqa: E402
 from dacph_drake.plant import ArmCoordinates  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
@@ -32,6 +36,7 @@ from dacph_drake.scenario import Scenario  # noqa: E402
 Logs = Dict[str, np.ndarray]
 PANELS = ("a_uncertainty_and_errors", "b_estimated_entries", "c_zoom_nonlinear",
           "d_rhs_gains", "e_dac_vs_model_based", "f_inputs_and_states")
+SPATIAL_PANELS = PANELS[:4] + ("e_attitude_dac_vs_model_based",)
 WIDTH, DPI = 11.0, 130          # [in], PNG dots per inch
 COLUMNS = 1000                  # envelope columns per axis (about one per pixel)
 LOG_DECADES = 7                 # a log axis spans at most this many decades
@@ -123,7 +128,7 @@ def _fit_log_axes(fig) -> None:
 
 def _figure(rows: int, scenario: Scenario, xlim=None, height: float = 2.0):
     """A column of ``rows`` axes sharing time, shaded by phase, labelled on top."""
-    xlim = xlim or (0.0, scenario.phases.end)
+    xlim = xlim or (0.0, scenario.duration)
     fig, axes = plt.subplots(rows, 1, figsize=(WIDTH, height * rows + 0.7),
                              sharex=True, squeeze=False, layout="constrained")
     axes = axes[:, 0]
@@ -152,7 +157,7 @@ def _matrix_norms(logs: Logs, n: int, B0, D0):
 
 
 def _panel_a(dac: Logs, scenario: Scenario):
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     t = dac["time"]
     dB, dD, eB, eD = _matrix_norms(dac, n, scenario.uncertainty.B0, scenario.uncertainty.D0)
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
@@ -174,9 +179,9 @@ def _panel_a(dac: Logs, scenario: Scenario):
 
 def _entries(dac: Logs, scenario: Scenario, xlim=None):
     """One small axis per entry: B_rc in an n x n grid, D_kk in a row below."""
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     t = dac["time"]
-    xlim = xlim or (0.0, scenario.phases.end)
+    xlim = xlim or (0.0, scenario.duration)
     fig, grid = plt.subplots(n + 1, n, figsize=(WIDTH, 1.7 * (n + 1) + 1.0),
                              sharex=True, squeeze=False, layout="constrained")
     prior = nominal_estimates(scenario)
@@ -204,7 +209,7 @@ def _entries(dac: Logs, scenario: Scenario, xlim=None):
 
 
 def _panel_d(dac: Logs, scenario: Scenario):
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     t, rhs, R = dac["time"], dac["rhs_log"], RhsLog(n)
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
     for k in range(n):
@@ -223,7 +228,7 @@ def _panel_d(dac: Logs, scenario: Scenario):
 
 
 def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario):
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     layout = LhsLog(n)
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
     for name, logs in (("model-based", model_based), ("dac", dac)):
@@ -245,7 +250,7 @@ def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario):
 
 
 def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario):
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
     t = dac["time"]
     for k in range(n):
@@ -272,6 +277,30 @@ def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario):
     return fig
 
 
+def _panel_attitude(dac: Logs, model_based: Logs, scenario):
+    """(e) of a spatial robot: |e| and ||s|| of both controllers, the smallest
+    link-base distance against the potential's margin, d(t)."""
+    n, layout = len(scenario.q0), AttitudeLog()
+    fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
+    for name, logs in (("model-based", model_based), ("dac", dac)):
+        t, log = logs["time"], logs["attitude_log"]
+        _trace(ax1, t, log[:, layout.e_norm], xlim, log=True, **CONTROLLER_STYLES[name])
+        _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **CONTROLLER_STYLES[name])
+        _trace(ax3, t, log[:, layout.clearance], xlim, **CONTROLLER_STYLES[name])
+    ax3.axhline(scenario.potential.margin, color="k", ls=":", lw=1.0,
+                label="potential's margin")
+    ax1.set_ylabel(r"attitude error $|e|$ [rad]")
+    ax2.set_ylabel(r"$\|s\|$ [rad/s]")
+    ax3.set_ylabel("link-base\ndistance [m]")
+    for k in range(n):
+        _trace(ax4, dac["time"], dac["disturbance"][:, k], xlim, color=f"C{k % 10}",
+               label=f"$d_{k + 1}$")
+    ax4.set_ylabel("d(t) [N m]")
+    for ax in (ax1, ax2, ax3, ax4):
+        _legend_outside(ax)
+    return fig
+
+
 def zoom_window(scenario: Scenario):
     """(c)'s window: from shortly before the nonlinear terms switch on to a twelfth
     of phase 2 after (40 s of the paper's 480 s phase)."""
@@ -279,19 +308,25 @@ def zoom_window(scenario: Scenario):
     return (start - length / 48, start + length / 12)
 
 
-def make_panels(dac: Logs, model_based: Logs, scenario: Scenario) -> Dict[str, object]:
-    """The six panels as matplotlib figures, by name (PANELS)."""
+def make_panels(dac: Logs, model_based: Logs, scenario) -> Dict[str, object]:
+    """The panels as matplotlib figures, by name: PANELS for a planar scenario,
+    SPATIAL_PANELS for a SpatialScenario."""
     figures = [_panel_a(dac, scenario), _entries(dac, scenario),
-               _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario),
-               _panel_e(dac, model_based, scenario),
-               _panel_f(dac, model_based, scenario)]
+               _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)]
+    if isinstance(scenario, Scenario):
+        figures += [_panel_e(dac, model_based, scenario),
+                    _panel_f(dac, model_based, scenario)]
+    else:
+        figures.append(_panel_attitude(dac, model_based, scenario))
     for fig in figures:
         _fit_log_axes(fig)
-    return dict(zip(PANELS, figures))
+    return dict(zip(PANELS if isinstance(scenario, Scenario) else SPATIAL_PANELS,
+                    figures))
 
 
-def plot_panels(dac: Logs, model_based: Logs, scenario: Scenario, out_dir) -> List[Path]:
-    """Writes the six panels (PNG and PDF) into out_dir; returns their paths."""
+def plot_panels(dac: Logs, model_based: Logs, scenario, out_dir) -> List[Path]:
+    """Writes the panels (make_panels; PNG and PDF) into out_dir; returns their
+    paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []

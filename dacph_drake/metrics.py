@@ -4,7 +4,7 @@ from typing import Dict
 
 import numpy as np
 
-from dacph_drake.log_layout import LearnerLog, LhsLog, RhsLog
+from dacph_drake.log_layout import AttitudeLog, LearnerLog, LhsLog, RhsLog
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.scenario import Scenario
@@ -50,7 +50,7 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     samples whose B_hat the RHS integrator rejected (DIC or trust band), and the
     share where the learner's beta_hat exceeded rhs.beta_max, so that the gain rule
     ran on beta_max instead (RhsIntegrator)."""
-    n = scenario.robot.num_links
+    n = len(scenario.q0)
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
     out = {}
@@ -68,21 +68,22 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     return out
 
 
-def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
+def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
     """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise;
     "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
-    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics."""
-    n = scenario.robot.num_links
+    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics.
+    ``scenario`` is a Scenario (the tracking error is alpha~ [rad]) or a
+    SpatialScenario (|e|, the attitude error [rad]; the base's excursion is the
+    angle it turned [rad])."""
+    n = len(scenario.q0)
     t = logs["time"]
     phases = scenario.phases
     active = t >= phases.linear_start
     phase3 = t >= scenario.disturbance_start
-    lhs, L, R = logs["lhs_log"], LhsLog(n), RhsLog(n)
-    alpha_error = lhs[:, L.alpha_error]
+    R = RhsLog(n)
+    alpha_error, sliding, clearance, base_turn = _task_signals(logs, scenario)
     e_tau = (logs["rhs_log"][:, R.e_tau] if "rhs_log" in logs
              else logs["tau_request"] - logs["tau"])
-    base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
-    potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
     out = {
         "tracking_error_rms": rms(alpha_error[active]),
         "tracking_error_rms_phase3": rms(alpha_error[phase3]),
@@ -90,10 +91,9 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, fl
         if active.any() else float("nan"),
         "control_effort_rms": rms(logs["u"][active]),
         "e_tau_rms": rms(e_tau[active]),
-        "sliding_rms": rms(lhs[active, L.s]),
-        "base_attitude_max_excursion": float(np.max(np.abs(base_pose[:, 2]
-                                                            - base_pose[0, 2]))),
-        "min_clearance": float(min(potential.MinClearance(joints) for joints in q)),
+        "sliding_rms": rms(sliding[active]),
+        "base_attitude_max_excursion": float(np.max(np.abs(base_turn))),
+        "min_clearance": float(np.min(clearance)),
     }
     if "estimates" in logs:
         window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \
@@ -127,3 +127,25 @@ def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str
         "control_effort_increase": dac["control_effort_rms"]
         / model_based["control_effort_rms"] - 1,
     }
+
+
+def _task_signals(logs, scenario):
+    """(tracking error, s, link-base clearance [m], base turn [rad]) over time: the
+    planar arm's alpha~, s (n columns), the kinematic clearance and theta0 - theta0(0),
+    or a spatial robot's |e|, ||s||, signed distance (attitude_log) and the angle of
+    the base's rotation from its start."""
+    if isinstance(scenario, Scenario):
+        n = scenario.robot.num_links
+        lhs, L = logs["lhs_log"], LhsLog(n)
+        base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
+        potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
+        return (lhs[:, L.alpha_error], lhs[:, L.s],
+                np.array([potential.MinClearance(joints) for joints in q]),
+                base_pose[:, 2] - base_pose[0, 2])
+    from dacph_drake.description import MakeRobotPlant
+    log, A = logs["attitude_log"], AttitudeLog()
+    base_q = ArmCoordinates.FromPlant(MakeRobotPlant(scenario.robot)).base_q
+    quaternion = logs["state"][:, base_q[:4]]       # the free base's (w, x, y, z)
+    quaternion = quaternion / np.linalg.norm(quaternion, axis=1, keepdims=True)
+    cosine = np.clip(np.abs(quaternion @ quaternion[0]), 0.0, 1.0)
+    return log[:, A.e_norm], log[:, A.s_norm], log[:, A.clearance], 2 * np.arccos(cosine)

@@ -16,7 +16,8 @@ from pydrake.common.yaml import yaml_dump_typed
 from dacph_drake.animation import LiveView
 from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
 from dacph_drake.errors import ConfigError, require_positive
-from dacph_drake.log_layout import AttitudeLog, RhsLog
+from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.metrics import run_metrics
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
 from dacph_drake.run import advance_in_chunks, collect_logs, prepare_out_dir
@@ -149,14 +150,13 @@ def simulate_spatial(scenario: SpatialScenario, duration: float = None, out_dir=
 
 
 def spatial_metrics(loop, logs) -> Dict[str, float]:
-    """Attitude error |e| (final, RMS and max after SETTLING_TIME, RMS per phase of
-    the scenario) [rad], the smallest link-base distance [m] (nan without the
-    potential, which measures it), the largest |spatial momentum| over the logged
-    states, and for DAC loops the RMS of ||e_tau|| [N m] and the learned / nominal
-    ratio of the RMS errors of B and D (as metrics.py defines them for the planar
-    runs) per phase. A phase the run did not reach is nan."""
+    """Attitude error |e| (final, RMS and max after SETTLING_TIME) [rad], the
+    smallest link-base distance [m] (nan without the potential, which measures it),
+    the largest |spatial momentum| over the logged states, and the planar runs'
+    metrics (metrics.run_metrics: tracking error = |e| over the phases, e_tau, the
+    learned / nominal error ratios of B and D per phase, ...), so that sweeps and
+    tables read spatial runs alike. A phase the run did not reach is nan."""
     layout = AttitudeLog()
-    scenario = loop.scenario
     t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
     settled = t >= SETTLING_TIME
     clearance = logs["attitude_log"][:, layout.clearance]
@@ -168,7 +168,9 @@ def spatial_metrics(loop, logs) -> Dict[str, float]:
             loop.plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3)
                                                             ).get_coeffs()))))
     nan = float("nan")
-    metrics = {
+    with np.errstate(invalid="ignore"):        # a phase not reached: nan
+        metrics = run_metrics(logs, loop.scenario)
+    metrics.update({
         "attitude_error_final": float(error[-1]) if len(error) else nan,
         "attitude_error_rms_settled": (float(np.sqrt(np.mean(error[settled]**2)))
                                        if settled.any() else nan),
@@ -176,28 +178,7 @@ def spatial_metrics(loop, logs) -> Dict[str, float]:
                                        if settled.any() else nan),
         "min_clearance": (float(np.min(clearance)) if np.all(np.isfinite(clearance))
                           and len(clearance) else nan),
-        "max_momentum": momentum}
-    phases = scenario.phases
-    starts = [SETTLING_TIME, phases.linear_start, phases.nonlinear_start,
-              scenario.disturbance_start, np.inf]
-    n = loop.model.num_joints
-    for k, phase in enumerate(("warmup", "linear", "nonlinear", "disturbance")):
-        inside = (t >= starts[k]) & (t < starts[k + 1])
-        metrics[f"{phase}.attitude_error_rms"] = (
-            float(np.sqrt(np.mean(error[inside]**2))) if inside.any() else nan)
-        if "rhs_log" not in logs or phase == "warmup":
-            continue
-        metrics[f"{phase}.e_tau_rms"] = (float(np.sqrt(np.mean(
-            logs["rhs_log"][inside, RhsLog(n).e_norm]**2))) if inside.any() else nan)
-        estimates, truth = logs["estimates"][inside], logs["true_matrices"][inside]
-        nominal = np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
-                                  scenario.uncertainty.D0])
-        for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
-            learned = np.sum((estimates[:, columns] - truth[:, columns])**2, axis=1)
-            prior = np.sum((nominal[columns] - truth[:, columns])**2, axis=1)
-            metrics[f"{phase}.{name}_error_learned_over_nominal"] = (
-                float(np.sqrt(np.mean(learned) / np.mean(prior)))
-                if inside.any() and np.mean(prior) > 0 else nan)
+        "max_momentum": momentum})
     return metrics
 
 

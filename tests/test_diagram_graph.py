@@ -35,3 +35,16 @@ def test_dacph_diagram_writes_to_the_current_directory(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "short_model_based.dot", "short_model_based.png", "short_model_based.svg"]
     assert {p.name: p.stat().st_mtime_ns for p in DIAGRAMS.iterdir()} == before
+
+
+@pytest.mark.parametrize("controller", list(NAMES))
+def test_rendered_spatial_graphs_are_in_sync(controller):
+    from dacph_drake.controllers import SPATIAL_REGISTRY
+    from dacph_drake.spatial_run import load_spatial_scenario
+    loop = build_closed_loop(controller, load_spatial_scenario(
+        DIAGRAMS / "satellite_6dof.yaml"), SPATIAL_REGISTRY)
+    stem = DIAGRAMS / f"satellite_6dof_{controller.replace('-', '_')}"
+    assert stem.with_suffix(".dot").read_text() == diagram_graphviz(loop.diagram), \
+        "run: dacph diagram diagrams/satellite_6dof.yaml --out diagrams"
+    for system in loop.systems:
+        assert f"name={system}" in stem.with_suffix(".dot").read_text()

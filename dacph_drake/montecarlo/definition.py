@@ -11,6 +11,10 @@ distribution (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``, ``!Deterministi
 drawn independently for each link. The controllers keep the nominal robot
 (``nominal_robot``): only the ground truth is perturbed.
 
+The base scenario may be a spatial robot's (spatial_run: a built-in name such as
+``satellite_3dof`` or a SpatialScenario YAML): every setting but the robot's
+(``link_*``, ``base_*``: a description file has no such parameters) applies alike.
+
 A sample is not checked against the robot's physical bounds here: a trial whose
 sampled scenario fails ``Scenario.Validate()`` (e.g. ``link_inertia_scale`` beyond
 the rod bound, a negative mass from a Gaussian) is recorded as failed with the
@@ -31,6 +35,10 @@ from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.robot import load_yaml_dataclass
 from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
                                   saved_forms)
+
+# The ground-truth robot's distributions (planar arms only).
+ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
+                       "base_mass_scale", "base_inertia_scale")
 
 
 # The YAML tags of Drake's distributions, and DistributionVariant and
@@ -82,7 +90,7 @@ class Sweep:
 class SweepDefinition:
     """A loaded, validated sweep with its base scenario."""
     sweep: Sweep
-    scenario: Scenario          # the base scenario
+    scenario: Scenario          # the base scenario (or a SpatialScenario)
     source: Path                # the sweep file
     text: str                   # the sweep file as written
 
@@ -131,19 +139,34 @@ def load_sweep(path) -> SweepDefinition:
         raise ConfigError(f"controllers = {sweep.controllers} names one twice; allowed: "
                           "each at most once")
     scenario = _base_scenario(sweep.scenario, path.parent)
-    _check_distributions(sweep.distributions, scenario.robot.num_links)
+    if not isinstance(scenario, Scenario):
+        for name in ROBOT_DISTRIBUTIONS:
+            if getattr(sweep.distributions, name) is not None:
+                raise ConfigError(
+                    f"distributions.{name} with the spatial scenario {sweep.scenario!r}; "
+                    f"allowed: the settings other than {', '.join(ROBOT_DISTRIBUTIONS)} "
+                    "(a robot description has no such parameters)")
+    _check_distributions(sweep.distributions, len(scenario.q0))
     return SweepDefinition(sweep=sweep, scenario=scenario, source=path,
                            text=path.read_text())
 
 
-def _base_scenario(name: str, folder: Path) -> Scenario:
+def _base_scenario(name: str, folder: Path):
+    """A Scenario, or a SpatialScenario for a spatial built-in name or file."""
+    from dacph_drake.spatial_run import (BUILT_IN_SPATIAL_SCENARIOS,
+                                         is_spatial_scenario, load_spatial_scenario)
     if name in BUILT_IN_SCENARIOS:
         return BUILT_IN_SCENARIOS[name]()
+    if name in BUILT_IN_SPATIAL_SCENARIOS:
+        return BUILT_IN_SPATIAL_SCENARIOS[name]()
     path = folder / name
+    if path.is_file() and is_spatial_scenario(path):
+        return load_spatial_scenario(path)
     if not path.is_file():
         raise ConfigError(f"scenario = {name!r} is neither a built-in scenario nor a file "
-                          f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)} "
-                          "or a scenario YAML path relative to the sweep file")
+                          f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)}, "
+                          f"{', '.join(BUILT_IN_SPATIAL_SCENARIOS)} or a scenario YAML "
+                          "path relative to the sweep file")
     return load_scenario(path)
 
 
@@ -279,7 +302,7 @@ def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
     seed = trial_seed(definition.sweep.seed, trial)
     generator = RandomGenerator(seed)
     d = definition.sweep.distributions
-    n = definition.scenario.robot.num_links
+    n = len(definition.scenario.q0)
     sampled: Dict[str, object] = {}
     for f in fields(Distributions):
         value = getattr(d, f.name)
@@ -310,20 +333,8 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
     docstring for what each one changes); scenario.seed = learner_seed if sampled,
     else ``seed``."""
     s = copy.deepcopy(base)
-    links = s.robot.links
-    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
-        link.mass *= f
-        link.inertia *= f
-    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
-        link.length *= f
-        link.com *= f
-        link.width *= f
-        link.inertia *= f * f
-    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
-        link.inertia *= f
-    f = sampled.get("base_mass_scale", 1.0)
-    s.robot.base.mass *= f
-    s.robot.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
+    if isinstance(s, Scenario):
+        _apply_robot_sample(s, sampled)
     u = s.uncertainty
     fB, fD = sampled.get("delta_B_scale", 1.0), sampled.get("delta_D_scale", 1.0)
     u.B_linear = [[fB * v for v in row] for row in u.B_linear]
@@ -341,3 +352,21 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
         s.q0 = list(sampled["q0"])
     s.seed = sampled.get("learner_seed", seed)
     return s
+
+
+def _apply_robot_sample(s: Scenario, sampled: Dict[str, object]) -> None:
+    """The ground-truth robot's sampled settings (planar scenarios)."""
+    links = s.robot.links
+    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
+        link.mass *= f
+        link.inertia *= f
+    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
+        link.length *= f
+        link.com *= f
+        link.width *= f
+        link.inertia *= f * f
+    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
+        link.inertia *= f
+    f = sampled.get("base_mass_scale", 1.0)
+    s.robot.base.mass *= f
+    s.robot.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
