@@ -56,11 +56,10 @@ def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.controllers import SPATIAL_REGISTRY
     from dacph_drake.graph import render_diagram
-    from dacph_drake.scenario import load_scenario
-    from dacph_drake.spatial_run import is_spatial_scenario, load_spatial_scenario
-    spatial = is_spatial_scenario(args.scenario)
-    scenario = (load_spatial_scenario if spatial else load_scenario)(args.scenario)
-    registry = SPATIAL_REGISTRY if spatial else REGISTRY
+    from dacph_drake.scenario import Scenario
+    from dacph_drake.spatial_run import load_any_scenario
+    scenario = load_any_scenario(args.scenario)
+    registry = REGISTRY if isinstance(scenario, Scenario) else SPATIAL_REGISTRY
     out = Path(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
@@ -161,23 +160,21 @@ def _verify(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.run import simulate
-    from dacph_drake.scenario import load_scenario
-    from dacph_drake.spatial_run import (is_spatial_scenario, load_spatial_scenario,
-                                         simulate_spatial)
+    from dacph_drake.scenario import Scenario
+    from dacph_drake.spatial_run import load_any_scenario, simulate_spatial
     target = Path(args.target)
     if target.is_dir():
         run_dir = target
     else:
-        spatial = is_spatial_scenario(args.target)
-        scenario = (load_spatial_scenario if spatial else load_scenario)(args.target)
+        scenario = load_any_scenario(args.target)
         if not args.out:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        if spatial:
-            simulate_spatial(scenario, out_dir=run_dir, progress=True, controller="dac")
-        else:
+        if isinstance(scenario, Scenario):
             simulate(scenario, "dac", out_dir=run_dir, progress=True)
+        else:
+            simulate_spatial(scenario, out_dir=run_dir, progress=True, controller="dac")
     report = verify_run(run_dir)
     for name, check in report["checks"].items():
         detail = check.get("reason") or check.get("first_failure") or ""

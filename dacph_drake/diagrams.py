@@ -297,14 +297,23 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
 
 def _AddModelBasedController(scenario: Scenario, loop: ClosedLoop,
                              controller: ControllerBuilder):
-    builder = controller.builder
     lhs = _AddLhsController(scenario, loop, controller, Excitation(amplitude=0.0))
-    chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
-        [scenario.lhs.chi_model_based]))
-    builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
+    return {"lhs_controller": lhs, **AddModelBasedRhs(
+        scenario, controller, lhs, scenario.lhs.chi_model_based)}
+
+
+def AddModelBasedRhs(scenario, controller: ControllerBuilder, lhs,
+                     chi: float) -> Dict[str, object]:
+    """The baseline's RHS side, shared by planar and spatial robots: a constant
+    ``chi`` into the LHS controller ``lhs`` and the static inversion of its
+    ``tau_request`` (ModelBasedInverter, with the controller's input qdot), exported
+    as ``u``. Returns the named systems."""
+    builder = controller.builder
+    fixed_chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource([chi]))
+    builder.Connect(fixed_chi.get_output_port(), lhs.GetInputPort("chi"))
     inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(scenario))
     builder.Connect(lhs.GetOutputPort("tau_request"), inverter.GetInputPort("tau_request"))
     controller.Input(inverter.GetInputPort("qdot"), "qdot")
     builder.ExportOutput(inverter.GetOutputPort("u"), "u")
-    return {"lhs_controller": lhs, "model_based_inverter": inverter}
+    return {"model_based_inverter": inverter}
 

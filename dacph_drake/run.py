@@ -18,6 +18,7 @@ import numpy as np
 from dacph_drake.animation import LiveView
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.files import replaced_atomically
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.progress import progress_bar
@@ -280,12 +281,11 @@ def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = Tr
     atomically (a reader or a crash never sees half a file)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    logs_path = out / f"logs_{result.controller}.npz"
-    with open(logs_path.with_suffix(".npz.tmp"), "wb") as f:
+    with replaced_atomically(out / f"logs_{result.controller}.npz") as path, \
+            open(path, "wb") as f:
         (np.savez_compressed if compress else np.savez)(f, **result.logs)
-    os.replace(logs_path.with_suffix(".npz.tmp"), logs_path)
-    save_scenario(scenario, out / "scenario.yaml.tmp")
-    os.replace(out / "scenario.yaml.tmp", out / "scenario.yaml")
+    with replaced_atomically(out / "scenario.yaml") as path:
+        save_scenario(scenario, path)
     meta = {"controller": result.controller, "status": result.status,
             "reason": result.reason, "final_time": result.final_time,
             "wall_time": result.wall_time, "seed": scenario.seed,
@@ -293,8 +293,7 @@ def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = Tr
             "scenario_fingerprint": scenario_fingerprint(scenario),
             "peak_memory_mib": result.peak_memory_mib,
             "versions": versions()}
-    meta_path = out / f"run_{result.controller}.json"
-    with open(meta_path.with_suffix(".json.tmp"), "w") as f:
+    with replaced_atomically(out / f"run_{result.controller}.json") as path, \
+            open(path, "w") as f:
         json.dump(meta, f, indent=2)
-    os.replace(meta_path.with_suffix(".json.tmp"), meta_path)
     return out

@@ -269,10 +269,7 @@ class Scenario:
         """Raises ConfigError naming the first invalid setting and its allowed range
         (the RHS period is checked against the gain rule when a diagram is built:
         gain_rule.check_rhs_period)."""
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
-            raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
-                              "integer in [0, 2^32 - 1]")
-        require_in_range("seed", self.seed, 0, 2**32 - 1)
+        validate_seed(self.seed)
         self.robot.Validate("robot")
         self.nominal_robot.Validate("nominal_robot")
         n = self.robot.num_links
@@ -280,8 +277,7 @@ class Scenario:
             raise ConfigError(f"nominal_robot has {self.nominal_robot.num_links} links; "
                               f"allowed: the same as robot ({n})")
         _require_length("q0", self.q0, n)
-        for name in ("warmup", "linear", "nonlinear", "disturbance"):
-            require_nonnegative(f"phases.{name}", getattr(self.phases, name), "s")
+        validate_phases(self.phases)
         require_positive("phases (total)", self.phases.end, "s")
         for name in ("Kd", "Lambda", "epsilon", "eta"):
             require_positive(f"lhs.{name}", getattr(self.lhs, name))
@@ -303,6 +299,20 @@ class Scenario:
         validate_simulator_config(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.
         require_finite_numbers("", self)
+
+
+def validate_seed(seed) -> None:
+    """ConfigError unless ``seed`` is an integer in [0, 2^32 - 1]."""
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise ConfigError(f"seed = {seed!r} is not an integer; allowed: an integer in "
+                          "[0, 2^32 - 1]")
+    require_in_range("seed", seed, 0, 2**32 - 1)
+
+
+def validate_phases(phases: Phases) -> None:
+    """ConfigError unless every phase duration is >= 0."""
+    for name in ("warmup", "linear", "nonlinear", "disturbance"):
+        require_nonnegative(f"phases.{name}", getattr(phases, name), "s")
 
 
 def validate_port_settings(scenario, n: int,

@@ -10,10 +10,11 @@ from typing import Dict
 
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import ConstantVectorSource, VectorLogSink
+from pydrake.systems.primitives import VectorLogSink
 
 from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
-from dacph_drake.diagrams import AddActuation, AddRhsChain, CloseLoop, ControllerBuilder
+from dacph_drake.diagrams import (AddActuation, AddModelBasedRhs, AddRhsChain,
+                                  CloseLoop, ControllerBuilder)
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.plant import AddStateSplitter, SetArmAtRest
 from dacph_drake.scenario import Excitation
@@ -21,7 +22,6 @@ from dacph_drake.simulation import MakeSimulator
 from dacph_drake.spatial_potential import BaseClearancePotential
 from dacph_drake.spatial_scenario import SpatialScenario
 from dacph_drake.systems.attitude_controller import AttitudeController
-from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
 
 
@@ -119,16 +119,7 @@ def build_spatial_model_based_diagram(scenario: SpatialScenario) -> SpatialLoop:
     integrator, no learning. On the default scenario's nominal ground truth the
     inversion is exact: the plant receives the LHS's request."""
     def add(scenario, model, controller):
-        builder = controller.builder
         lhs = _AddAttitudeController(scenario, model, controller, Excitation(amplitude=0.0))
-        chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
-            [scenario.gains.chi_model_based]))
-        builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
-        inverter = builder.AddNamedSystem("model_based_inverter",
-                                          ModelBasedInverter(scenario))
-        builder.Connect(lhs.GetOutputPort("tau_request"),
-                        inverter.GetInputPort("tau_request"))
-        controller.Input(inverter.GetInputPort("qdot"), "qdot")
-        builder.ExportOutput(inverter.GetOutputPort("u"), "u")
-        return {"attitude_controller": lhs, "model_based_inverter": inverter}
+        return {"attitude_controller": lhs, **AddModelBasedRhs(
+            scenario, controller, lhs, scenario.gains.chi_model_based)}
     return assemble_spatial_closed_loop(scenario, "spatial_model_based", add)

@@ -4,7 +4,6 @@ YAML scenarios, a progress bar, a stop with a reason when the state turns
 non-finite, the metrics, and the saved run (logs.npz, scenario.yaml, run.json,
 optionally the 3D replay), which `dacph verify` reads."""
 import json
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,12 +15,13 @@ from pydrake.common.yaml import yaml_dump_typed
 from dacph_drake.animation import LiveView
 from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
 from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.files import replaced_atomically
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.metrics import run_metrics
 from dacph_drake.progress import progress_bar
 from dacph_drake.robot import load_yaml_dataclass
 from dacph_drake.run import advance_in_chunks, collect_logs, prepare_out_dir
-from dacph_drake.scenario import Disturbance, Phases, Uncertainty
+from dacph_drake.scenario import Disturbance, Phases, Uncertainty, load_scenario
 from dacph_drake.spatial_scenario import SpatialScenario
 
 SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
@@ -85,6 +85,13 @@ def is_spatial_scenario(path) -> bool:
     except (OSError, ValueError, yaml.YAMLError):
         return False
     return isinstance(raw, dict) and isinstance(raw.get("robot"), str)
+
+
+def load_any_scenario(path):
+    """A SpatialScenario where ``path`` names one (is_spatial_scenario), else a
+    Scenario (scenario.load_scenario)."""
+    return (load_spatial_scenario(path) if is_spatial_scenario(path)
+            else load_scenario(path))
 
 
 def save_spatial_scenario(scenario: SpatialScenario, path) -> None:
@@ -186,17 +193,16 @@ def save_spatial_run(result: SpatialRunResult, scenario: SpatialScenario, out_di
     """logs.npz, scenario.yaml and run.json in out_dir, each replaced atomically."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "logs.npz.tmp", "wb") as f:
+    with replaced_atomically(out / "logs.npz") as path, open(path, "wb") as f:
         np.savez_compressed(f, **result.logs)
-    os.replace(out / "logs.npz.tmp", out / "logs.npz")
-    save_spatial_scenario(scenario, out / "scenario.yaml.tmp")
-    os.replace(out / "scenario.yaml.tmp", out / "scenario.yaml")
+    with replaced_atomically(out / "scenario.yaml") as path:
+        save_spatial_scenario(scenario, path)
     meta = {"controller": result.controller, "status": result.status,
             "reason": result.reason,
             "final_time": result.final_time, "wall_time": result.wall_time,
             "metrics": result.metrics}
-    (out / "run.json.tmp").write_text(json.dumps(meta, indent=2))
-    os.replace(out / "run.json.tmp", out / "run.json")
+    with replaced_atomically(out / "run.json") as path:
+        path.write_text(json.dumps(meta, indent=2))
     return out
 
 

@@ -16,7 +16,8 @@ from pydrake.systems.analysis import SimulatorConfig
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.scenario import (Disturbance, Excitation, Learner, Periods, Phases,
-                                  Rhs, Stress, Uncertainty, validate_port_settings)
+                                  Rhs, Stress, Uncertainty, validate_phases,
+                                  validate_port_settings, validate_seed)
 from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
 
@@ -199,12 +200,8 @@ class SpatialScenario:
                 f"lhs_period = {self.lhs_period:g} s; allowed: their sum * lhs_period "
                 "<= 0.5 (the sampled sliding-mode loop stays well damped)")
         require_nonnegative("gains.chi_model_based", self.gains.chi_model_based, "N m")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
-            raise ConfigError(f"seed = {self.seed!r} is not an integer; allowed: an "
-                              "integer in [0, 2^32 - 1]")
-        require_in_range("seed", self.seed, 0, 2**32 - 1)
-        for name in ("warmup", "linear", "nonlinear", "disturbance"):
-            require_nonnegative(f"phases.{name}", getattr(self.phases, name), "s")
+        validate_seed(self.seed)
+        validate_phases(self.phases)
         validate_port_settings(self, num_joints, lambda key: f"{key}_period")
         validate_simulator_config(self.simulator)
         require_finite_numbers("", self)

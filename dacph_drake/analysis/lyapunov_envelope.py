@@ -47,9 +47,9 @@ class EnvelopeConstants:
     """The envelope's constants (module docstring): rate_slow and rate_fast (the
     paper's), the damping part of the lower rate (``damping_low``), Young's weights
     for e_tau (``young_e``) and for the excitation (``young_a``), and the boundary
-    layer's (effective thickness for the slack, slope factor) as affine functions
-    of chi: layer(chi) = layer_base + layer_per_chi chi, slope(chi) = slope_gain
-    chi / layer_slope(chi)."""
+    layer: its effective thickness for the slack, Layer(chi) = layer_base +
+    layer_per_chi chi, and the lower bound's tanh rate, TanhRate(chi) =
+    2 slope_scale chi / Layer(chi)."""
     rate_slow: float
     rate_fast: float
     damping_low: float

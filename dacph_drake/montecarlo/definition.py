@@ -33,8 +33,7 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.robot import load_yaml_dataclass
-from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
-                                  saved_forms)
+from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario, saved_forms
 
 # The ground-truth robot's distributions (planar arms only).
 ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
@@ -153,21 +152,18 @@ def load_sweep(path) -> SweepDefinition:
 
 def _base_scenario(name: str, folder: Path):
     """A Scenario, or a SpatialScenario for a spatial built-in name or file."""
-    from dacph_drake.spatial_run import (BUILT_IN_SPATIAL_SCENARIOS,
-                                         is_spatial_scenario, load_spatial_scenario)
+    from dacph_drake.spatial_run import BUILT_IN_SPATIAL_SCENARIOS, load_any_scenario
     if name in BUILT_IN_SCENARIOS:
         return BUILT_IN_SCENARIOS[name]()
     if name in BUILT_IN_SPATIAL_SCENARIOS:
         return BUILT_IN_SPATIAL_SCENARIOS[name]()
     path = folder / name
-    if path.is_file() and is_spatial_scenario(path):
-        return load_spatial_scenario(path)
     if not path.is_file():
         raise ConfigError(f"scenario = {name!r} is neither a built-in scenario nor a file "
                           f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)}, "
                           f"{', '.join(BUILT_IN_SPATIAL_SCENARIOS)} or a scenario YAML "
                           "path relative to the sweep file")
-    return load_scenario(path)
+    return load_any_scenario(path)
 
 
 def _check_keys(data, schema_type, where: str) -> None:

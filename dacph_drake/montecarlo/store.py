@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Dict, List
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.files import replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
 from dacph_drake.scenario import save_scenario
 
@@ -122,9 +123,8 @@ class RowStore:
 
 
 def _write_atomically(path: Path, text: str) -> None:
-    temporary = path.with_suffix(path.suffix + ".tmp")
-    temporary.write_text(text)
-    os.replace(temporary, path)
+    with replaced_atomically(path) as temporary:
+        temporary.write_text(text)
 
 
 def sorted_rows(rows: Dict[int, Dict]) -> List[Dict]:
