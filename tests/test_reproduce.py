@@ -2,8 +2,6 @@
 panel, the table (whose numbers match the logs) and an HTML animation that a real
 headless Chromium shows offline."""
 import json
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -13,6 +11,7 @@ from dacph_drake.metrics import run_metrics
 from dacph_drake.reproduce import (ABLATION_ROWS, CONTROLLERS, PAPER_ROWS, flat_metrics,
                                    load_logs)
 from dacph_drake.scenario import load_scenario
+from headless_chromium import run_chromium
 
 
 def test_reproduce_writes_panels_table_scenario_and_animation(quick_reproduction):
@@ -63,13 +62,6 @@ def test_ablation_numbers_match_the_logs(quick_reproduction):
     assert text.count("\n| ") == len(ABLATION_ROWS) + 1
 
 
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name)
-    pytest.fail("no Chromium: scripts/setup.sh installs Debian's chromium package")
-
-
 def test_animation_shows_the_robot_offline_in_headless_chromium(quick_reproduction,
                                                                 tmp_path):
     """The page loads with the network blocked (an unreachable proxy) and its
@@ -77,13 +69,8 @@ def test_animation_shows_the_robot_offline_in_headless_chromium(quick_reproducti
     import matplotlib.image
     _, out = quick_reproduction
     shot = tmp_path / "shot.png"
-    subprocess.run(
-        [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
-         "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-         "--proxy-server=127.0.0.1:9", "--window-size=800,800",
-         "--virtual-time-budget=8000", f"--screenshot={shot}",
-         (out / "animation_dac.html").resolve().as_uri()],
-        check=True, capture_output=True, timeout=120)
+    run_chromium((out / "animation_dac.html").resolve().as_uri(), f"--screenshot={shot}",
+                 virtual_time_ms=8000)
     image = matplotlib.image.imread(shot)[..., :3]
     saturated = image.max(axis=2) - image.min(axis=2) > 0.3     # coloured pixels
     red = (image[..., 0] > 0.7) & (image[..., 1] < 0.35) & (image[..., 2] < 0.35)
@@ -103,12 +90,7 @@ def test_animation_explains_itself(quick_reproduction, tmp_path):
     from dacph_drake.animation import OVERLAY_BACKGROUND
     _, out = quick_reproduction
     page = (out / "animation_dac.html").resolve().as_uri()
-    browser = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
-               "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-               "--proxy-server=127.0.0.1:9", "--window-size=800,800",
-               "--virtual-time-budget=20000"]
-    dom = subprocess.run(browser + ["--dump-dom", page], check=True, capture_output=True,
-                         text=True, timeout=120).stdout
+    dom = run_chromium(page, "--dump-dom", virtual_time_ms=20000)
     time_shown = float(re.search(r'id="dacph-time">t = ([0-9.]+) s<', dom).group(1))
     assert 0.0 < time_shown <= 26.0
     assert re.search(r'id="dacph-phase">(Warm-up|Phase [123])', dom)
@@ -116,8 +98,7 @@ def test_animation_explains_itself(quick_reproduction, tmp_path):
                   "measured end-effector direction"):
         assert entry in dom, entry
     shot = tmp_path / "shot.png"
-    subprocess.run(browser + [f"--screenshot={shot}", page], check=True,
-                   capture_output=True, timeout=120)
+    run_chromium(page, f"--screenshot={shot}", virtual_time_ms=20000)
     image = matplotlib.image.imread(shot)[..., :3]
     background = np.array([int(OVERLAY_BACKGROUND[i:i + 2], 16) for i in (1, 3, 5)]) / 255
     box = np.abs(image - background).max(axis=2) < 0.02

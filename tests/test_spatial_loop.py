@@ -55,9 +55,8 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     attitude triads and the overlay with the simulated time, in headless Chromium
     with the network blocked."""
     import re
-    import subprocess
     import matplotlib.image
-    from test_reproduce import _chromium
+    from headless_chromium import run_chromium
     from dacph_drake.animation import write_spatial_animation
     scenario = SpatialScenario(duration=1.0)
     loop = build_spatial_model_based_diagram(scenario)
@@ -65,17 +64,11 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     simulator.AdvanceTo(scenario.duration)
     logs = collect_logs(loop, simulator.get_context())
     page = write_spatial_animation(scenario.robot, logs, tmp_path / "a.html")
-    browser = [_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
-               "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-               "--proxy-server=127.0.0.1:9", "--window-size=800,800",
-               "--virtual-time-budget=8000"]
-    dom = subprocess.run(browser + ["--dump-dom", page.resolve().as_uri()], check=True,
-                         capture_output=True, text=True, timeout=120).stdout
+    dom = run_chromium(page.resolve().as_uri(), "--dump-dom", virtual_time_ms=8000)
     assert 0.0 < float(re.search(r'id="dacph-time">t = ([0-9.]+) s<', dom).group(1)) <= 1.0
     assert "desired attitude" in dom and "measured end-effector attitude" in dom
     shot = tmp_path / "shot.png"
-    subprocess.run(browser + [f"--screenshot={shot}", page.resolve().as_uri()],
-                   check=True, capture_output=True, timeout=120)
+    run_chromium(page.resolve().as_uri(), f"--screenshot={shot}", virtual_time_ms=8000)
     image = matplotlib.image.imread(shot)[..., :3]
     orange = (image[..., 0] > 0.7) & (image[..., 1] > 0.3) & (image[..., 1] < 0.6) & \
         (image[..., 2] < 0.3)
