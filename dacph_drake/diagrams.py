@@ -241,7 +241,8 @@ def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: 
     learner = builder.AddNamedSystem("learner", RhsLearner(
         model=model, settings=settings, period=periods.learner,
         sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
-        D0=scenario.uncertainty.D0, seed=scenario.seed, learning=learning))
+        D0=scenario.uncertainty.D0, seed=scenario.seed, q0=scenario.q0,
+        learning=learning))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         model=model, network=learner.exported, settings=rhs_settings,
         Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,

@@ -92,19 +92,20 @@ class RhsIdentifier:
     with w_k = exp(-(t - t_k) / forgetting) (zero before ``window_start``),
     normalized to sum 1, E_u = sum w ||u||^2 / n, E_q = sum w ||qdot||^2 / n. The
     prior term keeps at (B0, D0) what the window does not inform; dividing by
-    E_u + E_q makes rho dimensionless and the loss O(1) for Adam.
+    E_u + E_q makes rho dimensionless and the loss O(1) for Adam. ``coupling`` is
+    the network's coupling scale F (network.coupling_factors; None: all ones).
 
     The torch module and Adam's moments are this object's state."""
 
     def __init__(self, n: int, settings: Learner, B0: np.ndarray, D0: np.ndarray,
-                 seed: int):
+                 seed: int, coupling: np.ndarray = None):
         self.n = n
         self._settings = settings
         self._regularized = settings.mode == "regularized"
         self._layout = PortSample(n)
         torch.set_num_threads(1)
         self.network = RhsNetwork(n, settings.hidden, B0, D0, settings.momentum_scale,
-                                  seed)
+                                  seed, coupling)
         self._optimizer = torch.optim.Adam(
             self.network.parameters(), lr=settings.learning_rate,
             betas=(settings.beta1, settings.beta2), eps=settings.eps)

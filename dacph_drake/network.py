@@ -1,19 +1,42 @@
 """The physics-informed RHS network (docs/equations.md E34-E35):
 
     h_B = MLP_B(X(x)), h_D = MLP_D(X(x)),  X(x) = (q, p / p_scale)
-    B_hat(x) = mat(W_B h_B + b_B)                 (n x n)
+    B_hat(x) = F o mat(W_B h_B + b_B)             (n x n, o: entrywise product)
     D_hat(x) = diag(softplus(W_D h_D + b_D))      (positive definite)
     tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
 
 Trained in torch (float64); the fast loops evaluate an exported copy of the weights
 in numpy (``ExportedNetwork.Evaluate``), so torch never runs inside them. The output layers
-start at zero with biases vec(B0) and softplus^-1(D0): the first estimate is the
-nominal RHS.
+start at zero with biases vec(B0 / F) and softplus^-1(D0): the first estimate is the
+nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
+network) unless the learner's ``coupling`` setting is "inertia".
 """
 from typing import List
 
 import numpy as np
 import torch
+
+from dacph_drake.scenario import LEARNER_COUPLINGS
+
+
+def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
+    """The coupling scale F (n x n) of B_hat = F o mat(W_B h_B + b_B):
+
+        "uniform": F_ij = 1 (the paper's network)
+        "inertia": F_ij = min(1, m_i / m_j),  m = ``joint_inertias`` (diag M(q0))
+
+    With "inertia", the network's output for the coupling from a heavy joint j into
+    a light joint i is scaled down by m_i / m_j, so its learning steps are: an
+    error delta in B_ij adds delta u_j to joint i's torque, and where u_j is a
+    shoulder's N m and joint i a wrist of 1e-3 kg m^2, no in-band data bound delta
+    tightly enough (README, "Spatial robots"). Couplings into heavier joints and
+    the diagonal keep F = 1."""
+    m = np.asarray(joint_inertias, float)
+    if coupling == "uniform":
+        return np.ones((len(m), len(m)))
+    if coupling == "inertia":
+        return np.minimum(1.0, m[:, None] / m[None, :])
+    raise ValueError(f"coupling = {coupling!r}; allowed: {', '.join(LEARNER_COUPLINGS)}")
 
 
 def port_torque(B, D, u, qdot):
@@ -25,12 +48,14 @@ def port_torque(B, D, u, qdot):
 
 class RhsNetwork(torch.nn.Module):
     def __init__(self, n: int, hidden: List[int], B0, D0, momentum_scale: float,
-                 seed: int):
+                 seed: int, coupling: np.ndarray = None):
         super().__init__()
         generator_state = torch.random.get_rng_state()
         torch.manual_seed(seed)
         self.n = n
         self.momentum_scale = momentum_scale
+        coupling = np.ones((n, n)) if coupling is None else np.asarray(coupling, float)
+        self.coupling = torch.as_tensor(coupling)
         self.body_B = _mlp(2 * n, hidden)
         self.body_D = _mlp(2 * n, hidden)
         self.head_B = torch.nn.Linear(hidden[-1], n * n, dtype=torch.float64)
@@ -38,7 +63,8 @@ class RhsNetwork(torch.nn.Module):
         with torch.no_grad():
             for head in (self.head_B, self.head_D):
                 head.weight.zero_()
-            self.head_B.bias.copy_(torch.as_tensor(np.asarray(B0, float).reshape(-1)))
+            self.head_B.bias.copy_(torch.as_tensor(
+                (np.asarray(B0, float) / coupling).reshape(-1)))
             D0 = np.maximum(np.asarray(D0, float), 1e-6)
             self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(D0))))
         torch.random.set_rng_state(generator_state)
@@ -49,7 +75,7 @@ class RhsNetwork(torch.nn.Module):
     def forward(self, q, p):
         """(B_hat, D_hat diagonal) for a batch: shapes (m, n, n), (m, n)."""
         X = self.features(q, p)
-        B = self.head_B(self.body_B(X)).reshape(-1, self.n, self.n)
+        B = self.head_B(self.body_B(X)).reshape(-1, self.n, self.n) * self.coupling
         D = torch.nn.functional.softplus(self.head_D(self.body_D(X)))
         return B, D
 
@@ -68,11 +94,14 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 
 
 class ExportedNetwork:
-    """numpy evaluation of RhsNetwork from its exported parameter vector."""
+    """numpy evaluation of RhsNetwork from its exported parameter vector (with the
+    same coupling scale F, default all ones)."""
 
-    def __init__(self, n: int, hidden: List[int], momentum_scale: float):
+    def __init__(self, n: int, hidden: List[int], momentum_scale: float,
+                 coupling: np.ndarray = None):
         self.n = n
         self._momentum_scale = momentum_scale
+        self._coupling = np.ones((n, n)) if coupling is None else np.asarray(coupling, float)
         shapes = []
         for _ in range(2):                    # body_B then body_D
             width = 2 * n
@@ -110,6 +139,6 @@ class ExportedNetwork:
             hB = np.tanh(params[i] @ hB + params[i + 1])
             hD = np.tanh(params[L + i] @ hD + params[L + i + 1])
         W_B, b_B, W_D, b_D = params[2 * L:]
-        B = (W_B @ hB + b_B).reshape(self.n, self.n)
+        B = (W_B @ hB + b_B).reshape(self.n, self.n) * self._coupling
         D = np.logaddexp(0.0, W_D @ hD + b_D)          # softplus
         return B, D

@@ -166,3 +166,45 @@ def test_change_detector_holds_after_a_jump_only():
     for k in range(ChangeDetector.MIN_HISTORY - 1):       # a fresh history first
         state = detector.Update(state, 3.1 + 0.1 * k, 0.3)
     assert not ChangeDetector.Holding(state, 3.6)
+
+
+def test_inertia_coupling_scales_the_couplings_into_lighter_joints():
+    """learner.coupling "inertia": B_hat = F o mat(W_B h_B + b_B) with
+    F_ij = min(1, m_i / m_j). The first estimate is still B0; the torch network and
+    the numpy copy the fast loops evaluate agree at random weights; one Adam step
+    moves the coupling from the heavy joint into the light one m_light / m_heavy
+    times as far as the coupling the other way (Adam moves every raw output by
+    about the learning rate); "uniform" is the unscaled network."""
+    import torch
+    from dacph_drake.network import ExportedNetwork, RhsNetwork, coupling_factors
+    inertias = [2.0, 0.01]
+    F = coupling_factors("inertia", inertias)
+    np.testing.assert_allclose(F, [[1.0, 1.0], [0.005, 1.0]])
+    np.testing.assert_array_equal(coupling_factors("uniform", inertias), np.ones((2, 2)))
+    with pytest.raises(ValueError, match=r"coupling = 'full'; allowed: uniform, inertia"):
+        coupling_factors("full", inertias)
+    B0_full = np.array([[1.1, 0.2], [0.003, 0.9]])
+    network = RhsNetwork(2, [16, 8], B0_full, D0, 0.5, seed=0, coupling=F)
+    q = torch.tensor([[0.3, -0.2]], dtype=torch.float64)
+    p = torch.tensor([[0.1, 0.01]], dtype=torch.float64)
+    np.testing.assert_allclose(network(q, p)[0][0].detach().numpy(), B0_full, atol=1e-15)
+    exported = ExportedNetwork(2, [16, 8], 0.5, coupling=F)
+    with torch.no_grad():
+        for parameter in network.parameters():
+            parameter.normal_()
+    B, D = network(q, p)
+    B_np, D_np = exported.Evaluate(network.export(), q[0].numpy(), p[0].numpy())
+    np.testing.assert_allclose(B_np, B[0].detach().numpy(), rtol=1e-12)
+    np.testing.assert_allclose(D_np, D[0].detach().numpy(), rtol=1e-12)
+    settings = Learner(hidden=[16, 8], learning_rate=1e-3, steps_per_update=1)
+    identifier = RhsIdentifier(2, settings, B0, D0, seed=0, coupling=F)
+    t = np.arange(0.0, 2.0, H)
+    u = np.stack([np.sin(2 * np.pi * 3.1 * t), np.sin(2 * np.pi * 4.3 * t)], axis=1)
+    B_true = np.array([[1.0, 0.5], [0.5, 1.0]])                 # both couplings off
+    zeros = np.zeros_like(u)
+    rows = _rows(t, zeros, zeros, zeros, u, u @ B_true.T, band=False)
+    before = identifier.Estimate(np.zeros(2), np.zeros(2))[0]
+    identifier.Fit(rows, t[-1])
+    step = np.abs(identifier.Estimate(np.zeros(2), np.zeros(2))[0] - before)
+    assert step[1, 0] == pytest.approx(0.005 * step[0, 1], rel=0.2)
+    assert step[0, 1] > 1e-4

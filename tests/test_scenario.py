@@ -42,6 +42,8 @@ BAD_SCENARIO_FILES = [
     ("stress: {start: -1.0}\n", r"stress.start = -1.0 .*>= 0 s"),
     ("learner: {mode: adaptive}\n", r"learner.mode = 'adaptive'; allowed: regularized, "
                                     r"plain"),
+    ("learner: {coupling: full}\n", r"learner.coupling = 'full'; allowed: uniform, "
+                                     r"inertia"),
     ("learner: {band: [1.0]}\n", r"learner.band has 1 entries; allowed: 2 \(\[low, "
                                  r"high\] in Hz\)"),
     ("learner: {band: [2.0, 60.0]}\n", r"learner.band\[1\] = 60.0 .*in \[2, 50\] Hz"),

@@ -5,7 +5,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.identification import (ChangeDetector, NewestRows, PortSample,
                                         RhsIdentifier)
 from dacph_drake.log_layout import LearnerLog
-from dacph_drake.network import ExportedNetwork
+from dacph_drake.network import ExportedNetwork, coupling_factors
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Learner
 
@@ -27,14 +27,16 @@ class RhsLearner(LeafSystem):
     nominal loss of (B0, D0) on the same samples, and whether training is paused)
     and ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] at the current plant state,
     for the metrics. With ``learning`` False the network keeps its initial weights
-    (B_hat = B0, D_hat = D0): the dac-nominal ablation.
+    (B_hat = B0, D_hat = D0): the dac-nominal ablation. The network's coupling
+    scale (settings.coupling, network.coupling_factors) reads the joints' inertias
+    diag M(q0) of ``model`` at the start configuration ``q0``.
 
     The torch module and Adam's moments live in this object, not in the Context:
     a diagram with a learner simulates one trajectory at a time (build one diagram
     per run, as the package's builders do)."""
 
     def __init__(self, *, model: ReducedOrderModel, settings: Learner, period: float,
-                 sample_period: float, B0, D0, seed: int,
+                 sample_period: float, B0, D0, seed: int, q0,
                  learning: bool = True):
         super().__init__()
         n = model.num_joints
@@ -43,10 +45,13 @@ class RhsLearner(LeafSystem):
         self._settings = settings
         self._learning = learning and settings.steps_per_update > 0
         self._regularized = settings.mode == "regularized"
-        self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed)
+        coupling = coupling_factors(settings.coupling, np.diag(
+            model.MassMatrix(np.asarray(q0, float))))
+        self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed, coupling)
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
-        self.exported = ExportedNetwork(n, settings.hidden, settings.momentum_scale)
+        self.exported = ExportedNetwork(n, settings.hidden, settings.momentum_scale,
+                                        coupling)
         initial_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
