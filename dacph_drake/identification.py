@@ -86,13 +86,15 @@ class RhsIdentifier:
     plain (the paper): Adam on mean ||tau - (B_hat(x) u - D_hat(x) qdot)||^2.
     regularized: Adam on
 
-        [sum_k w_k ||r_k||^2 + rho (E_u sum_k w_k ||B_hat(x_k) - B0||_F^2
+        [sum_k w_k ||r_k||^2 + rho (sum_k w_k sum_ij E_ij (B_hat_ij(x_k) - B0_ij)^2
                                    + E_q sum_k w_k ||D_hat(x_k) - D0||^2)] / (E_u + E_q)
 
     with w_k = exp(-(t - t_k) / forgetting) (zero before ``window_start``),
-    normalized to sum 1, E_u = sum w ||u||^2 / n, E_q = sum w ||qdot||^2 / n. The
-    prior term keeps at (B0, D0) what the window does not inform; dividing by
-    E_u + E_q makes rho dimensionless and the loss O(1) for Adam. ``coupling`` is
+    normalized to sum 1, E_u = sum w ||u||^2 / n, E_q = sum w ||qdot||^2 / n, and
+    E_ij = E_u for every entry (settings.prior_scale "pooled") or
+    max(E_i, E_j), E_j = sum w u_j^2 ("per_input"). The prior term keeps at
+    (B0, D0) what the window does not inform; dividing by E_u + E_q makes rho
+    dimensionless and the loss O(1) for Adam. ``coupling`` is
     the network's coupling scale F (network.coupling_factors; None: all ones).
 
     The torch module and Adam's moments are this object's state."""
@@ -136,8 +138,13 @@ class RhsIdentifier:
             return data
         E_u = torch.sum(w * torch.sum(u**2, 1)) / self.n
         E_q = torch.sum(w * torch.sum(qdot**2, 1)) / self.n
-        prior = (E_u * torch.sum(w * torch.sum((B - self._B0)**2, (1, 2)))
-                 + E_q * torch.sum(w * torch.sum((D - self._D0)**2, 1)))
+        if self._settings.prior_scale == "per_input":
+            E_input = torch.sum(w[:, None] * u**2, 0)
+            E_entry = torch.maximum(E_input[:, None], E_input[None, :])
+            prior_B = torch.sum(w * torch.sum(E_entry * (B - self._B0)**2, (1, 2)))
+        else:
+            prior_B = E_u * torch.sum(w * torch.sum((B - self._B0)**2, (1, 2)))
+        prior = prior_B + E_q * torch.sum(w * torch.sum((D - self._D0)**2, 1))
         return (data + self._settings.prior_weight * prior) / torch.clamp(
             E_u + E_q, min=1e-300)
 

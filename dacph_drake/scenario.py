@@ -154,6 +154,7 @@ class Disturbance:
 
 LEARNER_MODES = ("regularized", "plain")
 LEARNER_COUPLINGS = ("uniform", "inertia")     # network.coupling_factors
+LEARNER_PRIOR_SCALES = ("pooled", "per_input")  # identification.RhsIdentifier
 
 
 @dataclass
@@ -178,6 +179,10 @@ class Learner:
       rho (E_u sum w ||B_hat - B0||_F^2 + E_q sum w ||D_hat - D0||^2), E_u and E_q
       the weighted mean squares of the filtered u and qdot entries: a direction of
       (B, D) whose information is below rho times the average stays at the prior.
+      With ``prior_scale`` "per_input" (default "pooled": as written), entry B_ij
+      is weighted by max(E_i, E_j), E_j the mean square of input u_j, instead of
+      E_u: a light joint's own gain B_jj is weighed against its own small input
+      rather than held by the heavy joints' (spatial robots' scenarios).
     - change_ratio, change_floor, change_hold: when the relative residual of the
       newest samples jumps above change_ratio times its recent median and above
       change_floor (an abrupt change of B, D or d), training pauses for change_hold
@@ -206,6 +211,7 @@ class Learner:
     change_floor: float = 0.05
     change_hold: float = 1.5        # [s]
     coupling: str = "uniform"
+    prior_scale: str = "pooled"
 
 
 @dataclass
@@ -372,6 +378,9 @@ def validate_port_settings(scenario, n: int,
     if L.coupling not in LEARNER_COUPLINGS:
         raise ConfigError(f"learner.coupling = {L.coupling!r}; allowed: "
                           f"{', '.join(LEARNER_COUPLINGS)}")
+    if L.prior_scale not in LEARNER_PRIOR_SCALES:
+        raise ConfigError(f"learner.prior_scale = {L.prior_scale!r}; allowed: "
+                          f"{', '.join(LEARNER_PRIOR_SCALES)}")
     if len(L.hidden) == 0:
         raise ConfigError("learner.hidden is empty; allowed: at least one layer")
     for i, width in enumerate(L.hidden):
@@ -484,10 +493,11 @@ def saved_forms(scenario: Scenario) -> List[str]:
     """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
     its current form and, where its simulator settings are those an older file's
     top-level ``integration_scheme: X`` implied (_move_integration_scheme), that
-    older form. A setting added since (``learner.coupling``) is left out of these
-    texts at its default, so that runs saved before it existed still match."""
-    text = re.sub(r"^  coupling: uniform\n", "", yaml_dump_typed(scenario),
-                  flags=re.MULTILINE)
+    older form. Settings added since (``learner.coupling``, ``prior_scale``) are
+    left out of these texts at their defaults, so that runs saved before they
+    existed still match."""
+    text = re.sub(r"^  coupling: uniform\n  prior_scale: pooled\n", "",
+                  yaml_dump_typed(scenario), flags=re.MULTILINE)
     config = scenario.simulator
     if yaml_dump_typed(config) != yaml_dump_typed(FixedStepConfig(
             config.integration_scheme, scenario.periods.rhs)):

@@ -135,9 +135,12 @@ class SpatialScenario:
     # weighted 0.1 (heavy joints' damping torque is under 1 % of their in-band
     # inertial torque: D stays at D0 there instead of drifting); the couplings
     # from heavy into light joints scaled by their inertia ratio (unscaled, their
-    # errors perturbed the wrist: 8x the learner-off tracking error).
+    # errors perturbed the wrist: 3-8x the learner-off tracking error); each B_ij
+    # held by its own inputs' mean square (pooled, the shoulders' inputs held the
+    # wrist's B_ii at B0).
     learner: Learner = field(default_factory=lambda: Learner(
-        momentum_scale=0.5, prior_weight=0.1, band_sections=[8, 8], coupling="inertia"))
+        momentum_scale=0.5, prior_weight=0.1, band_sections=[8, 8], coupling="inertia",
+        prior_scale="per_input"))
     excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
     # Discrete periods [s]: RHS integrator and observer < LHS < learner sampling <

@@ -208,3 +208,26 @@ def test_inertia_coupling_scales_the_couplings_into_lighter_joints():
     step = np.abs(identifier.Estimate(np.zeros(2), np.zeros(2))[0] - before)
     assert step[1, 0] == pytest.approx(0.005 * step[0, 1], rel=0.2)
     assert step[0, 1] > 1e-4
+
+
+def test_per_input_prior_lets_a_light_joint_learn_its_own_gain():
+    """Two joints whose in-band inputs are three decades apart, both gains 20 % off
+    B0. With the pooled prior (E_u, the mean square of all inputs, on every entry)
+    the light joint's gain stays at B0, held by the heavy joint's input; with
+    learner.prior_scale "per_input" (entry ij weighted by max(E_i, E_j)) it is
+    learned like the heavy joint's, and the couplings stay at zero."""
+    t = np.arange(0.0, 20.0, H)
+    u = np.stack([_multisine(t, [1.0, 0.6], [3.1, 4.7]),
+                  1e-3 * _multisine(t, [1.0, 0.6], [3.7, 5.3], phase=1.0)], axis=1)
+    B_true = np.diag([1.2, 0.8])
+    zeros = np.zeros_like(u)
+    rows = _rows(t, zeros, zeros, zeros, u, u @ B_true.T, band=False)
+    learned = {}
+    for prior_scale in ("pooled", "per_input"):
+        settings = Learner(prior_weight=0.1, prior_scale=prior_scale)
+        learned[prior_scale] = _learn(rows, settings).Estimate(np.zeros(2), np.zeros(2))[0]
+    assert learned["pooled"][0, 0] == pytest.approx(1.2, abs=0.03)
+    assert learned["pooled"][1, 1] == pytest.approx(1.0, abs=0.03)
+    assert learned["per_input"][0, 0] == pytest.approx(1.2, abs=0.03)
+    assert learned["per_input"][1, 1] == pytest.approx(0.8, abs=0.03)
+    assert np.abs(learned["per_input"][[0, 1], [1, 0]]).max() < 0.03

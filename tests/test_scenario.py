@@ -42,6 +42,8 @@ BAD_SCENARIO_FILES = [
     ("stress: {start: -1.0}\n", r"stress.start = -1.0 .*>= 0 s"),
     ("learner: {mode: adaptive}\n", r"learner.mode = 'adaptive'; allowed: regularized, "
                                     r"plain"),
+    ("learner: {prior_scale: per_output}\n", r"learner.prior_scale = 'per_output'; "
+                                            r"allowed: pooled, per_input"),
     ("learner: {coupling: full}\n", r"learner.coupling = 'full'; allowed: uniform, "
                                      r"inertia"),
     ("learner: {band: [1.0]}\n", r"learner.band has 1 entries; allowed: 2 \(\[low, "
