@@ -26,8 +26,8 @@ def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
         "inertia": F_ij = min(1, m_i / m_j),  m = ``joint_inertias`` (diag M(q0))
 
     With "inertia", the network's output for the coupling from a heavy joint j into
-    a light joint i is scaled down by m_i / m_j, so its learning steps are: an
-    error delta in B_ij adds delta u_j to joint i's torque, and where u_j is a
+    a light joint i is scaled down by m_i / m_j, and so are its learning steps.
+    Why: an error delta in B_ij adds delta u_j to joint i's torque; where u_j is a
     shoulder's N m and joint i a wrist of 1e-3 kg m^2, no in-band data bound delta
     tightly enough (README, "Spatial robots"). Couplings into heavier joints and
     the diagonal keep F = 1."""
