@@ -14,7 +14,7 @@ controller, write that function and add one entry below."""
 import importlib
 from dataclasses import dataclass
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.errors import require_one_of
 
 
 @dataclass(frozen=True)
@@ -48,8 +48,7 @@ SPATIAL_REGISTRY = {
 
 def require_controller(name: str, registry=REGISTRY) -> Controller:
     """The registered controller ``name`` (ConfigError listing the names otherwise)."""
-    if name not in registry:
-        raise ConfigError(f"controller = {name!r}; allowed: {', '.join(registry)}")
+    require_one_of("controller", name, registry)
     return registry[name]
 
 

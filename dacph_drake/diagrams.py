@@ -150,8 +150,9 @@ def CloseLoop(builder: DiagramBuilder, controller_builder: ControllerBuilder, na
               ) -> Dict[str, VectorLogSink]:
     """Builds the controller (``{name}_controller``) into ``builder``, feeds its
     inputs from the state splitter's signals of the same names and its output ``u``
-    to the true RHS ``truth``, and logs every log_period: the plant's state, tau and true_matrices of the truth, d(t), and every output
-    of the controller. Returns the loggers by signal name."""
+    to the true RHS ``truth``, and logs every log_period: the plant's state, tau and
+    true_matrices of the truth, d(t), and every output of the controller. Returns
+    the loggers by signal name."""
     controller = controller_builder.builder.Build()
     controller.set_name(f"{name}_controller")
     builder.AddSystem(controller)

@@ -24,6 +24,13 @@ def require_in_range(name: str, value: float, low: float, high: float,
              f"in [{low:g}, {high:g}]{(' ' + unit) if unit else ''}")
 
 
+def require_one_of(name: str, value, allowed) -> None:
+    """Raises ConfigError unless ``value`` is one of ``allowed`` (names, listed in
+    the message)."""
+    if value not in allowed:
+        raise ConfigError(f"{name} = {value!r}; allowed: {', '.join(allowed)}")
+
+
 def _require(name: str, value: float, ok: bool, allowed: str) -> None:
     value = _plain(value)
     try:

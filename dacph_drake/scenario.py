@@ -12,7 +12,7 @@ from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
-                                require_nonnegative, require_positive)
+                                require_nonnegative, require_one_of, require_positive)
 from dacph_drake.robot import RobotParams, load_yaml_dataclass
 from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
@@ -372,15 +372,9 @@ def validate_port_settings(scenario, n: int,
     require_nonnegative("disturbance.scale", d.scale)
     require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
     L = scenario.learner
-    if L.mode not in LEARNER_MODES:
-        raise ConfigError(f"learner.mode = {L.mode!r}; allowed: "
-                          f"{', '.join(LEARNER_MODES)}")
-    if L.coupling not in LEARNER_COUPLINGS:
-        raise ConfigError(f"learner.coupling = {L.coupling!r}; allowed: "
-                          f"{', '.join(LEARNER_COUPLINGS)}")
-    if L.prior_scale not in LEARNER_PRIOR_SCALES:
-        raise ConfigError(f"learner.prior_scale = {L.prior_scale!r}; allowed: "
-                          f"{', '.join(LEARNER_PRIOR_SCALES)}")
+    require_one_of("learner.mode", L.mode, LEARNER_MODES)
+    require_one_of("learner.coupling", L.coupling, LEARNER_COUPLINGS)
+    require_one_of("learner.prior_scale", L.prior_scale, LEARNER_PRIOR_SCALES)
     if len(L.hidden) == 0:
         raise ConfigError("learner.hidden is empty; allowed: at least one layer")
     for i, width in enumerate(L.hidden):
@@ -489,15 +483,20 @@ def short_scenario() -> Scenario:
 BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
 
 
+# The YAML lines of settings added after runs were first saved, at their defaults.
+ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled")
+
+
 def saved_forms(scenario: Scenario) -> List[str]:
     """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
     its current form and, where its simulator settings are those an older file's
     top-level ``integration_scheme: X`` implied (_move_integration_scheme), that
-    older form. Settings added since (``learner.coupling``, ``prior_scale``) are
-    left out of these texts at their defaults, so that runs saved before they
-    existed still match."""
-    text = re.sub(r"^  coupling: uniform\n  prior_scale: pooled\n", "",
-                  yaml_dump_typed(scenario), flags=re.MULTILINE)
+    older form. The lines of settings added since (ADDED_SETTING_DEFAULTS) are left
+    out of these texts where they hold their defaults, so that runs saved before
+    those settings existed still match."""
+    text = yaml_dump_typed(scenario)
+    for line in ADDED_SETTING_DEFAULTS:
+        text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
     config = scenario.simulator
     if yaml_dump_typed(config) != yaml_dump_typed(FixedStepConfig(
             config.integration_scheme, scenario.periods.rhs)):

@@ -5,7 +5,8 @@ import copyreg
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
 
-from dacph_drake.errors import ConfigError, require_in_range, require_nonnegative
+from dacph_drake.errors import (ConfigError, require_in_range, require_nonnegative,
+                                require_one_of)
 
 # Explicit Runge-Kutta schemes: the closed loop's Python systems have no AutoDiff
 # form for an implicit scheme's Jacobian; each of these keeps the free-floating arm's
@@ -29,9 +30,8 @@ def FixedStepConfig(integration_scheme: str = "runge_kutta2",
 def validate_simulator_config(config: SimulatorConfig) -> None:
     """ConfigError naming the first simulator.* setting a closed loop cannot run
     (a scenario's ``simulator:``)."""
-    if config.integration_scheme not in INTEGRATION_SCHEMES:
-        raise ConfigError(f"simulator.integration_scheme = {config.integration_scheme!r}; "
-                          f"allowed: {', '.join(INTEGRATION_SCHEMES)}")
+    require_one_of("simulator.integration_scheme", config.integration_scheme,
+                   INTEGRATION_SCHEMES)
     require_in_range("simulator.max_step_size", config.max_step_size, 1e-7, 1.0, "s")
     if config.use_error_control:
         if config.integration_scheme not in ERROR_CONTROLLED_SCHEMES:

@@ -57,8 +57,8 @@ def assemble_spatial_closed_loop(scenario: SpatialScenario, name: str,
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
     truth, disturbance = AddActuation(builder, plant, SpatialTrueRhs(
-        plant=MakeRobotPlant(scenario.robot), uncertainty=scenario.uncertainty,
-        phases=scenario.phases), scenario)
+        plant=plant, uncertainty=scenario.uncertainty, phases=scenario.phases),
+        scenario)
     controller_builder = ControllerBuilder()
     systems = add_controller(scenario, model, controller_builder)
     loggers = CloseLoop(builder, controller_builder, name, plant, splitter, truth,

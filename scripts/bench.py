@@ -149,8 +149,8 @@ def bench_kernel_compilation():
 
 def bench_spatial(duration: float, planar_dac: float):
     """The 6-DOF spatial robot (satellite_6dof, all phases on within ``duration``):
-    diagram build time (description parsed for the ground truth, its true RHS and
-    the controller's model) and wall time per simulated second of the model-based
+    diagram build time (description parsed for the ground truth and the
+    controller's model) and wall time per simulated second of the model-based
     and the DAC loop, the DAC one beside the planar DAC loop's ``planar_dac`` of the
     same run (the spatial LHS is Python, without compiled kernels yet)."""
     from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop

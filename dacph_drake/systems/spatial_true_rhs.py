@@ -21,8 +21,8 @@ class SpatialTrueRhs(LeafSystem):
     Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
     plant's) and time, so it adds no delay; it feeds the plant's actuation input.
     Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics.
-    ``plant`` is a finalized copy of the ground truth (its scratch context is made
-    here)."""
+    ``plant`` is the ground truth (finalized); the scratch context for its mass
+    matrix is made here."""
 
     def __init__(self, *, plant: MultibodyPlant, uncertainty: Uncertainty,
                  phases: Phases):
