@@ -21,6 +21,7 @@ from dacph_drake.reference import OrientationReference
 from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.simulation import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
+from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.lhs_controller import LhsController
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter
@@ -174,20 +175,37 @@ def CloseLoop(builder: DiagramBuilder, controller_builder: ControllerBuilder, na
 
 
 def _AddLhsController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
-                      excitation: Excitation) -> LhsController:
+                      excitation: Excitation, identify: bool = False
+                      ) -> Dict[str, object]:
     """The LHS controller both controllers share, its state inputs exported and its
-    request and log as the controller's outputs ``tau_request`` and ``lhs_log``."""
+    request and log as the controller's outputs ``tau_request`` and ``lhs_log``;
+    with ``identify``, fed by an InertialIdentifier (scenario.inertia) whose
+    estimate is the controller's output ``inertial_parameters``. Returns the named
+    systems ("lhs_controller", "inertial_identifier")."""
     builder = controller.builder
+    identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
+        plant=loop.model.plant, settings=scenario.inertia,
+        period=scenario.periods.learner_sample)) if identify else None)
     lhs = builder.AddNamedSystem("lhs_controller", LhsController(
         model=loop.model, potential=loop.potential,
         reference=OrientationReference(scenario.reference,
                                        float(np.sum(scenario.q0))),   # theta0(0) = 0
-        gains=scenario.lhs, period=scenario.periods.lhs, excitation=excitation))
+        gains=scenario.lhs, period=scenario.periods.lhs, excitation=excitation,
+        lambda_min_M=loop.lambda_min_M,
+        inertial_parameters=identifier.parameters if identify else None))
     for signal in ("base_pose", "q", "qdot"):
         controller.Input(lhs.GetInputPort(signal), signal)
     for output in ("tau_request", "lhs_log"):
         builder.ExportOutput(lhs.GetOutputPort(output), output)
-    return lhs
+    if not identify:
+        return {"lhs_controller": lhs}
+    for signal in ("base_pose", "base_velocity", "q", "qdot"):
+        controller.Input(identifier.GetInputPort(signal), signal)
+    builder.Connect(identifier.GetOutputPort("inertial_parameters"),
+                    lhs.GetInputPort("inertial_parameters"))
+    builder.ExportOutput(identifier.GetOutputPort("inertial_parameters"),
+                         "inertial_parameters")
+    return {"lhs_controller": lhs, "inertial_identifier": identifier}
 
 
 def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
@@ -204,10 +222,11 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
 
 def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: ControllerBuilder,
                       learning: bool):
-    lhs = _AddLhsController(scenario, loop, controller, scenario.excitation)
-    return {"lhs_controller": lhs, **AddRhsChain(
-        scenario, loop.model, controller, lhs, Kd_max=scenario.lhs.Kd,
-        lambda_min_M=loop.lambda_min_M, learning=learning)}
+    lhs_side = _AddLhsController(scenario, loop, controller, scenario.excitation,
+                                 identify=scenario.inertia.identify)
+    return {**lhs_side, **AddRhsChain(
+        scenario, loop.model, controller, lhs_side["lhs_controller"],
+        Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, learning=learning)}
 
 
 def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: float,
@@ -253,14 +272,16 @@ def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: 
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):
         controller.Input(observer.GetInputPort(signal), signal)
-    builder.Connect(lhs.GetOutputPort("reduced_model"),
-                    observer.GetInputPort("reduced_model"))
+    for system in (observer, learner, rhs):      # M for p = M qdot, the observer's
+        builder.Connect(lhs.GetOutputPort("reduced_model"),
+                        system.GetInputPort("reduced_model"))
     builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
     port_sample = observer.GetOutputPort("port_sample")
     if prefilter is not None:
         builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
         port_sample = prefilter.GetOutputPort("filtered_sample")
     builder.Connect(port_sample, learner.GetInputPort("port_sample"))
+    builder.Connect(port_sample, rhs.GetInputPort("port_sample"))
     for signal in ("q", "qdot"):
         controller.Input(learner.GetInputPort(signal), signal)
     builder.Connect(observer.GetOutputPort("tau_observed"),
@@ -299,9 +320,9 @@ def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
 
 def _AddModelBasedController(scenario: Scenario, loop: ClosedLoop,
                              controller: ControllerBuilder):
-    lhs = _AddLhsController(scenario, loop, controller, Excitation(amplitude=0.0))
-    return {"lhs_controller": lhs, **AddModelBasedRhs(
-        scenario, controller, lhs, scenario.lhs.chi_model_based)}
+    lhs_side = _AddLhsController(scenario, loop, controller, Excitation(amplitude=0.0))
+    return {**lhs_side, **AddModelBasedRhs(
+        scenario, controller, lhs_side["lhs_controller"], scenario.lhs.chi_model_based)}
 
 
 def AddModelBasedRhs(scenario, controller: ControllerBuilder, lhs,

@@ -7,6 +7,9 @@ from dacph_drake.errors import ConfigError
 # With the observer's one-sample delay the discrete RHS loop per mode is
 # z^2 - z + g = 0, g = h k_p lambda_p; its roots are real (well damped) for g <= 1/4.
 WELL_DAMPED_LOOP_GAIN = 0.25
+# A certified loop keeps its spectral radius at most 1 - STABILITY_MARGIN
+# (analysis.rhs_loop).
+STABILITY_MARGIN = 0.05
 
 
 def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float) -> float:
@@ -44,9 +47,31 @@ def integral_gains(B_hat: np.ndarray, c: float):
     return k, paired, dic_ok
 
 
+def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
+    """The discrete RHS loop's state matrix with the port's true input matrix B and
+    the integrator's gains K (analysis.rhs_loop, the state (u_I, tau_obs)):
+    A = [[I, -h K], [B, 0]]; per decoupled mode its polynomial is z^2 - z + h k_p
+    lambda_p."""
+    n = B.shape[0]
+    return np.block([[np.eye(n), -period * np.diag(K)], [B, np.zeros((n, n))]])
+
+
+def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
+                          radius: float) -> bool:
+    """Whether the loop with the gains K of a new estimate keeps its spectral radius
+    within ``radius`` if the truth were the estimate in use B_in_use: the evidence
+    that makes the integrator adopt an estimate far from the one in use
+    (RhsIntegrator) may be wrong (a filtered window that still holds a change's
+    transient), and a jump that would destabilize the loop in that case is
+    refused; one that only slows it is not."""
+    return bool(np.max(np.abs(np.linalg.eigvals(loop_matrix(B_in_use, K, period))))
+                <= radius)
+
+
 def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) -> bool:
     """The bounded-learning-error condition made operational: every paired
-    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the nominal B0's,
+    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the anchor's
+    ``nominal`` (B0's, or those of the estimate in use: Rhs.trust_anchor),
     1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <= trust_ratio.
 
     Why: the discrete RHS loop of mode p has the loop gain
@@ -54,7 +79,12 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) ->
     and well damped for g_p <= 1/4. A learned eigenvalue far below the true one (a
     biased estimate, e.g. while an unmodelled disturbance acts) makes g_p exceed 1
     and the loop diverges within milliseconds. Rejecting such estimates keeps
-    g_p <= h c trust_ratio lambda~_p / lambda0_p."""
+    g_p <= h c trust_ratio lambda~_p / lambda0_p. Anchored at the estimate in use,
+    one accepted refresh changes every mode's loop gain by at most trust_ratio:
+    a loop that ran on a right estimate stays certified after any accepted step
+    (analysis.rhs_loop: at the defaults the loop is certified for
+    lambda~_p / lambda_hat_p in [0.45, 4.2]), while an estimate that follows the
+    truth away from B0 is no longer refused."""
     ratio = paired.real / np.asarray(nominal, float)
     return bool(np.all(ratio >= 1.0 / trust_ratio) and np.all(ratio <= trust_ratio))
 

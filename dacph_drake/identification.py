@@ -70,6 +70,41 @@ class BandPassCascade:
         return out
 
 
+class PortEvidence:
+    """The second moments of the regressed part z = [qdot, u, tau_obs] of port
+    samples with exponential forgetting, G <- a G + z z^T (a = exp(-h / window) per
+    sample period h), as a vector [vec(G) (3n x 3n), sum of weights] that can live
+    in a Drake Context; Residual(B, D) is then sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2
+    for any constant B, diagonal D, with no samples kept."""
+
+    def __init__(self, n: int, sample_period: float, window: float):
+        self.n = n
+        self.decay = float(np.exp(-sample_period / window))
+        self.size = 9 * n * n + 1
+        self._layout = PortSample(n)
+
+    def Update(self, state: np.ndarray, sample: np.ndarray) -> np.ndarray:
+        """The statistics after one more PortSample ``sample``."""
+        m = 3 * self.n
+        z = np.asarray(sample, float)[self._layout.regressed]
+        out = self.decay * state
+        out[:m * m] += np.outer(z, z).reshape(-1)
+        out[m * m] += 1.0
+        return out
+
+    def Residual(self, state: np.ndarray, B: np.ndarray, D: np.ndarray) -> float:
+        """sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2 (per unit weight)."""
+        n, m = self.n, 3 * self.n
+        A = np.hstack([np.diag(D), -B, np.eye(n)])        # residual = A z
+        G = state[:m * m].reshape(m, m)
+        return float(np.trace(A @ G @ A.T)) / max(state[m * m], 1e-300)
+
+    @staticmethod
+    def Weight(state: np.ndarray) -> float:
+        """The samples' total weight (in samples)."""
+        return float(state[-1])
+
+
 @dataclass
 class FitStatistics:
     """Of the current network on the weighted window: loss = sum w ||r||^2 (r the
@@ -148,6 +183,52 @@ class RhsIdentifier:
         return (data + self._settings.prior_weight * prior) / torch.clamp(
             E_u + E_q, min=1e-300)
 
+    def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float
+                    ) -> np.ndarray:
+        """The constant B that, with the current D_hat(x), minimizes the regularized
+        loss on the window (the loss restricted to B_hat independent of x): row i by
+        weighted ridge least squares of tau_i + D_hat_i(x) qdot_i on u, each B_ij
+        held to its prior B0_ij with the loss's weight rho E_ij divided by F_ij^2 for
+        the network's coupling scale F (network.coupling_factors): the network moves
+        B_ij in steps F_ij times its own, so a coupling from a heavy joint into a
+        light one (F_ij = m_i / m_j << 1) stays near its prior here as it does in
+        training (fitted freely, such a coupling's error of 0.007 from the 3-DOF
+        arm's shoulder into its forearm roll made the attitude error 6x the
+        learner-off loop's). D is left to Adam: on heavy joints it is hardly in the
+        data (a fitted D ended the 6-DOF arm's disturbance phase at 2.3 times the
+        prior's error)."""
+        times, q, p, qdot, u, tau = self._Split(rows)
+        w = self.Weights(times, t_now, window_start).numpy()
+        with torch.no_grad():
+            D = self.network(q, p)[1].numpy()
+        q, p, qdot, u, tau = (x.numpy() for x in (q, p, qdot, u, tau))
+        n, rho = self.n, self._settings.prior_weight
+        E_input = w @ u**2                                   # E_j, per input
+        E_u = E_input.sum() / n
+        B0 = self._B0.numpy()
+        coupling = self.network.coupling.numpy()
+        normal = u.T @ (w[:, None] * u)
+        B = np.empty((n, n))
+        target = tau + D * qdot
+        for i in range(n):
+            E_B = (np.maximum(E_input[i], E_input) if self._settings.prior_scale
+                   == "per_input" else np.full(n, E_u))
+            prior = rho * E_B / coupling[i]**2
+            B[i] = np.linalg.solve(normal + np.diag(prior),
+                                   u.T @ (w * target[:, i]) + prior * B0[i])
+        return B
+
+    def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float) -> None:
+        """Sets B_hat to the constant fit of the window (ConstantFit: B's output
+        layer with zero weights and the bias that gives it) and restarts Adam's
+        moments of that layer (only: fresh moments make Adam's next steps about
+        lr on every parameter they concern, which would kick D_hat too): after a
+        hold the new relation's best constant B, not the old estimate, is where
+        Adam starts."""
+        self.network.set_constant_B(self.ConstantFit(rows, t_now, window_start))
+        for parameter in self.network.head_B.parameters():
+            self._optimizer.state.pop(parameter, None)
+
     def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> None:
         """settings.steps_per_update Adam steps on the window ``rows``."""
         times, q, p, qdot, u, tau = self._Split(rows)
@@ -206,8 +287,10 @@ class ChangeDetector:
         self._ratio, self._floor, self._hold = ratio, floor, hold
 
     @classmethod
-    def InitialState(cls) -> np.ndarray:
-        return np.concatenate([[-np.inf, -np.inf, 0.0], np.zeros(cls.HISTORY)])
+    def InitialState(cls, hold_until: float = -np.inf) -> np.ndarray:
+        """No history; with ``hold_until`` > 0, as if a change had been detected at
+        t = 0 (holding, window from hold_until)."""
+        return np.concatenate([[hold_until, hold_until, 0.0], np.zeros(cls.HISTORY)])
 
     @staticmethod
     def Holding(state: np.ndarray, t: float) -> bool:

@@ -26,6 +26,7 @@ def relative_error_rms(estimate: np.ndarray, truth: np.ndarray) -> float:
 
 
 PHASES = ("phase1", "phase2", "phase3")
+FAULT_WINDOW = 2.0      # [s] before and after an actuator fault (run_metrics)
 
 
 def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
@@ -42,6 +43,28 @@ def nominal_estimates(scenario: Scenario) -> np.ndarray:
                            scenario.uncertainty.D0])
 
 
+def identified_scale(logs: Dict[str, np.ndarray], scenario) -> np.ndarray:
+    """k(t): the total mass of the identified bodies (the logged
+    ``inertial_parameters``, InertialIdentifier) over the true robot's, the common
+    factor momentum data leave to the prior (1 without an identifier)."""
+    from dacph_drake.inertial_parameters import MASS, PER_BODY
+    if "inertial_parameters" not in logs:
+        return np.ones(len(logs["time"]))
+    return (logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1)
+            / true_total_mass(scenario))
+
+
+def true_total_mass(scenario) -> float:
+    """The ground-truth robot's total mass [kg]."""
+    if isinstance(scenario, Scenario):
+        return scenario.robot.base.mass + sum(link.mass for link in scenario.robot.links)
+    from dacph_drake.description import MakeRobotPlant
+    from dacph_drake.inertial_parameters import InertialParameters
+    plant = MakeRobotPlant(scenario.robot)
+    return float(sum(body.default_mass()
+                     for body in InertialParameters(plant).bodies))
+
+
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray) -> Dict[str, float]:
     """Learning's own value over the samples ``mask``: the time-RMS
@@ -49,7 +72,9 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     prior (B0, D0), their ratio (below 1: learning beats the prior), the share of
     samples whose B_hat the RHS integrator rejected (DIC or trust band), and the
     share where the learner's beta_hat exceeded rhs.beta_max, so that the gain rule
-    ran on beta_max instead (RhsIntegrator)."""
+    ran on beta_max instead (RhsIntegrator). With an inertial identifier in the loop,
+    also the identified scale k (identified_scale, mean) and the ratios against
+    k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the same)."""
     n = len(scenario.q0)
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
@@ -60,6 +85,17 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
         out.update({f"{name}_error": learned, f"{name}_error_nominal": nominal,
                     f"{name}_error_ratio": learned / nominal if nominal > 0
                     else float("nan")})
+    if "inertial_parameters" in logs:
+        # The identified model is k times the truth's at best (momentum data do not
+        # fix the common scale), so the observer's port, and what the learner
+        # learns, is k (B~ u - D~ qdot): the errors against k B~, k D~ too.
+        scale = identified_scale(logs, scenario)[mask][:, None]
+        out["identified_scale"] = float(np.mean(scale)) if len(scale) else float("nan")
+        for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
+            learned = relative_error_rms(estimate[:, columns], scale * truth[:, columns])
+            nominal = relative_error_rms(prior[:, columns], scale * truth[:, columns])
+            out[f"{name}_error_ratio_scaled"] = (learned / nominal if nominal > 0
+                                                 else float("nan"))
     trusted = logs["rhs_log"][mask, RhsLog(n).trusted]
     out["rejected_share"] = float(np.mean(trusted < 0.5)) if len(trusted) else float("nan")
     beta_hat = logs["learner_log"][mask, LearnerLog().beta_hat]
@@ -71,7 +107,9 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
 def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
     """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise;
     "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
-    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics.
+    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics;
+    "faultK.NAME" for the K-th actuator fault (uncertainty.faults): the RMS tracking
+    error over the FAULT_WINDOW seconds before and after it, and their ratio.
     ``scenario`` is a Scenario (the tracking error is alpha~ [rad]) or a
     SpatialScenario (|e|, the attitude error [rad]; the base's excursion is the
     angle it turned [rad])."""
@@ -106,6 +144,15 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
         out["chi_final"] = float(rhs[-1, R.chi])
         out["dic_violations"] = int(np.sum(rhs[:, R.dic_ok] < 0.5))
         out["rejected_estimates"] = int(np.sum(rhs[:, R.trusted] < 0.5))
+    for i, fault in enumerate(scenario.uncertainty.faults):
+        # The first 2 s after an actuator fault against the 2 s before it.
+        before = (t >= fault.time - FAULT_WINDOW) & (t < fault.time)
+        after = (t >= fault.time) & (t < fault.time + FAULT_WINDOW)
+        out[f"fault{i + 1}.tracking_error_rms_before"] = rms(alpha_error[before])
+        out[f"fault{i + 1}.tracking_error_rms_after"] = rms(alpha_error[after])
+        out[f"fault{i + 1}.tracking_error_ratio"] = (
+            rms(alpha_error[after]) / rms(alpha_error[before])
+            if before.any() and after.any() else float("nan"))
     for phase, mask in phase_windows(scenario, t).items():
         out[f"{phase}.tracking_error_rms"] = rms(alpha_error[mask])
         out[f"{phase}.e_tau_rms"] = rms(e_tau[mask])

@@ -60,14 +60,24 @@ class RhsNetwork(torch.nn.Module):
         self.body_D = _mlp(2 * n, hidden)
         self.head_B = torch.nn.Linear(hidden[-1], n * n, dtype=torch.float64)
         self.head_D = torch.nn.Linear(hidden[-1], n, dtype=torch.float64)
-        with torch.no_grad():
-            for head in (self.head_B, self.head_D):
-                head.weight.zero_()
-            self.head_B.bias.copy_(torch.as_tensor(
-                (np.asarray(B0, float) / coupling).reshape(-1)))
-            D0 = np.maximum(np.asarray(D0, float), 1e-6)
-            self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(D0))))
+        self.set_constant(B0, np.maximum(np.asarray(D0, float), 1e-6))
         torch.random.set_rng_state(generator_state)
+
+    def set_constant(self, B, D) -> None:
+        """Output layers with zero weights and the biases that make B_hat = B (n x n)
+        and D_hat = diag(D) (D > 0) at every state."""
+        self.set_constant_B(B)
+        with torch.no_grad():
+            self.head_D.weight.zero_()
+            self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(np.asarray(D, float)))))
+
+    def set_constant_B(self, B) -> None:
+        """B's output layer with zero weights and the bias that makes B_hat = B (n x n)
+        at every state; D_hat unchanged."""
+        with torch.no_grad():
+            self.head_B.weight.zero_()
+            self.head_B.bias.copy_(torch.as_tensor(
+                (np.asarray(B, float) / self.coupling.numpy()).reshape(-1)))
 
     def features(self, q, p):
         return torch.cat([q, p / self.momentum_scale], dim=-1)

@@ -95,6 +95,21 @@ class ReducedOrderModel:
         kernels (kernels.arm)."""
         return self._coefficients, self._ranges
 
+    def CoefficientBasis(self, parameters) -> np.ndarray:
+        """The trigonometric coefficients as a linear function of the bodies'
+        inertial parameters (inertial_parameters.InertialParameters ``parameters``
+        of this model's plant): coefficients(pi) = tensordot(pi, basis, 1), basis of
+        shape (parameters.size, N*N, 1 + 2R). H(q) is linear in pi and the fit is a
+        linear operator on its samples, so this is exact: at the plant's own
+        parameters it gives trigonometric_representation's coefficients."""
+        context = self._plant.CreateDefaultContext()
+        samples = []
+        for q in self._fit_samples:
+            self._plant.SetPositions(context, self._coordinates.Positions(q))
+            samples.append(parameters.MassMatrixBasis(context).reshape(parameters.size, -1))
+        samples = np.array(samples)                                    # (S, P, N*N)
+        return np.einsum("rs,spe->per", self._fit_operator, samples)
+
     def _FullMassMatrix(self, q_full: np.ndarray) -> np.ndarray:
         self._plant.SetPositions(self._context, q_full)
         return self._plant.CalcMassMatrix(self._context)
@@ -135,7 +150,9 @@ class ReducedOrderModel:
 
         Psi = np.array([self._Basis(q)[:, 0].copy() for q in fit])
         H = np.array([full_mass_matrix(q) for q in fit])
-        self._coefficients = np.linalg.lstsq(Psi, H, rcond=None)[0].T  # (N*N, 1+2R)
+        self._fit_samples = fit
+        self._fit_operator = np.linalg.pinv(Psi)                       # (1+2R, S)
+        self._coefficients = (self._fit_operator @ H).T                 # (N*N, 1+2R)
         scale = np.max(np.abs(H))
         error = max(np.max(np.abs(self._MassMatrixAndDerivatives(q)[0].reshape(-1)
                                   - full_mass_matrix(q))) for q in check)

@@ -55,6 +55,23 @@ class LhsGains:
     eta: float = 0.1
     chi_model_based: float = 0.05   # fixed chi of the model-based baseline [N m]
     min_task_singular_value: float = 0.05
+    boundary_rate: float = 0.0      # [1/s]; chi tanh(s / phi), phi = epsilon + chi /
+    #                                 (boundary_rate inf lambda_min(M)); 0: phi = epsilon
+
+
+@dataclass
+class InertiaIdentification:
+    """The DAC loops' identification of the bodies' inertial parameters from momentum
+    conservation (systems/inertial_identifier.py; README, "Model error"): from
+    ``start`` [s] on, the LHS controller, and through it the port observer and the
+    learner's samples, use the parameters that the measured base and joint motion
+    determine, in place of nominal_robot's. Directions informed less than
+    ``prior_weight`` times the average, and the common scale of all parameters
+    (which momentum data cannot fix), stay at nominal_robot's. ``identify`` False:
+    the controller keeps nominal_robot (earlier releases)."""
+    identify: bool = True
+    prior_weight: float = 1e-8
+    start: float = 0.2              # [s]
 
 
 @dataclass
@@ -82,10 +99,25 @@ class Rhs:
     """RHS integrator (docs/equations.md E48): k_p = c / Re(lambda_hat_p), c filtered towards
     (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
     with exponential forgetting over chi_window, never below chi_floor. A learned B_hat
-is used only if it passes the DIC check and lies within trust_ratio of B0 (the
-paper's bounded learning error, see gain_rule.within_trust). The gain rule reads
+is used only if it passes the DIC check and its eigenvalues lie within trust_ratio of
+those of the trust band's anchor (the paper's bounded learning error, see
+gain_rule.within_trust): ``trust_anchor`` "in_use" (default), the estimate the loop
+runs on, so that the band moves with every accepted estimate and refuses only a
+sudden jump; "prior", B0 (the band of earlier releases, which refuses correct
+estimates wherever B0 is far from the truth). An estimate outside the band is still
+accepted on evidence: when, on the learner's port samples of the last
+``evidence_window`` seconds, its port relation leaves at most ``evidence_ratio``
+times the residual of the estimate in use (0: never). The gain rule reads
 min(beta_hat, beta_max): periods.rhs is checked at build time for the largest c
-that this allows, so the discrete loop never runs past the bound it was built for."""
+that this allows, so the discrete loop never runs past the bound it was built for.
+``gain_rule`` "paper" (default): c follows (1 + c_margin) c_min(beta_hat) (eq. 48);
+"well_damped": c = 1 / (4 periods.rhs), the fastest decay whose discrete loop with
+the estimate right is still well damped (at least the paper's rule's c: the period
+check at build time guarantees it). With the estimate in use off by a factor r,
+lambda~ = r lambda_hat, the loop stays certified (analysis.rhs_loop) for
+Td lambda_LHS / c <= r <= 0.9025 / (h c); the faster c moves that band towards
+weaker actuators, [0.39, 3.6] against the paper rule's [0.46, 4.2] at beta_hat = 1
+on the paper's arm."""
     Td: float = 2.0
     c_margin: float = 0.1
     c_time_constant: float = 1.0    # [s]
@@ -94,9 +126,15 @@ that this allows, so the discrete loop never runs past the bound it was built fo
     chi_initial: float = 0.05       # [N m]
     observer_noise: float = 0.0     # std of tau_obs measurement noise [N m]
     trust_ratio: float = 2.0        # accept B_hat only if its eigenvalues are within
-    #                                 this factor of B0's (gain_rule.within_trust)
+    #                                 this factor of the anchor's (gain_rule.within_trust)
+    trust_anchor: str = "in_use"    # TRUST_ANCHORS: the band around the estimate in
+    #                                 use, or around B0 ("prior")
+    evidence_ratio: float = 0.5     # accept outside the band if the residual on the
+    #                                 port samples is at most this times the in-use one's
+    evidence_window: float = 1.0    # [s] forgetting of those samples' statistics
     beta_max: float = 2.0           # the largest beta_hat the gain rule uses: the RHS
     #                                 period is sized for c_min(beta_max), see RhsIntegrator
+    gain_rule: str = "paper"        # GAIN_RULES
 
 
 @dataclass
@@ -116,13 +154,28 @@ class Periods:
 
 
 @dataclass
+class ActuatorFault:
+    """An actuator fault: from ``time`` [s] on, the actuator of joint ``joint``
+    (1-based, the paper's q_joint) delivers ``gain`` times the torque it did
+    before (row ``joint`` of B~ is multiplied by ``gain``; faults on one joint
+    compound)."""
+    time: float = 0.0               # [s]
+    joint: int = 1                  # 1 .. n
+    gain: float = 0.5               # [-]
+
+
+@dataclass
 class Uncertainty:
-    """Ground-truth RHS (docs/equations.md E19, SPEC settings): B~ = B0 + Delta B, D~ = D0 + Delta D with
+    """Ground-truth RHS (docs/equations.md E19, SPEC settings):
+    B~ = diag(g(t)) (B0 + Delta B), D~ = D0 + Delta D with
     Delta D(p) = diag(D_offset + D_linear * p)            [linear phase on]
                + diag(D_quadratic * p * p)                [nonlinear phase on]
     Delta B(x) = diag(B_linear @ q)                       [linear phase on]
                + diag(B_quadratic * p * p) + B_q1_squared q1^2   [nonlinear phase on]
-    each group multiplied by linear_scale / nonlinear_scale."""
+    each group multiplied by linear_scale / nonlinear_scale, and the actuators'
+    gains g_j(t) = B_scale[j] times the gain of every fault on joint j whose time
+    has come (from t = 0, warm-up included: a motor constant off its datasheet,
+    an actuator that degrades in orbit). B_scale empty: 1 for every joint."""
     B0: List[float] = field(default_factory=lambda: [1.0, 1.0])     # diagonal
     D0: List[float] = field(default_factory=lambda: [0.1, 0.1])     # diagonal
     D_offset: List[float] = field(default_factory=lambda: [0.02, 0.05])
@@ -135,6 +188,8 @@ class Uncertainty:
         default_factory=lambda: [[0.0, -0.1], [0.4, 0.0]])
     linear_scale: float = 1.0
     nonlinear_scale: float = 1.0
+    B_scale: List[float] = field(default_factory=list)     # per joint; []: all 1
+    faults: List[ActuatorFault] = field(default_factory=list)
 
 
 @dataclass
@@ -152,6 +207,8 @@ class Disturbance:
     hf_direction: List[float] = field(default_factory=lambda: [1.0, -1.0])
 
 
+TRUST_ANCHORS = ("in_use", "prior")            # Rhs.trust_anchor
+GAIN_RULES = ("paper", "well_damped")           # Rhs.gain_rule
 LEARNER_MODES = ("regularized", "plain")
 LEARNER_COUPLINGS = ("uniform", "inertia")     # network.coupling_factors
 LEARNER_PRIOR_SCALES = ("pooled", "per_input")  # identification.RhsIdentifier
@@ -188,6 +245,25 @@ class Learner:
       change_floor (an abrupt change of B, D or d), training pauses for change_hold
       seconds and forgets the samples before the pause ends (the band-pass filter's
       memory holds a mix of old and new data until then).
+    - start_hold: the start is such a change (the band-pass filter starts from rest
+      while the port's signals do not, and the arm sets off from rest): training
+      waits start_hold seconds and its window begins then. Fitted through, the
+      first 0.75 s let the network settle on a state-dependent B_hat that explains
+      them as well as the truth does (with actuators at x0.4 of B0, 0.67 against
+      0.4 on the 2 s window, 0.40 from 1 s on). 0: train from the start.
+    - min_window: training starts only once the window (after the start or a
+      change) holds min_window seconds of samples: two periods of the slower
+      excitation frequency determine B and D, while a network fitted to the few
+      samples right after a hold swings far off (B_hat's eigenvalues from 1 to
+      0.1 and below zero within 0.3 s). 0: fit from the second sample.
+    - warm_start: the first fit of a window after a hold (the start or a change)
+      sets B_hat to the window's best constant B (RhsIdentifier.ConstantFit: ridge
+      least squares with the same prior, D_hat as it is) before its Adam steps. From the old
+      estimate, Adam's first steps move every entry of B_hat by about the same
+      amount whatever its gradient (they are normalized per parameter): with u1 and
+      u2 correlated, a B0 off by x2.5 went to couplings of -0.24 and an eigenvalue
+      near 0 within 0.2 s and took 2.5 s to recover. False: continue from the old
+      estimate.
 
     ``coupling`` (either mode): how the network's n x n output enters B_hat
     (network.coupling_factors): "uniform" (the paper) or "inertia", where the
@@ -210,6 +286,9 @@ class Learner:
     change_ratio: float = 5.0
     change_floor: float = 0.05
     change_hold: float = 1.5        # [s]
+    start_hold: float = 1.0         # [s]; 0: train from t = 0 (earlier releases)
+    min_window: float = 0.5         # [s]; 0: fit from the second sample (earlier releases)
+    warm_start: bool = True         # False: Adam continues from the old estimate
     coupling: str = "uniform"
     prior_scale: str = "pooled"
 
@@ -251,6 +330,7 @@ class Scenario:
     phases: Phases = field(default_factory=Phases)
     lhs: LhsGains = field(default_factory=LhsGains)
     potential: Potential = field(default_factory=Potential)
+    inertia: InertiaIdentification = field(default_factory=InertiaIdentification)
     reference: Reference = field(default_factory=Reference)
     rhs: Rhs = field(default_factory=Rhs)
     periods: Periods = field(default_factory=Periods)
@@ -298,6 +378,9 @@ class Scenario:
         require_nonnegative("lhs.chi_model_based", self.lhs.chi_model_based, "N m")
         require_in_range("lhs.min_task_singular_value", self.lhs.min_task_singular_value,
                          0.0, 10.0)
+        require_nonnegative("lhs.boundary_rate", self.lhs.boundary_rate, "1/s")
+        require_in_range("inertia.prior_weight", self.inertia.prior_weight, 1e-14, 1.0)
+        require_nonnegative("inertia.start", self.inertia.start, "s")
         for name in ("base_gain", "base_margin", "fold_gain"):
             require_positive(f"potential.{name}", getattr(self.potential, name))
         require_in_range("potential.fold_margin", self.potential.fold_margin, 1e-3,
@@ -342,6 +425,10 @@ def validate_port_settings(scenario, n: int,
         require_positive(f"rhs.{name}", getattr(scenario.rhs, name))
     require_nonnegative("rhs.observer_noise", scenario.rhs.observer_noise, "N m")
     require_in_range("rhs.trust_ratio", scenario.rhs.trust_ratio, 1.0, 10.0)
+    require_one_of("rhs.trust_anchor", scenario.rhs.trust_anchor, TRUST_ANCHORS)
+    require_one_of("rhs.gain_rule", scenario.rhs.gain_rule, GAIN_RULES)
+    require_in_range("rhs.evidence_ratio", scenario.rhs.evidence_ratio, 0.0, 1.0)
+    require_positive("rhs.evidence_window", scenario.rhs.evidence_window, "s")
     require_in_range("rhs.beta_max", scenario.rhs.beta_max, 1.0, 1e6)
     require_positive("stress.B_hat_scale", scenario.stress.B_hat_scale)
     require_nonnegative("stress.start", scenario.stress.start, "s")
@@ -366,6 +453,19 @@ def validate_port_settings(scenario, n: int,
         require_nonnegative(f"uncertainty.D0[{i}]", d)
     require_nonnegative("uncertainty.linear_scale", u.linear_scale)
     require_nonnegative("uncertainty.nonlinear_scale", u.nonlinear_scale)
+    if len(u.B_scale) not in (0, n):
+        raise ConfigError(f"uncertainty.B_scale has {len(u.B_scale)} entries; allowed: "
+                          f"{n} (one per joint) or none (all 1)")
+    for i, g in enumerate(u.B_scale):
+        require_in_range(f"uncertainty.B_scale[{i}]", g, 1e-2, 1e2)
+    for i, fault in enumerate(u.faults):
+        where = f"uncertainty.faults[{i}]"
+        require_nonnegative(f"{where}.time", fault.time, "s")
+        if isinstance(fault.joint, bool) or not isinstance(fault.joint, int):
+            raise ConfigError(f"{where}.joint = {fault.joint!r} is not an integer; "
+                              f"allowed: a joint number in [1, {n}]")
+        require_in_range(f"{where}.joint", fault.joint, 1, n, "(1-based joint number)")
+        require_in_range(f"{where}.gain", fault.gain, 1e-2, 1e2)
     d = scenario.disturbance
     for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
         _require_length(f"disturbance.{name}", getattr(d, name), n)
@@ -403,6 +503,10 @@ def validate_port_settings(scenario, n: int,
     require_in_range("learner.change_ratio", L.change_ratio, 1.0, 1e6)
     require_nonnegative("learner.change_floor", L.change_floor)
     require_nonnegative("learner.change_hold", L.change_hold, "s")
+    require_nonnegative("learner.start_hold", L.start_hold, "s")
+    require_in_range("learner.min_window", L.min_window, 0.0,
+                     L.window * periods.learner_sample,
+                     f"s (at most learner.window * {period_name('learner_sample')})")
     E = scenario.excitation
     require_nonnegative("excitation.amplitude", E.amplitude, "N m")
     _require_length("excitation.frequencies", E.frequencies, 2,
@@ -484,19 +588,29 @@ BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
 
 
 # The YAML lines of settings added after runs were first saved, at their defaults.
-ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled")
+ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
+                          "  B_scale: []", "  faults: []", "  trust_anchor: in_use",
+                          "  start_hold: 1.0", "  gain_rule: paper",
+                          "  evidence_ratio: 0.5", "  evidence_window: 1.0",
+                          "  min_window: 0.5", "  warm_start: true",
+                          "  boundary_rate: 0.0")
+# The sections added since, at their defaults.
+ADDED_SECTION_DEFAULTS = (
+    "inertia:\n  identify: true\n  prior_weight: 1.0e-08\n  start: 0.2\n",)
 
 
 def saved_forms(scenario: Scenario) -> List[str]:
     """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
     its current form and, where its simulator settings are those an older file's
     top-level ``integration_scheme: X`` implied (_move_integration_scheme), that
-    older form. The lines of settings added since (ADDED_SETTING_DEFAULTS) are left
-    out of these texts where they hold their defaults, so that runs saved before
-    those settings existed still match."""
+    older form. The lines of settings added since (ADDED_SETTING_DEFAULTS) and the
+    sections added since (ADDED_SECTION_DEFAULTS) are left out of these texts where
+    they hold their defaults, so that runs saved before they existed still match."""
     text = yaml_dump_typed(scenario)
     for line in ADDED_SETTING_DEFAULTS:
         text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
+    for section in ADDED_SECTION_DEFAULTS:
+        text = re.sub(f"^{re.escape(section)}", "", text, flags=re.MULTILINE)
     config = scenario.simulator
     if yaml_dump_typed(config) != yaml_dump_typed(FixedStepConfig(
             config.integration_scheme, scenario.periods.rhs)):

@@ -4,9 +4,20 @@ import numpy as np
 from dacph_drake.scenario import Phases, Uncertainty
 
 
+def actuator_arguments(uncertainty: Uncertainty, n: int) -> np.ndarray:
+    """The actuators' gains as the kernels read them (kernels.loop.actuator_gains):
+    [B_scale (n), then (time, joint index from 0, gain) per fault]."""
+    scale = uncertainty.B_scale if len(uncertainty.B_scale) else [1.0] * n
+    faults = [[f.time, f.joint - 1, f.gain] for f in uncertainty.faults]
+    return np.concatenate([np.asarray(scale, float),
+                           np.asarray(faults, float).reshape(-1)])
+
+
 class TrueRhsModel:
-    """B~(q, p, t) = B0 + Delta B and D~(p, t) = D0 + Delta D, with the linear terms on
-    from phases.linear_start and the nonlinear terms from phases.nonlinear_start."""
+    """B~(q, p, t) = diag(g(t)) (B0 + Delta B) and D~(p, t) = D0 + Delta D, with the
+    linear terms on from phases.linear_start, the nonlinear terms from
+    phases.nonlinear_start and the actuators' gains g(t) (uncertainty.B_scale and
+    the faults whose time has come) from t = 0."""
 
     def __init__(self, uncertainty: Uncertainty, phases: Phases):
         u = uncertainty
@@ -20,16 +31,31 @@ class TrueRhsModel:
         self._B_q1_squared = u.nonlinear_scale * np.asarray(u.B_q1_squared, float)
         self._linear_start = phases.linear_start
         self._nonlinear_start = phases.nonlinear_start
+        self._actuator = actuator_arguments(u, len(self._B0))
 
     @property
     def kernel_arguments(self):
         """The arguments of kernels.loop.true_matrices after (t, q, p)."""
         return (self._B0, self._D0, self._D_offset, self._D_linear, self._B_linear,
                 self._D_quadratic, self._B_quadratic, self._B_q1_squared,
-                float(self._linear_start), float(self._nonlinear_start))
+                float(self._linear_start), float(self._nonlinear_start), self._actuator)
+
+    def ActuatorGains(self, t: float) -> np.ndarray:
+        """g(t): B_scale times the gains of the faults whose time has come."""
+        n = len(self._B0)
+        gains = self._actuator[:n].copy()
+        for time, joint, gain in self._actuator[n:].reshape(-1, 3):
+            if t >= time:
+                gains[int(joint)] *= gain
+        return gains
 
     def Matrices(self, t: float, q: np.ndarray, p: np.ndarray):
         """(B~, diagonal of D~) at time t and state (q, p)."""
+        B, D = self._NominalScaleMatrices(t, q, p)
+        return self.ActuatorGains(t)[:, None] * B, D
+
+    def _NominalScaleMatrices(self, t: float, q: np.ndarray, p: np.ndarray):
+        """(B0 + Delta B, diagonal of D~): B~ before the actuators' gains."""
         if t < self._linear_start:
             return np.diag(self._B0), self._D0.copy()
         B_diagonal = self._B0 + self._B_linear @ q

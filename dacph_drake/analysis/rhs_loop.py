@@ -20,18 +20,15 @@ import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
-from dacph_drake.gain_rule import integral_gains
+from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
 
-# A certified loop keeps its spectral radius at most 1 - STABILITY_MARGIN.
-STABILITY_MARGIN = 0.05
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:
     """The closed discrete RHS loop: input tau_c^r, output e_tau, time_period h."""
     n = B.shape[0]
-    hK = period * np.diag(K)
-    A = np.block([[np.eye(n), -hK], [B, np.zeros((n, n))]])
-    B_in = np.vstack([hK, np.zeros((n, n))])
+    A = loop_matrix(B, K, period)
+    B_in = np.vstack([period * np.diag(K), np.zeros((n, n))])
     C = np.hstack([np.zeros((n, n)), -np.eye(n)])
     return LinearSystem(A, B_in, C, np.eye(n), time_period=period)
 

@@ -26,14 +26,28 @@ def disturbance(t, model):
 
 
 @njit(cache=True)
+def actuator_gains(t, actuator, n):
+    """g(t) from ``actuator`` = [B_scale (n), (time, joint, gain) per fault]
+    (uncertainty.actuator_arguments): B_scale times the gain of every fault whose
+    time has come."""
+    gains = actuator[:n].copy()
+    for k in range((actuator.shape[0] - n) // 3):
+        if t >= actuator[n + 3 * k]:
+            gains[int(actuator[n + 3 * k + 1])] *= actuator[n + 3 * k + 2]
+    return gains
+
+
+@njit(cache=True)
 def true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
-                  B_quadratic, B_q1_squared, linear_start, nonlinear_start):
-    """(B~, diag D~) at time t and (q, p) (uncertainty.TrueRhsModel)."""
+                  B_quadratic, B_q1_squared, linear_start, nonlinear_start, actuator):
+    """(B~, diag D~) at time t and (q, p) (uncertainty.TrueRhsModel): B~ =
+    diag(g(t)) (B0 + Delta B), g from ``actuator`` (actuator_gains)."""
     n = q.shape[0]
     B = np.zeros((n, n))
+    gains = actuator_gains(t, actuator, n)
     if t < linear_start:
         for i in range(n):
-            B[i, i] = B0[i]
+            B[i, i] = gains[i] * B0[i]
         return B, D0.copy()
     B_diagonal = B0 + matvec(B_linear, q)
     D = D0 + D_offset + D_linear * p
@@ -44,6 +58,8 @@ def true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
         B += (q[0] * q[0]) * B_q1_squared
     for i in range(n):
         B[i, i] += B_diagonal[i]
+        for j in range(n):
+            B[i, j] *= gains[i]
     return B, D
 
 
@@ -52,7 +68,7 @@ def pack_true_rhs(coefficients, ranges, uncertainty) -> np.ndarray:
     array (numba's dispatch cost grows with the number of array arguments: 16 of
     them cost 3 us a call, more than the kernel): [vec(coefficients), vec(ranges),
     B0, D0, D_offset, D_linear, vec(B_linear), D_quadratic, B_quadratic,
-    vec(B_q1_squared), linear_start, nonlinear_start]."""
+    vec(B_q1_squared), linear_start, nonlinear_start, actuator (the rest)]."""
     return np.concatenate([np.ravel(a) for a in (coefficients, ranges, *uncertainty)]
                           ).astype(float)
 
@@ -83,33 +99,34 @@ def true_torque(t, x, indices, u, disturbance_model, packed):
     o += n * n
     p = joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges)
     B, D = true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear,
-                         D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1])
+                         D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1],
+                         packed[o + 2:])
     return matvec(B, u) - D * qdot + disturbance(t, disturbance_model)
 
 
-def pack_lhs(coefficients, ranges, geometry, link_of, fraction, radius,
+def pack_lhs(ranges, geometry, link_of, fraction, radius,
              potential_gains, reference, gains, excitation) -> np.ndarray:
     """The constant arguments of lhs_sample as one array (see pack_true_rhs):
-    [number of potential points, number of reference terms, vec(coefficients),
-    vec(ranges), geometry, link_of, fraction, radius, potential gains (4),
-    reference, gains (4), excitation]."""
+    [number of potential points, number of reference terms, vec(ranges), geometry,
+    link_of, fraction, radius, potential gains (4), reference, gains (5),
+    excitation]."""
     return np.concatenate([[len(link_of), (len(reference) - 1) // 2],
                            *(np.ravel(a) for a in (
-                               coefficients, ranges, geometry, link_of, fraction, radius,
+                               ranges, geometry, link_of, fraction, radius,
                                potential_gains, reference, gains, excitation))]
                           ).astype(float)
 
 
 @njit(cache=True)
-def lhs_sample(t, theta0, q, qdot, chi, packed):
-    """lhs_control with its constant arguments unpacked from ``packed``
-    (pack_lhs), returning one array [tau_c^r (n), log (n + 4), vec(M), vec(C')]."""
+def lhs_sample(t, theta0, q, qdot, chi, coefficients, packed):
+    """lhs_control with the mass matrix's trigonometric ``coefficients`` (the
+    controller's model, which the inertial identification may refresh) and its
+    constant arguments unpacked from ``packed`` (pack_lhs), returning one array
+    [tau_c^r (n), log (n + 4), vec(M), vec(C')]."""
     n = q.shape[0]
-    N, R = n + 3, n * (n + 1) // 2
+    R = n * (n + 1) // 2
     points, terms = int(packed[0]), int(packed[1])
     o = 2
-    coefficients = packed[o:o + N * N * (1 + 2 * R)].reshape(N * N, 1 + 2 * R)
-    o += N * N * (1 + 2 * R)
     ranges = packed[o:o + R * n].reshape(R, n)
     o += R * n
     geometry = packed[o:o + 3 + n]
@@ -122,8 +139,8 @@ def lhs_sample(t, theta0, q, qdot, chi, packed):
     o += 4
     reference = packed[o:o + 1 + 2 * terms]
     o += 1 + 2 * terms
-    gains = packed[o:o + 4]
-    excitation = packed[o + 4:o + 5 + n]
+    gains = packed[o:o + 5]
+    excitation = packed[o + 5:o + 6 + n]
     tau, log, M, C = lhs_control(t, theta0, q, qdot, chi, coefficients, ranges,
                                  geometry, link_of,
                                  fraction, radius, potential_gains, reference, gains,
@@ -141,7 +158,8 @@ def lhs_control(t, theta0, q, qdot, chi, coefficients, ranges, geometry, link_of
                 fraction, radius, potential_gains, reference, gains, excitation):
     """(tau_c^r, [s, alpha~, alpha_d, V, U], M, C') at time t, base angle theta0 and
     joint state (q, qdot) (LhsController). ``reference`` = [alpha0, amplitudes (m),
-    omegas (m)]; ``gains`` = [Kd, Lambda, epsilon, eta]; ``excitation`` =
+    omegas (m)]; ``gains`` = [Kd, Lambda, epsilon, eta, layer_per_chi] (the robust
+    term's boundary layer phi = epsilon + layer_per_chi chi); ``excitation`` =
     [amplitude, omegas (n)]."""
     n = q.shape[0]
     M, C, D, dD = reduced_dynamics(q, qdot, coefficients, ranges)
@@ -152,7 +170,8 @@ def lhs_control(t, theta0, q, qdot, chi, coefficients, ranges, geometry, link_of
         alpha_d += a * np.sin(w * t)
         alpha_d_dot += a * w * np.cos(w * t)
         alpha_d_ddot -= a * w * w * np.sin(w * t)
-    Kd, Lambda, epsilon, eta = gains[0], gains[1], gains[2], gains[3]
+    Kd, Lambda, eta = gains[0], gains[1], gains[3]
+    layer = gains[2] + gains[4] * chi
     U, grad_U, grad_U_dot = potential(q, qdot, geometry, link_of, fraction, radius,
                                       potential_gains)
     # Scalar loops rather than array expressions (each of those compiles into a
@@ -186,7 +205,7 @@ def lhs_control(t, theta0, q, qdot, chi, coefficients, ranges, geometry, link_of
     tau = np.empty(n)
     V = 0.0
     for i in range(n):
-        tau[i] = -Kd * s[i] - chi * np.tanh(s[i] / epsilon)
+        tau[i] = -Kd * s[i] - chi * np.tanh(s[i] / layer)
         for j in range(n):
             tau[i] += M[i, j] * nu_dot[j] + C[i, j] * nu[j]
             V += 0.5 * s[i] * M[i, j] * s[j]

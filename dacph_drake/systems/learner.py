@@ -8,6 +8,7 @@ from dacph_drake.log_layout import LearnerLog
 from dacph_drake.network import ExportedNetwork, coupling_factors
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Learner
+from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 
 class RhsLearner(LeafSystem):
@@ -19,14 +20,18 @@ class RhsLearner(LeafSystem):
     loss in plain mode, the prior-regularized, recency-weighted one in regularized
     mode) and publishes the weights. In regularized mode a ChangeDetector watches the
     relative residual of the newest samples and pauses training after an abrupt
-    change (settings.change_*).
+    change (settings.change_*) and for settings.start_hold seconds from the start;
+    a fit needs settings.min_window seconds of samples in the window, and the first
+    fit of a window after a hold starts from its best constant RHS
+    (settings.warm_start, RhsIdentifier.WarmStart).
 
     Outputs: ``weights`` (the exported parameter vector, held between updates; the
     fast loops evaluate it with numpy), ``beta_hat`` (FitStatistics.beta_hat, used
     by the gain rule), ``learner_log`` (log_layout.LearnerLog: loss, beta_hat,
     nominal loss of (B0, D0) on the same samples, and whether training is paused)
-    and ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] at the current plant state,
-    for the metrics. With ``learning`` False the network keeps its initial weights
+    and ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] at the current plant state
+    (p = M qdot with the LHS's M, input ``reduced_model``, as the integrator forms
+    it), for the metrics. With ``learning`` False the network keeps its initial weights
     (B_hat = B0, D_hat = D0): the dac-nominal ablation. The network's coupling
     scale (settings.coupling, network.coupling_factors) reads the joints' inertias
     diag M(q0) of ``model`` at the start configuration ``q0``.
@@ -45,6 +50,8 @@ class RhsLearner(LeafSystem):
         self._settings = settings
         self._learning = learning and settings.steps_per_update > 0
         self._regularized = settings.mode == "regularized"
+        # Samples the window must hold before a fit (settings.min_window), at least 2.
+        self._min_samples = max(2, int(round(settings.min_window / sample_period)))
         coupling = coupling_factors(settings.coupling, np.diag(
             model.MassMatrix(np.asarray(q0, float))))
         self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed, coupling)
@@ -58,10 +65,15 @@ class RhsLearner(LeafSystem):
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._port_sample = self.DeclareVectorInputPort("port_sample", width - 1)
+        self._reduced_model = ReducedModelInput(self, n, model)
         self._buffer = self.DeclareDiscreteState(settings.window * width)
         self._count = self.DeclareDiscreteState(1)
-        self._detector_state = self.DeclareDiscreteState(ChangeDetector.InitialState())
+        self._detector_state = self.DeclareDiscreteState(ChangeDetector.InitialState(
+            settings.start_hold if self._regularized and settings.start_hold > 0
+            else -np.inf))
         self._weights = self.DeclareDiscreteState(initial_weights)
+        # The window start of the last warm start (settings.warm_start).
+        self._warm_started = self.DeclareDiscreteState([-np.inf])
         log = LearnerLog()
         initial_log = np.zeros(log.size)
         initial_log[[log.loss, log.nominal_loss]] = np.nan
@@ -76,7 +88,8 @@ class RhsLearner(LeafSystem):
         self.DeclareVectorOutputPort(
             "estimates", n * n + n, self._CalcEstimates,
             prerequisites_of_calc={self.discrete_state_ticket(self._weights),
-                                   self._q.ticket(), self._qdot.ticket()})
+                                   self._q.ticket(), self._qdot.ticket(),
+                                   self._reduced_model.port.ticket()})
         self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0, self._UpdateSample)
         self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._UpdateTraining)
 
@@ -107,7 +120,13 @@ class RhsLearner(LeafSystem):
         holding = ChangeDetector.Holding(detector, t)
         window_start = ChangeDetector.WindowStart(detector)
         if (self._learning and not holding
-                and np.count_nonzero(rows[:, 0] >= window_start) >= 2):
+                and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples):
+            warm_started = context.get_discrete_state(self._warm_started).get_value()[0]
+            if (self._regularized and self._settings.warm_start
+                    and window_start > warm_started):
+                self._identifier.WarmStart(rows, t, window_start)
+                discrete_state.get_mutable_vector(self._warm_started).SetFromVector(
+                    [window_start])
             self._identifier.Fit(rows, t, window_start)
             discrete_state.get_mutable_vector(self._weights).SetFromVector(
                 self._identifier.Export())
@@ -122,5 +141,5 @@ class RhsLearner(LeafSystem):
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
         B, D = self.exported.Evaluate(
             context.get_discrete_state(self._weights).get_value(), q,
-            self._model.Momentum(q, qdot))
+            self._reduced_model.Momentum(context, q, qdot))
         output.SetFromVector(np.concatenate([B.reshape(-1), D]))

@@ -3,12 +3,19 @@ field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41).
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
+from dacph_drake.inertial_parameters import InertialParameters
 from dacph_drake.kernels.loop import lhs_sample, pack_lhs
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.reference import OrientationReference
 from dacph_drake.scenario import Excitation, LhsGains
+
+
+def boundary_layer_per_chi(gains: LhsGains, lambda_min_M: float) -> float:
+    """d phi / d chi of the robust term's boundary layer, 1 / (boundary_rate
+    inf_q lambda_min(M)) (0 with boundary_rate 0: phi = epsilon)."""
+    return 1.0 / (gains.boundary_rate * lambda_min_M) if gains.boundary_rate > 0 else 0.0
 
 
 class LhsController(LeafSystem):
@@ -18,33 +25,55 @@ class LhsController(LeafSystem):
         alpha~ = alpha - alpha_d,   D+ = D^T / (D D^T),   P = I - D+ D
         nu     = D+ (alpha_d_dot - Lambda alpha~) + P xi,  xi = -eta grad U(q)
         s      = qdot - nu
-        tau_c^r = M nu_dot + C' nu - K_d s - chi tanh(s / epsilon)
+        tau_c^r = M nu_dot + C' nu - K_d s - chi tanh(s / phi),
+        phi    = epsilon + chi / (boundary_rate inf_q lambda_min(M))
 
     with nu_dot exact: it uses dD/dq from the reduced model and Hess U qdot from the
     potential (no numerical differentiation). chi comes from input ``chi``: the RHS
-    loop's bound on ||e_tau|| in DAC, a constant source in the baseline. Output ``tau_request`` is held between updates; output
+    loop's bound on ||e_tau|| in DAC, a constant source in the baseline. The
+    boundary layer phi follows chi (Slotine and Li's balance condition, as the
+    spatial LHS's): the robust term's slope chi / phi then adds at most
+    ``gains.boundary_rate`` [1/s] to any joint's rate, whatever chi; with the
+    paper's phi = epsilon (boundary_rate 0) a large chi makes the sampled loop
+    stiff (chi / (epsilon M) h > 1), and chi grows with e_tau: actuators 3.5x
+    stronger than B0 make e_tau, chi and the request grow together and the loop
+    diverges within 10 ms. Output ``tau_request`` is held between updates; output
     ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)];
     output ``reduced_model`` = [vec(M), vec(C')] at the same sample (row-major), for
-    the port observer. The update is one compiled kernel (kernels.loop.lhs_sample);
+    the port observer. With ``inertial_parameters`` (the layout of the model's
+    bodies), input ``inertial_parameters`` replaces the model's inertias (an
+    InertialIdentifier's estimate): M, C', D and their derivatives are those of the
+    identified bodies (ReducedOrderModel.CoefficientBasis: the mass matrix is linear
+    in them). The update is one compiled kernel (kernels.loop.lhs_sample);
     lambda_min(M) of the log is computed when the log is read."""
 
 
     def __init__(self, *, model: ReducedOrderModel, potential: BaseRepulsionPotential,
                  reference: OrientationReference, gains: LhsGains, period: float,
-                 excitation: Excitation = Excitation(amplitude=0.0)):
+                 excitation: Excitation = Excitation(amplitude=0.0),
+                 lambda_min_M: float = 1.0,
+                 inertial_parameters: InertialParameters = None):
         super().__init__()
         n = model.num_joints
         self._n = n
         # The kernel's constant arguments (kernels.loop.lhs_sample).
+        self._coefficients, ranges = model.trigonometric_representation
         self._packed = pack_lhs(
-            *model.trigonometric_representation, *potential.kernel_arguments,
+            ranges, *potential.kernel_arguments,
             reference.kernel_arguments,
-            np.array([gains.Kd, gains.Lambda, gains.epsilon, gains.eta]),
+            np.array([gains.Kd, gains.Lambda, gains.epsilon, gains.eta,
+                      boundary_layer_per_chi(gains, lambda_min_M)]),
             np.concatenate([[excitation.amplitude], 2 * np.pi * excitation.Frequencies(n)]))
         self._base_pose = self.DeclareVectorInputPort("base_pose", 3)
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._chi = self.DeclareVectorInputPort("chi", 1)
+        self._parameters = None
+        if inertial_parameters is not None:
+            self._parameters = self.DeclareVectorInputPort("inertial_parameters",
+                                                           inertial_parameters.size)
+            self._coefficient_basis = model.CoefficientBasis(inertial_parameters)
+            self._identified_key, self._identified = None, None
         self._tau_index = self.DeclareDiscreteState(n)
         self._log_index = self.DeclareDiscreteState(n + 4)      # lhs_log but lambda_min
         self._model_index = self.DeclareDiscreteState(2 * n * n)
@@ -61,7 +90,7 @@ class LhsController(LeafSystem):
                 chi: float):
         """(tau_c^r, lhs_log) at time t, base angle theta0 and joint state (q, qdot)."""
         n = self._n
-        sample = lhs_sample(t, theta0, q, qdot, chi, self._packed)
+        sample = lhs_sample(t, theta0, q, qdot, chi, self._coefficients, self._packed)
         return sample[:n], self._Log(sample[n:2 * n + 4], sample[2 * n + 4:])
 
     def _Log(self, log, model):
@@ -74,12 +103,26 @@ class LhsController(LeafSystem):
         chi = self._chi.Eval(context)[0]
         sample = lhs_sample(context.get_time(), self._base_pose.Eval(context)[2],
                             self._q.Eval(context), self._qdot.Eval(context), chi,
-                            self._packed)
+                            self._Coefficients(context), self._packed)
         discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
         discrete_state.get_mutable_vector(self._log_index).SetFromVector(
             sample[n:2 * n + 4])
         discrete_state.get_mutable_vector(self._model_index).SetFromVector(
             sample[2 * n + 4:])
+
+    def _Coefficients(self, context) -> np.ndarray:
+        """The model's trigonometric coefficients: of the input
+        ``inertial_parameters`` when it is declared and connected (recomputed when
+        they change), else of the controller's model."""
+        if self._parameters is None or not self._parameters.HasValue(context):
+            return self._coefficients
+        pi = self._parameters.Eval(context)
+        key = pi.tobytes()
+        if key != self._identified_key:
+            self._identified_key = key
+            self._identified = np.ascontiguousarray(
+                np.tensordot(pi, self._coefficient_basis, 1))
+        return self._identified
 
     def _CalcLog(self, context, output):
         output.SetFromVector(self._Log(

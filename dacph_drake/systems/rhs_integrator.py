@@ -3,12 +3,15 @@ feed-forward (paper section "RHS Control and Learning", docs/equations.md E36-E3
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
+from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
+                                   integral_gains, stays_stable_if_wrong, within_trust)
+from dacph_drake.identification import PortEvidence, PortSample
 from dacph_drake.kernels.loop import integrator_sample
 from dacph_drake.log_layout import RhsLog, RhsState
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Stress
+from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 
 class RhsIntegrator(LeafSystem):
@@ -28,21 +31,37 @@ class RhsIntegrator(LeafSystem):
     could remove that error.
 
     Every ``model_period`` it refreshes, from the learner's exported weights at the
-    sampled state x = (q, p): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
+    sampled state x = (q, p = M qdot): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
     and c, which follows (1 + c_margin) c_min(beta) (eq. 48) through a first-order
-    filter with time constant c_time_constant and never drops below c_min, where
+    filter with time constant c_time_constant and never drops below c_min (with
+    ``gain_rule`` "well_damped", c stays at the fastest well-damped rate
+    1 / (4 period), which the build-time check keeps above the paper's), where
     beta = min(beta_hat, beta_max): c never exceeds (1 + c_margin) c_min(beta_max),
     the decay rate the RHS period was checked for when the diagram was built
     (gain_rule.check_rhs_period), so h c stays within the well-damped bound. If the DIC
     check (det B_hat != 0, Re lambda_hat_p > 0) fails, or B_hat's eigenvalues leave the
-    trust band around B0 (``trust_ratio``, gain_rule.within_trust), the previous
+    trust band (``trust_ratio``, gain_rule.within_trust) around its anchor
+    (``trust_anchor``: the eigenvalues in use, c / K_p, or B0's), the previous
     B_hat^-1, D_hat and K are kept and ``dic_ok`` (resp. ``trusted``) is 0 until the
-    estimate passes again.
+    estimate passes again. An estimate outside the band that passes DIC is accepted
+    on evidence (``evidence_ratio`` > 0): the learner's port samples (input
+    ``port_sample``, its own data, band-passed in regularized mode) of the last
+    ``evidence_window`` seconds (identification.PortEvidence, at least half of the
+    window's samples) leave a residual of its port relation at most evidence_ratio
+    times that of the estimate in use, and the loop with its gains would stay
+    stable (spectral radius at most 1 - STABILITY_MARGIN) if the estimate in use
+    were the truth (gain_rule.stays_stable_if_wrong: evidence from a window that
+    still holds a change's transient can be wrong). So a learner that follows a
+    truth far from B0 is adopted however fast it got there, and a jump that the
+    data do not support (a biased learner, ``stress``), or that would destabilize
+    the loop if they misled, is refused.
 
     ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
     from stress.start on.
 
-    Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``.
+    Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
+    ``port_sample`` (optional: without it, the band alone decides), ``reduced_model``
+    (optional: the LHS's M for p = M qdot; without it the model's).
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
     c_min, dic_ok, trusted]."""
 
@@ -60,12 +79,24 @@ class RhsIntegrator(LeafSystem):
         self._constants = np.array([period, np.exp(-period / settings.chi_window),
                                     settings.chi_floor])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
+        self._period = period
+        # c's target at beta: the paper's (1 + c_margin) c_min(beta), or at least the
+        # fastest well-damped rate (Rhs.gain_rule).
+        c_floor = WELL_DAMPED_LOOP_GAIN / period if settings.gain_rule == "well_damped" \
+            else 0.0
+        self._c_target = lambda beta: max((1 + settings.c_margin) * self._c_bound(beta),
+                                          c_floor)
         self._tau_request = self.DeclareVectorInputPort("tau_request", n)
         self._tau_observed = self.DeclareVectorInputPort("tau_observed", n)
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._weights = self.DeclareVectorInputPort("weights", network.size)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
+        self._port_sample = self.DeclareVectorInputPort("port_sample", PortSample(n).size)
+        self._reduced_model = ReducedModelInput(self, n, model)
+        self._evidence = PortEvidence(n, model_period, settings.evidence_window)
+        self._evidence_minimum = 0.5 * settings.evidence_window / model_period
+        self._evidence_index = self.DeclareDiscreteState(self._evidence.size)
         # The fast and model groups (log_layout.RhsState); u is a group of its own, so
         # that its output port (read at every integrator stage by the true RHS)
         # reads the state without a Python call.
@@ -77,7 +108,7 @@ class RhsIntegrator(LeafSystem):
         # The model group starts at the nominal RHS (B0, D0) with c = (1 + c_margin)
         # c_min(beta_hat = 1); an initialization event then refreshes it from the
         # input ports (the learner's weights at the initial state).
-        c0 = (1 + settings.c_margin) * self._c_bound(1.0)
+        c0 = self._c_target(1.0)
         model = np.zeros(layout.model_size)
         model[layout.B_inverse] = np.diag(1.0 / self._B0_eigenvalues).reshape(-1)
         model[layout.D_hat] = D0
@@ -103,18 +134,31 @@ class RhsIntegrator(LeafSystem):
         dic_ok, trusted) in ``context``, for inspection."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
-    def _Refresh(self, gains, weights, q, qdot, beta, B_hat_scale):
-        """The model group after one refresh from ``gains`` (see class docstring)."""
+    def _Refresh(self, gains, weights, q, p, beta, B_hat_scale, evidence=None):
+        """The model group after one refresh from ``gains`` at x = (q, p) (see class
+        docstring); ``evidence``: the PortEvidence state of the learner's samples,
+        or None."""
         L = self._layout
         gains = gains.copy()
-        B_hat, D_hat = self._network.Evaluate(weights, q, self._model.Momentum(q, qdot))
+        B_hat, D_hat = self._network.Evaluate(weights, q, p)
         B_hat = B_hat_scale * B_hat
-        c_min = self._c_bound(min(beta, self._settings.beta_max))
+        beta = min(beta, self._settings.beta_max)
+        c_min = self._c_bound(beta)
         c = gains[L.c]
-        c = max(c + self._c_step * ((1 + self._settings.c_margin) * c_min - c), c_min)
+        c = max(c + self._c_step * (self._c_target(beta) - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
-        trusted = dic_ok and within_trust(paired, self._B0_eigenvalues,
-                                          self._settings.trust_ratio)
+        anchor = (self._B0_eigenvalues if self._settings.trust_anchor == "prior"
+                  else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
+        trusted = dic_ok and within_trust(paired, anchor, self._settings.trust_ratio)
+        if (dic_ok and not trusted and self._settings.evidence_ratio > 0
+                and evidence is not None
+                and PortEvidence.Weight(evidence) >= self._evidence_minimum):
+            in_use = np.linalg.inv(gains[L.B_inverse].reshape(B_hat.shape))
+            trusted = (self._evidence.Residual(evidence, B_hat, D_hat)
+                       <= self._settings.evidence_ratio
+                       * self._evidence.Residual(evidence, in_use, gains[L.D_hat])
+                       and stays_stable_if_wrong(in_use, k, self._period,
+                                                 1.0 - STABILITY_MARGIN))
         if trusted:
             gains[L.B_inverse] = np.linalg.inv(B_hat).reshape(-1)
             gains[L.D_hat] = D_hat
@@ -127,11 +171,21 @@ class RhsIntegrator(LeafSystem):
 
     def _UpdateModel(self, context, discrete_state):
         beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0
+        evidence = None
+        if self._port_sample.HasValue(context):
+            evidence = self._evidence.Update(
+                context.get_discrete_state(self._evidence_index).get_value(),
+                self._port_sample.Eval(context))
+            discrete_state.get_mutable_vector(self._evidence_index).SetFromVector(evidence)
+        q = self._q.Eval(context)
         gains = self._Refresh(context.get_discrete_state(self._gains).get_value(),
-                              self._weights.Eval(context), self._q.Eval(context),
-                              self._qdot.Eval(context), beta,
+                              self._weights.Eval(context), q,
+                              self._reduced_model.Momentum(context, q,
+                                                           self._qdot.Eval(context)),
+                              beta,
                               self._stress.B_hat_scale
-                              if context.get_time() >= self._stress.start else 1.0)
+                              if context.get_time() >= self._stress.start else 1.0,
+                              evidence)
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
 
     def _UpdateIntegrator(self, context, discrete_state):

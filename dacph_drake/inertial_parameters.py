@@ -1,0 +1,188 @@
+"""The inertial parameters of a free-floating robot's bodies, and the two things the
+controller needs that are linear in them: the mass matrix and the momentum.
+
+Body k has ten parameters, in its own frame B about its origin Bo,
+
+    pi_k = [m, h_x, h_y, h_z, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz],
+
+the mass m, the first moment h = m p_BoBcm and the rotational inertia I about Bo.
+In the world frame (R = R_WB, o = p_WoBo) the body's spatial inertia about Bo is
+
+    M_k = [[R I R^T, S(R h)], [S(R h)^T, m 1]]        (Drake's [omega; v] order)
+
+so that H(q) = sum_k J_k^T M_k J_k (J_k the body origin's spatial velocity Jacobian)
+and the system's momentum about the world origin, with (omega_k, v_k) the body's
+angular velocity and its origin's velocity,
+
+    P = sum_k m v_k + omega_k x (R h)
+    L = sum_k R I R^T omega_k + (R h) x v_k + o x P_k
+
+are both linear in pi = [pi_1, ..., pi_N] for given positions and velocities:
+P, L = Y(x) pi (MomentumRegressor). In free flight from rest, P = L = 0, so
+Y(x) pi~ = 0 along any motion: the measured base and joint rates determine the
+true parameters up to one common factor (Yoshida and Abiko, "Inertia parameter
+identification for a free-flying space robot", AIAA GNC 2002) with no actuator
+model at all (systems/inertial_identifier.py).
+"""
+from typing import List
+
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import (BodyIndex, JacobianWrtVariable, SpatialInertia,
+                                    UnitInertia)
+
+PER_BODY = 10
+MASS, MOMENT, INERTIA = 0, slice(1, 4), slice(4, 10)
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def _inertia_matrix(theta: np.ndarray) -> np.ndarray:
+    """The symmetric 3 x 3 inertia of theta = [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]."""
+    xx, yy, zz, xy, xz, yz = theta
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+def _inertia_regressor(w: np.ndarray) -> np.ndarray:
+    """W(w) with I w = W(w) theta for theta = [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]."""
+    return np.array([[w[0], 0, 0, w[1], w[2], 0],
+                     [0, w[1], 0, w[0], 0, w[2]],
+                     [0, 0, w[2], 0, w[0], w[1]]])
+
+
+class InertialParameters:
+    """The parameter layout of a finalized plant's bodies (every body with mass but
+    the world, in body index order; a massless frame body, such as a URDF's tool
+    link, carries none) and the maps above, evaluated on a context of that plant
+    (its kinematics only: the maps do not read the context's own inertias)."""
+
+    def __init__(self, plant: MultibodyPlant):
+        self.plant = plant
+        self.bodies = [body for body in (plant.get_body(BodyIndex(i))
+                                         for i in range(1, plant.num_bodies()))
+                       if body.default_mass() > 0]
+        self.size = PER_BODY * len(self.bodies)
+
+    def body_slice(self, k: int) -> slice:
+        return slice(PER_BODY * k, PER_BODY * (k + 1))
+
+    def FromContext(self, context) -> np.ndarray:
+        """pi of the inertias the plant holds in ``context``."""
+        pi = np.zeros(self.size)
+        for k, body in enumerate(self.bodies):
+            M = body.CalcSpatialInertiaInBodyFrame(context)
+            m = M.get_mass()
+            block = pi[self.body_slice(k)]
+            block[MASS] = m
+            block[MOMENT] = m * M.get_com()
+            I = M.CalcRotationalInertia().CopyToFullMatrix3()
+            block[INERTIA] = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+        return pi
+
+    def SpatialInertias(self, pi: np.ndarray) -> List[SpatialInertia]:
+        """One Drake SpatialInertia per body, unchecked: an identified pi is exact
+        only in the directions the motion informs (a planar arm's out-of-plane
+        inertias stay at the prior while its in-plane one moves, which may break
+        the triangle inequality of a body that does not exist), so the controller
+        checks the mass matrix it will use instead (IsPositiveDefiniteAt)."""
+        out = []
+        for k in range(len(self.bodies)):
+            block = pi[self.body_slice(k)]
+            m = block[MASS]
+            G = _inertia_matrix(block[INERTIA]) / m
+            out.append(SpatialInertia(m, block[MOMENT] / m, UnitInertia(
+                G[0, 0], G[1, 1], G[2, 2], G[0, 1], G[0, 2], G[1, 2]),
+                skip_validity_check=True))
+        return out
+
+    def IsPositiveDefiniteAt(self, context, pi: np.ndarray) -> bool:
+        """Whether every body has a mass > 0 and H(q; pi) is positive definite at the
+        positions of ``context``: what the controller's reduced model needs of pi."""
+        masses = pi[MASS::PER_BODY]
+        if not np.all(masses > 0):
+            return False
+        H = np.tensordot(pi, self.MassMatrixBasis(context), 1)
+        return bool(np.linalg.eigvalsh(0.5 * (H + H.T))[0] > 0)
+
+    def Apply(self, context, pi: np.ndarray) -> None:
+        """Sets the plant's bodies in ``context`` to the inertias pi."""
+        for body, M in zip(self.bodies, self.SpatialInertias(pi)):
+            body.SetSpatialInertiaInBodyFrame(context, M)
+
+    def _Kinematics(self, context, body):
+        X = self.plant.EvalBodyPoseInWorld(context, body)
+        V = self.plant.EvalBodySpatialVelocityInWorld(context, body)
+        return X.rotation().matrix(), X.translation(), V.rotational(), V.translational()
+
+    def MomentumRegressor(self, context) -> np.ndarray:
+        """Y (6 x size), [L about the world origin; P] = Y pi, at the positions and
+        velocities of ``context``."""
+        Y = np.zeros((6, self.size))
+        for k, body in enumerate(self.bodies):
+            R, o, omega, v = self._Kinematics(context, body)
+            block = Y[:, self.body_slice(k)]
+            dP_dm, dP_dh = v, _skew(omega) @ R
+            block[3:, MASS] = dP_dm
+            block[3:, MOMENT] = dP_dh
+            block[:3, MASS] = _skew(o) @ dP_dm
+            block[:3, MOMENT] = -_skew(v) @ R + _skew(o) @ dP_dh
+            block[:3, INERTIA] = R @ _inertia_regressor(R.T @ omega)
+        return Y
+
+    def MassMatrixBasis(self, context) -> np.ndarray:
+        """H_j (size x nv x nv): H(q) = sum_j pi_j H_j at the positions of
+        ``context``."""
+        nv = self.plant.num_velocities()
+        world = self.plant.world_frame()
+        out = np.zeros((self.size, nv, nv))
+        for k, body in enumerate(self.bodies):
+            J = self.plant.CalcJacobianSpatialVelocity(
+                context, JacobianWrtVariable.kV, body.body_frame(), np.zeros(3), world,
+                world)
+            R = self.plant.EvalBodyPoseInWorld(context, body).rotation().matrix()
+            Jw, Jv = J[:3], J[3:]
+            base = PER_BODY * k
+            out[base + MASS] = Jv.T @ Jv
+            for i in range(3):
+                hW = R[:, i]                        # d(R h)/d h_i
+                coupling = Jw.T @ _skew(hW) @ Jv
+                out[base + 1 + i] = coupling + coupling.T
+            for i in range(6):
+                theta = np.zeros(6)
+                theta[i] = 1.0
+                out[base + 4 + i] = Jw.T @ R @ _inertia_matrix(theta) @ R.T @ Jw
+        return out
+
+
+
+def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
+    """A size for every parameter of the prior pi0, by body: its mass m, m r for
+    the first moments and m r^2 for the inertia entries, r = sqrt(I_max / m) its
+    radius of gyration about its origin. They weigh the prior term of
+    identify_parameters so that a relative error counts alike in every entry."""
+    scales = np.empty(parameters.size)
+    for k in range(len(parameters.bodies)):
+        block = pi0[parameters.body_slice(k)]
+        m = block[MASS]
+        inertia = max(np.max(np.abs(block[INERTIA])), 1e-12 * m)
+        r = np.sqrt(inertia / m)
+        scales[parameters.body_slice(k)] = [m] + [m * r] * 3 + [inertia] * 6
+    return scales
+
+
+def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
+                        prior_weight: float) -> np.ndarray:
+    """argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0),  A = sum_k Y_k^T Y_k
+    the ``information`` of the momentum samples (Y_k pi~ = 0 for the truth), S the
+    prior's scales and r = prior_weight trace(S A S) / size: the data determine
+    every direction they inform more than prior_weight times the average; the
+    rest, the common scale of all parameters among them, stays at the prior
+    (the scale comes out as the prior's weighted projection on the truth's ray)."""
+    S2 = scales**2
+    r = prior_weight * float(np.sum(np.diag(information) * S2)) / len(pi0)
+    if not r > 0:
+        return pi0.copy()
+    # (A + r S^-2) pi = r S^-2 pi0, multiplied by S^2 on the left.
+    return np.linalg.solve(S2[:, None] * information + r * np.eye(len(pi0)), r * pi0)

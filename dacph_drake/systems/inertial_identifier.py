@@ -1,0 +1,76 @@
+"""Identification of the bodies' inertial parameters from momentum conservation (a
+project extension for the LHS's "parametric uncertainties (e.g., misidentified mass
+or inertia)", docs/equations.md E8-E9)."""
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import LeafSystem
+
+from dacph_drake.inertial_parameters import (InertialParameters, identify_parameters,
+                                             prior_scales)
+from dacph_drake.plant import ArmCoordinates
+from dacph_drake.scenario import InertiaIdentification
+
+
+class InertialIdentifier(LeafSystem):
+    """Every ``period`` h, at the measured state (inputs ``base_pose``,
+    ``base_velocity``, ``q``, ``qdot``: the base's pose and twist as a satellite's
+    navigation and gyros give them, and the joints'):
+
+        A <- A + Y(x)^T Y(x),      Y(x) pi = [L; P] (the momentum, linear in pi,
+                                               inertial_parameters.MomentumRegressor)
+        pi_hat = argmin pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)
+
+    (inertial_parameters.identify_parameters, r from ``settings.prior_weight``). The
+    robot starts at rest, so L = P = 0 along the whole motion and Y(x) pi~ = 0 for
+    the true parameters pi~: the samples determine the parameters up to one common
+    factor, which the prior pi0 (the controller's model, ``plant``'s) fixes, and the
+    directions the motion has not informed stay at the prior. No actuator model
+    enters. Output ``inertial_parameters`` is pi0 until ``settings.start`` and
+    pi_hat after it, updated every period; an estimate whose mass matrix at the
+    sample is not positive definite (InertialParameters.IsPositiveDefiniteAt) leaves
+    the previous one in place.
+
+    What the controller does with it: the LHS controller's M, C' and task Jacobian D
+    are those of pi_hat (LhsController's input of the same name), so the port
+    observer's tau_obs and the learner's samples are too."""
+
+    def __init__(self, *, plant: MultibodyPlant, settings: InertiaIdentification,
+                 period: float):
+        super().__init__()
+        self._plant = plant
+        self._context = plant.CreateDefaultContext()
+        self.parameters = InertialParameters(plant)
+        self._coordinates = ArmCoordinates.FromPlant(plant)
+        self._settings = settings
+        self.prior = self.parameters.FromContext(self._context)
+        self._scales = prior_scales(self.parameters, self.prior)
+        size = self.parameters.size
+        c = self._coordinates
+        self._base_pose = self.DeclareVectorInputPort("base_pose", len(c.base_q))
+        self._base_velocity = self.DeclareVectorInputPort("base_velocity", len(c.base_v))
+        self._q = self.DeclareVectorInputPort("q", c.num_joints)
+        self._qdot = self.DeclareVectorInputPort("qdot", c.num_joints)
+        self._information = self.DeclareDiscreteState(size * size)
+        self._estimate = self.DeclareDiscreteState(self.prior)
+        self.DeclareStateOutputPort("inertial_parameters", self._estimate)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
+
+    def _UpdateEstimate(self, context, discrete_state):
+        c, size = self._coordinates, self.parameters.size
+        velocities = np.zeros(self._plant.num_velocities())
+        velocities[c.base_v] = self._base_velocity.Eval(context)
+        velocities[c.joint_v] = self._qdot.Eval(context)
+        self._plant.SetPositionsAndVelocities(self._context, np.concatenate([
+            c.Positions(self._q.Eval(context), self._base_pose.Eval(context)),
+            velocities]))
+        Y = self.parameters.MomentumRegressor(self._context)
+        information = (context.get_discrete_state(self._information).get_value()
+                       + (Y.T @ Y).reshape(-1))
+        discrete_state.get_mutable_vector(self._information).SetFromVector(information)
+        if context.get_time() < self._settings.start:
+            return
+        estimate = identify_parameters(information.reshape(size, size), self.prior,
+                                       self._scales, self._settings.prior_weight)
+        if not self.parameters.IsPositiveDefiniteAt(self._context, estimate):
+            return              # no mass matrix: keep the previous estimate
+        discrete_state.get_mutable_vector(self._estimate).SetFromVector(estimate)
