@@ -199,13 +199,20 @@ def _AddLhsController(scenario: Scenario, loop: ClosedLoop, controller: Controll
         builder.ExportOutput(lhs.GetOutputPort(output), output)
     if not identify:
         return {"lhs_controller": lhs}
+    ConnectIdentifier(controller, identifier, lhs)
+    return {"lhs_controller": lhs, "inertial_identifier": identifier}
+
+
+def ConnectIdentifier(controller: ControllerBuilder, identifier, lhs) -> None:
+    """Feeds the InertialIdentifier ``identifier`` from the controller's state
+    inputs and the LHS controller ``lhs`` from it, and exports its estimate as the
+    controller's output ``inertial_parameters`` (planar and spatial loops)."""
     for signal in ("base_pose", "base_velocity", "q", "qdot"):
         controller.Input(identifier.GetInputPort(signal), signal)
-    builder.Connect(identifier.GetOutputPort("inertial_parameters"),
-                    lhs.GetInputPort("inertial_parameters"))
-    builder.ExportOutput(identifier.GetOutputPort("inertial_parameters"),
-                         "inertial_parameters")
-    return {"lhs_controller": lhs, "inertial_identifier": identifier}
+    controller.builder.Connect(identifier.GetOutputPort("inertial_parameters"),
+                               lhs.GetInputPort("inertial_parameters"))
+    controller.builder.ExportOutput(identifier.GetOutputPort("inertial_parameters"),
+                                    "inertial_parameters")
 
 
 def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
@@ -226,12 +233,14 @@ def _AddDacController(scenario: Scenario, loop: ClosedLoop, controller: Controll
                                  identify=scenario.inertia.identify)
     return {**lhs_side, **AddRhsChain(
         scenario, loop.model, controller, lhs_side["lhs_controller"],
-        Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, learning=learning)}
+        Kd_max=scenario.lhs.Kd, lambda_min_M=loop.lambda_min_M, learning=learning,
+        identifier=lhs_side.get("inertial_identifier"))}
 
 
 def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: float,
                 lambda_min_M: float, learning: bool,
-                rhs_period_name: str = "periods.rhs") -> Dict[str, object]:
+                rhs_period_name: str = "periods.rhs",
+                identifier: InertialIdentifier = None) -> Dict[str, object]:
     """The DAC controller's RHS side, shared by planar and spatial robots: the port
     observer, the regression filter (regularized mode), the learner and the RHS
     integrator, wired to the LHS controller ``lhs`` (its outputs ``reduced_model``
@@ -242,7 +251,9 @@ def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: 
     The gain rule (eq. 48) uses Kd_max / lambda_min_M, the LHS's fastest rate over 2;
     the RHS period is checked for the largest c it allows
     (gain_rule.check_rhs_period; ``rhs_period_name`` names the setting in its
-    error). Returns the named systems."""
+    error). With the LHS's InertialIdentifier ``identifier``, the learner also
+    watches the model the observer uses (Learner.model_change). Returns the named
+    systems."""
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
     check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
                          rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
@@ -262,7 +273,11 @@ def AddRhsChain(scenario, model, controller: ControllerBuilder, lhs, *, Kd_max: 
         model=model, settings=settings, period=periods.learner,
         sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
         D0=scenario.uncertainty.D0, seed=scenario.seed, q0=scenario.q0,
-        learning=learning))
+        learning=learning,
+        watch_model=identifier is not None))
+    if identifier is not None:
+        builder.Connect(identifier.GetOutputPort("model_epoch"),
+                        learner.GetInputPort("model_epoch"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         model=model, network=learner.exported, settings=rhs_settings,
         Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,

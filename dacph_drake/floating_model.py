@@ -19,10 +19,12 @@ planar arms keep their closed-form, compiled ReducedOrderModel (reduced_model.py
 the fast path; this model is the reference that holds for every robot, and the
 planar model is tested against it."""
 import numpy as np
-from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
+from pydrake.autodiffutils import (AutoDiffXd, ExtractGradient, ExtractValue,
+                                   InitializeAutoDiff)
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import JacobianWrtVariable
+from pydrake.multibody.tree import JacobianWrtVariable, SpatialInertia_, UnitInertia_
 
+from dacph_drake.inertial_parameters import InertialParameters
 from dacph_drake.plant import ArmCoordinates
 
 
@@ -39,6 +41,33 @@ class FloatingBaseModel:
         n = self.num_joints
         self._selector = np.zeros((plant.num_positions(), n))   # d q_full / d q
         self._selector[self.coordinates.joint_q, np.arange(n)] = 1.0
+        self.parameters = InertialParameters(plant)
+        self._inertial_parameters = self.parameters.FromContext(self._context)
+
+    @property
+    def inertial_parameters(self) -> np.ndarray:
+        """The bodies' inertial parameters this model evaluates with
+        (inertial_parameters.InertialParameters layout; the plant's at first)."""
+        return self._inertial_parameters
+
+    def SetInertialParameters(self, pi: np.ndarray) -> None:
+        """Evaluates with the bodies' inertias pi from now on (the controller's
+        model error, SpatialScenario.nominal_inertia_scale, or an
+        InertialIdentifier's estimate); the plant itself is not changed."""
+        pi = np.asarray(pi, float)
+        if np.array_equal(pi, self._inertial_parameters):
+            return
+        self._inertial_parameters = pi.copy()
+        self.parameters.Apply(self._context, pi)
+        ad_bodies = [self._ad_plant.get_body(body.index()) for body in self.parameters.bodies]
+        for body, inertia in zip(ad_bodies, self.parameters.SpatialInertias(pi)):
+            G = inertia.get_unit_inertia()
+            moments, products = G.get_moments(), G.get_products()
+            ad = [AutoDiffXd(float(x)) for x in (*moments, *products)]
+            body.SetSpatialInertiaInBodyFrame(self._ad_context, SpatialInertia_[AutoDiffXd](
+                AutoDiffXd(inertia.get_mass()),
+                np.array([AutoDiffXd(float(x)) for x in inertia.get_com()]),
+                UnitInertia_[AutoDiffXd](*ad), True))
 
     @property
     def num_joints(self) -> int:

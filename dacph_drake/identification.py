@@ -300,6 +300,14 @@ class ChangeDetector:
     def WindowStart(state: np.ndarray) -> float:
         return float(state[1])
 
+    def Changed(self, state: np.ndarray, t: float) -> np.ndarray:
+        """The state after a change known at time t (not detected from the residual):
+        hold_until = window_start = t + hold, the history restarts."""
+        state = state.copy()
+        state[0] = state[1] = t + self._hold
+        state[2] = 0.0
+        return state
+
     def Update(self, state: np.ndarray, t: float, e_new: float) -> np.ndarray:
         state = state.copy()
         if t < state[0] or not np.isfinite(e_new):
@@ -308,8 +316,7 @@ class ChangeDetector:
         known = state[3:3 + min(count, self.HISTORY)]
         if (count >= self.MIN_HISTORY and e_new > self._ratio * np.median(known)
                 and e_new > self._floor):
-            state[0] = state[1] = t + self._hold
-            state[2] = 0.0
+            return self.Changed(state, t)
         else:
             state[3 + count % self.HISTORY] = e_new
             state[2] = count + 1

@@ -85,8 +85,8 @@ class InertialParameters:
         """One Drake SpatialInertia per body, unchecked: an identified pi is exact
         only in the directions the motion informs (a planar arm's out-of-plane
         inertias stay at the prior while its in-plane one moves, which may break
-        the triangle inequality of a body that does not exist), so the controller
-        checks the mass matrix it will use instead (IsPositiveDefiniteAt)."""
+        the triangle inequality of a body that does not exist), so the identifier
+        checks the mass matrix the controller will use instead."""
         out = []
         for k in range(len(self.bodies)):
             block = pi[self.body_slice(k)]
@@ -97,14 +97,6 @@ class InertialParameters:
                 skip_validity_check=True))
         return out
 
-    def IsPositiveDefiniteAt(self, context, pi: np.ndarray) -> bool:
-        """Whether every body has a mass > 0 and H(q; pi) is positive definite at the
-        positions of ``context``: what the controller's reduced model needs of pi."""
-        masses = pi[MASS::PER_BODY]
-        if not np.all(masses > 0):
-            return False
-        H = np.tensordot(pi, self.MassMatrixBasis(context), 1)
-        return bool(np.linalg.eigvalsh(0.5 * (H + H.T))[0] > 0)
 
     def Apply(self, context, pi: np.ndarray) -> None:
         """Sets the plant's bodies in ``context`` to the inertias pi."""

@@ -110,6 +110,16 @@ class ReducedOrderModel:
         samples = np.array(samples)                                    # (S, P, N*N)
         return np.einsum("rs,spe->per", self._fit_operator, samples)
 
+    def WithInertialParameters(self, parameters, pi: np.ndarray) -> "ReducedOrderModel":
+        """A copy of this model whose bodies have the inertial parameters pi
+        (``parameters``: the InertialParameters layout of this model's plant), e.g.
+        an InertialIdentifier's estimate: its M, C', D are those the LHS controller
+        evaluated with them. Its plant and GJMs stay this model's."""
+        copy = object.__new__(ReducedOrderModel)
+        copy.__dict__.update(self.__dict__)
+        copy._coefficients = np.tensordot(pi, self.CoefficientBasis(parameters), 1)
+        return copy
+
     def _FullMassMatrix(self, q_full: np.ndarray) -> np.ndarray:
         self._plant.SetPositions(self._context, q_full)
         return self._plant.CalcMassMatrix(self._context)

@@ -15,9 +15,10 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
-from dacph_drake.scenario import (Disturbance, Excitation, Learner, Periods, Phases,
-                                  Rhs, Stress, Uncertainty, validate_phases,
-                                  validate_port_settings, validate_seed)
+from dacph_drake.scenario import (Disturbance, Excitation, InertiaIdentification,
+                                  Learner, Periods, Phases, Rhs, Stress, Uncertainty,
+                                  validate_phases, validate_port_settings,
+                                  validate_seed)
 from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
 
 
@@ -115,6 +116,12 @@ class SpatialScenario:
     reference: AttitudeReference = field(default_factory=AttitudeReference)
     gains: AttitudeGains = field(default_factory=AttitudeGains)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
+    # The controller's model error: one factor per body with mass, in the
+    # description's order (base first; inertial_parameters.InertialParameters):
+    # the controller's model has that body's mass and rotational inertia times it
+    # (its centre of mass where it is). Empty: the description's own inertias.
+    nominal_inertia_scale: List[float] = field(default_factory=list)
+    inertia: InertiaIdentification = field(default_factory=InertiaIdentification)
     # The port's RHS chain (scenario.py's sections). By default the uncertainty
     # and the disturbance are scaled to zero (the ground truth is the nominal RHS,
     # B0 u - D0 qdot); the shipped scenarios (spatial_run.BUILT_IN_SPATIAL_SCENARIOS)
@@ -171,8 +178,21 @@ class SpatialScenario:
         return (self.disturbance.start if self.disturbance.start >= 0
                 else self.phases.disturbance_start)
 
-    def Validate(self, num_joints: int) -> None:
-        """ConfigError naming the first invalid setting and its allowed range."""
+    def Validate(self, num_joints: int, num_bodies: int = None) -> None:
+        """ConfigError naming the first invalid setting and its allowed range
+        (``num_bodies``: the description's bodies with mass, for
+        nominal_inertia_scale's length)."""
+        if len(self.nominal_inertia_scale) not in (0, num_bodies or
+                                                   len(self.nominal_inertia_scale)):
+            raise ConfigError(f"nominal_inertia_scale has {len(self.nominal_inertia_scale)} "
+                              f"entries; allowed: {num_bodies} (one per body with mass, "
+                              "base first) or none")
+        for i, f in enumerate(self.nominal_inertia_scale):
+            require_in_range(f"nominal_inertia_scale[{i}]", f, 0.1, 10.0)
+        require_in_range("inertia.prior_weight", self.inertia.prior_weight, 1e-14, 1.0)
+        require_nonnegative("inertia.start", self.inertia.start, "s")
+        require_in_range("inertia.change_threshold", self.inertia.change_threshold,
+                         0.0, 1.0)
         if len(self.q0) != num_joints:
             raise ConfigError(f"q0 has {len(self.q0)} entries; allowed: {num_joints} "
                               "(one per joint of the robot)")

@@ -62,13 +62,15 @@ class EnvelopeConstants:
 
     @staticmethod
     def ForConstantDamping(Kd_min: float, Kd_max: float, lambda_min_M: float,
-                           lambda_max_M: float, epsilon: float, n: int
-                           ) -> "EnvelopeConstants":
-        """The planar LHS: K_d between Kd_min and Kd_max, tanh(s / epsilon)."""
+                           lambda_max_M: float, epsilon: float, n: int,
+                           layer_per_chi: float = 0.0) -> "EnvelopeConstants":
+        """The planar LHS: K_d between Kd_min and Kd_max, tanh(s / phi) with
+        phi = epsilon + layer_per_chi chi (lhs.boundary_rate; 0: the paper's
+        tanh(s / epsilon))."""
         return EnvelopeConstants(
             rate_slow=2 * Kd_min / lambda_max_M, rate_fast=2 * Kd_max / lambda_min_M,
             damping_low=3 * Kd_max / lambda_min_M, young_e=Kd_max, young_a=Kd_min,
-            n=n, layer_base=epsilon, layer_per_chi=0.0,
+            n=n, layer_base=epsilon, layer_per_chi=layer_per_chi,
             slope_scale=1.0 / lambda_min_M)
 
     @staticmethod

@@ -33,12 +33,14 @@ from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
 from dacph_drake.analysis.region_of_attraction import (  # noqa: E402
     attitude_region_of_attraction, sliding_region_of_attraction)
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
+from dacph_drake.inertial_parameters import InertialParameters  # noqa: E402
 from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
                                        mass_matrix_bounds)
 from dacph_drake.run import require_run_files  # noqa: E402
 from dacph_drake.scenario import Scenario, load_scenario  # noqa: E402
+from dacph_drake.systems.lhs_controller import boundary_layer_per_chi  # noqa: E402
 
 
 @dataclass
@@ -103,20 +105,34 @@ class LhsSide:
 
 
 def _PlanarLhs(logs, scenario: Scenario) -> LhsSide:
+    """The planar LHS. V is s^T M s / 2 with the M the controller ran on: the
+    nominal robot's until the inertial identifier's start, the identified one's
+    after it (logs["inertial_parameters"]); the envelope and eq. (45) take the
+    inertia bounds of both (the smallest inf lambda_min, the largest sup
+    lambda_max)."""
     n = scenario.robot.num_links
     model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
-    lambda_min_M, lambda_max_M = mass_matrix_bounds(model)
+    models = [model]
+    if "inertial_parameters" in logs:
+        models.append(model.WithInertialParameters(InertialParameters(model.plant),
+                                                   logs["inertial_parameters"][-1]))
+    bounds = np.array([mass_matrix_bounds(m) for m in models])
+    lambda_min_M, lambda_max_M = float(bounds[:, 0].min()), float(bounds[:, 1].max())
     Kd, epsilon = scenario.lhs.Kd, scenario.lhs.epsilon
+    # The boundary layer as the controller built it, from the nominal robot's bound.
+    layer_per_chi = boundary_layer_per_chi(scenario.lhs, bounds[0, 0])
     L = LhsLog(n)
     return LhsSide(
         V=logs["lhs_log"][:, L.lyapunov_V],
         s0_norm=float(np.linalg.norm(logs["lhs_log"][0, L.s])),
-        constants=EnvelopeConstants.ForConstantDamping(Kd, Kd, lambda_min_M,
-                                                       lambda_max_M, epsilon, n),
+        constants=EnvelopeConstants.ForConstantDamping(
+            Kd, Kd, lambda_min_M, lambda_max_M, epsilon, n, layer_per_chi),
         lambda_lhs=2 * Kd / lambda_min_M,
-        region=sliding_region_of_attraction(model, np.asarray(scenario.q0), Kd,
-                                            scenario.rhs.chi_initial, epsilon),
-        settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M})
+        region=sliding_region_of_attraction(
+            model, np.asarray(scenario.q0), Kd, scenario.rhs.chi_initial,
+            epsilon + layer_per_chi * scenario.rhs.chi_initial),
+        settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M,
+                  "models": len(models)})
 
 
 # Configurations sampled for sup_q max_i M_ii of a spatial arm, and the margin on
@@ -126,15 +142,21 @@ DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
 
 
 def _SpatialLhs(logs, scenario) -> LhsSide:
-    from dacph_drake.description import MakeRobotPlant
-    from dacph_drake.floating_model import FloatingBaseModel
+    """The spatial LHS, with the controller's model (nominal_inertia_scale) and,
+    when it ran one, the inertial identifier's last estimate: the bounds of both
+    (as for _PlanarLhs)."""
     from dacph_drake.inertia_bound import search_inertia_bound
-    model = FloatingBaseModel(MakeRobotPlant(scenario.robot))
+    from dacph_drake.spatial_diagrams import controller_model
+    models = [controller_model(scenario)]
+    if "inertial_parameters" in logs:
+        models.append(controller_model(scenario))
+        models[-1].SetInertialParameters(logs["inertial_parameters"][-1])
+    model = models[0]
     n, gains = model.num_joints, scenario.gains
-    lambda_min_M = search_inertia_bound(model).lambda_min
+    lambda_min_M = min(search_inertia_bound(m).lambda_min for m in models)
     samples = np.random.default_rng(0).uniform(-np.pi, np.pi, (DIAGONAL_SAMPLES, n))
     max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
-        float(np.max(np.diag(model.MassMatrix(q)))) for q in samples)
+        float(np.max(np.diag(m.MassMatrix(q)))) for q in samples for m in models)
     L = AttitudeLog()
     return LhsSide(
         V=logs["attitude_log"][:, L.lyapunov_V],

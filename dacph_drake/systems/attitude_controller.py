@@ -38,12 +38,16 @@ class AttitudeController(LeafSystem):
     (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, smallest link-base distance [m]
     (inf without a potential), R_d(t) as a quaternion], which a replay reads;
     ``reduced_model`` = [vec(M), vec(C')] of the same sample (row-major), for the
-    port observer."""
+    port observer. With ``identify``, input ``inertial_parameters`` (an
+    InertialIdentifier's estimate) sets the model's inertias before every update
+    (FloatingBaseModel.SetInertialParameters): M, C', the GJM and the clearance
+    potential's gradient are then the identified bodies'."""
 
     def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
                  gains: AttitudeGains, period: float, q0,
                  potential: BaseClearancePotential = None, eta: float = 0.0,
-                 excitation: Excitation = Excitation(amplitude=0.0)):
+                 excitation: Excitation = Excitation(amplitude=0.0),
+                 identify: bool = False):
         super().__init__()
         n = model.num_joints
         self._model, self._reference, self._gains = model, reference, gains
@@ -60,6 +64,8 @@ class AttitudeController(LeafSystem):
         self._q = self.DeclareVectorInputPort("q", n)
         self._qdot = self.DeclareVectorInputPort("qdot", n)
         self._chi = self.DeclareVectorInputPort("chi", 1)
+        self._parameters = (self.DeclareVectorInputPort(
+            "inertial_parameters", model.parameters.size) if identify else None)
         self._tau_index = self.DeclareDiscreteState(n)
         self._log_index = self.DeclareDiscreteState(AttitudeLog().size)
         self._model_index = self.DeclareDiscreteState(2 * n * n)
@@ -103,6 +109,8 @@ class AttitudeController(LeafSystem):
                                base_pose[4:]])
 
     def _UpdateControl(self, context, discrete_state):
+        if self._parameters is not None and self._parameters.HasValue(context):
+            self._model.SetInertialParameters(self._parameters.Eval(context))
         t = context.get_time()
         base_pose = self._base_pose.Eval(context)
         omega_base = self._base_velocity.Eval(context)[:3]

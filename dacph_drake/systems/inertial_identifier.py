@@ -5,8 +5,8 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.inertial_parameters import (InertialParameters, identify_parameters,
-                                             prior_scales)
+from dacph_drake.inertial_parameters import (MASS, PER_BODY, InertialParameters,
+                                             identify_parameters, prior_scales)
 from dacph_drake.plant import ArmCoordinates
 from dacph_drake.scenario import InertiaIdentification
 
@@ -23,26 +23,34 @@ class InertialIdentifier(LeafSystem):
     (inertial_parameters.identify_parameters, r from ``settings.prior_weight``). The
     robot starts at rest, so L = P = 0 along the whole motion and Y(x) pi~ = 0 for
     the true parameters pi~: the samples determine the parameters up to one common
-    factor, which the prior pi0 (the controller's model, ``plant``'s) fixes, and the
-    directions the motion has not informed stay at the prior. No actuator model
-    enters. Output ``inertial_parameters`` is pi0 until ``settings.start`` and
-    pi_hat after it, updated every period; an estimate whose mass matrix at the
-    sample is not positive definite (InertialParameters.IsPositiveDefiniteAt) leaves
-    the previous one in place.
+    factor, which the prior pi0 (the controller's model: ``prior``, by default
+    ``plant``'s own inertias) fixes, and the directions the motion has not informed
+    stay at the prior. No actuator model enters.
+
+    Output ``inertial_parameters`` is pi0 until ``settings.start`` and pi_hat after
+    it, every period; an estimate with a mass <= 0, or whose mass matrix at the
+    sample is not positive definite, is not used. Output ``model_epoch`` counts the
+    estimates that changed the reduced mass matrix M(q) at the sample by more than
+    ``settings.change_threshold`` in some entry (relative to sqrt(M_ii M_jj), so that
+    a light wrist's change counts as much as a heavy shoulder's) since the last such
+    one: the learner treats a new epoch as a change of the port relation it observes
+    (Learner.model_change), while the refinements in between reach the LHS without
+    disturbing it.
 
     What the controller does with it: the LHS controller's M, C' and task Jacobian D
-    are those of pi_hat (LhsController's input of the same name), so the port
-    observer's tau_obs and the learner's samples are too."""
+    are those of pi_hat (its input of the same name), so the port observer's tau_obs
+    and the learner's samples are too."""
 
     def __init__(self, *, plant: MultibodyPlant, settings: InertiaIdentification,
-                 period: float):
+                 period: float, prior: np.ndarray = None):
         super().__init__()
         self._plant = plant
         self._context = plant.CreateDefaultContext()
         self.parameters = InertialParameters(plant)
         self._coordinates = ArmCoordinates.FromPlant(plant)
         self._settings = settings
-        self.prior = self.parameters.FromContext(self._context)
+        self.prior = (self.parameters.FromContext(self._context) if prior is None
+                      else np.asarray(prior, float).copy())
         self._scales = prior_scales(self.parameters, self.prior)
         size = self.parameters.size
         c = self._coordinates
@@ -52,7 +60,13 @@ class InertialIdentifier(LeafSystem):
         self._qdot = self.DeclareVectorInputPort("qdot", c.num_joints)
         self._information = self.DeclareDiscreteState(size * size)
         self._estimate = self.DeclareDiscreteState(self.prior)
+        # [number of the model, the estimate that began it].
+        self._epoch = self.DeclareDiscreteState(np.concatenate([[0.0], self.prior]))
         self.DeclareStateOutputPort("inertial_parameters", self._estimate)
+        self.DeclareVectorOutputPort(
+            "model_epoch", 1, lambda context, output: output.SetAtIndex(
+                0, context.get_discrete_state(self._epoch).GetAtIndex(0)),
+            prerequisites_of_calc={self.discrete_state_ticket(self._epoch)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
 
     def _UpdateEstimate(self, context, discrete_state):
@@ -71,6 +85,22 @@ class InertialIdentifier(LeafSystem):
             return
         estimate = identify_parameters(information.reshape(size, size), self.prior,
                                        self._scales, self._settings.prior_weight)
-        if not self.parameters.IsPositiveDefiniteAt(self._context, estimate):
+        basis = self.parameters.MassMatrixBasis(self._context)
+        H = np.tensordot(estimate, basis, 1)
+        if not (np.all(estimate[MASS::PER_BODY] > 0)
+                and np.linalg.eigvalsh(0.5 * (H + H.T))[0] > 0):
             return              # no mass matrix: keep the previous estimate
         discrete_state.get_mutable_vector(self._estimate).SetFromVector(estimate)
+        M = self._ReducedMassMatrix(H)
+        epoch = context.get_discrete_state(self._epoch).get_value()
+        change = (np.abs(M - self._ReducedMassMatrix(np.tensordot(epoch[1:], basis, 1)))
+                  / np.sqrt(np.outer(np.diag(M), np.diag(M))))
+        if np.max(change) > self._settings.change_threshold:
+            discrete_state.get_mutable_vector(self._epoch).SetFromVector(
+                np.concatenate([[epoch[0] + 1], estimate]))
+
+    def _ReducedMassMatrix(self, H: np.ndarray) -> np.ndarray:
+        """M = H_mm - H_bm^T H_bb^-1 H_bm of a full mass matrix H."""
+        b, m = self._coordinates.base_v, self._coordinates.joint_v
+        H_bm = H[np.ix_(b, m)]
+        return H[np.ix_(m, m)] - H_bm.T @ np.linalg.solve(H[np.ix_(b, b)], H_bm)

@@ -20,7 +20,9 @@ class RhsLearner(LeafSystem):
     loss in plain mode, the prior-regularized, recency-weighted one in regularized
     mode) and publishes the weights. In regularized mode a ChangeDetector watches the
     relative residual of the newest samples and pauses training after an abrupt
-    change (settings.change_*) and for settings.start_hold seconds from the start;
+    change (settings.change_*), for settings.start_hold seconds from the start and
+    after the LHS model changed (input ``model_epoch``, declared with
+    ``watch_model``: settings.model_change);
     a fit needs settings.min_window seconds of samples in the window, and the first
     fit of a window after a hold starts from its best constant RHS
     (settings.warm_start, RhsIdentifier.WarmStart).
@@ -42,7 +44,7 @@ class RhsLearner(LeafSystem):
 
     def __init__(self, *, model: ReducedOrderModel, settings: Learner, period: float,
                  sample_period: float, B0, D0, seed: int, q0,
-                 learning: bool = True):
+                 learning: bool = True, watch_model: bool = False):
         super().__init__()
         n = model.num_joints
         self._n, self._model = n, model
@@ -74,6 +76,11 @@ class RhsLearner(LeafSystem):
         self._weights = self.DeclareDiscreteState(initial_weights)
         # The window start of the last warm start (settings.warm_start).
         self._warm_started = self.DeclareDiscreteState([-np.inf])
+        # The LHS model's epoch at the last check (settings.model_change).
+        self._model_epoch = self._last_epoch = None
+        if watch_model:
+            self._model_epoch = self.DeclareVectorInputPort("model_epoch", 1)
+            self._last_epoch = self.DeclareDiscreteState(1)
         log = LearnerLog()
         initial_log = np.zeros(log.size)
         initial_log[[log.loss, log.nominal_loss]] = np.nan
@@ -111,6 +118,7 @@ class RhsLearner(LeafSystem):
         rows = context.get_discrete_state(self._buffer).get_value().reshape(
             -1, self._row_width)[:min(count, self._settings.window)]
         detector = context.get_discrete_state(self._detector_state).get_value()
+        detector = self._ModelChange(context, discrete_state, detector, t)
         if self._regularized and self._learning:
             newest = NewestRows(rows, t, self._period)
             if newest is not None:
@@ -136,6 +144,21 @@ class RhsLearner(LeafSystem):
         values[[log.loss, log.beta_hat, log.nominal_loss, log.holding]] = [
             stats.loss, stats.beta_hat, stats.nominal_loss, float(holding)]
         discrete_state.get_mutable_vector(self._log).SetFromVector(values)
+
+    def _ModelChange(self, context, discrete_state, detector, t):
+        """The detector state after checking whether the LHS model changed since the
+        last check (input ``model_epoch``, InertialIdentifier's); if so, a change at
+        t (ChangeDetector.Changed)."""
+        if (self._model_epoch is None or not self._model_epoch.HasValue(context)
+                or not (self._regularized and self._settings.model_change)):
+            return detector
+        epoch = self._model_epoch.Eval(context)
+        if not np.array_equal(epoch, context.get_discrete_state(
+                self._last_epoch).get_value()):
+            discrete_state.get_mutable_vector(self._last_epoch).SetFromVector(epoch)
+            detector = self._detector.Changed(detector, t)
+            discrete_state.get_mutable_vector(self._detector_state).SetFromVector(detector)
+        return detector
 
     def _CalcEstimates(self, context, output):
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)

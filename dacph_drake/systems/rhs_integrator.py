@@ -51,10 +51,15 @@ class RhsIntegrator(LeafSystem):
     times that of the estimate in use, and the loop with its gains would stay
     stable (spectral radius at most 1 - STABILITY_MARGIN) if the estimate in use
     were the truth (gain_rule.stays_stable_if_wrong: evidence from a window that
-    still holds a change's transient can be wrong). So a learner that follows a
-    truth far from B0 is adopted however fast it got there, and a jump that the
-    data do not support (a biased learner, ``stress``), or that would destabilize
-    the loop if they misled, is refused.
+    still holds a change's transient can be wrong). With the band anchored at the
+    estimate in use, no estimate is adopted, by band or by evidence, whose
+    eigenvalues leave trust_ratio^2 of B0's: a learner that drifts in small steps
+    is bounded too (at the default trust_ratio 2, B_hat within [0.25, 4] B0, where
+    the loop would stay stable even if B0 were right: it is stable down to about
+    0.24 B0 on the paper's arm). So a learner that follows a truth far from B0 is
+    adopted however fast it got there, and a jump that the data do not support (a
+    biased learner, ``stress``), or that would destabilize the loop if they
+    misled, is refused.
 
     ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
     from stress.start on.
@@ -149,8 +154,13 @@ class RhsIntegrator(LeafSystem):
         k, paired, dic_ok = integral_gains(B_hat, c)
         anchor = (self._B0_eigenvalues if self._settings.trust_anchor == "prior"
                   else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
-        trusted = dic_ok and within_trust(paired, anchor, self._settings.trust_ratio)
-        if (dic_ok and not trusted and self._settings.evidence_ratio > 0
+        # Anchored at the estimate in use, the band could follow a learner that
+        # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.
+        within_prior = within_trust(paired, self._B0_eigenvalues,
+                                    self._settings.trust_ratio**2)
+        trusted = (dic_ok and within_prior
+                   and within_trust(paired, anchor, self._settings.trust_ratio))
+        if (dic_ok and within_prior and not trusted and self._settings.evidence_ratio > 0
                 and evidence is not None
                 and PortEvidence.Weight(evidence) >= self._evidence_minimum):
             in_use = np.linalg.inv(gains[L.B_inverse].reshape(B_hat.shape))
