@@ -229,14 +229,31 @@ class RhsIdentifier:
         for parameter in self.network.head_B.parameters():
             self._optimizer.state.pop(parameter, None)
 
-    def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> None:
-        """settings.steps_per_update Adam steps on the window ``rows``."""
+    def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> bool:
+        """settings.steps_per_update Adam steps on the window ``rows``; in regularized
+        mode with settings.step_guard = G > 0 they are undone when the window's
+        loss after them exceeds G times its value before them, L_after > G L_before
+        (Learner.step_guard: the network's parameters go back, Adam's moments keep
+        the gradients seen). Returns whether the steps were kept."""
         times, q, p, qdot, u, tau = self._Split(rows)
         w = self.Weights(times, t_now, window_start)
+        guard = self._settings.step_guard if self._regularized else 0.0
+        before = [x.detach().clone() for x in self.network.parameters()] if guard else None
+        loss_before = None
         for _ in range(self._settings.steps_per_update):
             self._optimizer.zero_grad()
-            self._Loss(w, q, p, qdot, u, tau).backward()
+            loss = self._Loss(w, q, p, qdot, u, tau)
+            loss_before = float(loss.detach()) if loss_before is None else loss_before
+            loss.backward()
             self._optimizer.step()
+        if not guard or loss_before is None:
+            return True
+        with torch.no_grad():
+            if float(self._Loss(w, q, p, qdot, u, tau)) <= guard * loss_before:
+                return True
+            for parameter, value in zip(self.network.parameters(), before):
+                parameter.copy_(value)
+        return False
 
     def Statistics(self, rows: np.ndarray, t_now: float) -> FitStatistics:
         """FitStatistics on ``rows`` (weighted by recency in regularized mode, the

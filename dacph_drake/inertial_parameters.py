@@ -125,7 +125,9 @@ class InertialParameters:
 
     def MassMatrixBasis(self, context) -> np.ndarray:
         """H_j (size x nv x nv): H(q) = sum_j pi_j H_j at the positions of
-        ``context``."""
+        ``context``. With the body's Jacobian rotated into its frame, a = R^T J_w,
+        b = R^T J_v (rows a_x, a_y, a_z, ...): H_m = b^T b, H_h_i = a^T S(e_i) b + its
+        transpose, H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on."""
         nv = self.plant.num_velocities()
         world = self.plant.world_frame()
         out = np.zeros((self.size, nv, nv))
@@ -134,20 +136,16 @@ class InertialParameters:
                 context, JacobianWrtVariable.kV, body.body_frame(), np.zeros(3), world,
                 world)
             R = self.plant.EvalBodyPoseInWorld(context, body).rotation().matrix()
-            Jw, Jv = J[:3], J[3:]
-            base = PER_BODY * k
-            out[base + MASS] = Jv.T @ Jv
-            for i in range(3):
-                hW = R[:, i]                        # d(R h)/d h_i
-                coupling = Jw.T @ _skew(hW) @ Jv
-                out[base + 1 + i] = coupling + coupling.T
-            for i in range(6):
-                theta = np.zeros(6)
-                theta[i] = 1.0
-                out[base + 4 + i] = Jw.T @ R @ _inertia_matrix(theta) @ R.T @ Jw
+            a, b = R.T @ J[:3], R.T @ J[3:]
+            block = out[self.body_slice(k)]
+            block[MASS] = b.T @ b
+            for i, (y, z) in enumerate(((1, 2), (2, 0), (0, 1))):   # S(e_i) b = e_i x b
+                coupling = np.outer(a[z], b[y]) - np.outer(a[y], b[z])
+                block[1 + i] = coupling + coupling.T
+            for i, (x, y) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
+                product = np.outer(a[x], a[y])
+                block[4 + i] = product if x == y else product + product.T
         return out
-
-
 
 def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
     """A size for every parameter of the prior pi0, by body: its mass m, m r for
@@ -166,15 +164,26 @@ def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
 
 def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                         prior_weight: float) -> np.ndarray:
-    """argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0),  A = sum_k Y_k^T Y_k
-    the ``information`` of the momentum samples (Y_k pi~ = 0 for the truth), S the
-    prior's scales and r = prior_weight trace(S A S) / size: the data determine
-    every direction they inform more than prior_weight times the average; the
-    rest, the common scale of all parameters among them, stays at the prior
-    (the scale comes out as the prior's weighted projection on the truth's ray)."""
+    """argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to
+    pi0^T S^-2 pi = pi0^T S^-2 pi0,  A = sum_k Y_k^T Y_k the ``information`` of the
+    momentum samples (Y_k pi~ = 0 for the truth), S the prior's scales and
+    r = prior_weight trace(S A S) / size: the data determine every direction they
+    inform more than prior_weight times the average, the rest stays at the prior,
+    and the common scale of all parameters, which momentum data cannot fix, is the
+    prior's: pi's component along pi0 in the prior's metric S^-2 is pi0's (on the
+    truth's ray, k = |pi0|^2_S / (pi0^T S^-2 pi~)). Without that constraint the
+    ridge alone held the scale, and a controller's model whose link lengths were a
+    few percent off the robot's (Y_k pi~ no longer exactly 0 for any pi) shrank to
+    a quarter of the robot's mass."""
     S2 = scales**2
     r = prior_weight * float(np.sum(np.diag(information) * S2)) / len(pi0)
     if not r > 0:
         return pi0.copy()
-    # (A + r S^-2) pi = r S^-2 pi0, multiplied by S^2 on the left.
-    return np.linalg.solve(S2[:, None] * information + r * np.eye(len(pi0)), r * pi0)
+    # KKT: (S^2 A + r I) pi + mu c = r pi0,  c^T pi = c^T pi0,  c = S^-2 pi0.
+    size = len(pi0)
+    c = pi0 / S2
+    system = np.zeros((size + 1, size + 1))
+    system[:size, :size] = S2[:, None] * information + r * np.eye(size)
+    system[:size, size] = S2 * c
+    system[size, :size] = c
+    return np.linalg.solve(system, np.append(r * pi0, c @ pi0))[:size]

@@ -125,6 +125,9 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
     out = {
         "tracking_error_rms": rms(alpha_error[active]),
         "tracking_error_rms_phase3": rms(alpha_error[phase3]),
+        # Phases 2 and 3: after the start-up transient that dominates phase 1 (and
+        # is the same with or without learning, which starts in phase 1).
+        "tracking_error_rms_phases_2_3": rms(alpha_error[t >= phases.nonlinear_start]),
         "tracking_error_max": float(np.max(np.abs(alpha_error[active])))
         if active.any() else float("nan"),
         "control_effort_rms": rms(logs["u"][active]),

@@ -191,6 +191,7 @@ class SpatialScenario:
             require_in_range(f"nominal_inertia_scale[{i}]", f, 0.1, 10.0)
         require_in_range("inertia.prior_weight", self.inertia.prior_weight, 1e-14, 1.0)
         require_nonnegative("inertia.start", self.inertia.start, "s")
+        require_positive("inertia.duration", self.inertia.duration, "s")
         require_in_range("inertia.change_threshold", self.inertia.change_threshold,
                          0.0, 1.0)
         if len(self.q0) != num_joints:

@@ -3,6 +3,7 @@
 Each comparison is a ratio measured in this one run (the machines are shared).
 """
 import argparse
+import copy
 import json
 import time
 from pathlib import Path
@@ -91,9 +92,14 @@ def bench_closed_loop(duration: float, paper_run: Path = None) -> float:
     for controller in ("model-based", "dac"):
         result = simulate(scenario, controller, duration=duration)
         walls[controller] = result.wall_time / duration
+    # The inertial identifier's cost: the same DAC loop without it.
+    blind = copy.deepcopy(scenario)
+    blind.inertia.identify = False
+    walls["dac, no id."] = simulate(blind, "dac", duration=duration).wall_time / duration
     print(f"closed loop, {duration:g} s of the short scenario, RHS step "
           f"{scenario.periods.rhs * 1e3:.2f} ms ({scenario.simulator.integration_scheme}):")
-    targets = {"plant": "", "model-based": "(target <= 2)", "dac": "(target <= 3)"}
+    targets = {"plant": "", "model-based": "(target <= 2)", "dac": "(target <= 3)",
+               "dac, no id.": "(the DAC loop without its inertial identifier)"}
     for name, wall in walls.items():
         print(f"  {name:12s} {wall:6.3f} s wall per simulated s   "
               f"ratio to plant alone {wall / plant:5.2f}  {targets[name]}")

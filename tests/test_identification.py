@@ -231,3 +231,25 @@ def test_per_input_prior_lets_a_light_joint_learn_its_own_gain():
     assert learned["per_input"][0, 0] == pytest.approx(1.2, abs=0.03)
     assert learned["per_input"][1, 1] == pytest.approx(0.8, abs=0.03)
     assert np.abs(learned["per_input"][[0, 1], [1, 0]]).max() < 0.03
+
+
+def test_the_step_guard_undoes_steps_that_raise_the_windows_loss():
+    """Learner.step_guard: with a learning rate far too large, five Adam steps from
+    the prior (B0, 10 % off the truth) leave the window's loss far above its value
+    before them; the guard puts the network back (Fit returns False), without it
+    the estimate moves. With the default rate the steps lower the loss and are
+    kept."""
+    t = np.arange(0.0, 2.0, H)
+    u = np.stack([np.sin(2 * np.pi * 3.1 * t), np.sin(2 * np.pi * 4.3 * t)], axis=1)
+    zeros = np.zeros_like(u)
+    rows = _rows(t, zeros, zeros, zeros, u, u @ (0.9 * B0).T, band=False)
+    for guard, kept in ((10.0, False), (0.0, True)):
+        identifier = RhsIdentifier(2, Learner(learning_rate=1.0, step_guard=guard),
+                                   B0, D0, seed=0)
+        before = identifier.Export().copy()
+        assert identifier.Fit(rows, t[-1]) is kept
+        assert np.array_equal(identifier.Export(), before) is not kept
+    identifier = RhsIdentifier(2, Learner(), B0, D0, seed=0)
+    before = identifier.Statistics(rows, t[-1]).loss
+    assert identifier.Fit(rows, t[-1]) is True
+    assert identifier.Statistics(rows, t[-1]).loss < before

@@ -9,7 +9,9 @@ replace it. Per-link and per-joint settings take a vector distribution
 ``!DeterministicVector``, a plain list) with one entry per link, or a scalar
 distribution (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``, ``!Deterministic``)
 drawn independently for each link. The controllers keep the nominal robot
-(``nominal_robot``): only the ground truth is perturbed.
+(``nominal_robot``) unless ``nominal_*`` settings perturb it (the controller's
+model error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per
+joint, and ``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault.
 
 The base scenario may be a spatial robot's (spatial_run: a built-in name such as
 ``satellite_3dof`` or a SpatialScenario YAML): every setting but the robot's
@@ -72,6 +74,18 @@ class Distributions:
     q0: Optional[VectorDistribution] = None             # initial joint angles [rad]
     learner_seed: Optional[ScalarDistribution] = None   # integers; None: the trial's
     #                                                     own seed (see trial_seed)
+    # The controller's model error (the ground truth keeps its robot): one factor per
+    # link on nominal_robot's link mass and inertia, one on its base's (a spatial
+    # scenario: nominal_inertia_scale = [base, links...]).
+    nominal_link_mass_scale: Optional[VectorDistribution] = None
+    nominal_base_mass_scale: Optional[ScalarDistribution] = None
+    # Actuators: B~'s row j times 10^x_j (uncertainty.B_scale), and one fault: from
+    # fault_time [s] on, joint fault_joint (1-based) delivers fault_gain times its
+    # torque (uncertainty.faults; the three go together).
+    actuator_gain_log10: Optional[VectorDistribution] = None
+    fault_time: Optional[ScalarDistribution] = None
+    fault_joint: Optional[ScalarDistribution] = None
+    fault_gain: Optional[ScalarDistribution] = None
 
 
 @dataclass
@@ -211,6 +225,10 @@ def _check_distributions(d: Distributions, num_links: int) -> None:
             _check_scalar(name, value)
     if d.learner_seed is not None:
         _check_seed_values(d.learner_seed)
+    fault = [d.fault_time is not None, d.fault_joint is not None, d.fault_gain is not None]
+    if any(fault) and not all(fault):
+        raise ConfigError("distributions.fault_time, fault_joint and fault_gain go "
+                          "together; allowed: all three or none")
 
 
 def _is_per_link(setting) -> bool:
@@ -308,8 +326,9 @@ def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
             sampled[f.name] = _sample_vector(value, n, generator)
         else:
             sampled[f.name] = float(schema.ToDistribution(value).Sample(generator))
-    if "learner_seed" in sampled:
-        sampled["learner_seed"] = int(sampled["learner_seed"])
+    for name in ("learner_seed", "fault_joint"):
+        if name in sampled:
+            sampled[name] = int(round(sampled[name]))
     scenario = apply_sample(definition.scenario, sampled, seed)
     return TrialSample(trial=trial, seed=seed, scenario=scenario, sampled=sampled)
 
@@ -347,7 +366,31 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
     if "q0" in sampled:
         s.q0 = list(sampled["q0"])
     s.seed = sampled.get("learner_seed", seed)
+    _apply_model_error_sample(s, sampled)
     return s
+
+
+def _apply_model_error_sample(s, sampled: Dict[str, object]) -> None:
+    """The controller's model error and the actuators' sampled settings."""
+    from dacph_drake.scenario import ActuatorFault
+    links = sampled.get("nominal_link_mass_scale")
+    base = sampled.get("nominal_base_mass_scale")
+    if isinstance(s, Scenario):
+        for link, f in zip(s.nominal_robot.links, links or []):
+            link.mass *= f
+            link.inertia *= f
+        if base is not None:
+            s.nominal_robot.base.mass *= base
+            s.nominal_robot.base.inertia *= base
+    elif links is not None or base is not None:
+        s.nominal_inertia_scale = ([1.0 if base is None else base]
+                                   + list(links or [1.0] * len(s.q0)))
+    if "actuator_gain_log10" in sampled:
+        s.uncertainty.B_scale = [10.0**x for x in sampled["actuator_gain_log10"]]
+    if "fault_time" in sampled:
+        s.uncertainty.faults = list(s.uncertainty.faults) + [ActuatorFault(
+            time=sampled["fault_time"], joint=int(round(sampled["fault_joint"])),
+            gain=sampled["fault_gain"])]
 
 
 def _apply_robot_sample(s: Scenario, sampled: Dict[str, object]) -> None:

@@ -62,6 +62,8 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
             "metrics": {name: _quantiles([m[name] for m in ok]) for name in names}}
     if "dac" in controllers:
         summary["learning"] = learning_summary(rows)
+    if {"dac", "dac-nominal"} <= set(controllers):
+        summary["learning_in_tracking"] = tracking_summary(rows)
     if {"dac", "model-based"} <= set(controllers):
         pairs = [comparison(r["runs"]["dac"]["metrics"], r["runs"]["model-based"]["metrics"])
                  for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
@@ -87,8 +89,11 @@ def learning_summary(rows: List[Dict]) -> Dict:
         return out
     for phase in PHASES:
         entry = {}
-        for name in ("B", "D"):
-            ratios = np.array([m[f"{phase}.{name}_error_ratio"] for m in runs], float)
+        for name in ("B", "D", "B_scaled", "D_scaled"):
+            key = f"{phase}.{name[0]}_error_ratio" + name[1:]
+            if key not in runs[0]:
+                continue
+            ratios = np.array([m[key] for m in runs], float)
             entry[name] = {"beats_prior": float(np.mean(ratios <= 1.0)),
                            "median": float(np.median(ratios)),
                            "q95": float(np.quantile(ratios, 0.95))}
@@ -101,6 +106,47 @@ def learning_summary(rows: List[Dict]) -> Dict:
                                        if nominal else None)
         out["phases"][phase] = entry
     return out
+
+
+# An actuator error beyond this factor (either way) is a "large" one.
+LARGE_ACTUATOR_ERROR = 2.0
+
+
+def tracking_summary(rows: List[Dict]) -> Dict:
+    """Over the trials where DAC ran to the end: how often it tracked better than
+    dac-nominal, the same loop without learning (RMS tracking error over phases 2
+    and 3, after the start-up transient that dominates phase 1 and is the same for
+    both; a dac-nominal run that diverged counts as worse), in all of them and in
+    those whose sampled actuator gains (actuator_gain_log10) are off by more than
+    LARGE_ACTUATOR_ERROR on some joint, split by the direction of the largest
+    error (weaker or stronger than the prior); and how many DAC runs did not
+    finish."""
+    key = "tracking_error_rms_phases_2_3"
+
+    def better(row) -> bool:
+        nominal = row["runs"]["dac-nominal"]
+        return nominal["status"] != "ok" or (row["runs"]["dac"]["metrics"][key]
+                                             < nominal["metrics"][key])
+
+    def share(trials):
+        return float(np.mean([better(r) for r in trials])) if trials else None
+
+    finished = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
+                and "dac-nominal" in r["runs"]]
+    large = [r for r in finished if "actuator_gain_log10" in r["sampled"] and np.max(
+        np.abs(r["sampled"]["actuator_gain_log10"])) > np.log10(LARGE_ACTUATOR_ERROR)]
+    weaker = [r for r in large if -np.min(r["sampled"]["actuator_gain_log10"])
+              >= np.max(r["sampled"]["actuator_gain_log10"])]
+    return {"dac_not_finished": sum(r["runs"].get("dac", {}).get("status") not in
+                                    (None, "ok") for r in rows),
+            "trials": len(finished), "dac_better": share(finished),
+            "large_actuator_error_trials": len(large),
+            "dac_better_large_actuator_error": share(large),
+            "weaker_trials": len(weaker), "dac_better_weaker": share(weaker),
+            "stronger_trials": len(large) - len(weaker),
+            "dac_better_stronger": share([r for r in large if r not in weaker]),
+            "dac_nominal_diverged": sum(r["runs"]["dac-nominal"]["status"] != "ok"
+                                        for r in finished)}
 
 
 def _quantiles(values) -> Dict:
@@ -144,24 +190,57 @@ def format_summary(summary: Dict) -> str:
                          f"{100 * p['median']:.2f} % |")
     if summary.get("learning"):
         learning = summary["learning"]
-        lines += ["", f"Learning (DAC, {learning['trials']} finished trials): learned / "
-                      "nominal error ratio",
-                  "", "| phase | B ratio <= 1 | B median | B 95 % | D ratio <= 1 | "
-                      "D median | D 95 % | max rejected B_hat | trials rejecting > 5 % | "
-                      "median e_tau DAC / dac-nominal |",
+        header = ["| phase | B ratio <= 1 | B median | B 95 % | D ratio <= 1 | "
+                  "D median | D 95 % | max rejected B_hat | trials rejecting > 5 % | "
+                  "median e_tau DAC / dac-nominal |",
                   "|---|---|---|---|---|---|---|---|---|---|"]
-        for phase, e in learning["phases"].items():
-            e_tau = e["e_tau_ratio_median"]
-            lines.append(
-                f"| {phase} | {100 * e['B']['beats_prior']:.0f} % | {e['B']['median']:.3g} "
-                f"| {e['B']['q95']:.3g} | {100 * e['D']['beats_prior']:.0f} % | "
-                f"{e['D']['median']:.3g} | {e['D']['q95']:.3g} | "
-                f"{100 * e['rejected_share_max']:.2f} % | "
-                f"{e['trials_rejecting_over_5_percent']} | "
-                f"{'-' if e_tau is None else f'{e_tau:.3g}'} |")
+        lines += ["", f"Learning (DAC, {learning['trials']} finished trials): learned / "
+                      "nominal error ratio", "", *header]
+        lines += _learning_rows(learning, "")
+        if all("B_scaled" in e for e in learning["phases"].values()):
+            lines += ["", "The same against k B~, k D~, k the identified scale (the "
+                          "common factor of the inertias that momentum data leave to "
+                          "the prior):", "", *header]
+            lines += _learning_rows(learning, "_scaled")
+    tracking = summary.get("learning_in_tracking")
+    if tracking and tracking["trials"]:
+        lines += ["", f"DAC against dac-nominal, RMS tracking error over phases 2-3 "
+                      f"({tracking['trials']} trials where DAC ran to the end; "
+                      f"{tracking['dac_not_finished']} DAC runs did not finish; "
+                      f"dac-nominal diverged in {tracking['dac_nominal_diverged']}): "
+                      f"DAC tracked better in {100 * tracking['dac_better']:.0f} % of "
+                      "them"]
+        if tracking["large_actuator_error_trials"]:
+            def percent(x):
+                return "-" if x is None else f"{100 * x:.0f} %"
+            lines[-1] += (
+                f"; in {percent(tracking['dac_better_large_actuator_error'])} of the "
+                f"{tracking['large_actuator_error_trials']} with an actuator off by "
+                f"more than x{LARGE_ACTUATOR_ERROR:g} ("
+                f"{percent(tracking['dac_better_weaker'])} of the "
+                f"{tracking['weaker_trials']} whose largest error is a weaker "
+                f"actuator, {percent(tracking['dac_better_stronger'])} of the "
+                f"{tracking['stronger_trials']} whose largest is a stronger one)")
     for failure in summary["failures"]:
         lines.append(f"failed trial {failure['trial']}: {failure['reason']}")
     return "\n".join(lines) + "\n"
+
+
+def _learning_rows(learning: Dict, scaled: str) -> List[str]:
+    """The learning table's rows, of the ratios against the truth (``scaled`` "")
+    or against it at the identified scale ("_scaled")."""
+    rows = []
+    for phase, e in learning["phases"].items():
+        e_tau = e["e_tau_ratio_median"]
+        B, D = e[f"B{scaled}"], e[f"D{scaled}"]
+        rows.append(
+            f"| {phase} | {100 * B['beats_prior']:.0f} % | {B['median']:.3g} "
+            f"| {B['q95']:.3g} | {100 * D['beats_prior']:.0f} % | "
+            f"{D['median']:.3g} | {D['q95']:.3g} | "
+            f"{100 * e['rejected_share_max']:.2f} % | "
+            f"{e['trials_rejecting_over_5_percent']} | "
+            f"{'-' if e_tau is None else f'{e_tau:.3g}'} |")
+    return rows
 
 
 def write_summary(out_dir, definition: SweepDefinition) -> Dict:

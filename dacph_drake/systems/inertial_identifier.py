@@ -18,7 +18,8 @@ class InertialIdentifier(LeafSystem):
 
         A <- A + Y(x)^T Y(x),      Y(x) pi = [L; P] (the momentum, linear in pi,
                                                inertial_parameters.MomentumRegressor)
-        pi_hat = argmin pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)
+        pi_hat = argmin pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0),
+                 subject to pi0^T S^-2 pi = pi0^T S^-2 pi0
 
     (inertial_parameters.identify_parameters, r from ``settings.prior_weight``). The
     robot starts at rest, so L = P = 0 along the whole motion and Y(x) pi~ = 0 for
@@ -28,7 +29,9 @@ class InertialIdentifier(LeafSystem):
     stay at the prior. No actuator model enters.
 
     Output ``inertial_parameters`` is pi0 until ``settings.start`` and pi_hat after
-    it, every period; an estimate with a mass <= 0, or whose mass matrix at the
+    it, every period until ``settings.duration`` has passed (then it is kept: the
+    bodies' inertias do not change, while the directions the data hardly inform
+    keep refining); an estimate with a mass <= 0, or whose mass matrix at the
     sample is not positive definite, is not used. Output ``model_epoch`` counts the
     estimates that changed the reduced mass matrix M(q) at the sample by more than
     ``settings.change_threshold`` in some entry (relative to sqrt(M_ii M_jj), so that
@@ -70,6 +73,8 @@ class InertialIdentifier(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
 
     def _UpdateEstimate(self, context, discrete_state):
+        if context.get_time() > self._settings.start + self._settings.duration:
+            return              # the estimate is kept (settings.duration)
         c, size = self._coordinates, self.parameters.size
         velocities = np.zeros(self._plant.num_velocities())
         velocities[c.base_v] = self._base_velocity.Eval(context)

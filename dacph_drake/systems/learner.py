@@ -24,8 +24,8 @@ class RhsLearner(LeafSystem):
     after the LHS model changed (input ``model_epoch``, declared with
     ``watch_model``: settings.model_change);
     a fit needs settings.min_window seconds of samples in the window, and the first
-    fit of a window after a hold starts from its best constant RHS
-    (settings.warm_start, RhsIdentifier.WarmStart).
+    fit of the run starts from the window's best constant B (settings.warm_start,
+    RhsIdentifier.WarmStart).
 
     Outputs: ``weights`` (the exported parameter vector, held between updates; the
     fast loops evaluate it with numpy), ``beta_hat`` (FitStatistics.beta_hat, used
@@ -74,7 +74,7 @@ class RhsLearner(LeafSystem):
             settings.start_hold if self._regularized and settings.start_hold > 0
             else -np.inf))
         self._weights = self.DeclareDiscreteState(initial_weights)
-        # The window start of the last warm start (settings.warm_start).
+        # The window start of the warm start (settings.warm_start), -inf before it.
         self._warm_started = self.DeclareDiscreteState([-np.inf])
         # The LHS model's epoch at the last check (settings.model_change).
         self._model_epoch = self._last_epoch = None
@@ -131,7 +131,7 @@ class RhsLearner(LeafSystem):
                 and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples):
             warm_started = context.get_discrete_state(self._warm_started).get_value()[0]
             if (self._regularized and self._settings.warm_start
-                    and window_start > warm_started):
+                    and warm_started == -np.inf):
                 self._identifier.WarmStart(rows, t, window_start)
                 discrete_state.get_mutable_vector(self._warm_started).SetFromVector(
                     [window_start])

@@ -152,23 +152,7 @@ class RhsIntegrator(LeafSystem):
         c = gains[L.c]
         c = max(c + self._c_step * (self._c_target(beta) - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
-        anchor = (self._B0_eigenvalues if self._settings.trust_anchor == "prior"
-                  else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
-        # Anchored at the estimate in use, the band could follow a learner that
-        # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.
-        within_prior = within_trust(paired, self._B0_eigenvalues,
-                                    self._settings.trust_ratio**2)
-        trusted = (dic_ok and within_prior
-                   and within_trust(paired, anchor, self._settings.trust_ratio))
-        if (dic_ok and within_prior and not trusted and self._settings.evidence_ratio > 0
-                and evidence is not None
-                and PortEvidence.Weight(evidence) >= self._evidence_minimum):
-            in_use = np.linalg.inv(gains[L.B_inverse].reshape(B_hat.shape))
-            trusted = (self._evidence.Residual(evidence, B_hat, D_hat)
-                       <= self._settings.evidence_ratio
-                       * self._evidence.Residual(evidence, in_use, gains[L.D_hat])
-                       and stays_stable_if_wrong(in_use, k, self._period,
-                                                 1.0 - STABILITY_MARGIN))
+        trusted = dic_ok and self._Accepts(gains, B_hat, D_hat, paired, k, evidence)
         if trusted:
             gains[L.B_inverse] = np.linalg.inv(B_hat).reshape(-1)
             gains[L.D_hat] = D_hat
@@ -178,6 +162,28 @@ class RhsIntegrator(LeafSystem):
         gains[[L.c, L.c_min, L.dic_ok, L.trusted]] = [c, c_min, float(dic_ok),
                                                       float(trusted)]
         return gains
+
+    def _Accepts(self, gains, B_hat, D_hat, paired, k, evidence) -> bool:
+        """Whether an estimate that passed DIC is adopted (class docstring): within
+        trust_ratio^2 of B0 and within trust_ratio of the anchor (B0 or the estimate
+        in use), or outside the latter on evidence."""
+        L, settings = self._layout, self._settings
+        # Anchored at the estimate in use, the band could follow a learner that
+        # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.
+        if not within_trust(paired, self._B0_eigenvalues, settings.trust_ratio**2):
+            return False
+        anchor = (self._B0_eigenvalues if settings.trust_anchor == "prior"
+                  else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
+        if within_trust(paired, anchor, settings.trust_ratio):
+            return True
+        if (settings.evidence_ratio == 0 or evidence is None
+                or PortEvidence.Weight(evidence) < self._evidence_minimum):
+            return False
+        in_use = np.linalg.inv(gains[L.B_inverse].reshape(B_hat.shape))
+        return (self._evidence.Residual(evidence, B_hat, D_hat)
+                <= settings.evidence_ratio
+                * self._evidence.Residual(evidence, in_use, gains[L.D_hat])
+                and stays_stable_if_wrong(in_use, k, self._period, 1.0 - STABILITY_MARGIN))
 
     def _UpdateModel(self, context, discrete_state):
         beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0

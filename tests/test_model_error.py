@@ -1,0 +1,336 @@
+"""Control when the robot is not what the controller assumed (README, "Model error"):
+actuators off their prior and failing, the controller's inertias off the robot's.
+Each mechanism is tested alone (the true RHS's actuator gains, the inertial
+parameters and their identification from momentum, the learner's constant fit, the
+integrator's acceptance of an estimate), and the closed loop in the cases the issue
+names: actuators x3 of the prior, inertias off by 20 %."""
+import copy
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from dacph_drake.analysis.verify import verify_logs
+from dacph_drake.description import MakeRobotPlant
+from dacph_drake.errors import ConfigError
+from dacph_drake.gain_rule import stays_stable_if_wrong
+from dacph_drake.identification import PortEvidence, PortSample, RhsIdentifier
+from dacph_drake.inertial_parameters import (InertialParameters, identify_parameters,
+                                             prior_scales)
+from dacph_drake.log_layout import RhsLog
+from dacph_drake.metrics import run_metrics
+from dacph_drake.montecarlo.definition import load_sweep, sample_trial
+from dacph_drake.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
+from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.run import simulate
+from dacph_drake.scenario import ActuatorFault, Learner, Scenario, short_scenario
+from dacph_drake.systems.disturbance import DisturbanceSource
+from dacph_drake.systems.true_rhs import TrueRhs
+
+
+# --- the ground truth's actuators -------------------------------------------------
+
+
+def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
+    """uncertainty.B_scale scales B~'s rows from t = 0; a fault multiplies its
+    joint's row from its time on; the compiled true RHS and the Python model agree."""
+    scenario = Scenario()
+    scenario.uncertainty.B_scale = [0.5, 3.0]
+    scenario.uncertainty.faults = [ActuatorFault(time=70.0, joint=2, gain=0.4)]
+    truth = TrueRhs(scenario)
+    context = truth.CreateDefaultContext()
+    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    q, qdot, u = np.array([0.5, -0.2]), np.array([0.1, 0.3]), np.array([0.2, -0.1])
+    v_base = model.BaseVelocity(np.concatenate([[0, 0, 0], q]), qdot)
+    FixStateInputs(truth, context, np.concatenate([[0, 0, 0], q, v_base, qdot]))
+    truth.GetInputPort("u").FixValue(context, u)
+    quiet = DisturbanceSource(scenario.disturbance, start=1e9)
+    truth.GetInputPort("disturbance_model").FixValue(
+        context, quiet.GetOutputPort("disturbance_model").Eval(quiet.CreateDefaultContext()))
+    matrices = truth.GetOutputPort("true_matrices")
+    tau = truth.GetOutputPort("tau")
+
+    def B_at(t):
+        context.SetTime(t)
+        return matrices.Eval(context)[:4].reshape(2, 2)
+
+    np.testing.assert_allclose(B_at(1.0), np.diag([0.5, 3.0]), atol=1e-15)  # warm-up
+    before, after = B_at(69.999), B_at(70.0)
+    np.testing.assert_allclose(after[0], before[0], rtol=1e-12)        # joint 1 as it was
+    np.testing.assert_allclose(after[1], 0.4 * before[1], rtol=1e-12)  # joint 2 x 0.4
+    D = matrices.Eval(context)[4:]
+    np.testing.assert_allclose(tau.Eval(context), after @ u - D * qdot, rtol=1e-12)
+    from dacph_drake.uncertainty import TrueRhsModel
+    p = model.MassMatrix(q) @ qdot
+    np.testing.assert_allclose(TrueRhsModel(scenario.uncertainty, scenario.phases)
+                               .Matrices(70.0, q, p)[0], after, rtol=1e-9)
+
+
+# --- inertial parameters and their identification ----------------------------------
+
+
+@pytest.fixture(scope="module", params=["planar", "satellite_3dof"])
+def plant(request):
+    return (MakeArmPlant(Scenario().robot) if request.param == "planar"
+            else MakeRobotPlant(request.param))
+
+
+def test_the_mass_matrix_and_the_momentum_are_linear_in_the_inertias(plant):
+    """H(q) = sum_j pi_j H_j and [L; P] = Y(x) pi are Drake's own, at a random state,
+    and setting the parameters reproduces them."""
+    parameters, context = InertialParameters(plant), plant.CreateDefaultContext()
+    rng = np.random.default_rng(3)
+    coordinates = ArmCoordinates.FromPlant(plant)
+    plant.SetPositions(context, coordinates.Positions(
+        rng.uniform(-1, 1, coordinates.num_joints)))
+    plant.SetVelocities(context, rng.normal(size=plant.num_velocities()))
+    pi = parameters.FromContext(context)
+    H = plant.CalcMassMatrix(context)
+    np.testing.assert_allclose(np.tensordot(pi, parameters.MassMatrixBasis(context), 1), H,
+                               atol=1e-13 * np.abs(H).max())
+    h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
+    np.testing.assert_allclose(parameters.MomentumRegressor(context) @ pi,
+                               np.concatenate([h.rotational(), h.translational()]),
+                               atol=1e-12)
+    parameters.Apply(context, 1.3 * pi)
+    np.testing.assert_allclose(plant.CalcMassMatrix(context), 1.3 * H,
+                               atol=1e-13 * np.abs(H).max())
+
+
+def _prior_20_percent_off():
+    """The paper's arm with base and link 1 20 % heavier, link 2 20 % lighter (mass
+    and inertia), as the controller's model."""
+    robot = copy.deepcopy(Scenario().robot)
+    for body, f in zip([robot.base] + robot.links, [1.2, 1.2, 0.8]):
+        body.mass *= f
+        body.inertia *= f
+    return robot
+
+
+def _momentum_identification(truth, prior_robot):
+    """The robot ``truth`` moved by joint torques from rest (its momentum stays
+    zero), sampled every 10 ms for 0.5 s in the coordinates of the controller's
+    model ``prior_robot``: (that model, the exact one, the identified one, pi0, pi)."""
+    plant = MakeArmPlant(truth)
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, [0, 0, 0, 0.3, 1.0])
+    simulator = Simulator(plant, context)
+    model = ReducedOrderModel(MakeArmPlant(prior_robot))
+    parameters = InertialParameters(model.plant)
+    pi0 = parameters.FromContext(model.plant.CreateDefaultContext())
+    A = np.zeros((parameters.size, parameters.size))
+    sample_context = model.plant.CreateDefaultContext()
+    for k in range(1, 51):
+        t = 0.01 * k
+        plant.get_actuation_input_port().FixValue(
+            context, 0.02 * np.array([np.sin(7 * t), np.cos(5 * t)]))
+        simulator.AdvanceTo(t)
+        model.plant.SetPositionsAndVelocities(sample_context,
+                                              plant.GetPositionsAndVelocities(context))
+        Y = parameters.MomentumRegressor(sample_context)
+        A += Y.T @ Y
+    pi = identify_parameters(A, pi0, prior_scales(parameters, pi0), 1e-12)
+    return (model, ReducedOrderModel(plant), model.WithInertialParameters(parameters, pi),
+            pi0, pi)
+
+
+def test_momentum_identifies_the_inertias_up_to_their_common_scale():
+    """The planar arm 20 % off in its body masses and inertias (the controller's
+    prior): the samples of its base and joint motion determine the robot's reduced
+    mass matrix M(q) and task Jacobian D(q) up to one factor, which the prior fixes
+    (pi's component along pi0 in the prior's metric is pi0's); the prior itself is
+    6-9 % off them."""
+    truth, prior_robot = Scenario().robot, _prior_20_percent_off()
+    model, exact, identified, pi0, pi = _momentum_identification(truth, prior_robot)
+    weight = pi0 / prior_scales(InertialParameters(model.plant), pi0)**2
+    np.testing.assert_allclose(weight @ pi, weight @ pi0, rtol=1e-12)   # the scale
+    for q in ([0.3, 1.0], [0.6, 0.5], [-0.2, 1.4]):
+        q = np.array(q)
+        M, M_hat = exact.MassMatrix(q), identified.MassMatrix(q)
+        scale = np.trace(M_hat) / np.trace(M)
+        assert 0.8 < scale < 1.2
+        np.testing.assert_allclose(M_hat / scale, M, rtol=1e-6)
+        D = exact.Evaluate(q, np.zeros(2)).D
+        np.testing.assert_allclose(identified.Evaluate(q, np.zeros(2)).D, D, rtol=1e-6)
+        assert np.max(np.abs(model.Evaluate(q, np.zeros(2)).D - D)) > 1e-2  # the prior's
+
+
+# --- the learner and the integrator ------------------------------------------------
+
+
+def _synthetic_rows(B, D, n_samples=300, seed=0):
+    """Port samples [t, q, p, qdot, u, tau] of tau = B u - D qdot with correlated
+    inputs (u2 follows u1, as the planar arm's do along its task)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_samples) * 0.01
+    base = np.sin(2 * np.pi * 3.1 * t)[:, None]
+    u = np.hstack([base, 0.8 * base]) + 0.2 * np.stack(
+        [np.sin(2 * np.pi * 4.3 * t), np.cos(2 * np.pi * 3.7 * t)], 1)
+    qdot = 0.1 * rng.normal(size=(n_samples, 2))
+    tau = u @ B.T - D * qdot
+    zeros = np.zeros((n_samples, 2))
+    return np.hstack([t[:, None], zeros, zeros, qdot, u, tau])
+
+
+def test_the_warm_start_is_the_windows_constant_fit():
+    """Actuators at x0.4 of B0 with correlated inputs: the constant fit of the
+    window is B~ exactly without the prior, and within 1 % of B~'s scale with the
+    learner's prior (rho = 1e-3 pulls the weakly informed direction towards B0,
+    0.6 away: by design); a coupling whose network scale F is small keeps its
+    prior there (it moves in steps F times the others' in training too)."""
+    B_true, D = np.diag([0.4, 0.4]), np.array([0.1, 0.1])
+    rows = _synthetic_rows(B_true, D)
+    settings = Learner()
+    identifier = RhsIdentifier(2, settings, np.eye(2), D, seed=0)
+    np.testing.assert_allclose(identifier.ConstantFit(rows, 3.0, -np.inf), B_true,
+                               atol=1e-2)
+    unregularized = RhsIdentifier(2, Learner(prior_weight=0.0), np.eye(2), D, seed=0)
+    np.testing.assert_allclose(unregularized.ConstantFit(rows, 3.0, -np.inf), B_true,
+                               atol=1e-9)
+    B_coupled = np.array([[0.4, 0.3], [0.0, 0.4]])
+    coupled = RhsIdentifier(2, settings, np.eye(2), D, seed=0,
+                            coupling=np.array([[1.0, 1e-3], [1.0, 1.0]]))
+    fit = coupled.ConstantFit(_synthetic_rows(B_coupled, D), 3.0, -np.inf)
+    assert abs(fit[0, 1]) < 1e-3 < abs(fit[1, 1] - 1.0)        # coupling held at 0
+    coupled.WarmStart(_synthetic_rows(B_coupled, D), 3.0, -np.inf)
+    B_hat, D_hat = coupled.Estimate(np.zeros(2), np.zeros(2))
+    np.testing.assert_allclose(B_hat, fit, atol=1e-12)
+    np.testing.assert_allclose(D_hat, D, atol=1e-9)           # D left to Adam
+
+
+def test_port_evidence_is_the_residual_of_the_samples():
+    """PortEvidence's statistics give the weighted residual of any constant (B, D)
+    on the samples, without keeping them."""
+    rows = _synthetic_rows(np.diag([0.4, 0.5]), np.array([0.1, 0.2]), 50)
+    evidence = PortEvidence(2, 0.01, 1.0)
+    state = np.zeros(evidence.size)
+    for row in rows:
+        state = evidence.Update(state, row[1:])
+    B, D = np.array([[1.0, 0.1], [0.0, 0.9]]), np.array([0.3, 0.1])
+    layout = PortSample(2)
+    samples = rows[:, 1:]
+    weights = evidence.decay ** np.arange(len(rows))[::-1]
+    residual = (samples[:, layout.tau] - samples[:, layout.u] @ B.T
+                + D * samples[:, layout.qdot])
+    expected = weights @ np.sum(residual**2, 1) / weights.sum()
+    assert evidence.Residual(state, B, D) == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_jump_is_adopted_only_if_the_loop_survives_the_evidence_being_wrong():
+    """The stability guard of an estimate adopted on evidence: the loop with its gains
+    against the estimate in use as the truth. Down to x0.3 of the estimate in use
+    it stays stable; x0.15 (the stress test's) would make the loop gain exceed 1."""
+    h, c = 2.5e-4, 864.0
+    in_use = np.eye(2)
+    for scale, stable in ((0.3, True), (3.0, True), (0.15, False)):
+        K = c / np.full(2, scale)
+        assert stays_stable_if_wrong(in_use, K, h, 0.95) is stable
+
+
+# --- bad input --------------------------------------------------------------------
+
+
+def test_bad_spatial_model_error_settings_are_named():
+    from dacph_drake.spatial_diagrams import controller_model
+    from dacph_drake.spatial_scenario import SpatialScenario
+    scenario = SpatialScenario(robot="satellite_3dof", q0=[0.3, -0.8, 0.5],
+                               nominal_inertia_scale=[1.0, 1.0])
+    with pytest.raises(ConfigError, match=r"nominal_inertia_scale has 2 entries; "
+                                          r"allowed: 4"):
+        controller_model(scenario)
+    scenario.nominal_inertia_scale = [1.0, 1.0, 0.0, 1.0]
+    with pytest.raises(ConfigError, match=r"nominal_inertia_scale\[2\] = 0.0"):
+        controller_model(scenario)
+
+
+def test_the_model_error_sweep_samples_what_it_names():
+    definition = load_sweep("sweeps/model_error.yaml")
+    trial = sample_trial(definition, 5)
+    s, sampled = trial.scenario, trial.sampled
+    np.testing.assert_allclose(s.uncertainty.B_scale,
+                               10.0 ** np.array(sampled["actuator_gain_log10"]))
+    fault = s.uncertainty.faults[-1]
+    assert (fault.time, fault.joint, fault.gain) == (
+        sampled["fault_time"], sampled["fault_joint"], sampled["fault_gain"])
+    assert 10.0 <= fault.time <= 18.0 and fault.joint in (1, 2)
+    base = definition.scenario.nominal_robot
+    assert s.nominal_robot.links[1].mass == pytest.approx(
+        base.links[1].mass * sampled["nominal_link_mass_scale"][1])
+    assert s.robot == definition.scenario.robot           # the robot itself is kept
+
+
+# --- the closed loop ----------------------------------------------------------------
+
+
+def _settled_rejections(result, scenario) -> float:
+    """The share of logged samples with a refused B_hat, outside the 2 s after the
+    start and after each phase's start (a change of the port relation)."""
+    t = result.logs["time"]
+    p = scenario.phases
+    changes = [0.0, p.linear_start, p.nonlinear_start, p.disturbance_start]
+    settled = np.ones(len(t), bool)
+    for change in changes:
+        settled &= ~((t >= change) & (t < change + 2.0))
+    trusted = result.logs["rhs_log"][:, RhsLog(2).trusted]
+    return float(np.mean(trusted[settled] < 0.5))
+
+
+def test_actuators_three_times_stronger_than_the_prior():
+    """B~ = 3 B0 from the start: DAC runs to the end, its integrator adopts the
+    learned estimates (at most 1 % refused outside the 2 s after a change, against
+    100 % with the band around B0 of earlier releases), and the discrete RHS loop
+    with the true B~ is certified at every logged sample. dac-nominal, the same loop
+    on B0, is allowed to diverge here (the RHS loop's gain is 3x its design), and is
+    not run."""
+    scenario = short_scenario()
+    scenario.uncertainty.B_scale = [3.0, 3.0]
+    result = simulate(scenario, "dac")
+    assert result.status == "ok", result.reason
+    assert _settled_rejections(result, scenario) <= 0.01
+    report = verify_logs(result.logs, scenario, {"status": result.status,
+                                                 "final_time": result.final_time})
+    assert report["checks"]["rhs_loop_truth"]["ok"], report["checks"]["rhs_loop_truth"]
+    metrics = run_metrics(result.logs, scenario)
+    for phase in ("phase1", "phase2", "phase3"):
+        assert metrics[f"{phase}.B_error_ratio"] < 0.5, phase
+
+
+@pytest.fixture(scope="module")
+def inertia_runs():
+    """The short scenario with the controller's model off the robot by 20 % (base and
+    link 1 heavier, link 2 lighter, in mass and inertia), DAC with and without the
+    inertial identification, and DAC with the exact model."""
+    exact = short_scenario()
+    wrong = short_scenario()
+    for body, f in zip([wrong.nominal_robot.base] + wrong.nominal_robot.links,
+                       [1.2, 1.2, 0.8]):
+        body.mass *= f
+        body.inertia *= f
+    blind = copy.deepcopy(wrong)
+    blind.inertia.identify = False
+    return {name: (s, run_metrics(simulate(s, "dac").logs, s))
+            for name, s in (("exact", exact), ("wrong", wrong), ("blind", blind))}
+
+
+def test_tracking_holds_when_the_inertias_are_20_percent_off(inertia_runs):
+    """With the identification, DAC tracks within 3x of the exact model's RMS error
+    in every phase; without it (the controller's task Jacobian off the robot's),
+    at least 10x worse in phases 2 and 3."""
+    exact, wrong, blind = (inertia_runs[k][1] for k in ("exact", "wrong", "blind"))
+    for phase in ("phase1", "phase2", "phase3"):
+        key = f"{phase}.tracking_error_rms"
+        assert wrong[key] < 3 * exact[key], phase
+    for phase in ("phase2", "phase3"):
+        key = f"{phase}.tracking_error_rms"
+        assert blind[key] > 10 * exact[key], phase
+
+
+def test_learning_beats_the_prior_when_the_inertias_are_20_percent_off(inertia_runs):
+    """The observer forms the port with the identified model, so the learner sees
+    k (B~ u - D~ qdot), k the common scale momentum data leave to the prior: against
+    k B~ and k D~ the learned estimates beat the prior in every phase."""
+    metrics = inertia_runs["wrong"][1]
+    for phase in ("phase1", "phase2", "phase3"):
+        assert 0.8 < metrics[f"{phase}.identified_scale"] < 1.2
+        for name in ("B", "D"):
+            assert metrics[f"{phase}.{name}_error_ratio_scaled"] < 1.0, (phase, name)
