@@ -147,6 +147,7 @@ class InertialParameters:
                 block[4 + i] = product if x == y else product + product.T
         return out
 
+
 def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
     """A size for every parameter of the prior pi0, by body: its mass m, m r for
     the first moments and m r^2 for the inertia entries, r = sqrt(I_max / m) its
