@@ -86,8 +86,8 @@ class ArmViewer(_RobotViewer):
         """``view``: half-width of the square shown [m]; ``fps``: the
         visualizer's publish rate."""
         super().__init__(meshcat, fps,
-                         lambda builder: AddFreeFloatingArm(builder, scenario.robot))
-        self._coordinates = ArmCoordinates.ForPlanarArm(scenario.robot.num_links)
+                         lambda builder: AddFreeFloatingArm(builder, scenario.robot.truth))
+        self._coordinates = ArmCoordinates.ForPlanarArm(scenario.robot.truth.num_links)
         meshcat.Set2dRenderMode(RigidTransform(RotationMatrix(
             np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])), [0, 0, 1.0]),
             -view, view, -view, view)
@@ -98,8 +98,8 @@ class ArmViewer(_RobotViewer):
     @staticmethod
     def Reach(scenario: Scenario) -> float:
         """Distance from the base's centre to the arm's stretched-out tip [m]."""
-        return (scenario.robot.base.size / 2
-                + sum(link.length for link in scenario.robot.links))
+        return (scenario.robot.truth.base.size / 2
+                + sum(link.length for link in scenario.robot.truth.links))
 
     def Draw(self, x: np.ndarray, alpha_desired: float, time: float = None) -> None:
         """Shows plant state ``x`` and alpha_d; with ``time``, as the frame of a
@@ -118,7 +118,7 @@ class LiveView:
     """Draws a closed loop's ground truth into Meshcat while it simulates:
     Update(root_context) after each advance calls ``draw(root_context, x, t)`` with
     the plant state x at most ``fps`` times per simulated second and sets Meshcat's
-    simulation time. ForPlanarLoop and ForSpatialLoop make one for a loop."""
+    simulation time. A robot makes one for its loop (robots.Robot.LiveView)."""
 
     def __init__(self, plant, meshcat: Meshcat, draw, fps: float = 30.0):
         self._plant, self._meshcat, self._draw = plant, meshcat, draw
@@ -131,7 +131,7 @@ class LiveView:
         scenario = loop.scenario
         viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
         lhs_log = loop.loggers.get("lhs_log")
-        column = LhsLog(scenario.robot.num_links).alpha_desired
+        column = LhsLog(scenario.robot.truth.num_links).alpha_desired
         coordinates = ArmCoordinates.FromPlant(loop.plant)
 
         def draw(root_context, x, t):
@@ -143,13 +143,6 @@ class LiveView:
                 alpha_desired = base_pose[2] + q.sum()
             viewer.Draw(x, alpha_desired)
         return LiveView(loop.plant, meshcat, draw, fps)
-
-    @staticmethod
-    def ForSpatialLoop(loop, meshcat: Meshcat, fps: float = 30.0) -> "LiveView":
-        """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
-        viewer = SpatialViewer(loop.scenario.robot, meshcat, fps)
-        return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
-            x, loop.controller.DesiredAttitude(t)[0]), fps)
 
     def Update(self, root_context) -> None:
         t = root_context.get_time()
@@ -169,7 +162,7 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
     meshcat.StaticHtml(), with the overlay, to out_html. Runs longer than
     ``max_playback`` seconds are sped up to fit."""
     t, x = _RequireReplayable(logs, fps, max_playback)
-    alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.num_links).alpha_desired]
+    alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.truth.num_links).alpha_desired]
     meshcat = meshcat or QuietMeshcat()
     view = 1.2 * ArmViewer.Reach(scenario) + float(np.max(np.abs(x[:, :2])))
     viewer = ArmViewer(scenario, meshcat, view, fps)
@@ -177,7 +170,7 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
                       lambda row, time: viewer.Draw(x[row], alpha_desired[row], time))
     entries = [(BASE_COLOR, "base"),
                *[(LINK_COLORS[k % len(LINK_COLORS)], f"link {k + 1}")
-                 for k in range(scenario.robot.num_links)],
+                 for k in range(scenario.robot.truth.num_links)],
                (DESIRED_COLOR, "desired end-effector direction &alpha;<sub>d</sub>"),
                (MEASURED_COLOR, "measured end-effector direction &alpha;")]
     p = scenario.phases

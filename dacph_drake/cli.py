@@ -6,6 +6,8 @@ import sys
 import numpy as np
 
 from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed_loop
+# The built-in scenarios' names (scenario.BUILT_IN_SCENARIOS), without loading Drake.
+BUILT_IN_SCENARIO_NAMES = ("paper", "short", "satellite_6dof", "satellite_3dof")
 from dacph_drake.errors import ConfigError, require_nonnegative
 
 
@@ -27,7 +29,9 @@ def _free_flight(args) -> int:
 
 
 def _simulate(args) -> int:
+    from pathlib import Path
     from dacph_drake.metrics import PHASES, run_metrics
+    from dacph_drake.robots import robot_of
     from dacph_drake.run import simulate
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
@@ -47,62 +51,40 @@ def _simulate(args) -> int:
             print(f"  {name:32s} {value:.6g}" if reached and value == value else
                   f"  {name:32s} n/a, not reached (the run ended at "
                   f"{result.final_time:g} s)")
+    if args.animate and len(result.logs["time"]) > 1:
+        print(robot_of(scenario).WriteAnimation(
+            result.logs, Path(args.out) / f"animation_{args.controller.replace('-', '_')}"
+                                           ".html"))
     print(f"saved to {args.out}")
     _KeepViewerOpen(meshcat)
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
 
+def _spatial(args) -> int:
+    """The command before every robot ran through `dacph simulate`: the same run,
+    with a note."""
+    if args.panels:
+        raise ConfigError("--panels: dacph spatial is now dacph simulate; allowed: "
+                          f"dacph reproduce {args.scenario} --out DIR (every controller, "
+                          "its tables and panels)")
+    print("dacph: note: dacph spatial is dacph simulate now (any scenario, planar or "
+          "described)", file=sys.stderr)
+    return _simulate(args)
+
+
 def _diagram(args) -> int:
     from pathlib import Path
-    from dacph_drake.controllers import SPATIAL_REGISTRY
     from dacph_drake.graph import render_diagram
-    from dacph_drake.scenario import Scenario
-    from dacph_drake.spatial_run import load_any_scenario
-    scenario = load_any_scenario(args.scenario)
-    registry = REGISTRY if isinstance(scenario, Scenario) else SPATIAL_REGISTRY
+    from dacph_drake.scenario import load_scenario
+    scenario = load_scenario(args.scenario)
     out = Path(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
-        loop = build_closed_loop(controller, scenario, registry)
+        loop = build_closed_loop(controller, scenario)
         stem = out / f"{Path(args.scenario).stem}_{controller.replace('-', '_')}"
         for path in render_diagram(loop.diagram, stem):
             print(path)
     return 0
-
-
-def _spatial(args) -> int:
-    from pathlib import Path
-    from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
-    scenario = load_spatial_scenario(args.scenario)
-    if args.panels and args.controller != "dac":
-        raise ConfigError(f"--panels with --controller {args.controller}; allowed: "
-                          "--controller dac (the panels compare it with the baseline)")
-    meshcat = _LiveViewing(args, scenario)
-    result = simulate_spatial(scenario, args.duration, out_dir=args.out, progress=True,
-                              meshcat=meshcat, controller=args.controller)
-    print(f"{scenario.robot}: {result.status}"
-          f"{': ' + result.reason if result.reason else ''} ({result.final_time:.2f} s "
-          f"simulated in {result.wall_time:.1f} s)")
-    for name, value in result.metrics.items():
-        print(f"  {name:44s} {value:.4g}" if value == value else
-              f"  {name:44s} n/a, not reached")
-    if args.panels and result.status == "ok":
-        from dacph_drake.figures import plot_panels
-        baseline = simulate_spatial(scenario, args.duration, progress=True,
-                                    controller="model-based")
-        print(f"model-based baseline: {baseline.status}"
-              f"{': ' + baseline.reason if baseline.reason else ''}")
-        for path in plot_panels(result.logs, baseline.logs, scenario,
-                                Path(args.out) / "panels"):
-            if path.suffix == ".png":
-                print(path)
-    if args.animate:
-        from dacph_drake.animation import write_spatial_animation
-        print(write_spatial_animation(scenario.robot, result.logs,
-                                      Path(args.out) / "animation.html"))
-    print(f"saved to {args.out}")
-    _KeepViewerOpen(meshcat)
-    return 0 if result.status == "ok" else 1
 
 
 def _print_table(summary) -> None:
@@ -119,14 +101,12 @@ def _print_table(summary) -> None:
 
 def _animate_run(run_dir, controller: str, out=None):
     from pathlib import Path
-    from dacph_drake.animation import write_animation
-    from dacph_drake.reproduce import load_logs
-    from dacph_drake.run import require_run_files
-    from dacph_drake.scenario import load_scenario
-    run_dir = require_run_files(run_dir, [controller])
-    scenario = load_scenario(run_dir / "scenario.yaml")
-    out = Path(out) if out else run_dir / f"animation_{controller.replace('-', '_')}.html"
-    return write_animation(scenario, load_logs(run_dir, controller), out)
+    from dacph_drake.robots import robot_of
+    from dacph_drake.run import load_run
+    logs, scenario, _ = load_run(run_dir, controller)
+    out = (Path(out) if out else
+           Path(run_dir) / f"animation_{controller.replace('-', '_')}.html")
+    return robot_of(scenario).WriteAnimation(logs, out)
 
 
 def _reproduce(args) -> int:
@@ -160,22 +140,18 @@ def _verify(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.run import simulate
-    from dacph_drake.scenario import Scenario
-    from dacph_drake.spatial_run import load_any_scenario, simulate_spatial
+    from dacph_drake.scenario import load_scenario
     target = Path(args.target)
     if target.is_dir():
         run_dir = target
     else:
-        scenario = load_any_scenario(args.target)
+        scenario = load_scenario(args.target)
         if not args.out:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        if isinstance(scenario, Scenario):
-            simulate(scenario, "dac", out_dir=run_dir, progress=True)
-        else:
-            simulate_spatial(scenario, out_dir=run_dir, progress=True, controller="dac")
-    report = verify_run(run_dir)
+        simulate(scenario, args.controller, out_dir=run_dir, progress=True)
+    report = verify_run(run_dir, controller=args.controller)
     for name, check in report["checks"].items():
         detail = check.get("reason") or check.get("first_failure") or ""
         print(f"  {name:22s} {'ok' if check['ok'] else 'FAILED'}  {detail}")
@@ -244,6 +220,22 @@ def _KeepViewerOpen(meshcat) -> None:
               "close it. ")
 
 
+def _AddSimulateArguments(command) -> None:
+    command.add_argument("--out", required=True, help="output directory")
+    command.add_argument("--controller", choices=CONTROLLERS, default="dac",
+                         help="; ".join(f"{name}: {c.description}"
+                                        for name, c in REGISTRY.items()))
+    command.add_argument("--duration", type=float, default=None,
+                         help="[s] (default: the scenario's phases)")
+    command.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
+                         help="save the logs so far every SECONDS of wall time (status "
+                              "'incomplete' until the run ends; default 60)")
+    command.add_argument("--animate", action="store_true",
+                         help="also write an HTML replay of the run "
+                              "(animation_CONTROLLER.html)")
+    _AddLiveViewing(command)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -253,19 +245,12 @@ def main(argv=None) -> int:
     free.add_argument("--robot", help="robot YAML (default: the paper's robot)")
     free.add_argument("--duration", type=float, default=10.0, help="[s]")
     free.set_defaults(run=_free_flight)
-    sim = commands.add_parser("simulate", help="simulate a closed loop and save its logs")
-    sim.add_argument("scenario", help="scenario YAML (e.g. diagrams/short.yaml) or a "
-                                      "built-in name: paper, short")
-    sim.add_argument("--out", required=True, help="output directory")
-    sim.add_argument("--controller", choices=CONTROLLERS, default="dac",
-                     help="; ".join(f"{name}: {c.description}"
-                                    for name, c in REGISTRY.items()))
-    sim.add_argument("--duration", type=float, default=None,
-                     help="[s] (default: the scenario's phases)")
-    sim.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
-                     help="save the logs so far every SECONDS of wall time (status "
-                          "'incomplete' until the run ends; default 60)")
-    _AddLiveViewing(sim)
+    sim = commands.add_parser("simulate", help="simulate a closed loop of any robot "
+                                               "and save its logs")
+    sim.add_argument("scenario", help="scenario YAML (e.g. scenarios/short.yaml) or a "
+                                      "built-in name: "
+                                      f"{', '.join(BUILT_IN_SCENARIO_NAMES)}")
+    _AddSimulateArguments(sim)
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
     graph.add_argument("scenario")
@@ -303,11 +288,11 @@ def main(argv=None) -> int:
     ver = commands.add_parser(
         "verify", help="check the paper's Lyapunov claims on a DAC run (exit 1 on a "
                        "failed check)")
-    ver.add_argument("target", help="a run directory (a planar DAC run, or a spatial "
-                                    "one saved by dacph spatial --controller dac), or a "
-                                    "scenario YAML / built-in name (planar or spatial) "
-                                    "to simulate first")
+    ver.add_argument("target", help="a run directory holding a DAC run, or a scenario "
+                                    "YAML / built-in name to simulate first")
     ver.add_argument("--out", default=None, help="where to save the run of a scenario")
+    ver.add_argument("--controller", choices=CONTROLLERS, default="dac",
+                     help="the run to verify (one with the RHS integrator; default: dac)")
     ver.set_defaults(run=_verify)
     swp = commands.add_parser(
         "sweep", help="Monte Carlo sweep over uncertainty (resumes where it stopped)")
@@ -325,23 +310,12 @@ def main(argv=None) -> int:
                           "so far")
     swp.set_defaults(run=_sweep)
     spa = commands.add_parser(
-        "spatial", help="a spatial robot (URDF/SDF) tracking a 3D end-effector "
-                        "attitude with DAC-pH (or the ablation, or the baseline)")
-    spa.add_argument("scenario", nargs="?", default="satellite_6dof",
-                     help="spatial scenario YAML or a built-in name: satellite_6dof "
-                          "(default), satellite_3dof")
-    spa.add_argument("--out", required=True, help="output directory")
-    spa.add_argument("--duration", type=float, default=None,
-                     help="[s] (default: the scenario's)")
-    spa.add_argument("--controller", default="dac", choices=CONTROLLERS,
-                     help="default: dac")
-    spa.add_argument("--animate", action="store_true",
-                     help="also write the 3D replay (animation.html)")
+        "spatial", help="the former command for described arms: dacph simulate "
+                        "(default scenario satellite_6dof)")
+    spa.add_argument("scenario", nargs="?", default="satellite_6dof")
+    _AddSimulateArguments(spa)
     spa.add_argument("--panels", action="store_true",
-                     help="also run the model-based baseline and write the panels "
-                          "(DIR/panels: learned against nominal B and D, the RHS "
-                          "loop, DAC against the baseline)")
-    _AddLiveViewing(spa)
+                     help="now: dacph reproduce SCENARIO --out DIR")
     spa.set_defaults(run=_spatial)
     args = parser.parse_args(argv)
     logging.basicConfig(format="dacph: note: %(message)s", level=logging.WARNING)

@@ -1,5 +1,5 @@
-"""The paper's figures as six panels, from the logs of a DAC run
-and a model-based run of the same scenario:
+"""The paper's figures as six panels, from the logs of the runs of one scenario
+(a DAC run, the model-based baseline's, and any other registered controller's):
 
 (a) uncertainty (= the nominal prior's error) against the learned estimation error,
     and the RHS control error (norms, log axes)
@@ -7,12 +7,13 @@ and a model-based run of the same scenario:
     axis per entry (readable for any number of links)
 (c) zoom on (b) shortly after the nonlinear terms switch on
 (d) RHS gains K, c against its lower bound c_min (eq. 48), chi
-(e) DAC against model-based: |alpha~| and ||s|| (log axes), d(t)
+(e) every run: |alpha~| and ||s|| (log axes), d(t)
 (f) control inputs (DAC, and the model-based input's difference from it) and states
 
-A spatial robot's runs (SpatialScenario) get (a)-(d) and, in place of (e) and (f),
-(e) DAC against model-based: the attitude error |e|, ||s||, the smallest link-base
-    distance, d(t).
+(a)-(d) are DAC's; (e) and (f) are the planar task's (robots.Robot.task_panels). A
+described arm's runs get, in place of (e) and (f),
+(e) every run: the attitude error |e|, ||s||, the smallest link-base distance, d(t).
+Each controller is drawn in its registered style (controllers.REGISTRY).
 
 Each panel is written as PNG and PDF. Warm-up and phases are shaded and labelled,
 every axis carries one unit, legends sit outside the data. A series with more
@@ -28,20 +29,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
+from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
 from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
 from dacph_drake.metrics import nominal_estimates  # noqa: E402
 from dacph_drake.plant import ArmCoordinates  # noqa: E402
+from dacph_drake.robots import robot_type  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
-PANELS = ("a_uncertainty_and_errors", "b_estimated_entries", "c_zoom_nonlinear",
-          "d_rhs_gains", "e_dac_vs_model_based", "f_inputs_and_states")
-SPATIAL_PANELS = PANELS[:4] + ("e_attitude_dac_vs_model_based",)
+DAC_PANELS = ("a_uncertainty_and_errors", "b_estimated_entries", "c_zoom_nonlinear",
+              "d_rhs_gains")
 WIDTH, DPI = 11.0, 130          # [in], PNG dots per inch
 COLUMNS = 1000                  # envelope columns per axis (about one per pixel)
 LOG_DECADES = 7                 # a log axis spans at most this many decades
-CONTROLLER_STYLES = {"dac": dict(color="C0", ls="-", label="DAC-pH"),
-                     "model-based": dict(color="C1", ls="--", label="model-based")}
 ENTRY_STYLES = {"true": dict(color="k", ls="-", lw=1.0),
                 "learned": dict(color="C0", ls="--", lw=1.0),
                 "nominal": dict(color="0.55", ls=":", lw=1.2)}
@@ -227,16 +227,28 @@ def _panel_d(dac: Logs, scenario: Scenario):
     return fig
 
 
-def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario):
+def _style(controller: str) -> Dict:
+    """A controller's registered colour, line style and label."""
+    entry = REGISTRY[controller]
+    return dict(color=entry.color, ls=entry.linestyle, label=entry.label or controller)
+
+
+def _compared(runs: Dict[str, Logs]):
+    """(controller, logs) of every run, the reference (DAC) last, on top."""
+    return sorted(runs.items(), key=lambda item: item[0] == REFERENCE)
+
+
+def _panel_e(runs: Dict[str, Logs], scenario: Scenario):
     n = len(scenario.q0)
     layout = LhsLog(n)
+    dac = runs[REFERENCE]
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
-    for name, logs in (("model-based", model_based), ("dac", dac)):
+    for name, logs in _compared(runs):
         t, lhs = logs["time"], logs["lhs_log"]
         _trace(ax1, t, np.abs(lhs[:, layout.alpha_error]), xlim, log=True,
-               **CONTROLLER_STYLES[name])
+               **_style(name))
         _trace(ax2, t, np.linalg.norm(lhs[:, layout.s], axis=1), xlim, log=True,
-               **CONTROLLER_STYLES[name])
+               **_style(name))
     ax1.set_ylabel(r"$|\tilde\alpha|$ [rad]")
     ax2.set_ylabel(r"$\|s\|$ [rad/s]")
     _legend_outside(ax1)
@@ -249,8 +261,10 @@ def _panel_e(dac: Logs, model_based: Logs, scenario: Scenario):
     return fig
 
 
-def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario):
+def _panel_f(runs: Dict[str, Logs], scenario: Scenario):
+    """Needs the baseline's run (controllers.BASELINE) beside DAC's."""
     n = len(scenario.q0)
+    dac, model_based = runs[REFERENCE], runs[BASELINE]
     fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
     t = dac["time"]
     for k in range(n):
@@ -277,17 +291,18 @@ def _panel_f(dac: Logs, model_based: Logs, scenario: Scenario):
     return fig
 
 
-def _panel_attitude(dac: Logs, model_based: Logs, scenario):
-    """(e) of a spatial robot: |e| and ||s|| of both controllers, the smallest
-    link-base distance against the potential's margin, d(t)."""
+def _panel_attitude(runs: Dict[str, Logs], scenario):
+    """(e) of a described arm: |e| and ||s|| of every run, the smallest link-base
+    distance against the potential's margin, d(t)."""
     n, layout = len(scenario.q0), AttitudeLog()
+    dac = runs[REFERENCE]
     fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
-    for name, logs in (("model-based", model_based), ("dac", dac)):
+    for name, logs in _compared(runs):
         t, log = logs["time"], logs["attitude_log"]
-        _trace(ax1, t, log[:, layout.e_norm], xlim, log=True, **CONTROLLER_STYLES[name])
-        _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **CONTROLLER_STYLES[name])
-        _trace(ax3, t, log[:, layout.clearance], xlim, **CONTROLLER_STYLES[name])
-    ax3.axhline(scenario.potential.margin, color="k", ls=":", lw=1.0,
+        _trace(ax1, t, log[:, layout.e_norm], xlim, log=True, **_style(name))
+        _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **_style(name))
+        _trace(ax3, t, log[:, layout.clearance], xlim, **_style(name))
+    ax3.axhline(scenario.robot.potential.margin, color="k", ls=":", lw=1.0,
                 label="potential's margin")
     ax1.set_ylabel(r"attitude error $|e|$ [rad]")
     ax2.set_ylabel(r"$\|s\|$ [rad/s]")
@@ -308,29 +323,33 @@ def zoom_window(scenario: Scenario):
     return (start - length / 48, start + length / 12)
 
 
-def make_panels(dac: Logs, model_based: Logs, scenario) -> Dict[str, object]:
-    """The panels as matplotlib figures, by name: PANELS for a planar scenario,
-    SPATIAL_PANELS for a SpatialScenario."""
-    figures = [_panel_a(dac, scenario), _entries(dac, scenario),
-               _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)]
-    if isinstance(scenario, Scenario):
-        figures += [_panel_e(dac, model_based, scenario),
-                    _panel_f(dac, model_based, scenario)]
-    else:
-        figures.append(_panel_attitude(dac, model_based, scenario))
-    for fig in figures:
+# The task panels by name (robots.Robot.task_panels).
+TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f,
+               "e_attitude_dac_vs_model_based": _panel_attitude}
+
+
+def make_panels(runs: Dict[str, Logs], scenario) -> Dict[str, object]:
+    """The panels as matplotlib figures, by name: DAC_PANELS of the DAC run
+    (runs["dac"]) and the robot's task panels comparing every run in ``runs``
+    (controller -> logs)."""
+    dac = runs[REFERENCE]
+    figures = {name: figure for name, figure in zip(DAC_PANELS, (
+        _panel_a(dac, scenario), _entries(dac, scenario),
+        _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)))}
+    for name in robot_type(scenario).task_panels:
+        figures[name] = TASK_PANELS[name](runs, scenario)
+    for fig in figures.values():
         _fit_log_axes(fig)
-    return dict(zip(PANELS if isinstance(scenario, Scenario) else SPATIAL_PANELS,
-                    figures))
+    return figures
 
 
-def plot_panels(dac: Logs, model_based: Logs, scenario, out_dir) -> List[Path]:
+def plot_panels(runs: Dict[str, Logs], scenario, out_dir) -> List[Path]:
     """Writes the panels (make_panels; PNG and PDF) into out_dir; returns their
     paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for name, fig in make_panels(dac, model_based, scenario).items():
+    for name, fig in make_panels(runs, scenario).items():
         paths += [out / f"{name}.png", out / f"{name}.pdf"]
         fig.savefig(paths[-2], dpi=DPI)
         fig.savefig(paths[-1])

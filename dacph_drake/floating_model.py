@@ -52,7 +52,7 @@ class FloatingBaseModel:
 
     def SetInertialParameters(self, pi: np.ndarray) -> None:
         """Evaluates with the bodies' inertias pi from now on (the controller's
-        model error, SpatialScenario.nominal_inertia_scale, or an
+        model error, scenario.DescribedArm.nominal_inertia_scale, or an
         InertialIdentifier's estimate); the plant itself is not changed."""
         pi = np.asarray(pi, float)
         if np.array_equal(pi, self._inertial_parameters):

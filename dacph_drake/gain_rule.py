@@ -19,7 +19,7 @@ def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float
 
 def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
     """Eq. (48) for an LHS damping scaled to the inertia, K_d = damping_rate M(q)
-    (spatial_scenario.AttitudeGains): the paper's fastest LHS sliding rate
+    (scenario.AttitudeGains): the paper's fastest LHS sliding rate
     2 lambda_max(K_d) / inf_q lambda_min(M) bounds dV/dt = -s^T K_d s against
     V = s^T M s / 2; with K_d = damping_rate M it is exactly 2 damping_rate
     (dV/dt = -2 damping_rate V), so c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5)
@@ -89,25 +89,24 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) ->
     return bool(np.all(ratio >= 1.0 / trust_ratio) and np.all(ratio <= trust_ratio))
 
 
-def check_period_order(periods, name=lambda key: f"periods.{key}") -> None:
+def check_period_order(periods) -> None:
     """Refuses periods that break the time-scale separation (RHS faster than LHS,
-    LHS no slower than the learner's sampling, sampling no slower than training);
-    ``name(key)`` is the setting's name in the scenario (periods.rhs, ...)."""
+    LHS no slower than the learner's sampling, sampling no slower than training)."""
     order = [("rhs", periods.rhs), ("lhs", periods.lhs),
              ("learner_sample", periods.learner_sample), ("learner", periods.learner)]
     for (fast, h_fast), (slow, h_slow) in zip(order, order[1:]):
         if not h_fast <= h_slow:
             raise ConfigError(
-                f"{name(fast)} = {h_fast:g} s must not exceed {name(slow)} = "
+                f"periods.{fast} = {h_fast:g} s must not exceed periods.{slow} = "
                 f"{h_slow:g} s (time-scale separation: RHS faster than LHS faster "
                 "than the learner)")
     if periods.lhs == periods.rhs:
-        raise ConfigError(f"{name('rhs')} = {periods.rhs:g} s must be shorter than "
-                          f"{name('lhs')} = {periods.lhs:g} s")
+        raise ConfigError(f"periods.rhs = {periods.rhs:g} s must be shorter than "
+                          f"periods.lhs = {periods.lhs:g} s")
 
 
-def check_rhs_period(periods, c_nominal: float, c_largest: float, beta_max: float,
-                     name: str = "periods.rhs") -> None:
+def check_rhs_period(periods, c_nominal: float, c_largest: float,
+                     beta_max: float) -> None:
     """Refuses an RHS period that cannot realize the largest decay rate the integrator
     may run, ``c_largest`` = (1 + c_margin) c_min(beta_max) [1/s], with a well-damped
     discrete loop (g = h c <= 1/4, see WELL_DAMPED_LOOP_GAIN); ``c_nominal`` is the
@@ -115,8 +114,8 @@ def check_rhs_period(periods, c_nominal: float, c_largest: float, beta_max: floa
     bound = WELL_DAMPED_LOOP_GAIN / c_largest
     if periods.rhs > bound:
         raise ConfigError(
-            f"{name} = {periods.rhs:g} s cannot realize the RHS decay rate "
+            f"periods.rhs = {periods.rhs:g} s cannot realize the RHS decay rate "
             f"c = {c_nominal:.1f} 1/s required by the gain rule (eq. 48) at beta_hat = 1, "
             f"up to {c_largest:.1f} 1/s at rhs.beta_max = {beta_max:g}, with a "
-            f"well-damped discrete loop; allowed: {name} <= 1 / (4 c) = "
+            f"well-damped discrete loop; allowed: periods.rhs <= 1 / (4 c) = "
             f"{bound:.3g} s, or a smaller rhs.beta_max")

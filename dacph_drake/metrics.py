@@ -4,9 +4,8 @@ from typing import Dict
 
 import numpy as np
 
-from dacph_drake.log_layout import AttitudeLog, LearnerLog, LhsLog, RhsLog
-from dacph_drake.plant import ArmCoordinates
-from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.log_layout import LearnerLog, RhsLog
+from dacph_drake.robots import robot_of
 from dacph_drake.scenario import Scenario
 
 
@@ -43,30 +42,19 @@ def nominal_estimates(scenario: Scenario) -> np.ndarray:
                            scenario.uncertainty.D0])
 
 
-def identified_scale(logs: Dict[str, np.ndarray], scenario) -> np.ndarray:
+def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarray:
     """k(t): the total mass of the identified bodies (the logged
-    ``inertial_parameters``, InertialIdentifier) over the true robot's, the common
-    factor momentum data leave to the prior (1 without an identifier)."""
+    ``inertial_parameters``, InertialIdentifier) over the true robot's
+    (``total_mass``), the common factor momentum data leave to the prior (1 without
+    an identifier)."""
     from dacph_drake.inertial_parameters import MASS, PER_BODY
     if "inertial_parameters" not in logs:
         return np.ones(len(logs["time"]))
-    return (logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1)
-            / true_total_mass(scenario))
-
-
-def true_total_mass(scenario) -> float:
-    """The ground-truth robot's total mass [kg]."""
-    if isinstance(scenario, Scenario):
-        return scenario.robot.base.mass + sum(link.mass for link in scenario.robot.links)
-    from dacph_drake.description import MakeRobotPlant
-    from dacph_drake.inertial_parameters import InertialParameters
-    plant = MakeRobotPlant(scenario.robot)
-    return float(sum(body.default_mass()
-                     for body in InertialParameters(plant).bodies))
+    return logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1) / total_mass
 
 
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
-                     mask: np.ndarray) -> Dict[str, float]:
+                     mask: np.ndarray, total_mass: float) -> Dict[str, float]:
     """Learning's own value over the samples ``mask``: the time-RMS
     relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and of the nominal
     prior (B0, D0), their ratio (below 1: learning beats the prior), the share of
@@ -74,7 +62,8 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     share where the learner's beta_hat exceeded rhs.beta_max, so that the gain rule
     ran on beta_max instead (RhsIntegrator). With an inertial identifier in the loop,
     also the identified scale k (identified_scale, mean) and the ratios against
-    k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the same)."""
+    k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the same;
+    ``total_mass``: the ground truth's)."""
     n = len(scenario.q0)
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
@@ -89,7 +78,7 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
         # The identified model is k times the truth's at best (momentum data do not
         # fix the common scale), so the observer's port, and what the learner
         # learns, is k (B~ u - D~ qdot): the errors against k B~, k D~ too.
-        scale = identified_scale(logs, scenario)[mask][:, None]
+        scale = identified_scale(logs, total_mass)[mask][:, None]
         out["identified_scale"] = float(np.mean(scale)) if len(scale) else float("nan")
         for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
             learned = relative_error_rms(estimate[:, columns], scale * truth[:, columns])
@@ -110,16 +99,23 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
     tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics;
     "faultK.NAME" for the K-th actuator fault (uncertainty.faults): the RMS tracking
     error over the FAULT_WINDOW seconds before and after it, and their ratio.
-    ``scenario`` is a Scenario (the tracking error is alpha~ [rad]) or a
-    SpatialScenario (|e|, the attitude error [rad]; the base's excursion is the
-    angle it turned [rad])."""
+    The tracking error and the task's own metrics are the robot's
+    (robots.Robot.TaskSignals, TaskMetrics: a planar arm's alpha~ [rad], a
+    described arm's attitude error |e| [rad]). A phase the run did not reach is
+    nan."""
+    with np.errstate(invalid="ignore"):        # a phase not reached: nan
+        return _RunMetrics(logs, scenario, robot_of(scenario))
+
+
+def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
     n = len(scenario.q0)
     t = logs["time"]
     phases = scenario.phases
     active = t >= phases.linear_start
     phase3 = t >= scenario.disturbance_start
     R = RhsLog(n)
-    alpha_error, sliding, clearance, base_turn = _task_signals(logs, scenario)
+    alpha_error, sliding, clearance, base_turn = robot.TaskSignals(logs)
+    total_mass = robot.TotalMass()
     e_tau = (logs["rhs_log"][:, R.e_tau] if "rhs_log" in logs
              else logs["tau_request"] - logs["tau"])
     out = {
@@ -162,7 +158,8 @@ def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
         if "estimates" in logs:
             out[f"{phase}.chi_rms"] = rms(logs["rhs_log"][mask, R.chi])
             out.update({f"{phase}.{k}": v for k, v in
-                        learning_metrics(logs, scenario, mask).items()})
+                        learning_metrics(logs, scenario, mask, total_mass).items()})
+    out.update(robot.TaskMetrics(logs))
     return out
 
 
@@ -177,25 +174,3 @@ def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str
         "control_effort_increase": dac["control_effort_rms"]
         / model_based["control_effort_rms"] - 1,
     }
-
-
-def _task_signals(logs, scenario):
-    """(tracking error, s, link-base clearance [m], base turn [rad]) over time: the
-    planar arm's alpha~, s (n columns), the kinematic clearance and theta0 - theta0(0),
-    or a spatial robot's |e|, ||s||, signed distance (attitude_log) and the angle of
-    the base's rotation from its start."""
-    if isinstance(scenario, Scenario):
-        n = scenario.robot.num_links
-        lhs, L = logs["lhs_log"], LhsLog(n)
-        base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
-        potential = BaseRepulsionPotential(scenario.robot, scenario.potential)
-        return (lhs[:, L.alpha_error], lhs[:, L.s],
-                np.array([potential.MinClearance(joints) for joints in q]),
-                base_pose[:, 2] - base_pose[0, 2])
-    from dacph_drake.description import MakeRobotPlant
-    log, A = logs["attitude_log"], AttitudeLog()
-    base_q = ArmCoordinates.FromPlant(MakeRobotPlant(scenario.robot)).base_q
-    quaternion = logs["state"][:, base_q[:4]]       # the free base's (w, x, y, z)
-    quaternion = quaternion / np.linalg.norm(quaternion, axis=1, keepdims=True)
-    cosine = np.clip(np.abs(quaternion @ quaternion[0]), 0.0, 1.0)
-    return log[:, A.e_norm], log[:, A.s_norm], log[:, A.clearance], 2 * np.arccos(cosine)

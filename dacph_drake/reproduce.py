@@ -9,18 +9,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional
 
-import numpy as np
 
-from dacph_drake.controllers import NAMES as CONTROLLERS   # reproduce() runs them all
+from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduce()
+                                     REFERENCE)                         # runs them all
 from dacph_drake.errors import ConfigError
 from dacph_drake.figures import plot_panels
 from dacph_drake.metrics import PHASES, comparison, run_metrics
-from dacph_drake.run import (require_run_files, scenario_fingerprints, simulate,
-                             versions)
+from dacph_drake.run import (load_logs, load_run_meta, require_run_files,
+                             scenario_fingerprints, simulate, versions)
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
-REQUIRED = ("dac", "model-based")       # report() also reads directories without
-#                                         the ablation run
+REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
+#                                        the other controllers' runs
 
 
 @dataclass(frozen=True)
@@ -71,16 +71,26 @@ class AblationRow:
     over: Optional[str] = None
 
 
-ABLATION_ROWS = (
-    AblationRow("dac.tracking_error_rms", "RMS alpha~, DAC", "rad"),
-    AblationRow("dac-nominal.tracking_error_rms", "RMS alpha~, dac-nominal", "rad"),
-    AblationRow("model-based.tracking_error_rms", "RMS alpha~, model-based", "rad"),
-    AblationRow("dac.e_tau_rms", "RMS ||e_tau||, DAC", "N m"),
-    AblationRow("dac-nominal.e_tau_rms", "RMS ||e_tau||, dac-nominal", "N m"),
-    AblationRow("dac.e_tau_rms", "RMS ||e_tau||, DAC / dac-nominal", "-",
-                over="dac-nominal.e_tau_rms"),
-    AblationRow("dac.chi_rms", "RMS chi, DAC", "N m"),
-    AblationRow("dac-nominal.chi_rms", "RMS chi, dac-nominal", "N m"),
+def ablation_rows(metrics: Dict[str, Dict[str, float]]) -> List[AblationRow]:
+    """The ablation table's rows for the controllers that ran (``metrics`` by
+    controller, in the registry's order): every controller's tracking error; for
+    every controller with an RHS loop (a chi) its e_tau, DAC's over it, and its
+    chi; then the learner's rows of DAC."""
+    ran = [c for c in CONTROLLERS if c in metrics]
+    rhs_loop = [c for c in ran if f"{PHASES[0]}.chi_rms" in metrics[c]]
+    label = {c: "DAC" if c == REFERENCE else c for c in ran}
+    rows = [AblationRow(f"{c}.tracking_error_rms", f"RMS alpha~, {label[c]}", "rad")
+            for c in ran]
+    rows += [AblationRow(f"{c}.e_tau_rms", f"RMS ||e_tau||, {label[c]}", "N m")
+             for c in rhs_loop]
+    rows += [AblationRow(f"{REFERENCE}.e_tau_rms",
+                         f"RMS ||e_tau||, {label[REFERENCE]} / {c}", "-",
+                         over=f"{c}.e_tau_rms") for c in rhs_loop if c != REFERENCE]
+    rows += [AblationRow(f"{c}.chi_rms", f"RMS chi, {label[c]}", "N m") for c in rhs_loop]
+    return rows + list(LEARNER_ROWS)
+
+
+LEARNER_ROWS = (
     AblationRow("dac.B_error", "B error, learned", "-"),
     AblationRow("dac.B_error_nominal", "B error, nominal prior B0", "-"),
     AblationRow("dac.B_error_ratio", "B error, learned / nominal", "-"),
@@ -110,11 +120,11 @@ def metrics_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
 
 
 def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """The ABLATION_ROWS whose controllers ran, one value per phase (time-RMS
+    """The ablation_rows whose controllers ran, one value per phase (time-RMS
     relative errors: metrics.learning_metrics)."""
     flat = {f"{c}.{k}": v for c, values in metrics.items() for k, v in values.items()}
     rows = []
-    for r in ABLATION_ROWS:
+    for r in ablation_rows(metrics):
         controller, name = r.key.split(".", 1)
         if controller not in metrics or (r.over and r.over.split(".")[0] not in metrics):
             continue
@@ -167,11 +177,6 @@ def table_markdown(rows: List[Dict], title: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
-    with np.load(Path(run_dir) / f"logs_{controller}.npz") as data:
-        return {k: data[k] for k in data.files}
-
-
 def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                                runs: Dict[str, Dict]) -> None:
     """ConfigError unless every run (its run_CONTROLLER.json) was made from
@@ -200,12 +205,12 @@ def report(run_dir) -> Dict:
     controllers = [c for c in CONTROLLERS
                    if c in REQUIRED or (run_dir / f"logs_{c}.npz").exists()]
     logs = {c: load_logs(run_dir, c) for c in controllers}
-    runs = {c: json.loads((run_dir / f"run_{c}.json").read_text()) for c in controllers}
+    runs = {c: load_run_meta(run_dir, c) for c in controllers}
     check_runs_belong_together(run_dir, scenario, runs)
     metrics = {c: run_metrics(logs[c], scenario) for c in controllers}
     rows = metrics_table(metrics)
     ablation = ablation_table(metrics)
-    figures = plot_panels(logs["dac"], logs["model-based"], scenario, run_dir / "figures")
+    figures = plot_panels(logs, scenario, run_dir / "figures")
     summary = {"scenario": "scenario.yaml", "duration": scenario.duration,
                "runs": runs, "table": rows, "ablation": ablation, "metrics": metrics,
                "figures": [str(p.relative_to(run_dir)) for p in figures],
@@ -216,7 +221,7 @@ def report(run_dir) -> Dict:
     (run_dir / "metrics.md").write_text(table_markdown(
         rows, f"DAC-pH against the paper ({scenario.duration:g} s scenario; {status})"))
     (run_dir / "ablation.md").write_text(ablation_markdown(
-        ablation, f"Learning per phase: DAC, dac-nominal (learner off), model-based "
+        ablation, f"Learning per phase: {', '.join(controllers)} "
                   f"({scenario.duration:g} s scenario)"))
     return summary
 

@@ -106,6 +106,23 @@ def save_robot(robot: RobotParams, path: str) -> None:
         f.write(yaml_dump_typed(robot))
 
 
+def read_yaml(path):
+    """The parsed YAML file (tagged mappings as _TaggedMapping), {} when empty;
+    ConfigError naming the file for malformed YAML (with its line and column) or a
+    file that cannot be read."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            raw = yaml.load(f, Loader=_TaggedLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark
+        raise ConfigError(f"{path}: malformed YAML at line {mark.line + 1}, column "
+                          f"{mark.column + 1}: {e.problem}") from e
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
+        raise ConfigError(f"{path}: cannot be read ({e}); allowed: a readable UTF-8 "
+                          "YAML file") from e
+    return raw if raw is not None else {}
+
+
 def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
     """yaml_load_typed with one-line errors that name the file: malformed YAML (with
     its line and column), a value of the wrong kind (naming the setting), unknown
@@ -113,17 +130,7 @@ def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
     named in a logged warning (it takes the schema's default). ``migrate(raw, path)``,
     if given, returns the parsed file with settings of an older layout moved to
     their current place (or None when there is nothing to move)."""
-    try:
-        with open(path) as f:
-            raw = yaml.load(f, Loader=_TaggedLoader)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark
-        raise ConfigError(f"{path}: malformed YAML at line {mark.line + 1}, column "
-                          f"{mark.column + 1}: {e.problem}") from e
-    except (OSError, yaml.YAMLError) as e:
-        raise ConfigError(f"{path}: cannot be read ({e}); allowed: a readable YAML "
-                          "file") from e
-    raw = raw if raw is not None else {}
+    raw = read_yaml(path)
     migrated = migrate(raw, path) if migrate is not None else None
     raw = migrated if migrated is not None else raw
     _check_kinds(raw, schema, f"{path}: ")
@@ -135,7 +142,8 @@ def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
             " or ".join(f"{name}:" for name in missing))
     try:
         if migrated is not None:
-            return yaml_load_typed(schema=schema, data=yaml.safe_dump(migrated))
+            return yaml_load_typed(schema=schema, data=yaml.dump(migrated,
+                                                             Dumper=_TaggedDumper))
         return yaml_load_typed(schema=schema, filename=str(path))
     except (RuntimeError, ValueError, TypeError) as e:
         raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
@@ -146,9 +154,16 @@ class _TaggedLoader(yaml.SafeLoader):
     !Uniform {min, max}) as its untagged mapping, list or scalar."""
 
 
+class _TaggedMapping(dict):
+    """A mapping read with its YAML tag (``tag``: the name after the !)."""
+    tag = ""
+
+
 def _construct_untagged(loader, suffix, node):
     if isinstance(node, yaml.MappingNode):
-        return loader.construct_mapping(node, deep=True)
+        mapping = _TaggedMapping(loader.construct_mapping(node, deep=True))
+        mapping.tag = suffix
+        return mapping
     if isinstance(node, yaml.SequenceNode):
         return loader.construct_sequence(node, deep=True)
     return loader.construct_scalar(node)
@@ -157,12 +172,30 @@ def _construct_untagged(loader, suffix, node):
 _TaggedLoader.add_multi_constructor("!", _construct_untagged)
 
 
+class _TaggedDumper(yaml.SafeDumper):
+    """PyYAML's safe dumper writing a _TaggedMapping with its tag."""
+
+
+_TaggedDumper.add_representer(_TaggedMapping, lambda dumper, mapping: (
+    dumper.represent_mapping(f"!{mapping.tag}" if mapping.tag else
+                             "tag:yaml.org,2002:map", mapping)))
+
+
 def _check_kinds(raw, schema, where: str, name: str = "") -> None:
     """ConfigError naming the first setting of ``raw`` (parsed YAML) whose kind does
     not fit ``schema`` (a dataclass type, List[...], float, int or str): a mapping
     where a section belongs, a list where a list belongs, a number where a number
     belongs. Unknown keys are left to yaml_load_typed."""
     shown = name or "the file"
+    if typing.get_origin(schema) is typing.Union and all(
+            dataclasses.is_dataclass(member) for member in typing.get_args(schema)):
+        members = {member.__name__: member for member in typing.get_args(schema)}
+        tag = getattr(raw, "tag", "")
+        if tag not in members and tag:
+            raise ConfigError(f"{where}{shown} has the tag !{tag}; allowed: "
+                              f"{', '.join('!' + m for m in members)} (none: "
+                              f"{typing.get_args(schema)[0].__name__})")
+        schema = members[tag] if tag else typing.get_args(schema)[0]
     if dataclasses.is_dataclass(schema):
         if not isinstance(raw, dict):
             raise ConfigError(f"{where}{shown} = {raw!r} is not a mapping; allowed: a "

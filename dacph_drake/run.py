@@ -1,5 +1,7 @@
-"""Simulating a closed loop: initial state, divergence monitor, progress bar, and
-saving the logs with the scenario, the versions and the seed."""
+"""Simulating a closed loop of any robot: initial state, divergence monitor,
+progress bar, and the run layout: a run directory holds scenario.yaml and, per
+controller, logs_CONTROLLER.npz and run_CONTROLLER.json (status, reason, times,
+seed, the scenario's fingerprint, versions), all runs of one scenario."""
 import fcntl
 import hashlib
 import json
@@ -9,20 +11,19 @@ import resource
 import signal
 import threading
 import time
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional
 
 import numpy as np
 
-from dacph_drake.animation import LiveView
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.files import replaced_atomically
 from dacph_drake.plant import ArmCoordinates
-from dacph_drake.potential import BaseRepulsionPotential
 from dacph_drake.progress import progress_bar
-from dacph_drake.scenario import Scenario, save_scenario, saved_forms
+from dacph_drake.scenario import Scenario, load_scenario, save_scenario, saved_forms
 
 MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state
@@ -110,15 +111,24 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     redone on resume. With ``checkpoint_seconds`` and out_dir, the logs so far are
     saved every checkpoint_seconds of wall time with status "incomplete", so that a
     crash or kill -9 loses at most that much (every file is replaced atomically).
-    With ``meshcat`` (a pydrake Meshcat), the ground truth is drawn there while it
-    simulates (animation.LiveView; scenario.simulator.target_realtime_rate paces
-    it); the diagram and the results are the same as without."""
+    A directory holding another controller's run of another scenario is refused
+    (require_one_scenario). With ``meshcat`` (a pydrake Meshcat), the ground truth
+    is drawn there while it simulates (robots.Robot.LiveView;
+    scenario.simulator.target_realtime_rate paces it); the diagram and the results
+    are the same as without."""
     require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
     if checkpoint_seconds is not None:
         require_positive("checkpoint_seconds (--checkpoint)", checkpoint_seconds, "s")
-    lock = _LockRun(prepare_out_dir(out_dir), controller) if out_dir is not None else None
+    lock = None
+    if out_dir is not None:
+        lock = _LockRun(prepare_out_dir(out_dir), controller)
+        try:
+            require_one_scenario(Path(out_dir), scenario, controller)
+        except ConfigError:
+            lock.close()
+            raise
     checkpoint = None
     if out_dir is not None and checkpoint_seconds is not None:
         checkpoint = (checkpoint_seconds,
@@ -152,25 +162,25 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
     partial result that often; ``meshcat`` gets a LiveView."""
     loop = build_closed_loop(controller, scenario)
-    live_view = LiveView.ForPlanarLoop(loop, meshcat) if meshcat is not None else None
+    live_view = loop.robot.LiveView(loop, meshcat) if meshcat is not None else None
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant
     plant_context = plant.GetMyContextFromRoot(context)
     coordinates = ArmCoordinates.FromPlant(plant)
-    clearance = BaseRepulsionPotential(scenario.robot, scenario.potential).MinClearance
+    clearance = loop.robot.Clearance()
 
     def check(t: float):
         """The reason to stop at time t, or None: a non-finite state, a joint rate
-        beyond MAX_JOINT_RATE, or a link touching the base (the ground truth has no
-        collision geometry: the kinematic clearance of its links is checked here)."""
+        beyond MAX_JOINT_RATE, or a link touching the base where the robot measures
+        it (robots.Robot.Clearance: the ground truth has no collision geometry)."""
         x = plant_context.get_continuous_state_vector().CopyToVector()
         if not np.all(np.isfinite(x)):
             return f"non-finite plant state at t = {t:.4f} s"
         _, q, base_velocity, qdot = coordinates.Split(x)
         if max(np.max(np.abs(base_velocity)), np.max(np.abs(qdot))) > MAX_JOINT_RATE:
             return f"runaway: a rate exceeded {MAX_JOINT_RATE} rad/s at t = {t:.4f} s"
-        rho = clearance(q)
+        rho = clearance(q) if clearance is not None else np.inf
         if rho <= 0:
             return (f"collision: a link touched the base at t = {t:.4f} s (clearance "
                     f"{rho:.4f} m)")
@@ -244,8 +254,7 @@ def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
 
 
 def collect_logs(loop, context) -> Dict[str, np.ndarray]:
-    """Every logger's samples of a loop (ClosedLoop, spatial_diagrams.SpatialLoop),
-    with "time", cut to the samples all of them hold: a run stopped
+    """Every logger's samples of a closed_loop.ClosedLoop, with "time", cut to the samples all of them hold: a run stopped
     inside the loggers' publish at one instant (SIGINT, a failed callback) has some
     loggers one sample ahead of the others."""
     logs, times = {}, None
@@ -297,3 +306,57 @@ def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = Tr
             open(path, "w") as f:
         json.dump(meta, f, indent=2)
     return out
+
+
+def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
+    """ConfigError when ``out`` holds a run that a run of ``controller`` on
+    ``scenario`` would leave beside runs of another scenario (report() then
+    refuses the directory): another controller's run_C.json whose scenario
+    fingerprint is not ``scenario``'s, or a run of the layout before one run
+    layout (run.json, logs.npz)."""
+    if (out / "run.json").is_file() or (out / "logs.npz").is_file():
+        raise ConfigError(f"--out = {str(out)!r} holds a run of the older spatial "
+                          "layout (run.json, logs.npz); allowed: a directory without it")
+    fingerprints = scenario_fingerprints(scenario)
+    for path in sorted(out.glob("run_*.json")):
+        other = path.stem[len("run_"):]
+        if other == controller:
+            continue
+        try:
+            recorded = json.loads(path.read_text()).get("scenario_fingerprint")
+        except (OSError, ValueError):
+            recorded = None
+        if recorded not in fingerprints:
+            raise ConfigError(
+                f"--out = {str(out)!r} holds a {other} run of another scenario; "
+                "allowed: a directory whose runs are of this scenario (runs of one "
+                "scenario in one directory), or another directory")
+
+
+def load_run(run_dir, controller: str):
+    """(logs, scenario, run.json contents) of ``controller``'s run saved in run_dir
+    (ConfigError naming a missing or damaged file)."""
+    run_dir = require_run_files(run_dir, [controller])
+    scenario = load_scenario(run_dir / "scenario.yaml")
+    return load_logs(run_dir, controller), scenario, load_run_meta(run_dir, controller)
+
+
+def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
+    """logs_CONTROLLER.npz of run_dir (ConfigError naming it when damaged)."""
+    path = Path(run_dir) / f"logs_{controller}.npz"
+    try:
+        with np.load(path) as data:
+            return {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
+        raise ConfigError(f"{path} is damaged ({type(e).__name__}: {e}); allowed: a "
+                          "logs file saved by dacph simulate") from e
+
+
+def load_run_meta(run_dir, controller: str) -> Dict:
+    """run_CONTROLLER.json of run_dir (ConfigError naming it when damaged)."""
+    path = Path(run_dir) / f"run_{controller}.json"
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise ConfigError(f"{path} is damaged ({e}); allowed: a run file saved by "
+                          "dacph simulate") from e

@@ -2,13 +2,14 @@
 ``pydrake.common.yaml.yaml_load_typed`` (the defaults are the paper's scenario, 1500 s,
 with the SPEC settings listed in docs/equations.md)."""
 import logging
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List
+from typing import List, Union
 
 import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.common.yaml import yaml_dump_typed
+from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
@@ -107,6 +108,57 @@ class Reference:
     """alpha_d(t) = alpha(0) + sum_i amplitudes[i] sin(2 pi t / periods[i]) [rad]."""
     amplitudes: List[float] = field(default_factory=lambda: [0.3, 0.1])
     periods: List[float] = field(default_factory=lambda: [30.0, 11.0])
+
+
+@dataclass
+class AttitudeReference:
+    """R_d(t) = R_d(0) Rot(axis, amplitude sin(2 pi t / period)) (a body-fixed
+    axis), with R_d(0) the end effector's attitude at q0 turned by
+    ``initial_error`` [rad] about ``initial_error_axis`` (world frame)."""
+    axis: List[float] = field(default_factory=lambda: [0.0, 0.6, 0.8])
+    amplitude: float = 0.4          # [rad]
+    period: float = 8.0             # [s]
+    initial_error: float = 0.3      # [rad]
+    initial_error_axis: List[float] = field(default_factory=lambda: [0.6, 0.0, 0.8])
+
+    def Start(self, R_WE0: RotationMatrix) -> RotationMatrix:
+        """R_d(0) from the end effector's attitude at the start."""
+        axis = np.asarray(self.initial_error_axis, float)
+        return RotationMatrix(AngleAxis(self.initial_error,
+                                        axis / np.linalg.norm(axis))) @ R_WE0
+
+    def At(self, R_d0: RotationMatrix, t: float):
+        """(R_d(t), omega_d(t) in the world frame [rad/s])."""
+        axis = np.asarray(self.axis, float) / np.linalg.norm(self.axis)
+        w = 2 * np.pi / self.period
+        phi, phi_dot = self.amplitude * np.sin(w * t), self.amplitude * w * np.cos(w * t)
+        return (R_d0 @ RotationMatrix(AngleAxis(phi, axis)),
+                R_d0.matrix() @ axis * phi_dot)
+
+
+@dataclass
+class AttitudeGains:
+    """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi with a damped pseudo-inverse
+    (``task_damping`` mu), and the sliding-mode law
+
+        tau = M nu_dot + C' nu - damping_rate M s - chi tanh(diag(M) s / phi),
+        phi = epsilon + chi / boundary_rate:
+
+    the damping is scaled to the inertia (K_d = damping_rate M(q)), so every joint's
+    s decays at the same rate whatever its inertia (a light wrist with a constant
+    K_d would need a far faster controller than a heavy shoulder), and so is the
+    robust term's boundary layer, whose thickness phi follows chi (Slotine and Li's
+    balance condition, Applied Nonlinear Control, sec. 7.2): its slope adds at most
+    boundary_rate [1/s] to any joint's rate, whatever chi and the inertia (the
+    paper's fixed tanh(s / epsilon) would add chi / (epsilon M_ii), a stiff sampled
+    loop for a 5e-4 kg m^2 wrist or a large chi). chi comes from the RHS loop in DAC
+    (its bound on ||e_tau||) and is ``chi_model_based`` in the baseline."""
+    Lambda: float = 2.0             # [1/s]
+    damping_rate: float = 20.0      # [1/s]
+    task_damping: float = 1e-3      # mu [-]
+    epsilon: float = 1e-3           # [N m s]
+    boundary_rate: float = 20.0     # [1/s]
+    chi_model_based: float = 0.0    # [N m]
 
 
 @dataclass
@@ -355,16 +407,203 @@ class Stress:
     start: float = 0.0              # [s]
 
 
+# The robot: one of two typed sections (YAML tags !PlanarArm, the default, and
+# !DescribedArm), and the task its LHS controller tracks (!EndEffectorAngle, the
+# default, and !EndEffectorAttitude). robots.robot_of is the one place that
+# dispatches on them.
+
+
+@dataclass
+class PlanarArm:
+    """robot: a planar n-link arm on a free base (robot.RobotParams): ``truth`` is
+    the ground truth, ``nominal`` the controller's model of it (their difference is
+    the controller's model error), ``potential`` the null-space potential keeping
+    the links off the base and unfolded. Its task: EndEffectorAngle."""
+    truth: RobotParams = field(default_factory=RobotParams)
+    nominal: RobotParams = field(default_factory=RobotParams)
+    potential: Potential = field(default_factory=Potential)
+
+    def Validate(self) -> int:
+        """ConfigError naming the first invalid setting; returns the joint count."""
+        self.truth.Validate("robot.truth")
+        self.nominal.Validate("robot.nominal")
+        n = self.truth.num_links
+        if self.nominal.num_links != n:
+            raise ConfigError(f"robot.nominal has {self.nominal.num_links} links; "
+                              f"allowed: the same as robot.truth ({n})")
+        for name in ("base_gain", "base_margin", "fold_gain"):
+            require_positive(f"robot.potential.{name}", getattr(self.potential, name))
+        require_in_range("robot.potential.fold_margin", self.potential.fold_margin, 1e-3,
+                         np.pi, "rad")
+        require_in_range("robot.potential.points_per_link",
+                         self.potential.points_per_link, 1, 100)
+        return n
+
+    # The sweep's ground-truth distributions this robot takes
+    # (montecarlo.definition.ROBOT_DISTRIBUTIONS).
+    SAMPLED_SETTINGS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
+                        "base_mass_scale", "base_inertia_scale")
+
+    def ApplyRobotSample(self, sampled) -> None:
+        """A sweep trial's sampled ground truth (montecarlo.definition): per link
+        mass (and inertia), length (com, width; inertia by its square) and inertia
+        factors, the base's mass (and inertia) and inertia factors."""
+        links = self.truth.links
+        for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
+            link.mass *= f
+            link.inertia *= f
+        for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
+            link.length *= f
+            link.com *= f
+            link.width *= f
+            link.inertia *= f * f
+        for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
+            link.inertia *= f
+        f = sampled.get("base_mass_scale", 1.0)
+        self.truth.base.mass *= f
+        self.truth.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
+
+    def ApplyModelErrorSample(self, links, base, num_joints: int) -> None:
+        """The controller's model error of a sweep trial: ``links`` (one factor per
+        link, or None) and ``base`` (or None) multiply the nominal robot's masses
+        and inertias."""
+        for link, f in zip(self.nominal.links, links or []):
+            link.mass *= f
+            link.inertia *= f
+        if base is not None:
+            self.nominal.base.mass *= base
+            self.nominal.base.inertia *= base
+
+    def OlderForms(self, scenario) -> List[str]:
+        """The YAML texts of ``scenario`` (whose robot this is) in the layouts
+        before the robot: and task: sections (scenario_layouts.PlanarLayoutV1)."""
+        from dacph_drake.scenario_layouts import PlanarLayoutV1
+        return PlanarLayoutV1.From(scenario).SavedForms()
+
+
+@dataclass
+class ClearancePotential:
+    """The null-space potential of a described arm
+    (spatial_potential.BaseClearancePotential): U = gain / 2 sum_k max(0, margin -
+    phi_k)^2 over the link-base signed distances, xi = -eta grad U; gain = 0
+    switches it off."""
+    gain: float = 1.0
+    margin: float = 0.1             # [m]
+    eta: float = 20.0               # [1/s]
+
+
+@dataclass
+class DescribedArm:
+    """robot: !DescribedArm, an arm from a description file (``description``: a
+    shipped name, description.SPATIAL_ROBOTS, or a .urdf/.sdf path; the root body
+    is the free base). ``nominal_inertia_scale`` is the controller's model error: one
+    factor per body with mass in the description's order (base first;
+    inertial_parameters.InertialParameters), by which the controller's model
+    multiplies that body's mass and rotational inertia (its centre of mass stays);
+    empty: the description's own inertias. Its task: EndEffectorAttitude."""
+    description: str = "satellite_6dof"
+    nominal_inertia_scale: List[float] = field(default_factory=list)
+    potential: ClearancePotential = field(default_factory=ClearancePotential)
+
+    def Validate(self, num_bodies: int) -> None:
+        """ConfigError naming the first invalid setting (``num_bodies``: the
+        description's bodies with mass)."""
+        if len(self.nominal_inertia_scale) not in (0, num_bodies):
+            raise ConfigError(f"robot.nominal_inertia_scale has "
+                              f"{len(self.nominal_inertia_scale)} entries; allowed: "
+                              f"{num_bodies} (one per body with mass, base first) or none")
+        for i, f in enumerate(self.nominal_inertia_scale):
+            require_in_range(f"robot.nominal_inertia_scale[{i}]", f, 0.1, 10.0)
+        require_nonnegative("robot.potential.gain", self.potential.gain)
+        require_positive("robot.potential.margin", self.potential.margin, "m")
+        require_nonnegative("robot.potential.eta", self.potential.eta, "1/s")
+
+    SAMPLED_SETTINGS = ()           # a description has no link parameters to sample
+
+    def ApplyRobotSample(self, sampled) -> None:
+        """Nothing: the ground truth is the description's."""
+
+    def ApplyModelErrorSample(self, links, base, num_joints: int) -> None:
+        """nominal_inertia_scale = [base, links...] (1 where not sampled; one link
+        per joint)."""
+        if links is not None or base is not None:
+            self.nominal_inertia_scale = ([1.0 if base is None else base]
+                                          + list(links or [1.0] * num_joints))
+
+    def OlderForms(self, scenario) -> List[str]:
+        """None: runs of described arms were first fingerprinted in this layout."""
+        return []
+
+
+@dataclass
+class EndEffectorAngle:
+    """task: the planar end effector's absolute angle alpha = theta0 + sum q tracks
+    ``reference`` under the sliding-mode LHS controller with ``gains``."""
+    reference: Reference = field(default_factory=Reference)
+    gains: LhsGains = field(default_factory=LhsGains)
+
+    def Validate(self, periods: Periods) -> None:
+        for name in ("Kd", "Lambda", "epsilon", "eta"):
+            require_positive(f"task.gains.{name}", getattr(self.gains, name))
+        require_nonnegative("task.gains.chi_model_based", self.gains.chi_model_based,
+                            "N m")
+        require_in_range("task.gains.min_task_singular_value",
+                         self.gains.min_task_singular_value, 0.0, 10.0)
+        require_nonnegative("task.gains.boundary_rate", self.gains.boundary_rate, "1/s")
+        if len(self.reference.amplitudes) != len(self.reference.periods):
+            raise ConfigError("task.reference.amplitudes and task.reference.periods "
+                              "must have the same length")
+        for i, T in enumerate(self.reference.periods):
+            require_positive(f"task.reference.periods[{i}]", T, "s")
+
+
+@dataclass
+class EndEffectorAttitude:
+    """task: !EndEffectorAttitude, the end effector's 3D attitude tracks
+    ``reference`` under the AttitudeController with ``gains``."""
+    reference: AttitudeReference = field(default_factory=AttitudeReference)
+    gains: AttitudeGains = field(default_factory=AttitudeGains)
+
+    def Validate(self, periods: Periods) -> None:
+        r, g = self.reference, self.gains
+        require_positive("task.reference.period", r.period, "s")
+        require_nonnegative("task.reference.amplitude", r.amplitude, "rad")
+        require_in_range("task.reference.initial_error", r.initial_error, 0.0, np.pi,
+                         "rad")
+        for name in ("axis", "initial_error_axis"):
+            axis = getattr(r, name)
+            require_finite_numbers(f"task.reference.{name}", list(axis))
+            if len(axis) != 3 or np.linalg.norm(axis) == 0:
+                raise ConfigError(f"task.reference.{name} = {list(axis)}; allowed: a "
+                                  "non-zero 3-vector")
+        require_positive("task.gains.Lambda", g.Lambda, "1/s")
+        require_positive("task.gains.damping_rate", g.damping_rate, "1/s")
+        require_nonnegative("task.gains.task_damping", g.task_damping)
+        require_positive("task.gains.epsilon", g.epsilon, "N m s")
+        require_positive("task.gains.boundary_rate", g.boundary_rate, "1/s")
+        require_nonnegative("task.gains.chi_model_based", g.chi_model_based, "N m")
+        for name, rate in (("damping_rate", g.damping_rate),
+                           ("damping_rate + task.gains.boundary_rate",
+                            g.damping_rate + g.boundary_rate)):
+            if rate * periods.lhs > 0.5:
+                raise ConfigError(
+                    f"task.gains.{name} = {rate:g} 1/s with periods.lhs = "
+                    f"{periods.lhs:g} s; allowed: rate * periods.lhs <= 0.5 (the "
+                    "sampled sliding-mode loop stays well damped)")
+
+
 @dataclass(eq=False)
 class Scenario:
-    robot: RobotParams = field(default_factory=RobotParams)
-    nominal_robot: RobotParams = field(default_factory=RobotParams)
+    """Every setting of a closed-loop run: the robot and its task (typed sections,
+    see PlanarArm, DescribedArm, EndEffectorAngle, EndEffectorAttitude), the
+    initial joint angles, and the sections every robot shares. The run lasts as
+    long as the phases."""
+    robot: Union[PlanarArm, DescribedArm] = field(default_factory=PlanarArm)
+    task: Union[EndEffectorAngle, EndEffectorAttitude] = field(
+        default_factory=EndEffectorAngle)
     q0: List[float] = field(default_factory=lambda: [0.3, 1.0])   # initial joints [rad]
     phases: Phases = field(default_factory=Phases)
-    lhs: LhsGains = field(default_factory=LhsGains)
-    potential: Potential = field(default_factory=Potential)
     inertia: InertiaIdentification = field(default_factory=InertiaIdentification)
-    reference: Reference = field(default_factory=Reference)
     rhs: Rhs = field(default_factory=Rhs)
     periods: Periods = field(default_factory=Periods)
     uncertainty: Uncertainty = field(default_factory=Uncertainty)
@@ -394,40 +633,26 @@ class Scenario:
 
     def Validate(self) -> None:
         """Raises ConfigError naming the first invalid setting and its allowed range
-        (the RHS period is checked against the gain rule when a diagram is built:
+        (the robot and its task through robots.robot_of, which builds the robot;
+        the RHS period is checked against the gain rule when a diagram is built:
         gain_rule.check_rhs_period)."""
+        from dacph_drake.robots import robot_of
         validate_seed(self.seed)
-        self.robot.Validate("robot")
-        self.nominal_robot.Validate("nominal_robot")
-        n = self.robot.num_links
-        if self.nominal_robot.num_links != n:
-            raise ConfigError(f"nominal_robot has {self.nominal_robot.num_links} links; "
-                              f"allowed: the same as robot ({n})")
+        robot_of(self)
+
+    def ValidateShared(self, n: int) -> None:
+        """ConfigError naming the first invalid setting of the sections every robot
+        shares, for a robot with ``n`` joints (robots.robot_of calls it)."""
         _require_length("q0", self.q0, n)
+        require_finite_numbers("q0", list(self.q0))
+        self.task.Validate(self.periods)
         validate_phases(self.phases)
         require_positive("phases (total)", self.phases.end, "s")
-        for name in ("Kd", "Lambda", "epsilon", "eta"):
-            require_positive(f"lhs.{name}", getattr(self.lhs, name))
-        require_nonnegative("lhs.chi_model_based", self.lhs.chi_model_based, "N m")
-        require_in_range("lhs.min_task_singular_value", self.lhs.min_task_singular_value,
-                         0.0, 10.0)
-        require_nonnegative("lhs.boundary_rate", self.lhs.boundary_rate, "1/s")
         require_in_range("inertia.prior_weight", self.inertia.prior_weight, 1e-14, 1.0)
         require_nonnegative("inertia.start", self.inertia.start, "s")
         require_positive("inertia.duration", self.inertia.duration, "s")
         require_in_range("inertia.change_threshold", self.inertia.change_threshold,
                          0.0, 1.0)
-        for name in ("base_gain", "base_margin", "fold_gain"):
-            require_positive(f"potential.{name}", getattr(self.potential, name))
-        require_in_range("potential.fold_margin", self.potential.fold_margin, 1e-3,
-                         np.pi, "rad")
-        require_in_range("potential.points_per_link", self.potential.points_per_link,
-                         1, 100)
-        if len(self.reference.amplitudes) != len(self.reference.periods):
-            raise ConfigError("reference.amplitudes and reference.periods must have the "
-                              "same length")
-        for i, T in enumerate(self.reference.periods):
-            require_positive(f"reference.periods[{i}]", T, "s")
         validate_port_settings(self, n)
         validate_simulator_config(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.
@@ -448,12 +673,10 @@ def validate_phases(phases: Phases) -> None:
         require_nonnegative(f"phases.{name}", getattr(phases, name), "s")
 
 
-def validate_port_settings(scenario, n: int,
-                           period_name=lambda key: f"periods.{key}") -> None:
+def validate_port_settings(scenario, n: int) -> None:
     """ConfigError naming the first invalid setting of the port's RHS chain (rhs,
     stress, periods, uncertainty, disturbance, learner, excitation) of a scenario
-    with ``n`` joints; planar and spatial scenarios share these sections.
-    ``period_name(key)`` is how the scenario names its period ``key``."""
+    with ``n`` joints."""
     from dacph_drake.gain_rule import check_period_order
     require_positive("rhs.Td", scenario.rhs.Td)
     require_nonnegative("rhs.c_margin", scenario.rhs.c_margin)
@@ -470,10 +693,10 @@ def validate_port_settings(scenario, n: int,
     require_nonnegative("stress.start", scenario.stress.start, "s")
     periods = scenario.periods
     for key in ("rhs", "lhs", "learner", "learner_sample", "log"):
-        require_positive(period_name(key), getattr(periods, key), "s")
-    check_period_order(periods, period_name)
+        require_positive(f"periods.{key}", getattr(periods, key), "s")
+    check_period_order(periods)
     if periods.log > scenario.duration:
-        raise ConfigError(f"{period_name('log')} = {periods.log:g} s is longer than "
+        raise ConfigError(f"periods.log = {periods.log:g} s is longer than "
                           f"the run ({scenario.duration:g} s); allowed: at most the "
                           "run's duration")
     u = scenario.uncertainty
@@ -526,10 +749,10 @@ def validate_port_settings(scenario, n: int,
     _require_length("learner.band", L.band, 2, "[low, high] in Hz")
     require_in_range("learner.band[0]", L.band[0], 0.0, nyquist,
                      "Hz (0: no high-pass; at most the Nyquist frequency of "
-                     f"{period_name('learner_sample')})")
+                     "periods.learner_sample)")
     require_in_range("learner.band[1]", L.band[1], L.band[0], nyquist,
                      "Hz (above band[0], at most the Nyquist frequency of "
-                     f"{period_name('learner_sample')})")
+                     "periods.learner_sample)")
     _require_length("learner.band_sections", L.band_sections, 2,
                     "[high-pass, low-pass] section counts")
     for i, count in enumerate(L.band_sections):
@@ -544,18 +767,18 @@ def validate_port_settings(scenario, n: int,
         require_in_range("learner.step_guard", L.step_guard, 1.0, 1e12, "(0: off)")
     require_in_range("learner.min_window", L.min_window, 0.0,
                      L.window * periods.learner_sample,
-                     f"s (at most learner.window * {period_name('learner_sample')})")
+                     "s (at most learner.window * periods.learner_sample)")
     E = scenario.excitation
     require_nonnegative("excitation.amplitude", E.amplitude, "N m")
     _require_length("excitation.frequencies", E.frequencies, 2,
                     "[first, last] in Hz")
     require_in_range("excitation.frequencies[0]", E.frequencies[0], 1e-3,
                      0.5 / periods.lhs, "Hz (at most the Nyquist frequency "
-                     f"of {period_name('lhs')})")
+                     "of periods.lhs)")
     require_in_range("excitation.frequencies[1]", E.frequencies[1],
                      E.frequencies[0], 0.5 / periods.lhs,
                      "Hz (at least frequencies[0], at most the Nyquist frequency "
-                     f"of {period_name('lhs')})")
+                     "of periods.lhs)")
     if E.amplitude > 0 and L.mode == "regularized" and not (
             L.band[0] < E.frequencies[0] and E.frequencies[1] < L.band[1]):
         raise ConfigError(
@@ -572,23 +795,24 @@ def _require_length(name: str, values, n: int, meaning: str = "one per joint"
 
 
 def load_scenario(path) -> Scenario:
-    """Loads and validates a scenario: a YAML file (unknown keys and wrong types are
-    errors that name the file and the key; a file without a robot: or nominal_robot:
-    section gets the paper's arm and a logged warning saying so) or a built-in name (BUILT_IN_SCENARIOS:
-    "paper", "short") where no file of that name exists."""
+    """Loads and validates a scenario: a built-in name (BUILT_IN_SCENARIOS) where no
+    file of that name exists, or a YAML file (unknown keys and wrong types are
+    errors that name the file and the key; a file without a robot: section gets the
+    paper's arm and a logged warning saying so). Files of the layouts before the
+    robot: and task: sections (scenario_layouts) load with a logged note."""
+    from dacph_drake.scenario_layouts import load_older_layout
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
-    scenario = load_yaml_dataclass(path, Scenario,
-                                   noted_defaults=("robot", "nominal_robot"),
-                                   migrate=_move_integration_scheme)
+    scenario = load_older_layout(path) or load_yaml_dataclass(
+        path, Scenario, noted_defaults=("robot",), migrate=move_integration_scheme)
     scenario.Validate()
     return scenario
 
 
-def _move_integration_scheme(raw, path):
+def move_integration_scheme(raw, path):
     """Files saved before the scenario embedded Drake's SimulatorConfig have a
     top-level ``integration_scheme: X``: it is read as ``simulator:
     {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
@@ -611,54 +835,120 @@ def _move_integration_scheme(raw, path):
 
 
 def paper_scenario() -> Scenario:
-    """The paper's scenario (1500 s): the defaults;
-    diagrams/paper.yaml is its file."""
+    """The paper's scenario (1500 s): the defaults; scenarios/paper.yaml is its
+    file."""
     return Scenario()
 
 
 def short_scenario() -> Scenario:
     """The paper's phases compressed to 2 + 8 + 8 + 8 s (tests and a quick look);
-    diagrams/short.yaml is its file."""
+    scenarios/short.yaml is its file."""
     return Scenario(phases=Phases(warmup=2.0, linear=8.0, nonlinear=8.0, disturbance=8.0))
 
 
-BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario}
+# The sections a described arm's scenario changes from the planar defaults.
+
+def described_arm_periods() -> Periods:
+    """RHS integrator and observer < LHS < learner sampling < training (the gain
+    rule with K_d = damping_rate M asks for periods.rhs <= 1.25 ms)."""
+    return Periods(rhs=5e-4, lhs=1e-3, learner=0.1, learner_sample=1e-2, log=1e-2)
 
 
-# The YAML lines of settings added after runs were first saved, at their defaults.
-ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
-                          "  B_scale: []", "  faults: []", "  trust_anchor: in_use",
-                          "  start_hold: 1.0", "  gain_rule: paper",
-                          "  evidence_ratio: 0.5", "  evidence_window: 1.0",
-                          "  min_window: 0.5", "  warm_start: true",
-                          "  model_change: true", "  step_guard: 10.0",
-                          "  boundary_rate: 0.0")
-# The sections added since, at their defaults.
-ADDED_SECTION_DEFAULTS = (
-    "inertia:\n  identify: true\n  prior_weight: 1.0e-12\n  start: 0.2\n"
-    "  duration: 10.0\n  change_threshold: 0.05\n",)
+def described_arm_rhs() -> Rhs:
+    """chi forgets over 0.25 s (the planar default is 2 s): the arm starts at rest
+    with a 0.3 rad error, and the sliding mode's first request (73 N m at the
+    6-DOF shoulder) passes through e_tau once, at the observer's one-sample
+    pairing; a 2 s window would keep chi near 30 N m for seconds."""
+    return Rhs(chi_window=0.25)
+
+
+def described_arm_learner() -> Learner:
+    """The learner on joints whose inertias lie decades apart (README, "Spatial
+    robots"): 8 high-pass sections (with the planar 4, the slow reference's N m
+    torques leak into the band and leave 10-92 % of the heavy joints' in-band port
+    torque unexplained by the true model: 1-5 % with 8); the prior weighted 0.1
+    (heavy joints' damping torque is under 1 % of their in-band inertial torque: D
+    stays at D0 there instead of drifting); the couplings from heavy into light
+    joints scaled by their inertia ratio (unscaled, their errors perturbed the
+    wrist: 3-8x the learner-off tracking error); each B_ij held by its own inputs'
+    mean square (pooled, the shoulders' inputs held the wrist's B_ii at B0)."""
+    return Learner(momentum_scale=0.5, prior_weight=0.1, band_sections=[8, 8],
+                   coupling="inertia", prior_scale="per_input")
+
+
+def six_dof_uncertainty(scale: float = 1.0) -> Uncertainty:
+    """The ground truth's RHS of satellite_6dof, the paper's form sized to each
+    joint: dampings and momentum terms scaled to the joint's inertia and momentum
+    (shoulder p ~ 0.8, wrist p ~ 0.02 kg m^2/s on the shipped reference); both
+    groups times ``scale``."""
+    pair = np.array([[-0.1, 0.0], [0.05, 0.15]])
+    coupling = np.zeros((6, 6))
+    coupling[:2, :2] = [[0.0, -0.1], [0.4, 0.0]]
+    return Uncertainty(
+        B0=[1.0] * 6, D0=[0.2, 0.2, 0.1, 0.01, 0.01, 0.005],
+        D_offset=[0.04, 0.05, 0.02, 0.002, 0.003, 0.001],
+        D_linear=[0.05, 0.15, 0.1, 0.1, 0.1, 0.1],
+        D_quadratic=[-0.01, 0.1, 0.1, 1.0, -1.0, 1.0],
+        B_linear=np.kron(np.eye(3), pair).tolist(),
+        B_quadratic=[0.02, -0.5, 0.5, 5.0, -5.0, 5.0],
+        B_q1_squared=coupling.tolist(), linear_scale=scale, nonlinear_scale=scale)
+
+
+def six_dof_disturbance(scale: float = 1.0) -> Disturbance:
+    return Disturbance(
+        scale=scale, lf_offset=[0.03, -0.02, 0.02, -0.002, 0.002, -0.001],
+        lf_amplitude=[0.02, 0.02, 0.01, 0.002, 0.002, 0.001],
+        lf_frequency=[0.05, 0.07, 0.06, 0.08, 0.09, 0.1],
+        hf_direction=[1.0, -1.0, 0.5, -0.1, 0.1, -0.05])
+
+
+SATELLITE_PHASES = dict(warmup=2.0, linear=4.0, nonlinear=4.0, disturbance=4.0)
+
+
+def satellite_6dof_scenario() -> Scenario:
+    """The 6-DOF example (scenarios/satellite_6dof.yaml): 2 s warm-up on the
+    nominal RHS, then 4 s each of linear uncertainty, nonlinear uncertainty and the
+    disturbance."""
+    return Scenario(
+        robot=DescribedArm("satellite_6dof"), task=EndEffectorAttitude(),
+        q0=[0.3, -0.8, 1.6, 0.2, 0.6, -0.3], phases=Phases(**SATELLITE_PHASES),
+        rhs=described_arm_rhs(), periods=described_arm_periods(),
+        uncertainty=six_dof_uncertainty(), disturbance=six_dof_disturbance(),
+        learner=described_arm_learner())
+
+
+def satellite_3dof_scenario() -> Scenario:
+    """The 3-DOF variant (scenarios/satellite_3dof.yaml) with the same phases and
+    an uncertainty of the same form sized to its joints (shoulder yaw p ~ 0.3,
+    pitch p ~ 1.1, forearm roll p ~ 5e-4 kg m^2/s)."""
+    return Scenario(
+        robot=DescribedArm("satellite_3dof"), task=EndEffectorAttitude(),
+        q0=[0.3, -0.8, 1.6], phases=Phases(**SATELLITE_PHASES),
+        rhs=described_arm_rhs(), periods=described_arm_periods(),
+        uncertainty=Uncertainty(
+            B0=[1.0] * 3, D0=[0.2, 0.2, 0.01], D_offset=[0.04, 0.05, 0.002],
+            D_linear=[0.15, 0.05, 0.1], D_quadratic=[0.1, -0.01, 1.0],
+            B_linear=[[-0.1, 0.0, 0.0], [0.05, 0.15, 0.0], [0.0, 0.0, 0.1]],
+            B_quadratic=[0.5, 0.02, 5.0],
+            B_q1_squared=[[0.0, -0.1, 0.0], [0.4, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        disturbance=Disturbance(lf_offset=[0.03, -0.02, 0.002],
+                                lf_amplitude=[0.02, 0.02, 0.002],
+                                lf_frequency=[0.05, 0.07, 0.09],
+                                hf_direction=[1.0, -1.0, 0.1]),
+        learner=described_arm_learner())
+
+
+BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario,
+                      "satellite_6dof": satellite_6dof_scenario,
+                      "satellite_3dof": satellite_3dof_scenario}
 
 
 def saved_forms(scenario: Scenario) -> List[str]:
     """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
-    its current form and, where its simulator settings are those an older file's
-    top-level ``integration_scheme: X`` implied (_move_integration_scheme), that
-    older form. The lines of settings added since (ADDED_SETTING_DEFAULTS) and the
-    sections added since (ADDED_SECTION_DEFAULTS) are left out of these texts where
-    they hold their defaults, so that runs saved before they existed still match."""
-    text = yaml_dump_typed(scenario)
-    for line in ADDED_SETTING_DEFAULTS:
-        text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
-    for section in ADDED_SECTION_DEFAULTS:
-        text = re.sub(f"^{re.escape(section)}", "", text, flags=re.MULTILINE)
-    config = scenario.simulator
-    if yaml_dump_typed(config) != yaml_dump_typed(FixedStepConfig(
-            config.integration_scheme, scenario.periods.rhs)):
-        return [text]
-    older = re.sub(r"^simulator:\n(?:  .*\n)*",
-                   f"integration_scheme: {config.integration_scheme}\n", text,
-                   flags=re.MULTILINE)
-    return [text, older]
+    its current form and the forms of the same settings in the layouts before
+    (scenario_layouts: a planar arm's scenario before the robot: and task:
+    sections, and before that the top-level integration_scheme:)."""
+    return [yaml_dump_typed(scenario)] + scenario.robot.OlderForms(scenario)
 
 
 def save_scenario(scenario: Scenario, path) -> None:

@@ -68,7 +68,7 @@ def _plant_alone_wall(scenario, duration: float) -> float:
     """Wall time of the ground-truth plant alone (constant small torques), with the
     closed loop's integrator and step."""
     builder = DiagramBuilder()
-    plant, _ = AddFreeFloatingArm(builder, scenario.robot)
+    plant, _ = AddFreeFloatingArm(builder, scenario.robot.truth)
     torque = builder.AddSystem(ConstantVectorSource(np.full(plant.num_actuators(), 1e-3)))
     builder.Connect(torque.get_output_port(), plant.get_actuation_input_port())
     diagram = builder.Build()
@@ -159,17 +159,15 @@ def bench_spatial(duration: float, planar_dac: float):
     controller's model) and wall time per simulated second of the model-based
     and the DAC loop, the DAC one beside the planar DAC loop's ``planar_dac`` of the
     same run (the spatial LHS is Python, without compiled kernels yet)."""
-    from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
-    from dacph_drake.scenario import Phases
-    from dacph_drake.spatial_run import load_spatial_scenario
-    scenario = load_spatial_scenario("satellite_6dof")
-    scenario.duration = duration
+    from dacph_drake.controllers import build_closed_loop
+    from dacph_drake.scenario import Phases, load_scenario
+    scenario = load_scenario("satellite_6dof")
     scenario.phases = Phases(warmup=duration / 8, linear=duration / 4,
                              nonlinear=duration / 4, disturbance=3 * duration / 8)
     print(f"satellite_6dof, {duration:g} s with every phase on:")
     for controller in ("model-based", "dac"):
         start = time.perf_counter()
-        loop = build_closed_loop(controller, scenario, SPATIAL_REGISTRY)
+        loop = build_closed_loop(controller, scenario)
         build = time.perf_counter() - start
         simulator = loop.CreateSimulator()
         simulator.Initialize()

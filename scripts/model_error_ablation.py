@@ -38,15 +38,17 @@ SPATIAL = {   # name -> (robot, the controller's factors per body, warm-up [s])
 
 def scenario_of(name: str, seed: int):
     if name in SPATIAL:
-        from dacph_drake.spatial_run import load_spatial_scenario
+        from dacph_drake.scenario import load_scenario
         robot, factors, warmup = SPATIAL[name]
-        s = load_spatial_scenario(robot)
-        s.seed, s.nominal_inertia_scale = seed, factors
+        s = load_scenario(robot)
+        s.seed, s.robot.nominal_inertia_scale = seed, factors
+        end = s.duration                    # the run keeps its length: phase 3 shorter
         s.phases.warmup = warmup
+        s.phases.disturbance = end - s.phases.disturbance_start
         return s
     s = short_scenario()
     s.seed, s.q0 = seed, START[seed]
-    robot = s.nominal_robot
+    robot = s.robot.nominal
     bodies = [robot.base] + robot.links
     if name == "x0.4":
         s.uncertainty.B_scale = [0.4, 0.4]
@@ -124,15 +126,11 @@ def run(task):
     scenario = _apply(scenario_of(name, seed), CONFIGURATIONS[configuration])
     if configuration == "exact model":          # the controller knows the robot
         if name in SPATIAL:
-            scenario.nominal_inertia_scale = []
+            scenario.robot.nominal_inertia_scale = []
         else:
-            scenario.nominal_robot = copy.deepcopy(scenario.robot)
+            scenario.robot.nominal = copy.deepcopy(scenario.robot.truth)
     start = time.perf_counter()
-    if name in SPATIAL:
-        from dacph_drake.spatial_run import simulate_spatial
-        result = simulate_spatial(scenario, controller=controller)
-    else:
-        result = simulate(scenario, controller)
+    result = simulate(scenario, controller)
     row = {"scenario": name, "seed": seed, "configuration": configuration,
            "controller": controller, "status": result.status, "reason": result.reason,
            "final_time": result.final_time, "wall_time": time.perf_counter() - start}

@@ -8,7 +8,9 @@ metrics to --out (JSON). About 6 minutes on one core.
 import argparse
 import json
 
-from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
+from dacph_drake.metrics import run_metrics
+from dacph_drake.run import simulate
+from dacph_drake.scenario import load_scenario
 
 RUNS = [("dac", 0), ("dac", 1), ("dac-nominal", 0), ("dac-nominal", 1),
         ("model-based", 0)]
@@ -29,10 +31,10 @@ def main():
     print("| --- | --- | --- | --- | --- |")
     for robot in args.robots:
         for controller, seed in RUNS:
-            scenario = load_spatial_scenario(robot)
+            scenario = load_scenario(robot)
             scenario.seed = seed
-            result = simulate_spatial(scenario, controller=controller)
-            m = result.metrics
+            result = simulate(scenario, controller)
+            m = run_metrics(result.logs, scenario)
             rows.append({"robot": robot, "controller": controller, "seed": seed,
                          "status": result.status, "metrics": m})
             learned = (f"{_phases(m, 'B_error_ratio', '2f')} | "

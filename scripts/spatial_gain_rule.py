@@ -21,13 +21,12 @@ from dacph_drake.inertia_bound import search_inertia_bound  # noqa: E402
 from dacph_drake.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
 from dacph_drake.robot import RobotParams  # noqa: E402
-from dacph_drake.scenario import Scenario  # noqa: E402
-from dacph_drake.spatial_scenario import AttitudeGains  # noqa: E402
+from dacph_drake.scenario import AttitudeGains, Scenario  # noqa: E402
 
 
 def main() -> None:
     scenario = Scenario()
-    Td, Kd, rhs = scenario.rhs.Td, scenario.lhs.Kd, scenario.rhs
+    Td, Kd, rhs = scenario.rhs.Td, scenario.task.gains.Kd, scenario.rhs
     robots = [("planar 2-link (paper)", MakeArmPlant(RobotParams()), True),
               ("planar 3-link (tests)", MakeArmPlant(three_link_robot()), True)]
     robots += [(name, MakeRobotPlant(name), False) for name in SPATIAL_ROBOTS]

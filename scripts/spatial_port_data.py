@@ -12,9 +12,9 @@ import argparse
 
 import numpy as np
 
-from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
+from dacph_drake.controllers import build_closed_loop
 from dacph_drake.identification import PortSample
-from dacph_drake.spatial_run import load_spatial_scenario
+from dacph_drake.scenario import load_scenario
 
 WINDOW = 200            # the newest samples fitted (2 s at the 10 ms sample period)
 
@@ -23,8 +23,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("scenario", nargs="?", default="satellite_3dof")
     args = parser.parse_args()
-    scenario = load_spatial_scenario(args.scenario)
-    loop = build_closed_loop("dac-nominal", scenario, SPATIAL_REGISTRY)
+    scenario = load_scenario(args.scenario)
+    loop = build_closed_loop("dac-nominal", scenario)
     n, layout = loop.model.num_joints, PortSample(loop.model.num_joints)
     learner, truth = loop.systems["learner"], loop.systems["true_rhs"]
     simulator = loop.CreateSimulator()

@@ -9,7 +9,8 @@ import pytest
 from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN
 from dacph_drake.log_layout import LearnerLog, RhsLog
 from dacph_drake.metrics import comparison, run_metrics
-from dacph_drake.reproduce import CONTROLLERS, load_logs
+from dacph_drake.reproduce import CONTROLLERS
+from dacph_drake.run import load_logs
 from dacph_drake.scenario import load_scenario, short_scenario
 
 
@@ -58,7 +59,7 @@ def test_dac_tracks_learns_and_stays_clear(runs):
     assert m["estimation_error_B"] < 0.63 and m["estimation_error_D"] < 0.30
     # Every estimate used before d(t) switches on passed the DIC and trust checks.
     before = t < phases.disturbance_start
-    assert np.all(logs["rhs_log"][before, RhsLog(scenario.robot.num_links).trusted] == 1.0)
+    assert np.all(logs["rhs_log"][before, RhsLog(scenario.robot.truth.num_links).trusted] == 1.0)
 
 
 def test_e_tau_follows_tau_request_at_the_gain_rule_rate(runs):
@@ -66,7 +67,7 @@ def test_e_tau_follows_tau_request_at_the_gain_rule_rate(runs):
     |d tau_c^r / dt| / c. In phases 1-2 the measured RMS of ||e_tau|| stays within
     RMS(d tau_c^r / dt) / c_min: the loop realizes the rate eq. (48) asks for."""
     scenario, _, _, logs = runs
-    n = scenario.robot.num_links
+    n = scenario.robot.truth.num_links
     t, rhs = logs["dac"]["time"], logs["dac"]["rhs_log"]
     window = (t >= scenario.phases.linear_start + 0.5) & (t < scenario.disturbance_start)
     ramp = np.gradient(logs["dac"]["tau_request"], t, axis=0)[window]
@@ -82,7 +83,7 @@ def test_the_rhs_loop_never_runs_past_the_bound_it_was_built_for(runs):
     that gain_rule.check_rhs_period checked when the diagram was built, while c still
     meets c_min at the beta the rule used."""
     scenario, _, _, logs = runs
-    R = RhsLog(scenario.robot.num_links)
+    R = RhsLog(scenario.robot.truth.num_links)
     for controller in ("dac", "dac-nominal"):
         rhs = logs[controller]["rhs_log"]
         assert np.max(scenario.periods.rhs * rhs[:, R.c]) <= WELL_DAMPED_LOOP_GAIN
@@ -133,7 +134,7 @@ def test_learning_helps_the_rhs_loop_without_costing_tracking(runs):
 def test_driving_the_diagram_yourself_is_the_same_run():
     """The README's snippet: loop.CreateSimulator() has the scenario's integrator and
     initial state, so advancing it gives the logs simulate() gives, bit for bit."""
-    from dacph_drake.diagrams import build_model_based_diagram
+    from dacph_drake.controllers.model_based import build_model_based_diagram
     from dacph_drake.run import simulate
     scenario = short_scenario()
     loop = build_model_based_diagram(scenario)

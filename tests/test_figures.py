@@ -9,15 +9,18 @@ import numpy as np
 import pytest
 
 from conftest import three_link_robot
-from dacph_drake.figures import COLUMNS, PANELS, envelope, make_panels
+from dacph_drake.figures import COLUMNS, DAC_PANELS, envelope, make_panels
 from dacph_drake.log_layout import LhsLog, RhsLog
-from dacph_drake.scenario import Scenario, Uncertainty, paper_scenario
+from dacph_drake.robots.planar import PlanarRobot
+from dacph_drake.scenario import PlanarArm, Scenario, Uncertainty, paper_scenario
+
+PANELS = DAC_PANELS + PlanarRobot.task_panels
 
 
 def _synthetic_run(scenario: Scenario, tracking_error: float, seed: int):
     """Logs laid out as a run's, with a 20 Hz ripple in phase 3 (as d_HF makes)."""
     rng = np.random.default_rng(seed)
-    n = scenario.robot.num_links
+    n = scenario.robot.truth.num_links
     t = np.arange(0.0, scenario.phases.end, scenario.periods.log)
     phase3 = t >= scenario.disturbance_start
     ripple = np.where(phase3, np.sin(2 * np.pi * 20.0 * t), 0.0)
@@ -46,7 +49,7 @@ def _synthetic_run(scenario: Scenario, tracking_error: float, seed: int):
 
 def _three_link_scenario() -> Scenario:
     robot = three_link_robot()
-    return Scenario(robot=robot, nominal_robot=robot, q0=[0.3, 0.6, 0.6],
+    return Scenario(robot=PlanarArm(truth=robot, nominal=robot), q0=[0.3, 0.6, 0.6],
                     uncertainty=Uncertainty(B0=[1.0] * 3, D0=[0.1] * 3))
 
 
@@ -56,7 +59,7 @@ def panels(request):
     scenario.phases = paper_scenario().phases
     dac = _synthetic_run(scenario, 1e-5, seed=1)
     model_based = _synthetic_run(scenario, 1e-2, seed=2)
-    figures = make_panels(dac, model_based, scenario)
+    figures = make_panels({"dac": dac, "model-based": model_based}, scenario)
     for fig in figures.values():
         fig.canvas.draw()
     yield scenario, dac, figures
@@ -128,7 +131,7 @@ def test_envelope_keeps_every_extreme():
 
 def test_one_axis_per_matrix_entry_for_any_number_of_links(panels):
     scenario, _, figures = panels
-    n = scenario.robot.num_links
+    n = scenario.robot.truth.num_links
     for name in (PANELS[1], PANELS[2]):
         labels = [ax.get_ylabel() for ax in _data_axes(figures[name])]
         assert len(labels) == n * n + n and len(set(labels)) == len(labels)

@@ -78,7 +78,7 @@ def test_potential_kernel_matches_the_model(robot):
 
 def test_true_torque_kernel_matches_the_reference_by_phase():
     scenario = Scenario()
-    model = ReducedOrderModel(MakeArmPlant(scenario.robot))
+    model = ReducedOrderModel(MakeArmPlant(scenario.robot.truth))
     reference = TrueRhsModel(scenario.uncertainty, scenario.phases)
     source = DisturbanceSource(scenario.disturbance, scenario.disturbance_start)
     model_vector = source.GetOutputPort("disturbance_model").Eval(source.CreateDefaultContext())

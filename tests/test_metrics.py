@@ -24,7 +24,7 @@ def test_relative_error_rms():
 
 def _synthetic_logs(scenario, error_amplitude, effort, B_error):
     """Logs of a made-up run: alpha~ = A sin, ||u|| = effort, B_hat = (1 + B_error) B~."""
-    n = scenario.robot.num_links
+    n = scenario.robot.truth.num_links
     t = np.arange(0, scenario.duration, 0.01)
     T = len(t)
     lhs = np.zeros((T, n + 5))

@@ -39,7 +39,7 @@ def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
     scenario.uncertainty.faults = [ActuatorFault(time=70.0, joint=2, gain=0.4)]
     truth = TrueRhs(scenario)
     context = truth.CreateDefaultContext()
-    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
     q, qdot, u = np.array([0.5, -0.2]), np.array([0.1, 0.3]), np.array([0.2, -0.1])
     v_base = model.BaseVelocity(np.concatenate([[0, 0, 0], q]), qdot)
     FixStateInputs(truth, context, np.concatenate([[0, 0, 0], q, v_base, qdot]))
@@ -71,7 +71,7 @@ def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
 
 @pytest.fixture(scope="module", params=["planar", "satellite_3dof"])
 def plant(request):
-    return (MakeArmPlant(Scenario().robot) if request.param == "planar"
+    return (MakeArmPlant(Scenario().robot.truth) if request.param == "planar"
             else MakeRobotPlant(request.param))
 
 
@@ -100,7 +100,7 @@ def test_the_mass_matrix_and_the_momentum_are_linear_in_the_inertias(plant):
 def _prior_20_percent_off():
     """The paper's arm with base and link 1 20 % heavier, link 2 20 % lighter (mass
     and inertia), as the controller's model."""
-    robot = copy.deepcopy(Scenario().robot)
+    robot = copy.deepcopy(Scenario().robot.truth)
     for body, f in zip([robot.base] + robot.links, [1.2, 1.2, 0.8]):
         body.mass *= f
         body.inertia *= f
@@ -140,7 +140,7 @@ def test_momentum_identifies_the_inertias_up_to_their_common_scale():
     mass matrix M(q) and task Jacobian D(q) up to one factor, which the prior fixes
     (pi's component along pi0 in the prior's metric is pi0's); the prior itself is
     6-9 % off them."""
-    truth, prior_robot = Scenario().robot, _prior_20_percent_off()
+    truth, prior_robot = Scenario().robot.truth, _prior_20_percent_off()
     model, exact, identified, pi0, pi = _momentum_identification(truth, prior_robot)
     weight = pi0 / prior_scales(InertialParameters(model.plant), pi0)**2
     np.testing.assert_allclose(weight @ pi, weight @ pi0, rtol=1e-12)   # the scale
@@ -231,16 +231,17 @@ def test_a_jump_is_adopted_only_if_the_loop_survives_the_evidence_being_wrong():
 
 
 def test_bad_spatial_model_error_settings_are_named():
-    from dacph_drake.spatial_diagrams import controller_model
-    from dacph_drake.spatial_scenario import SpatialScenario
-    scenario = SpatialScenario(robot="satellite_3dof", q0=[0.3, -0.8, 0.5],
-                               nominal_inertia_scale=[1.0, 1.0])
+    from dacph_drake.robots import robot_of
+    from dacph_drake.scenario import satellite_3dof_scenario
+    scenario = satellite_3dof_scenario()
+    scenario.q0 = [0.3, -0.8, 0.5]
+    scenario.robot.nominal_inertia_scale = [1.0, 1.0]
     with pytest.raises(ConfigError, match=r"nominal_inertia_scale has 2 entries; "
                                           r"allowed: 4"):
-        controller_model(scenario)
-    scenario.nominal_inertia_scale = [1.0, 1.0, 0.0, 1.0]
+        robot_of(scenario)
+    scenario.robot.nominal_inertia_scale = [1.0, 1.0, 0.0, 1.0]
     with pytest.raises(ConfigError, match=r"nominal_inertia_scale\[2\] = 0.0"):
-        controller_model(scenario)
+        robot_of(scenario)
 
 
 def test_the_model_error_sweep_samples_what_it_names():
@@ -253,10 +254,10 @@ def test_the_model_error_sweep_samples_what_it_names():
     assert (fault.time, fault.joint, fault.gain) == (
         sampled["fault_time"], sampled["fault_joint"], sampled["fault_gain"])
     assert 10.0 <= fault.time <= 18.0 and fault.joint in (1, 2)
-    base = definition.scenario.nominal_robot
-    assert s.nominal_robot.links[1].mass == pytest.approx(
+    base = definition.scenario.robot.nominal
+    assert s.robot.nominal.links[1].mass == pytest.approx(
         base.links[1].mass * sampled["nominal_link_mass_scale"][1])
-    assert s.robot == definition.scenario.robot           # the robot itself is kept
+    assert s.robot.truth == definition.scenario.robot.truth   # the robot itself is kept
 
 
 # --- the closed loop ----------------------------------------------------------------
@@ -302,7 +303,7 @@ def inertia_runs():
     inertial identification, and DAC with the exact model."""
     exact = short_scenario()
     wrong = short_scenario()
-    for body, f in zip([wrong.nominal_robot.base] + wrong.nominal_robot.links,
+    for body, f in zip([wrong.robot.nominal.base] + wrong.robot.nominal.links,
                        [1.2, 1.2, 0.8]):
         body.mass *= f
         body.inertia *= f

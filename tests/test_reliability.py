@@ -49,9 +49,9 @@ def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, messag
 # simulated time, with the setting named.
 UNRUNNABLE_SCENARIO_FILES = [
     ("q0: [2.5, 0.5]\n", r"q0 = \[2.5, 0.5\] puts the arm into the base"),
-    ("lhs: {min_task_singular_value: 0.9}\n",
+    ("task: {gains: {min_task_singular_value: 0.9}}\n",
      r"q0 = \[0.3, 1.0\] is near a singularity of the task Jacobian D \(\|\|D\(q0\)\|\| = "
-     r"0.832\); allowed: .* lhs.min_task_singular_value = 0.9"),
+     r"0.832\); allowed: .* task.gains.min_task_singular_value = 0.9"),
     ("periods: {rhs: 0.0005}\n", r"periods.rhs = 0.0005 s cannot realize"),
     ("rhs: {beta_max: 100.0}\n", r"periods.rhs = 0.00025 s cannot realize .* up to "
                                   r"\d+.\d 1/s at rhs.beta_max = 100, .* or a smaller "
@@ -80,10 +80,10 @@ def test_a_file_without_a_robot_section_says_so(tmp_path, caplog):
     path.write_text("seed: 3\n")
     with caplog.at_level("WARNING"):
         assert load_scenario(path).robot == short_scenario().robot
-    assert "no robot: or nominal_robot: section; using the defaults" in caplog.text
+    assert "no robot: section; using the defaults" in caplog.text
     caplog.clear()
     with caplog.at_level("WARNING"):
-        load_scenario("diagrams/short.yaml")
+        load_scenario("scenarios/short.yaml")
     assert caplog.text == ""
 
 
@@ -96,11 +96,15 @@ def test_out_dir_is_checked_before_the_simulation(tmp_path):
     assert time.perf_counter() - start < 1.0        # refused before the diagram is built
 
 
-def _interrupt_simulate(out, sig, extra=(), after=1.0):
-    """Starts `dacph simulate short` (with ``extra`` arguments), sends ``sig``
+# A planar and a described arm's scenario: every reliability behaviour holds for both.
+SCENARIOS = ["short", "satellite_3dof"]
+
+
+def _interrupt_simulate(out, sig, extra=(), after=1.0, scenario="short"):
+    """Starts `dacph simulate SCENARIO` (with ``extra`` arguments), sends ``sig``
     ``after`` seconds into the progress bar, and returns the exit status."""
     process = subprocess.Popen(
-        [sys.executable, "-m", "dacph_drake.cli", "simulate", "short", "--out", str(out),
+        [sys.executable, "-m", "dacph_drake.cli", "simulate", scenario, "--out", str(out),
          *extra],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -119,13 +123,17 @@ def _interrupt_simulate(out, sig, extra=(), after=1.0):
     return process.wait(120)
 
 
+@pytest.mark.parametrize("scenario", SCENARIOS)
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_an_interrupted_run_saves_what_it_has(tmp_path, sig):
+def test_an_interrupted_run_saves_what_it_has(tmp_path, sig, scenario):
+    from dacph_drake.run import scenario_fingerprint
+    from dacph_drake.scenario import load_scenario
     out = tmp_path / "run"
-    assert _interrupt_simulate(out, sig) == 130
+    assert _interrupt_simulate(out, sig, scenario=scenario) == 130
     meta = json.loads((out / "run_dac.json").read_text())
     assert meta["status"] == "interrupted" and sig.name in meta["reason"]
-    assert 0 < meta["final_time"] < short_scenario().duration
+    assert 0 < meta["final_time"] < load_scenario(scenario).duration
+    assert meta["scenario_fingerprint"] == scenario_fingerprint(load_scenario(scenario))
     with np.load(out / "logs_dac.npz") as logs:
         assert logs["time"][-1] <= meta["final_time"] and len(logs["time"]) > 10
     assert (out / "scenario.yaml").is_file()
@@ -140,7 +148,12 @@ def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
     other.disturbance.scale = 2.0
     mixed, durations = tmp_path / "mixed", tmp_path / "durations"
     simulate(scenario, "dac", duration=0.3, out_dir=mixed)
-    simulate(other, "model-based", duration=0.3, out_dir=mixed)
+    with pytest.raises(ConfigError, match="holds a dac run of another scenario"):
+        simulate(other, "model-based", duration=0.3, out_dir=mixed)   # refused up front
+    simulate(other, "model-based", duration=0.3, out_dir=tmp_path / "other")
+    for name in ("logs_model-based.npz", "run_model-based.json", "scenario.yaml"):
+        # mixed by hand, as an earlier release let a second run do
+        (mixed / name).write_bytes((tmp_path / "other" / name).read_bytes())
     with pytest.raises(ConfigError, match="the dac run was made from another scenario"):
         report(mixed)
     simulate(scenario, "dac", duration=0.3, out_dir=durations)
@@ -151,16 +164,42 @@ def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
     assert main(["report", str(durations)]) == 2
 
 
-def test_a_second_writer_of_the_same_run_is_refused(tmp_path):
+@pytest.mark.parametrize("scenario", SCENARIOS)
+def test_a_second_writer_of_the_same_run_is_refused(tmp_path, scenario):
     import fcntl
+    from dacph_drake.scenario import load_scenario
     out = tmp_path / "run"
     out.mkdir()
     with open(out / ".run_dac.lock", "w") as held:            # a run in progress
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         with pytest.raises(ConfigError, match="another process is writing a dac run"):
-            simulate(short_scenario(), "dac", duration=0.1, out_dir=out)
-    result = simulate(short_scenario(), "dac", duration=0.1, out_dir=out)   # released
-    assert result.status == "ok"
+            simulate(load_scenario(scenario), "dac", duration=0.1, out_dir=out)
+    result = simulate(load_scenario(scenario), "dac", duration=0.1, out_dir=out)
+    assert result.status == "ok"                                            # released
+
+
+def test_runs_of_two_robots_never_share_a_directory(tmp_path, capsys):
+    """A described arm's run into a planar run's directory, the reverse, and either
+    into a directory of the older spatial layout (run.json, logs.npz) are refused
+    before any simulated time, and the directory's runs stay readable."""
+    from dacph_drake.run import load_run
+    from dacph_drake.scenario import load_scenario
+    planar, described = tmp_path / "planar", tmp_path / "described"
+    simulate(short_scenario(), "dac", duration=0.1, out_dir=planar)
+    simulate(load_scenario("satellite_3dof"), "model-based", duration=0.1,
+             out_dir=described)
+    for scenario, out, other in (("satellite_3dof", planar, "dac"),
+                                 ("short", described, "model-based")):
+        assert main(["simulate", scenario, "--out", str(out), "--controller",
+                     "dac-nominal", "--duration", "0.1"]) == 2
+        assert f"holds a {other} run of another scenario" in capsys.readouterr().err
+        assert not (out / "run_dac-nominal.json").exists()
+        assert load_run(out, other)[2]["status"] == "ok"
+    older = tmp_path / "older"
+    older.mkdir()
+    (older / "run.json").write_text("{}")
+    with pytest.raises(ConfigError, match="holds a run of the older spatial layout"):
+        simulate(load_scenario("satellite_3dof"), "dac", duration=0.1, out_dir=older)
 
 
 def test_metrics_of_phases_a_run_never_reached_say_so(tmp_path, capsys):
@@ -174,13 +213,14 @@ def test_metrics_of_phases_a_run_never_reached_say_so(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("q0: [0.3, 1.0\nlhs: {Kd: 0.5}\n",
-     "malformed YAML at line 2, column 4: expected ',' or ']', but got ':'"),
+    ("q0: [0.3, 1.0\ntask: {gains: {Kd: 0.5}}\n",
+     "malformed YAML at line 2, column 5: expected ',' or ']', but got ':'"),
     ("q0: 0.3\n", "q0 = 0.3 is not a list"),
-    ("lhs: 3\n", "lhs = 3 is not a mapping"),
-    ("robot: {links: [{mass: heavy}]}\n", "robot.links[0].mass = 'heavy' is not a number"),
-    ("reference: {periods: [30.0, eleven]}\n",
-     "reference.periods[1] = 'eleven' is not a number"),
+    ("task: 3\n", "task = 3 is not a mapping"),
+    ("robot: {truth: {links: [{mass: heavy}]}}\n",
+     "robot.truth.links[0].mass = 'heavy' is not a number"),
+    ("task: {reference: {periods: [30.0, eleven]}}\n",
+     "task.reference.periods[1] = 'eleven' is not a number"),
 ])
 def test_malformed_files_get_one_line_naming_the_place(tmp_path, capsys, text, message):
     path = tmp_path / "s.yaml"
@@ -211,7 +251,7 @@ def test_an_incomplete_run_directory_names_the_missing_file(tmp_path, capsys, co
 def test_a_start_inside_the_base_is_refused(q0):
     """Such a run used to "diverge" at t = 0.0003 s with a runaway message that never
     named the collision."""
-    from dacph_drake.diagrams import build_dac_diagram
+    from dacph_drake.controllers.dac import build_dac_diagram
     scenario = short_scenario()
     scenario.q0 = q0
     with pytest.raises(ConfigError, match=r"q0 = .* puts the arm into the base "
@@ -222,7 +262,8 @@ def test_a_start_inside_the_base_is_refused(q0):
 def test_the_rhs_period_check_applies_to_the_integrator_only():
     """The model-based baseline has no RHS integrator, so a coarse periods.rhs that
     the DAC diagram refuses is allowed for it."""
-    from dacph_drake.diagrams import build_dac_diagram, build_model_based_diagram
+    from dacph_drake.controllers.dac import build_dac_diagram
+    from dacph_drake.controllers.model_based import build_model_based_diagram
     scenario = short_scenario()
     scenario.periods.rhs = 5e-4
     with pytest.raises(ConfigError, match="periods.rhs = 0.0005 s cannot realize"):
@@ -230,15 +271,17 @@ def test_the_rhs_period_check_applies_to_the_integrator_only():
     assert build_model_based_diagram(scenario).diagram is not None
 
 
-def test_a_killed_run_keeps_its_last_checkpoint(tmp_path):
+@pytest.mark.parametrize("scenario", SCENARIOS)
+def test_a_killed_run_keeps_its_last_checkpoint(tmp_path, scenario):
     """kill -9 cannot be caught: what survives is the last checkpoint, a readable
     directory whose run.json says the run had not finished."""
+    from dacph_drake.scenario import load_scenario
     out = tmp_path / "run"
     assert _interrupt_simulate(out, signal.SIGKILL, ["--checkpoint", "0.5"],
-                               after=4.0) == -signal.SIGKILL
+                               after=4.0, scenario=scenario) == -signal.SIGKILL
     meta = json.loads((out / "run_dac.json").read_text())
     assert meta["status"] == "incomplete" and "had not finished" in meta["reason"]
-    assert 0 < meta["final_time"] < short_scenario().duration
+    assert 0 < meta["final_time"] < load_scenario(scenario).duration
     with np.load(out / "logs_dac.npz") as logs:
         assert abs(logs["time"][-1] - meta["final_time"]) <= 0.011
     assert main(["verify", str(out)]) == 1          # run_finished fails, with a report
@@ -248,12 +291,12 @@ def test_a_run_in_contact_stops_with_the_named_reason(monkeypatch):
     """The ground truth has no collision geometry: the run's monitor checks the
     links' kinematic clearance every run.MONITOR_PERIOD. A start inside the base,
     let through the build-time check here, stops at the first check."""
-    import dacph_drake.diagrams as diagrams
+    from dacph_drake.robots.planar import PlanarRobot
     from dacph_drake.run import MONITOR_PERIOD
-    monkeypatch.setattr(diagrams, "_RequireRunnableStart", lambda scenario, model: None)
+    monkeypatch.setattr(PlanarRobot, "RequireRunnableStart", lambda robot: None)
     scenario = short_scenario()
     scenario.q0 = [2.5, 0.5]
-    scenario.potential.base_gain = 1e-12       # no field to blow up inside the base
+    scenario.robot.potential.base_gain = 1e-12       # no field to blow up inside the base
     result = simulate(scenario, "model-based", duration=0.5)
     assert result.status == "diverged"
     assert result.reason.startswith(f"collision: a link touched the base at t = "

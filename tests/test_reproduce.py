@@ -6,10 +6,11 @@ import json
 import numpy as np
 import pytest
 
-from dacph_drake.figures import PANELS
+from dacph_drake.figures import DAC_PANELS
 from dacph_drake.metrics import run_metrics
-from dacph_drake.reproduce import (ABLATION_ROWS, CONTROLLERS, PAPER_ROWS, flat_metrics,
-                                   load_logs)
+from dacph_drake.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
+from dacph_drake.robots.planar import PlanarRobot
+from dacph_drake.run import load_logs
 from dacph_drake.scenario import load_scenario
 from headless_chromium import run_chromium
 
@@ -17,7 +18,7 @@ from headless_chromium import run_chromium
 def test_reproduce_writes_panels_table_scenario_and_animation(quick_reproduction):
     status, out = quick_reproduction
     assert status == 0
-    for panel in PANELS:
+    for panel in DAC_PANELS + PlanarRobot.task_panels:
         for suffix in ("png", "pdf"):
             path = out / "figures" / f"{panel}.{suffix}"
             assert path.stat().st_size > 10_000, path
@@ -42,14 +43,14 @@ def test_table_numbers_match_the_logs(quick_reproduction):
 
 
 def test_ablation_numbers_match_the_logs(quick_reproduction):
-    """ablation.md / metrics.json["ablation"]: one row per ABLATION_ROWS entry, each
+    """ablation.md / metrics.json["ablation"]: one row per ablation_rows entry, each
     phase's value equal to the metric recomputed from the saved logs."""
     _, out = quick_reproduction
     summary = json.loads((out / "metrics.json").read_text())
     scenario = load_scenario(out / "scenario.yaml")
     metrics = {c: run_metrics(load_logs(out, c), scenario) for c in CONTROLLERS}
-    assert [row["metric"] for row in summary["ablation"]] == \
-        [r.label for r in ABLATION_ROWS]
+    rows = ablation_rows(metrics)
+    assert [row["metric"] for row in summary["ablation"]] == [r.label for r in rows]
     for row in summary["ablation"]:
         controller, name = row["key"].split(".", 1)
         for phase, value in zip(("phase1", "phase2", "phase3"), row["phases"]):
@@ -59,7 +60,7 @@ def test_ablation_numbers_match_the_logs(quick_reproduction):
                 expected /= metrics[over_controller][f"{phase}.{over_name}"]
             assert value == pytest.approx(expected, rel=1e-12), (row["metric"], phase)
     text = (out / "ablation.md").read_text()
-    assert text.count("\n| ") == len(ABLATION_ROWS) + 1
+    assert text.count("\n| ") == len(rows) + 1
 
 
 def test_animation_shows_the_robot_offline_in_headless_chromium(quick_reproduction,

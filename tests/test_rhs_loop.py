@@ -34,7 +34,7 @@ def test_trust_band_bounds_the_discrete_loop_gain():
 
 def _Integrator(B_hat_scale):
     """An RhsIntegrator whose learner publishes B_hat = B_hat_scale I."""
-    model = ReducedOrderModel(MakeArmPlant(Scenario().nominal_robot))
+    model = ReducedOrderModel(MakeArmPlant(Scenario().robot.nominal))
     network = ExportedNetwork(2, [16, 8], 0.01)
     weights = RhsNetwork(2, [16, 8], B_hat_scale * np.eye(2), [0.1, 0.1], 0.01,
                          0).export()
@@ -73,7 +73,7 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     """A step in tau_c^r through tau = B~ u, observed one sample late, decays in the
     integrator's discrete loop at least as fast as c_min (eq. 48) asks."""
     scenario = Scenario()
-    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
     network = ExportedNetwork(2, [16, 8], 0.01)
     weights = RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01, 0).export()
     h = scenario.periods.rhs

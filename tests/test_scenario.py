@@ -3,19 +3,19 @@ from pathlib import Path
 
 import pytest
 
-from dacph_drake.diagrams import build_dac_diagram
+from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
 from pydrake.common.yaml import yaml_dump_typed
 
 from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
                                   save_scenario, saved_forms)
 
-DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
 
 @pytest.mark.parametrize("name", ["paper", "short"])
 def test_shipped_scenarios_load(name):
-    scenario = load_scenario(DIAGRAMS / f"{name}.yaml")
+    scenario = load_scenario(SCENARIOS / f"{name}.yaml")
     assert scenario.duration == (1500.0 if name == "paper" else 26.0)
     assert scenario == BUILT_IN_SCENARIOS[name]()       # the files match the built-ins
 
@@ -28,12 +28,12 @@ def test_yaml_round_trip(tmp_path):
 # Scenario files that must be refused, and a pattern the one-line message must
 # match (it names the setting); the CLI's table in test_reliability runs them too.
 BAD_SCENARIO_FILES = [
-    ("lhs: {Kd: 0.5, gain: 1}\n", r"s.yaml.*gain"),
-    ("lhs: {Kd: fast}\n", r"s.yaml.*fast"),
-    ("lhs: {Kd: -0.5}\n", r"lhs.Kd = -0.5 .*> 0"),
+    ("task: {gains: {Kd: 0.5, gain: 1}}\n", r"s.yaml.*gain"),
+    ("task: {gains: {Kd: fast}}\n", r"s.yaml.*fast"),
+    ("task: {gains: {Kd: -0.5}}\n", r"task.gains.Kd = -0.5 .*> 0"),
     ("periods: {rhs: 0.0}\n", r"periods.rhs = 0.0 .*> 0 s"),
     ("periods: {lhs: 0.5}\n", r"periods.lhs = 0.5 s must not exceed periods.learner_sample"),
-    ("nominal_robot: {base: {mass: -2.0}}\n", r"nominal_robot.base.mass = -2.0"),
+    ("robot: {nominal: {base: {mass: -2.0}}}\n", r"robot.nominal.base.mass = -2.0"),
     ("q0: [0.1]\n", r"q0 has 1 entries; allowed: 2"),
     ("integration_scheme: euler\n", r"integration_scheme = 'euler'; allowed"),
     ("uncertainty: {B_linear: [[1.0]]}\n", r"uncertainty.B_linear must be a 2 x 2"),
@@ -61,19 +61,21 @@ BAD_SCENARIO_FILES = [
     # Non-finite numbers anywhere, and settings that cannot run together.
     ("q0: [.nan, 1.0]\n", r"q0\[0\] = nan is not finite; allowed: a finite number"),
     ("q0: [0.3, .inf]\n", r"q0\[1\] = inf is not finite"),
-    ("reference: {amplitudes: [.nan, 0.1]}\n", r"reference.amplitudes\[0\] = nan"),
+    ("task: {reference: {amplitudes: [.nan, 0.1]}}\n",
+     r"task.reference.amplitudes\[0\] = nan"),
     ("uncertainty: {B_linear: [[.nan, 0.0], [0.05, 0.15]]}\n",
      r"uncertainty.B_linear\[0\]\[0\] = nan is not finite"),
     ("disturbance: {hf_amplitude: .nan}\n", r"disturbance.hf_amplitude = nan"),
     ("disturbance: {start: .nan}\n", r"disturbance.start = nan is not finite"),
     ("disturbance: {lf_offset: [.inf, 0.0]}\n", r"disturbance.lf_offset\[0\] = inf"),
-    ("robot: {links: [{mass: 1.0, length: .nan}, {mass: 1.0}]}\n", r"robot.links\[0\]"),
+    ("robot: {truth: {links: [{mass: 1.0, length: .nan}, {mass: 1.0}]}}\n",
+     r"robot.truth.links\[0\]"),
     ("seed: -1\n", r"seed = -1 is out of range; allowed: in \[0, 4\.29497e\+09\]"),
     ("periods: {log: 100.0}\nphases: {warmup: 1.0, linear: 1.0, nonlinear: 1.0, "
      "disturbance: 1.0}\n", r"periods.log = 100 s is longer than the run \(4 s"),
     ("rhs: {beta_max: 0.5}\n", r"rhs.beta_max = 0.5 is out of range; allowed: in \[1, "),
-    ("lhs: {min_task_singular_value: -0.1}\n",
-     r"lhs.min_task_singular_value = -0.1 is out of range; allowed: in \[0, 10\]"),
+    ("task: {gains: {min_task_singular_value: -0.1}}\n",
+     r"task.gains.min_task_singular_value = -0.1 is out of range; allowed: in \[0, 10\]"),
     # Drake's SimulatorConfig, embedded as simulator:.
     ("simulator: {integration_scheme: radau3}\n",
      r"simulator.integration_scheme = 'radau3'; allowed: runge_kutta2, runge_kutta3"),
@@ -107,7 +109,7 @@ BAD_SCENARIO_FILES = [
     ("rhs: {evidence_ratio: 2.0}\n", r"rhs.evidence_ratio = 2.0 .*in \[0, 1\]"),
     ("rhs: {evidence_window: 0.0}\n", r"rhs.evidence_window = 0.0 .*> 0"),
     ("rhs: {gain_rule: fast}\n", r"rhs.gain_rule = 'fast'; allowed: paper, well_damped"),
-    ("lhs: {boundary_rate: -1.0}\n", r"lhs.boundary_rate = -1.0 .*>= 0"),
+    ("task: {gains: {boundary_rate: -1.0}}\n", r"task.gains.boundary_rate = -1.0 .*>= 0"),
     ("learner: {start_hold: -1.0}\n", r"learner.start_hold = -1.0 .*>= 0"),
     ("learner: {min_window: 10.0}\n", r"learner.min_window = 10.0 .*in \[0, 4\]"),
     ("learner: {step_guard: 0.5}\n", r"learner.step_guard = 0.5 .*in \[1, 1e\+12\]"),
@@ -130,22 +132,64 @@ def test_files_of_the_older_layout_load(tmp_path, caplog):
     assert "integration_scheme: is read as simulator:" in caplog.text
     assert yaml_dump_typed(scenario.simulator) == yaml_dump_typed(
         FixedStepConfig("runge_kutta3", 1.25e-4))
-    current, legacy = scenario_fingerprints(scenario)
+    # This layout's, the one before the robot: and task: sections, and that one's
+    # with the old key.
+    current, before_sections, legacy = scenario_fingerprints(scenario)
     assert current != legacy
     # The older layout's text is the dump of the same settings with the old key.
-    assert "integration_scheme: runge_kutta3\n" in saved_forms(scenario)[1]
-    assert "simulator:" not in saved_forms(scenario)[1]
+    assert "integration_scheme: runge_kutta3\n" in saved_forms(scenario)[2]
+    assert "simulator:" not in saved_forms(scenario)[2]
     save_scenario(scenario, path)
     assert load_scenario(path) == scenario
     scenario.simulator.max_step_size = 1e-4     # not what the old key implied
-    assert len(scenario_fingerprints(scenario)) == 1
+    assert len(scenario_fingerprints(scenario)) == 2
+
+
+def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplog):
+    """A planar file with top-level robot:, nominal_robot:, lhs:, potential:,
+    reference: and a spatial file with robot: DESCRIPTION, gains:, flat periods and
+    a duration load with a note, into the same settings; the paper run committed
+    in results/paper (saved in the older layout) keeps its fingerprint, so report()
+    still reads it."""
+    import json
+    from dacph_drake.reproduce import check_runs_belong_together
+    from dacph_drake.scenario_layouts import PlanarLayoutV1
+    results = Path(__file__).resolve().parents[1] / "results" / "paper"
+    with caplog.at_level("WARNING"):
+        scenario = load_scenario(results / "scenario.yaml")
+    assert "read in the layout before the robot: and task: sections" in caplog.text
+    assert scenario == BUILT_IN_SCENARIOS["paper"]()
+    runs = {c: json.loads((results / f"run_{c}.json").read_text())
+            for c in ("dac", "dac-nominal", "model-based")}
+    check_runs_belong_together(results, scenario, runs)
+    assert runs["dac"]["scenario_fingerprint"] in [
+        f[:16] for f in (__import__("hashlib").sha256(t.encode()).hexdigest()
+                         for t in saved_forms(scenario))]
+    path = tmp_path / "old.yaml"
+    path.write_text(yaml_dump_typed(PlanarLayoutV1.From(BUILT_IN_SCENARIOS["short"]())))
+    assert load_scenario(path) == BUILT_IN_SCENARIOS["short"]()
+    path.write_text("robot: satellite_3dof\nq0: [0.3, -0.8, 1.6]\nduration: 14.0\n"
+                    "phases: {warmup: 2.0, linear: 4.0, nonlinear: 4.0, disturbance: 3.0}\n"
+                    "gains: {Lambda: 3.0}\nrhs_period: 2.5e-4\n"
+                    "uncertainty: {B0: [1.0, 1.0, 1.0], D0: [0.2, 0.2, 0.01], "
+                    "D_offset: [0.04, 0.05, 0.002], D_linear: [0.15, 0.05, 0.1], "
+                    "D_quadratic: [0.1, -0.01, 1.0], B_linear: [[-0.1, 0.0, 0.0], "
+                    "[0.05, 0.15, 0.0], [0.0, 0.0, 0.1]], B_quadratic: [0.5, 0.02, 5.0], "
+                    "B_q1_squared: [[0.0, -0.1, 0.0], [0.4, 0.0, 0.0], [0.0, 0.0, 0.0]]}\n"
+                    "disturbance: {lf_offset: [0.03, -0.02, 0.002], lf_amplitude: [0.02, "
+                    "0.02, 0.002], lf_frequency: [0.05, 0.07, 0.09], hf_direction: [1.0, "
+                    "-1.0, 0.1]}\n")
+    old = load_scenario(path)
+    assert old.robot.description == "satellite_3dof" and old.task.gains.Lambda == 3.0
+    assert old.periods.rhs == 2.5e-4 and old.duration == 14.0     # the last phase: 4 s
+    assert old.phases.disturbance == 4.0
 
 
 def test_the_simulator_settings_reach_drake():
     """loop.CreateSimulator() applies scenario.simulator: scheme, step, real-time
     rate."""
     from pydrake.systems.analysis import RungeKutta3Integrator
-    from dacph_drake.diagrams import build_model_based_diagram
+    from dacph_drake.controllers.model_based import build_model_based_diagram
     scenario = BUILT_IN_SCENARIOS["short"]()
     scenario.simulator.integration_scheme = "runge_kutta3"
     scenario.simulator.max_step_size = 1e-4
@@ -197,7 +241,7 @@ def test_built_in_names_load_and_unknown_ones_are_named(tmp_path):
     assert load_scenario("paper") == BUILT_IN_SCENARIOS["paper"]()
     with pytest.raises(ConfigError, match=r"scenario 'shrot': no such file; allowed: a "
                                           r"scenario YAML file or a built-in name "
-                                          r"\(paper, short\)"):
+                                          r"\(paper, short, satellite_6dof, satellite_3dof\)"):
         load_scenario("shrot")
     with pytest.raises(ConfigError, match=r"no such file"):
         load_scenario(tmp_path)                            # a directory

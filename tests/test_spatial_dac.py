@@ -5,28 +5,27 @@ import json
 import numpy as np
 import pytest
 
+from dacph_drake.controllers import build_closed_loop
+from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
-from dacph_drake.scenario import Phases
-from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
+from dacph_drake.metrics import run_metrics
+from dacph_drake.run import simulate
+from dacph_drake.scenario import AttitudeGains, Phases, load_scenario, save_scenario
 
 
-def _short_3dof(**changes):
+def _short_3dof():
     """satellite_3dof with its phases compressed to 0.5 + 1 + 1 + 1 s."""
-    scenario = load_spatial_scenario("satellite_3dof")
+    scenario = load_scenario("satellite_3dof")
     scenario.phases = Phases(warmup=0.5, linear=1.0, nonlinear=1.0, disturbance=1.0)
-    scenario.duration = scenario.phases.end
-    for name, value in changes.items():
-        setattr(scenario, name, value)
     return scenario
 
 
 def test_spatial_true_rhs_is_the_port_model_at_the_plant_state(rng):
     """tau = B~(q, p) u - D~(p) qdot + d(t) with p = M(q) qdot at a random state of
     zero momentum in every phase, B~, D~ from uncertainty.TrueRhsModel."""
-    from dacph_drake.controllers import SPATIAL_REGISTRY, build_closed_loop
     from dacph_drake.uncertainty import TrueRhsModel
     scenario = _short_3dof()
-    loop = build_closed_loop("dac", scenario, SPATIAL_REGISTRY)
+    loop = build_closed_loop("dac", scenario)
     truth, model = loop.systems["true_rhs"], loop.model
     disturbance = loop.systems["disturbance"]
     context = truth.CreateDefaultContext()
@@ -57,15 +56,15 @@ def test_spatial_true_rhs_is_the_port_model_at_the_plant_state(rng):
 def test_model_based_loop_on_the_nominal_truth_applies_the_request():
     """On the nominal ground truth (the warm-up) the baseline's inversion is exact:
     the plant's torque is the attitude controller's request."""
-    from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
-    loop = build_spatial_model_based_diagram(_short_3dof())
+    loop = build_closed_loop("model-based", _short_3dof())
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(0.05)
     context = simulator.get_context()
     tau = loop.systems["true_rhs"].GetOutputPort("tau").Eval(
         loop.systems["true_rhs"].GetMyContextFromRoot(context))
-    request = loop.controller.GetOutputPort("tau_request").Eval(
-        loop.controller.GetMyContextFromRoot(context))
+    controller = loop.systems["attitude_controller"]
+    request = controller.GetOutputPort("tau_request").Eval(
+        controller.GetMyContextFromRoot(context))
     np.testing.assert_allclose(tau, request, rtol=1e-12, atol=1e-15)
 
 
@@ -78,80 +77,85 @@ def test_spatial_dac_tracks_through_the_phases_and_verifies(tmp_path):
     phase, and `dacph verify` passes on the saved run."""
     from dacph_drake.cli import main
     scenario = _short_3dof()
-    dac = simulate_spatial(scenario, out_dir=tmp_path / "dac", controller="dac")
-    baseline = simulate_spatial(scenario, controller="model-based")
+    dac = simulate(scenario, "dac", out_dir=tmp_path / "dac")
+    baseline = simulate(scenario, "model-based")
     assert dac.status == "ok" and baseline.status == "ok"
     t = dac.logs["time"]
     error = dac.logs["attitude_log"][:, 3]
-    bound = 1.1 * error[0] * np.exp(-scenario.gains.Lambda * (t - 0.1)) + 1e-3
+    bound = 1.1 * error[0] * np.exp(-scenario.task.gains.Lambda * (t - 0.1)) + 1e-3
     assert np.all(error <= bound), t[np.argmax(error > bound)]
     assert np.max(error[t >= 3.0]) < 1e-3
-    assert dac.metrics["max_momentum"] < 1e-8
-    assert dac.metrics["min_clearance"] > 0.1
-    assert (dac.metrics["phase3.tracking_error_rms"]
-            < baseline.metrics["phase3.tracking_error_rms"])
-    assert json.loads((tmp_path / "dac" / "run.json").read_text())["controller"] == "dac"
+    metrics, baseline_metrics = (run_metrics(r.logs, scenario) for r in (dac, baseline))
+    assert metrics["max_momentum"] < 1e-8
+    assert metrics["min_clearance"] > 0.1
+    assert (metrics["phase3.tracking_error_rms"]
+            < baseline_metrics["phase3.tracking_error_rms"])
+    assert json.loads((tmp_path / "dac" / "run_dac.json").read_text())["controller"] \
+        == "dac"
     assert main(["verify", str(tmp_path / "dac")]) == 0
     report = json.loads((tmp_path / "dac" / "verification.json").read_text())
     assert report["ok"] and report["checks"]["rhs_loop_truth"]["evaluated"] > 0
     assert report["settings"]["lambda_lhs"] == pytest.approx(
-        2 * scenario.gains.damping_rate)
+        2 * scenario.task.gains.damping_rate)
 
 
 def test_verify_refuses_a_spatial_baseline_run(tmp_path, capsys):
     from dacph_drake.cli import main
-    simulate_spatial(_short_3dof(duration=0.1), out_dir=tmp_path, controller="model-based")
+    simulate(_short_3dof(), "model-based", duration=0.1, out_dir=tmp_path)
     assert main(["verify", str(tmp_path)]) == 2
-    assert "a model-based run; allowed: a dac run" in capsys.readouterr().err
+    assert "logs_dac.npz is missing" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("change, message", [
-    (dict(rhs_period=2e-3), r"rhs_period = 0.002 s must not exceed lhs_period = 0.001 s"),
-    (dict(rhs_period=1e-3), r"rhs_period = 0.001 s must be shorter than lhs_period"),
-    (dict(learner_sample_period=1e-1, learner_period=1e-2),
-     r"learner_sample_period = 0.1 s must not exceed learner_period = 0.01 s"),
+    (dict(rhs=2e-3), r"periods.rhs = 0.002 s must not exceed periods.lhs = 0.001 s"),
+    (dict(rhs=1e-3), r"periods.rhs = 0.001 s must be shorter than periods.lhs"),
+    (dict(learner_sample=1e-1, learner=1e-2),
+     r"periods.learner_sample = 0.1 s must not exceed periods.learner = 0.01 s"),
 ])
 def test_bad_spatial_periods_are_named(change, message):
-    from dacph_drake.spatial_diagrams import build_spatial_dac_diagram
+    scenario = _short_3dof()
+    for name, value in change.items():
+        setattr(scenario.periods, name, value)
     with pytest.raises(ConfigError, match=message):
-        build_spatial_dac_diagram(_short_3dof(**change))
+        build_dac_diagram(scenario)
 
 
 def test_bad_spatial_port_settings_are_named():
-    from dacph_drake.spatial_diagrams import build_spatial_dac_diagram
-    from dacph_drake.spatial_scenario import AttitudeGains
     scenario = _short_3dof()
     scenario.uncertainty.D0 = [0.1, 0.1]
     with pytest.raises(ConfigError, match=r"uncertainty.D0 has 2 entries; allowed: 3"):
-        build_spatial_dac_diagram(scenario)
-    with pytest.raises(ConfigError, match=r"gains.damping_rate \+ gains.boundary_rate = "
-                                          r"520 1/s with lhs_period = 0.001 s"):
-        build_spatial_dac_diagram(_short_3dof(gains=AttitudeGains(boundary_rate=500.0)))
-    with pytest.raises(ConfigError, match=r"rhs_period = 0.0005 s cannot realize"):
-        build_spatial_dac_diagram(_short_3dof(gains=AttitudeGains(damping_rate=200.0,
-                                                                  boundary_rate=1.0),
-                                              lhs_period=2e-3, log_period=1e-2))
+        build_dac_diagram(scenario)
+    scenario = _short_3dof()
+    scenario.task.gains = AttitudeGains(boundary_rate=500.0)
+    with pytest.raises(ConfigError, match=r"task.gains.damping_rate \+ "
+                                          r"task.gains.boundary_rate = 520 1/s with "
+                                          r"periods.lhs = 0.001 s"):
+        build_dac_diagram(scenario)
+    scenario = _short_3dof()
+    scenario.task.gains = AttitudeGains(damping_rate=200.0, boundary_rate=1.0)
+    scenario.periods.lhs = 2e-3
+    with pytest.raises(ConfigError, match=r"periods.rhs = 0.0005 s cannot realize"):
+        build_dac_diagram(scenario)
 
 
 def test_spatial_panels_show_dac_against_the_baseline(tmp_path, capsys):
-    """`dacph spatial --panels` writes (a)-(d) and the attitude panel (e), whose
-    first axis holds both controllers' |e|; --panels asks for the DAC controller."""
+    """`dacph reproduce` on a described arm's scenario writes (a)-(d) and the
+    attitude panel (e), whose first axis holds every controller's |e|; the former
+    `dacph spatial --panels` points there."""
     import matplotlib.image
     from dacph_drake.cli import main
-    from dacph_drake.figures import SPATIAL_PANELS
-    from dacph_drake.spatial_run import save_spatial_scenario
+    from dacph_drake.figures import DAC_PANELS
+    from dacph_drake.robots.described import DescribedRobot
     scenario = _short_3dof()
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
-    scenario.duration = scenario.phases.end
-    save_spatial_scenario(scenario, tmp_path / "s.yaml")
-    assert main(["spatial", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "run"),
-                 "--panels"]) == 0
-    for name in SPATIAL_PANELS:
-        image = matplotlib.image.imread(tmp_path / "run" / "panels" / f"{name}.png")
-        assert image.shape[0] > 500 and (tmp_path / "run" / "panels" / f"{name}.pdf").is_file()
+    save_scenario(scenario, tmp_path / "s.yaml")
+    assert main(["reproduce", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "run")]) == 0
+    for name in DAC_PANELS + DescribedRobot.task_panels:
+        image = matplotlib.image.imread(tmp_path / "run" / "figures" / f"{name}.png")
+        assert image.shape[0] > 500 and (tmp_path / "run" / "figures" / f"{name}.pdf").is_file()
     assert main(["spatial", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "mb"),
                  "--controller", "model-based", "--panels"]) == 2
-    assert "allowed: --controller dac" in capsys.readouterr().err
+    assert "allowed: dacph reproduce" in capsys.readouterr().err
 
 
 def test_a_sweep_over_a_spatial_scenario(tmp_path):
@@ -162,11 +166,9 @@ def test_a_sweep_over_a_spatial_scenario(tmp_path):
     from dacph_drake.montecarlo.executors import InProcessExecutor
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.montecarlo.summary import write_summary
-    from dacph_drake.spatial_run import save_spatial_scenario
     scenario = _short_3dof()
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
-    scenario.duration = scenario.phases.end
-    save_spatial_scenario(scenario, tmp_path / "s.yaml")
+    save_scenario(scenario, tmp_path / "s.yaml")
     (tmp_path / "sweep.yaml").write_text(
         "scenario: s.yaml\ntrials: 2\ncontrollers: [dac]\ndistributions:\n"
         "  delta_D_scale: !Uniform {min: 0.5, max: 1.5}\n")
@@ -180,7 +182,8 @@ def test_a_sweep_over_a_spatial_scenario(tmp_path):
     (tmp_path / "bad.yaml").write_text(
         "scenario: satellite_3dof\ntrials: 1\ndistributions:\n  link_mass_scale: 1.1\n")
     with pytest.raises(ConfigError, match=r"distributions.link_mass_scale with the "
-                                          r"spatial scenario 'satellite_3dof'"):
+                                          r"scenario 'satellite_3dof', whose robot is a "
+                                          r"DescribedArm"):
         load_sweep(tmp_path / "bad.yaml")
 
 
@@ -191,12 +194,13 @@ def test_six_dof_dac_meets_the_stated_bounds_and_verifies(tmp_path):
     at least 0.15 m between the arm and the base, momentum below 1e-7, and
     `dacph verify` passes."""
     from dacph_drake.analysis.verify import verify_run
-    result = simulate_spatial(load_spatial_scenario("satellite_6dof"), out_dir=tmp_path,
-                              controller="dac")
+    scenario = load_scenario("satellite_6dof")
+    result = simulate(scenario, "dac", out_dir=tmp_path)
     t, error = result.logs["time"], result.logs["attitude_log"][:, 3]
+    metrics = run_metrics(result.logs, scenario)
     assert result.status == "ok" and np.max(error[t >= 4.0]) < 1e-3
-    assert result.metrics["min_clearance"] > 0.15
-    assert result.metrics["max_momentum"] < 1e-7
+    assert metrics["min_clearance"] > 0.15
+    assert metrics["max_momentum"] < 1e-7
     assert verify_run(tmp_path)["ok"]
 
 
@@ -207,13 +211,14 @@ def test_learning_beats_the_prior_on_the_3dof_arm_without_costing_tracking():
     under 1 % of their in-band inertial torque: not in the data), and the attitude
     error in phases 2 and 3 stays within 1.5x of the learner-off loop's (with the
     planar learner's settings on this arm: 8x)."""
-    scenario = load_spatial_scenario("satellite_3dof")
-    dac = simulate_spatial(scenario, controller="dac")
-    nominal = simulate_spatial(scenario, controller="dac-nominal")
+    scenario = load_scenario("satellite_3dof")
+    dac = simulate(scenario, "dac")
+    nominal = simulate(scenario, "dac-nominal")
     assert dac.status == "ok" and nominal.status == "ok"
+    dac_metrics, nominal_metrics = (run_metrics(r.logs, scenario) for r in (dac, nominal))
     for phase in ("phase1", "phase2", "phase3"):
-        assert dac.metrics[f"{phase}.B_error_ratio"] < 0.95, phase
-        assert dac.metrics[f"{phase}.D_error_ratio"] < 1.05, phase
+        assert dac_metrics[f"{phase}.B_error_ratio"] < 0.95, phase
+        assert dac_metrics[f"{phase}.D_error_ratio"] < 1.05, phase
     for phase in ("phase2", "phase3"):
-        assert (dac.metrics[f"{phase}.tracking_error_rms"]
-                < 1.5 * nominal.metrics[f"{phase}.tracking_error_rms"]), phase
+        assert (dac_metrics[f"{phase}.tracking_error_rms"]
+                < 1.5 * nominal_metrics[f"{phase}.tracking_error_rms"]), phase

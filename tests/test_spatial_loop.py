@@ -4,12 +4,22 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import SimulatorConfig
 
+from dacph_drake.controllers.model_based import build_model_based_diagram
 from dacph_drake.errors import ConfigError
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.run import collect_logs
-from dacph_drake.spatial_diagrams import build_spatial_model_based_diagram
-from dacph_drake.spatial_scenario import (AttitudeGains, ClearancePotential,
-                                          SpatialScenario)
+from dacph_drake.scenario import (AttitudeGains, ClearancePotential, Phases,
+                                  satellite_6dof_scenario)
+
+
+def _nominal_6dof(duration: float):
+    """satellite_6dof on the nominal ground truth (uncertainty and disturbance
+    off) for ``duration`` seconds."""
+    scenario = satellite_6dof_scenario()
+    scenario.uncertainty.linear_scale = scenario.uncertainty.nonlinear_scale = 0.0
+    scenario.disturbance.scale = 0.0
+    scenario.phases = Phases(warmup=duration, linear=0.0, nonlinear=0.0, disturbance=0.0)
+    return scenario
 
 
 def test_six_dof_arm_tracks_a_3d_attitude_reference():
@@ -18,15 +28,15 @@ def test_six_dof_arm_tracks_a_3d_attitude_reference():
     1.1 |e0| exp(-Lambda (t - 0.1 s)) + 1e-4 rad throughout, and below 2e-4 rad
     after 4 s while R_d(t) turns by up to 0.4 rad; ||s|| < 1e-3 after 0.5 s; the
     momentum stays zero."""
-    scenario = SpatialScenario(duration=4.0)
-    loop = build_spatial_model_based_diagram(scenario)
+    scenario = _nominal_6dof(4.0)
+    loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(scenario.duration)
     log = loop.loggers["attitude_log"].FindLog(simulator.get_context())
     t, data = log.sample_times(), log.data().T
     error, s_norm = data[:, AttitudeLog().e_norm], data[:, AttitudeLog().s_norm]
-    assert error[0] == pytest.approx(2 * np.sin(scenario.reference.initial_error / 2))
-    bound = 1.1 * error[0] * np.exp(-scenario.gains.Lambda * (t - 0.1)) + 1e-4
+    assert error[0] == pytest.approx(2 * np.sin(scenario.task.reference.initial_error / 2))
+    bound = 1.1 * error[0] * np.exp(-scenario.task.gains.Lambda * (t - 0.1)) + 1e-4
     assert np.all(error <= bound), t[np.argmax(error > bound)]
     assert error[-1] < 2e-4
     assert np.max(s_norm[t > 0.5]) < 1e-3
@@ -36,18 +46,29 @@ def test_six_dof_arm_tracks_a_3d_attitude_reference():
 
 
 @pytest.mark.parametrize("change, message", [
-    (dict(q0=[0.1, 0.2]), r"q0 has 2 entries; allowed: 6"),
-    (dict(lhs_period=0.05), r"gains.damping_rate = 20 1/s with lhs_period = 0.05 s"),
-    (dict(robot="satellite_9dof"), r"no such .urdf or .sdf file"),
-    (dict(log_period=100.0), r"log_period = 100.0 is out of range; allowed: in \[0.001, 8\] s"),
-    (dict(gains=AttitudeGains(task_damping=-1.0)), r"gains.task_damping = -1.0"),
-    (dict(potential=ClearancePotential(margin=0.0)), r"potential.margin = 0.0"),
-    (dict(simulator=SimulatorConfig(integration_scheme="radau3")),
-     r"simulator.integration_scheme = 'radau3'; allowed: runge_kutta2"),
+    ("q0", r"q0 has 2 entries; allowed: 6"),
+    ("lhs_period", r"task.gains.damping_rate = 20 1/s with periods.lhs = 0.05 s"),
+    ("robot", r"no such .urdf or .sdf file"),
+    ("log_period", r"periods.log = 100 s is longer than the run \(8 s\)"),
+    ("task_damping", r"task.gains.task_damping = -1.0"),
+    ("margin", r"robot.potential.margin = 0.0"),
+    ("simulator", r"simulator.integration_scheme = 'radau3'; allowed: runge_kutta2"),
 ])
 def test_bad_spatial_settings_are_named(change, message):
+    scenario = _nominal_6dof(8.0)
+    {"q0": lambda: setattr(scenario, "q0", [0.1, 0.2]),
+     "lhs_period": lambda: setattr(scenario.periods, "lhs", 0.05),
+     "robot": lambda: setattr(scenario.robot, "description", "satellite_9dof"),
+     "log_period": lambda: setattr(scenario.periods, "log", 100.0),
+     "task_damping": lambda: setattr(scenario.task, "gains",
+                                     AttitudeGains(task_damping=-1.0)),
+     "margin": lambda: setattr(scenario.robot, "potential",
+                               ClearancePotential(margin=0.0)),
+     "simulator": lambda: setattr(scenario, "simulator",
+                                  SimulatorConfig(integration_scheme="radau3")),
+     }[change]()
     with pytest.raises(ConfigError, match=message):
-        build_spatial_model_based_diagram(SpatialScenario(**change))
+        build_model_based_diagram(scenario)
 
 
 def test_spatial_run_replays_in_3d_offline(tmp_path):
@@ -58,12 +79,12 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     import matplotlib.image
     from headless_chromium import run_chromium
     from dacph_drake.animation import write_spatial_animation
-    scenario = SpatialScenario(duration=1.0)
-    loop = build_spatial_model_based_diagram(scenario)
+    scenario = _nominal_6dof(1.0)
+    loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(scenario.duration)
     logs = collect_logs(loop, simulator.get_context())
-    page = write_spatial_animation(scenario.robot, logs, tmp_path / "a.html")
+    page = write_spatial_animation(scenario.robot.description, logs, tmp_path / "a.html")
     dom = run_chromium(page.resolve().as_uri(), "--dump-dom", virtual_time_ms=8000)
     assert 0.0 < float(re.search(r'id="dacph-time">t = ([0-9.]+) s<', dom).group(1)) <= 1.0
     assert "desired attitude" in dom and "measured end-effector attitude" in dom
@@ -82,17 +103,17 @@ def test_the_clearance_potential_keeps_the_arm_off_the_base():
     0.1 m margin, and the attitude error is the same (the potential acts in the
     task's null space)."""
     from dacph_drake.spatial_potential import BaseClearancePotential
-    from dacph_drake.spatial_scenario import ClearancePotential
     runs = {}
     for gain in (1.0, 0.0):
-        scenario = SpatialScenario(duration=3.0, q0=[0.3, -0.8, 2.1, 0.2, 0.6, -0.3],
-                                   potential=ClearancePotential(gain=gain))
-        loop = build_spatial_model_based_diagram(scenario)
+        scenario = _nominal_6dof(3.0)
+        scenario.q0 = [0.3, -0.8, 2.1, 0.2, 0.6, -0.3]
+        scenario.robot.potential = ClearancePotential(gain=gain)
+        loop = build_model_based_diagram(scenario)
         simulator = loop.CreateSimulator()
         simulator.AdvanceTo(scenario.duration)
         context = simulator.get_context()
         states = loop.loggers["state"].FindLog(context).data().T
-        measure = BaseClearancePotential(description=scenario.robot, model=loop.model,
+        measure = BaseClearancePotential(description=scenario.robot.description, model=loop.model,
                                          gain=1.0, margin=0.1)
         joints, base = loop.model.coordinates.joint_q, loop.model.coordinates.base_q
         clearance = np.array([measure.Evaluate(x[joints], x[base]).min_distance
@@ -117,62 +138,66 @@ def test_inertia_scaled_damping_sets_the_lhs_rate_the_gain_rule_uses():
     arm's 3.8e-4 kg m^2 wrist)."""
     from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, inertia_scaled_c_lower_bound
     from dacph_drake.scenario import Rhs
-    scenario = SpatialScenario(duration=0.2, log_period=1e-3)
-    loop = build_spatial_model_based_diagram(scenario)
+    scenario = _nominal_6dof(0.2)
+    scenario.periods.log = 1e-3
+    loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
     simulator.AdvanceTo(scenario.duration)
     log = loop.loggers["attitude_log"].FindLog(simulator.get_context())
     t, V = log.sample_times(), log.data()[AttitudeLog().lyapunov_V]
     rate = -np.polyfit(t, np.log(V), 1)[0]
-    assert rate == pytest.approx(2 * scenario.gains.damping_rate, rel=0.03)
+    assert rate == pytest.approx(2 * scenario.task.gains.damping_rate, rel=0.03)
     rhs = Rhs()
     c_largest = (1 + rhs.c_margin) * inertia_scaled_c_lower_bound(
-        rhs.Td, scenario.gains.damping_rate, rhs.beta_max)
+        rhs.Td, scenario.task.gains.damping_rate, rhs.beta_max)
     assert WELL_DAMPED_LOOP_GAIN / c_largest == pytest.approx(1.25e-3, rel=0.01)
 
 
 def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
-    """`dacph spatial satellite_3dof` end to end: metrics printed, the run saved,
-    its scenario file loads back to the same settings; a bad name is named."""
-    import json
-    from pydrake.common.yaml import yaml_dump_typed
+    """`dacph spatial satellite_3dof` (now `dacph simulate`, with a note) end to end:
+    metrics printed, the run saved, its scenario file loads back to the same
+    settings; a bad name is named."""
     from dacph_drake.cli import main
-    from dacph_drake.spatial_run import load_spatial_scenario
+    from dacph_drake.metrics import run_metrics
+    from dacph_drake.run import load_run
+    from dacph_drake.scenario import BUILT_IN_SCENARIOS
     out = tmp_path / "run"
     assert main(["spatial", "satellite_3dof", "--out", str(out), "--duration", "2",
                  "--animate"]) == 0
-    printed = capsys.readouterr().out
-    assert "satellite_3dof: ok (2.00 s simulated" in printed
-    run = json.loads((out / "run.json").read_text())
-    assert run["status"] == "ok" and run["metrics"]["max_momentum"] < 1e-8
-    assert run["metrics"]["attitude_error_final"] < 0.2 * 2 * np.sin(0.15)
-    assert (out / "animation.html").stat().st_size > 100_000
-    loaded = load_spatial_scenario(out / "scenario.yaml")
-    assert yaml_dump_typed(loaded) == yaml_dump_typed(load_spatial_scenario("satellite_3dof"))
+    printed = capsys.readouterr()
+    assert "dac: ok (2.00 s simulated" in printed.out
+    assert "dacph spatial is dacph simulate now" in printed.err
+    logs, scenario, run = load_run(out, "dac")
+    metrics = run_metrics(logs, scenario)
+    assert run["status"] == "ok" and metrics["max_momentum"] < 1e-8
+    assert metrics["attitude_error_final"] < 0.2 * 2 * np.sin(0.15)
+    assert (out / "animation_dac.html").stat().st_size > 100_000
+    assert scenario == BUILT_IN_SCENARIOS["satellite_3dof"]()
     assert main(["spatial", "satellite_9dof", "--out", str(out)]) == 2
-    assert "allowed: a YAML file or a built-in name (satellite_6dof, satellite_3dof)" \
-        in capsys.readouterr().err
+    assert ("allowed: a scenario YAML file or a built-in name (paper, short, "
+            "satellite_6dof, satellite_3dof)") in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("name", ["satellite_6dof", "satellite_3dof"])
 def test_shipped_spatial_scenario_files_are_the_built_ins(name):
     from pathlib import Path
     from pydrake.common.yaml import yaml_dump_typed
-    from dacph_drake.spatial_run import BUILT_IN_SPATIAL_SCENARIOS, load_spatial_scenario
-    path = Path(__file__).resolve().parents[1] / "diagrams" / f"{name}.yaml"
-    assert yaml_dump_typed(load_spatial_scenario(path)) == yaml_dump_typed(
-        BUILT_IN_SPATIAL_SCENARIOS[name]())
+    from dacph_drake.scenario import BUILT_IN_SCENARIOS, load_scenario
+    path = Path(__file__).resolve().parents[1] / "scenarios" / f"{name}.yaml"
+    assert yaml_dump_typed(load_scenario(path)) == yaml_dump_typed(
+        BUILT_IN_SCENARIOS[name]())
 
 
 def test_live_meshcat_shows_a_spatial_run_without_changing_it():
     from dacph_drake.animation import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
-    from dacph_drake.spatial_run import load_spatial_scenario, simulate_spatial
+    from dacph_drake.run import simulate
+    from dacph_drake.scenario import load_scenario
     meshcat = QuietMeshcat()
-    scenario = load_spatial_scenario("satellite_3dof")
-    watched = simulate_spatial(scenario, duration=0.3, meshcat=meshcat)
+    scenario = load_scenario("satellite_3dof")
+    watched = simulate(scenario, "model-based", duration=0.3, meshcat=meshcat)
     for path in ("/drake/visualizer", DESIRED_TRIAD, MEASURED_TRIAD):
         assert meshcat.HasPath(path), path
-    plain = simulate_spatial(scenario, duration=0.3)
+    plain = simulate(scenario, "model-based", duration=0.3)
     for name, log in plain.logs.items():
         assert np.array_equal(log, watched.logs[name]), name
 

@@ -194,7 +194,7 @@ distributions:
             kinds.add("invalid")
             assert row["status"] == "failed" and row["runs"] == {}
             assert row["reason"].startswith(
-                f"invalid sample: robot.links[{invalid[0]}].inertia = ")
+                f"invalid sample: robot.truth.links[{invalid[0]}].inertia = ")
             assert "rod bound" in row["reason"]
         elif row["sampled"]["disturbance_scale"] > 1:
             kinds.add("diverged")
@@ -337,7 +337,7 @@ distributions:
     assert "none of the 3 trials ran to the end" in capsys.readouterr().err
     rows = [json.loads(line) for line in (out / "rows.jsonl").read_text().splitlines()]
     assert len(rows) == 3 and all(r["status"] == "failed" for r in rows)
-    assert all("robot.links[1].inertia = " in r["reason"] and "np.float64" not in r["reason"]
+    assert all("robot.truth.links[1].inertia = " in r["reason"] and "np.float64" not in r["reason"]
                for r in rows)
 
 

@@ -18,7 +18,7 @@ from dacph_drake.systems.true_rhs import TrueRhs
 
 @pytest.fixture(scope="module")
 def model():
-    return ReducedOrderModel(MakeArmPlant(Scenario().nominal_robot))
+    return ReducedOrderModel(MakeArmPlant(Scenario().robot.nominal))
 
 
 def _state(q, qdot, model):
@@ -108,10 +108,10 @@ def test_port_observer(model):
 
 def test_lhs_controller_equation(model):
     scenario = Scenario()
-    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
-    reference = OrientationReference(scenario.reference, 1.3)
+    potential = BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential)
+    reference = OrientationReference(scenario.task.reference, 1.3)
     lhs = LhsController(model=model, potential=potential, reference=reference,
-                        gains=scenario.lhs, period=1e-3)
+                        gains=scenario.task.gains, period=1e-3)
     q, qdot = np.array([1.3, 2.2]), np.array([0.3, -0.2])     # potential active here
     x = _state(q, qdot, model)
     x[2] = 0.1
@@ -124,8 +124,8 @@ def test_lhs_controller_equation(model):
         Dp = D / (D @ D)
         a_d, ad_d, _ = reference(time)
         alpha = x[2] + np.sum(qq) + (time - t) * r.base_velocity_map[2] @ qdot
-        xi = -scenario.lhs.eta * potential.Evaluate(qq, qd)[1]
-        return Dp * (ad_d - scenario.lhs.Lambda * (alpha - a_d)) \
+        xi = -scenario.task.gains.eta * potential.Evaluate(qq, qd)[1]
+        return Dp * (ad_d - scenario.task.gains.Lambda * (alpha - a_d)) \
             + (np.eye(2) - np.outer(Dp, D)) @ xi, D, xi, Dp
     nu, D, xi, Dp = nu_of(t, q, qdot)
     s = qdot - nu
@@ -139,8 +139,8 @@ def test_lhs_controller_equation(model):
     nu_minus = nu_of(t - h, q - h * qdot, qdot - h * qddot)[0]
     nu_dot_fd = (nu_plus - nu_minus) / (2 * h)
     r = model.Evaluate(q, qdot)
-    expected = (r.M @ nu_dot_fd + r.C @ nu - scenario.lhs.Kd * s
-                - chi * np.tanh(s / scenario.lhs.epsilon))
+    expected = (r.M @ nu_dot_fd + r.C @ nu - scenario.task.gains.Kd * s
+                - chi * np.tanh(s / scenario.task.gains.epsilon))
     np.testing.assert_allclose(tau, expected, rtol=1e-6, atol=1e-9)
 
 
@@ -187,13 +187,13 @@ def test_regression_filter_is_the_band_pass_cascade():
 def test_lhs_controller_adds_the_excitation(model):
     from dacph_drake.scenario import Excitation
     scenario = Scenario()
-    potential = BaseRepulsionPotential(scenario.nominal_robot, scenario.potential)
-    reference = OrientationReference(scenario.reference, 1.3)
+    potential = BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential)
+    reference = OrientationReference(scenario.task.reference, 1.3)
     excitation = Excitation(amplitude=2e-3, frequencies=[3.0, 5.0])
     plain = LhsController(model=model, potential=potential, reference=reference,
-                          gains=scenario.lhs, period=1e-3)
+                          gains=scenario.task.gains, period=1e-3)
     excited = LhsController(model=model, potential=potential, reference=reference,
-                            gains=scenario.lhs, period=1e-3, excitation=excitation)
+                            gains=scenario.task.gains, period=1e-3, excitation=excitation)
     x = _state(np.array([0.3, 1.0]), np.array([0.1, -0.1]), model)
     t = 0.37
     q, qdot = x[3:5], x[8:]
@@ -219,15 +219,15 @@ def test_port_observer_on_a_known_trajectory():
     scenario = Scenario()
     h = scenario.periods.rhs
     builder = DiagramBuilder()
-    plant, _ = AddFreeFloatingArm(builder, scenario.robot)
-    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
+    plant, _ = AddFreeFloatingArm(builder, scenario.robot.truth)
+    model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
     truth = builder.AddSystem(TrueRhs(scenario))
     source = builder.AddSystem(DisturbanceSource(scenario.disturbance, 0.0))
     u = builder.AddSystem(Sine([0.02, 0.015], [9.0, 13.0], [0.0, 1.0], 2))
     lhs = builder.AddSystem(LhsController(
         model=model,
-        potential=BaseRepulsionPotential(scenario.nominal_robot, scenario.potential),
-        reference=OrientationReference(scenario.reference, 1.3), gains=scenario.lhs,
+        potential=BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential),
+        reference=OrientationReference(scenario.task.reference, 1.3), gains=scenario.task.gains,
         period=scenario.periods.lhs))
     chi = builder.AddSystem(ConstantVectorSource([0.05]))
     builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))

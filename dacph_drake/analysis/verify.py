@@ -13,9 +13,9 @@
 3. A region-of-attraction certificate of the sliding dynamics at the initial
    configuration (region_of_attraction), checked to contain s(0).
 The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
-Planar runs (Scenario) and spatial runs (SpatialScenario, `dacph spatial`) are
-checked alike; a spatial run's LHS has K_d = damping_rate M and the
-inertia-scaled boundary layer (EnvelopeConstants.ForInertiaScaled).
+Every robot's runs are checked alike; what the checks need of the LHS comes from
+the robot (robots.Robot.VerifyLhs: a described arm's LHS has K_d = damping_rate M
+and the inertia-scaled boundary layer, EnvelopeConstants.ForInertiaScaled).
 """
 import json
 from dataclasses import dataclass, field
@@ -30,17 +30,12 @@ import numpy as np  # noqa: E402
 
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
-from dacph_drake.analysis.region_of_attraction import (  # noqa: E402
-    attitude_region_of_attraction, sliding_region_of_attraction)
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
-from dacph_drake.inertial_parameters import InertialParameters  # noqa: E402
-from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
-from dacph_drake.plant import MakeArmPlant  # noqa: E402
-from dacph_drake.reduced_model import (ReducedOrderModel,  # noqa: E402
-                                       mass_matrix_bounds)
-from dacph_drake.run import require_run_files  # noqa: E402
-from dacph_drake.scenario import Scenario, load_scenario  # noqa: E402
-from dacph_drake.systems.lhs_controller import boundary_layer_per_chi  # noqa: E402
+from dacph_drake.errors import ConfigError  # noqa: E402
+from dacph_drake.log_layout import RhsLog  # noqa: E402
+from dacph_drake.robots import robot_of  # noqa: E402
+from dacph_drake.run import load_run  # noqa: E402
+from dacph_drake.scenario import Scenario  # noqa: E402
 
 
 @dataclass
@@ -104,81 +99,12 @@ class LhsSide:
     settings: Dict
 
 
-def _PlanarLhs(logs, scenario: Scenario) -> LhsSide:
-    """The planar LHS. V is s^T M s / 2 with the M the controller ran on: the
-    nominal robot's until the inertial identifier's start, the identified one's
-    after it (logs["inertial_parameters"]); the envelope and eq. (45) take the
-    inertia bounds of both (the smallest inf lambda_min, the largest sup
-    lambda_max)."""
-    n = scenario.robot.num_links
-    model = ReducedOrderModel(MakeArmPlant(scenario.nominal_robot))
-    models = [model]
-    if "inertial_parameters" in logs:
-        models.append(model.WithInertialParameters(InertialParameters(model.plant),
-                                                   logs["inertial_parameters"][-1]))
-    bounds = np.array([mass_matrix_bounds(m) for m in models])
-    lambda_min_M, lambda_max_M = float(bounds[:, 0].min()), float(bounds[:, 1].max())
-    Kd, epsilon = scenario.lhs.Kd, scenario.lhs.epsilon
-    # The boundary layer as the controller built it, from the nominal robot's bound.
-    layer_per_chi = boundary_layer_per_chi(scenario.lhs, bounds[0, 0])
-    L = LhsLog(n)
-    return LhsSide(
-        V=logs["lhs_log"][:, L.lyapunov_V],
-        s0_norm=float(np.linalg.norm(logs["lhs_log"][0, L.s])),
-        constants=EnvelopeConstants.ForConstantDamping(
-            Kd, Kd, lambda_min_M, lambda_max_M, epsilon, n, layer_per_chi),
-        lambda_lhs=2 * Kd / lambda_min_M,
-        region=sliding_region_of_attraction(
-            model, np.asarray(scenario.q0), Kd, scenario.rhs.chi_initial,
-            epsilon + layer_per_chi * scenario.rhs.chi_initial),
-        settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M,
-                  "models": len(models)})
-
-
-# Configurations sampled for sup_q max_i M_ii of a spatial arm, and the margin on
-# the largest sample. It enters only the envelope's lower bound (a faster allowed
-# decay), so an underestimate can flag a false violation, never hide one.
-DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
-
-
-def _SpatialLhs(logs, scenario) -> LhsSide:
-    """The spatial LHS, with the controller's model (nominal_inertia_scale) and,
-    when it ran one, the inertial identifier's last estimate: the bounds of both
-    (as for _PlanarLhs)."""
-    from dacph_drake.inertia_bound import search_inertia_bound
-    from dacph_drake.spatial_diagrams import controller_model
-    models = [controller_model(scenario)]
-    if "inertial_parameters" in logs:
-        models.append(controller_model(scenario))
-        models[-1].SetInertialParameters(logs["inertial_parameters"][-1])
-    model = models[0]
-    n, gains = model.num_joints, scenario.gains
-    lambda_min_M = min(search_inertia_bound(m).lambda_min for m in models)
-    samples = np.random.default_rng(0).uniform(-np.pi, np.pi, (DIAGONAL_SAMPLES, n))
-    max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
-        float(np.max(np.diag(m.MassMatrix(q)))) for q in samples for m in models)
-    L = AttitudeLog()
-    return LhsSide(
-        V=logs["attitude_log"][:, L.lyapunov_V],
-        s0_norm=float(logs["attitude_log"][0, L.s_norm]),
-        constants=EnvelopeConstants.ForInertiaScaled(
-            gains.damping_rate, lambda_min_M, max_diagonal_M, gains.epsilon,
-            gains.boundary_rate, n),
-        lambda_lhs=2 * gains.damping_rate,
-        region=attitude_region_of_attraction(model, np.asarray(scenario.q0),
-                                             gains.damping_rate),
-        settings={"inf_lambda_min_M": lambda_min_M,
-                  "sup_max_diagonal_M": max_diagonal_M})
-
-
 def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
                 out_dir=None) -> Dict:
-    """All checks on the logs of a DAC run of ``scenario`` (a Scenario or a
-    SpatialScenario); writes verification.{md,json} and plots into out_dir when
+    """All checks on the logs of a DAC run of ``scenario``; writes verification.{md,json} and plots into out_dir when
     given. Returns the report dictionary (``ok`` is the verdict)."""
     n = len(scenario.q0)
-    lhs = _PlanarLhs(logs, scenario) if isinstance(scenario, Scenario) else \
-        _SpatialLhs(logs, scenario)
+    lhs = robot_of(scenario).VerifyLhs(logs)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
@@ -216,19 +142,15 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
     return report
 
 
-def verify_run(run_dir, out_dir=None) -> Dict:
-    """verify_logs on the DAC run saved in run_dir (by ``dacph simulate``,
-    ``dacph reproduce`` or ``dacph spatial --controller dac``); the report goes to
-    out_dir (default: run_dir)."""
-    if (Path(run_dir) / "logs.npz").is_file():
-        from dacph_drake.spatial_run import load_spatial_run
-        logs, scenario, meta = load_spatial_run(run_dir, controller="dac")
-        return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
-    run_dir = require_run_files(run_dir, ["dac"])
-    scenario = load_scenario(run_dir / "scenario.yaml")
-    with np.load(run_dir / "logs_dac.npz") as data:
-        logs = {k: data[k] for k in data.files}
-    meta = json.loads((run_dir / "run_dac.json").read_text())
+def verify_run(run_dir, out_dir=None, controller: str = "dac") -> Dict:
+    """verify_logs on the run of ``controller`` (one with the RHS integrator: DAC,
+    its ablation, or a registered variant) saved in run_dir (by ``dacph simulate``
+    or ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
+    logs, scenario, meta = load_run(run_dir, controller)
+    if "rhs_log" not in logs:
+        raise ConfigError(f"{run_dir}: the {controller} run has no RHS loop to verify "
+                          "(no rhs_log); allowed: the run of a controller with the RHS "
+                          "integrator (dac, dac-nominal)")
     return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
 
 

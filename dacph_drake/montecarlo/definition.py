@@ -13,9 +13,10 @@ drawn independently for each link. The controllers keep the nominal robot
 model error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per
 joint, and ``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault.
 
-The base scenario may be a spatial robot's (spatial_run: a built-in name such as
-``satellite_3dof`` or a SpatialScenario YAML): every setting but the robot's
-(``link_*``, ``base_*``: a description file has no such parameters) applies alike.
+The base scenario may be any robot's: every setting but the ground-truth robot's
+(``link_*``, ``base_*``: a planar arm's parameters, which a description file does
+not have; the robot section says which it takes: ``SAMPLED_SETTINGS``) applies
+alike.
 
 A sample is not checked against the robot's physical bounds here: a trial whose
 sampled scenario fails ``Scenario.Validate()`` (e.g. ``link_inertia_scale`` beyond
@@ -35,7 +36,8 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.robot import load_yaml_dataclass
-from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario, saved_forms
+from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
+                                  saved_forms)
 
 # The ground-truth robot's distributions (planar arms only).
 ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
@@ -103,7 +105,7 @@ class Sweep:
 class SweepDefinition:
     """A loaded, validated sweep with its base scenario."""
     sweep: Sweep
-    scenario: Scenario          # the base scenario (or a SpatialScenario)
+    scenario: Scenario          # the base scenario
     source: Path                # the sweep file
     text: str                   # the sweep file as written
 
@@ -152,32 +154,29 @@ def load_sweep(path) -> SweepDefinition:
         raise ConfigError(f"controllers = {sweep.controllers} names one twice; allowed: "
                           "each at most once")
     scenario = _base_scenario(sweep.scenario, path.parent)
-    if not isinstance(scenario, Scenario):
-        for name in ROBOT_DISTRIBUTIONS:
-            if getattr(sweep.distributions, name) is not None:
-                raise ConfigError(
-                    f"distributions.{name} with the spatial scenario {sweep.scenario!r}; "
-                    f"allowed: the settings other than {', '.join(ROBOT_DISTRIBUTIONS)} "
-                    "(a robot description has no such parameters)")
+    for name in ROBOT_DISTRIBUTIONS:
+        if (getattr(sweep.distributions, name) is not None
+                and name not in scenario.robot.SAMPLED_SETTINGS):
+            raise ConfigError(
+                f"distributions.{name} with the scenario {sweep.scenario!r}, whose robot "
+                f"is a {type(scenario.robot).__name__}; allowed: the settings other "
+                f"than {', '.join(ROBOT_DISTRIBUTIONS)} (its robot has no such "
+                "parameters)")
     _check_distributions(sweep.distributions, len(scenario.q0))
     return SweepDefinition(sweep=sweep, scenario=scenario, source=path,
                            text=path.read_text())
 
 
-def _base_scenario(name: str, folder: Path):
-    """A Scenario, or a SpatialScenario for a spatial built-in name or file."""
-    from dacph_drake.spatial_run import BUILT_IN_SPATIAL_SCENARIOS, load_any_scenario
+def _base_scenario(name: str, folder: Path) -> Scenario:
+    """A built-in scenario, or a scenario file relative to the sweep file."""
     if name in BUILT_IN_SCENARIOS:
         return BUILT_IN_SCENARIOS[name]()
-    if name in BUILT_IN_SPATIAL_SCENARIOS:
-        return BUILT_IN_SPATIAL_SCENARIOS[name]()
     path = folder / name
     if not path.is_file():
         raise ConfigError(f"scenario = {name!r} is neither a built-in scenario nor a file "
-                          f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)}, "
-                          f"{', '.join(BUILT_IN_SPATIAL_SCENARIOS)} or a scenario YAML "
-                          "path relative to the sweep file")
-    return load_any_scenario(path)
+                          f"(looked for {path}); allowed: {', '.join(BUILT_IN_SCENARIOS)} "
+                          "or a scenario YAML path relative to the sweep file")
+    return load_scenario(path)
 
 
 def _check_keys(data, schema_type, where: str) -> None:
@@ -348,8 +347,7 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
     docstring for what each one changes); scenario.seed = learner_seed if sampled,
     else ``seed``."""
     s = copy.deepcopy(base)
-    if isinstance(s, Scenario):
-        _apply_robot_sample(s, sampled)
+    s.robot.ApplyRobotSample(sampled)
     u = s.uncertainty
     fB, fD = sampled.get("delta_B_scale", 1.0), sampled.get("delta_D_scale", 1.0)
     u.B_linear = [[fB * v for v in row] for row in u.B_linear]
@@ -373,39 +371,11 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
 def _apply_model_error_sample(s, sampled: Dict[str, object]) -> None:
     """The controller's model error and the actuators' sampled settings."""
     from dacph_drake.scenario import ActuatorFault
-    links = sampled.get("nominal_link_mass_scale")
-    base = sampled.get("nominal_base_mass_scale")
-    if isinstance(s, Scenario):
-        for link, f in zip(s.nominal_robot.links, links or []):
-            link.mass *= f
-            link.inertia *= f
-        if base is not None:
-            s.nominal_robot.base.mass *= base
-            s.nominal_robot.base.inertia *= base
-    elif links is not None or base is not None:
-        s.nominal_inertia_scale = ([1.0 if base is None else base]
-                                   + list(links or [1.0] * len(s.q0)))
+    s.robot.ApplyModelErrorSample(sampled.get("nominal_link_mass_scale"),
+                                  sampled.get("nominal_base_mass_scale"), len(s.q0))
     if "actuator_gain_log10" in sampled:
         s.uncertainty.B_scale = [10.0**x for x in sampled["actuator_gain_log10"]]
     if "fault_time" in sampled:
         s.uncertainty.faults = list(s.uncertainty.faults) + [ActuatorFault(
             time=sampled["fault_time"], joint=int(round(sampled["fault_joint"])),
             gain=sampled["fault_gain"])]
-
-
-def _apply_robot_sample(s: Scenario, sampled: Dict[str, object]) -> None:
-    """The ground-truth robot's sampled settings (planar scenarios)."""
-    links = s.robot.links
-    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
-        link.mass *= f
-        link.inertia *= f
-    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
-        link.length *= f
-        link.com *= f
-        link.width *= f
-        link.inertia *= f * f
-    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
-        link.inertia *= f
-    f = sampled.get("base_mass_scale", 1.0)
-    s.robot.base.mass *= f
-    s.robot.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)

@@ -14,7 +14,7 @@ class Trial:
     """What a worker receives (picklable, no Drake objects)."""
     trial: int
     seed: int
-    scenario: Scenario              # or a SpatialScenario
+    scenario: Scenario
     sampled: Dict[str, object]
     controllers: List[str]
     log_dir: Optional[str] = None   # save each run's logs under log_dir/trial_NNNNN
@@ -30,15 +30,10 @@ def run_trial(task: Trial) -> Dict:
     import torch
     from dacph_drake.metrics import run_metrics
     from dacph_drake.run import simulate
-    from dacph_drake.spatial_run import simulate_spatial
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()
-    spatial = not isinstance(task.scenario, Scenario)
     try:
-        if spatial:
-            task.scenario.Validate(len(task.scenario.q0))
-        else:
-            task.scenario.Validate()
+        task.scenario.Validate()
     except ConfigError as e:
         return failed_row(task, f"invalid sample: {e}", time.perf_counter() - start)
     runs = {}
@@ -46,19 +41,12 @@ def run_trial(task: Trial) -> Dict:
         out_dir = (Path(task.log_dir) / f"trial_{task.trial:05d}" if task.log_dir
                    else None)
         try:
-            if spatial:     # a spatial run directory holds one controller's run
-                result = simulate_spatial(task.scenario, controller=controller,
-                                          out_dir=out_dir and out_dir / controller)
-            else:
-                result = simulate(task.scenario, controller, out_dir=out_dir)
+            result = simulate(task.scenario, controller, out_dir=out_dir)
         except Exception as e:   # noqa: BLE001 -- recorded as the run's failure
             runs[controller] = {"status": "error", "reason": f"{type(e).__name__}: {e}",
                                 "final_time": None, "wall_time": None, "metrics": None}
             continue
-        metrics = None
-        if result.status == "ok":
-            metrics = result.metrics if spatial else run_metrics(result.logs,
-                                                                  task.scenario)
+        metrics = run_metrics(result.logs, task.scenario) if result.status == "ok" else None
         runs[controller] = {"status": result.status, "reason": result.reason,
                             "final_time": result.final_time,
                             "wall_time": result.wall_time, "metrics": metrics}

@@ -1,6 +1,6 @@
 """LHS controller of a spatial arm: the sliding-mode law of LhsController with the 3D
 end-effector attitude as its task (attitude.py) and the damping and the robust
-term's boundary layer scaled to the inertia (spatial_scenario.AttitudeGains)."""
+term's boundary layer scaled to the inertia (scenario.AttitudeGains)."""
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis, Quaternion
 from pydrake.math import RotationMatrix
@@ -10,9 +10,8 @@ from dacph_drake.attitude import attitude_error, reference_rates
 from dacph_drake.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.plant import END_EFFECTOR
-from dacph_drake.scenario import Excitation
+from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
 from dacph_drake.spatial_potential import BaseClearancePotential
-from dacph_drake.spatial_scenario import AttitudeGains, AttitudeReference
 
 NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
 

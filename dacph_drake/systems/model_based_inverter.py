@@ -13,8 +13,7 @@ class ModelBasedInverter(Diagram):
     It feeds the true RHS, which the integrator evaluates at every stage, so it is
     built from Drake's C++ primitives (no Python call per stage): a Multiplexer
     stacks [tau_c^r; qdot] and a MatrixGain applies [B0^-1 | B0^-1 diag(D0)].
-    ``scenario``: any scenario with an ``uncertainty`` section (Scenario,
-    SpatialScenario)."""
+    ``scenario``: B0 and D0 from its ``uncertainty`` section."""
 
     def __init__(self, scenario: Scenario):
         super().__init__()

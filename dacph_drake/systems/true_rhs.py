@@ -24,8 +24,8 @@ class TrueRhs(LeafSystem):
 
     def __init__(self, scenario: Scenario):
         super().__init__()
-        n = scenario.robot.num_links
-        model = ReducedOrderModel(MakeArmPlant(scenario.robot))
+        n = scenario.robot.truth.num_links
+        model = ReducedOrderModel(MakeArmPlant(scenario.robot.truth))
         self._coordinates = ArmCoordinates.FromPlant(model.plant)
         self._indices = self._coordinates.StateIndices()
         self._representation = model.trigonometric_representation

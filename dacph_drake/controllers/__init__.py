@@ -1,0 +1,57 @@
+"""The controllers every command knows, registered once, for every robot.
+
+A controller is one module of this package with a function ``build(scenario) ->
+closed_loop.ClosedLoop`` that calls ``closed_loop.assemble_closed_loop(scenario,
+name, add)``, where ``add(loop, controller)`` adds the controller's systems to
+``controller.builder`` (the robot's LHS controller through
+``closed_loop.AddLhsSide``) and returns them by name (model_based.py is the
+shortest). REGISTRY maps its name to that function, as "module:function" so that
+the command line can list the names without loading Drake, with how tables and
+figures show it. `dacph simulate --controller`, `dacph diagram`, `dacph animate`,
+`dacph reproduce` (which runs every registered controller into its tables and
+panels), the sweep's ``controllers:`` and its summary, and ``run.simulate`` all
+take their names from here. To add a controller, write its module and add one
+entry below."""
+import importlib
+from dataclasses import dataclass
+
+from dacph_drake.errors import require_one_of
+
+
+@dataclass(frozen=True)
+class Controller:
+    builder: str            # "module:function" returning a closed_loop.ClosedLoop
+    description: str        # one line, for --help and the README
+    label: str = ""         # in legends (empty: the registered name)
+    color: str = "C7"       # in figures (matplotlib colour and line style)
+    linestyle: str = "-."
+
+
+REGISTRY = {
+    "dac": Controller("dacph_drake.controllers.dac:build_dac_diagram",
+                      "DAC-pH: LHS sliding mode, port observer, RHS integrator, learner",
+                      "DAC-pH", "C0", "-"),
+    "dac-nominal": Controller("dacph_drake.controllers.dac:build_dac_nominal_diagram",
+                              "DAC-pH with the learner off (the learning ablation)",
+                              "dac-nominal", "C2", ":"),
+    "model-based": Controller("dacph_drake.controllers.model_based:"
+                              "build_model_based_diagram",
+                              "the LHS controller with u = B0^-1 (tau_c^r + D0 qdot)",
+                              "model-based", "C1", "--"),
+}
+NAMES = tuple(REGISTRY)
+# The controller the tables compare the others with (the paper's DAC-pH), and the
+# paper's baseline.
+REFERENCE, BASELINE = "dac", "model-based"
+
+
+def require_controller(name: str) -> Controller:
+    """The registered controller ``name`` (ConfigError listing the names otherwise)."""
+    require_one_of("controller", name, REGISTRY)
+    return REGISTRY[name]
+
+
+def build_closed_loop(name: str, scenario):
+    """The loop (closed_loop.ClosedLoop) of controller ``name`` for ``scenario``."""
+    module, function = require_controller(name).builder.split(":")
+    return getattr(importlib.import_module(module), function)(scenario)

@@ -1,0 +1,112 @@
+"""DAC-pH (the paper's controller) and its learning ablation: the robot's LHS
+controller with chi from the RHS loop and the learner's excitation, the port
+observer, the regression filter, the learner and the RHS integrator."""
+from typing import Dict
+
+from dacph_drake.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
+                                     assemble_closed_loop)
+from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
+from dacph_drake.scenario import Scenario
+from dacph_drake.systems.learner import RhsLearner
+from dacph_drake.systems.port_observer import PortObserver
+from dacph_drake.systems.regression_filter import RegressionFilter
+from dacph_drake.systems.rhs_integrator import RhsIntegrator
+
+
+def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
+    """Plant + true RHS + disturbance, closed by the DAC-pH controller: the robot's
+    LHS controller (chi from the RHS loop, plus scenario.excitation; an inertial
+    identifier with inertia.identify), the port observer, the RHS integrator and
+    the learner (in regularized mode behind a RegressionFilter). With ``learning``
+    False the learner keeps its initial weights, so the integrator runs on the
+    nominal RHS (B0, D0): the dac-nominal ablation, otherwise the same diagram."""
+    def add(loop: ClosedLoop, controller: ControllerBuilder):
+        lhs, systems = AddLhsSide(loop, controller, scenario.excitation,
+                                  identify=scenario.inertia.identify)
+        return {**systems, **AddRhsChain(loop, controller, lhs, learning,
+                                         systems.get("inertial_identifier"))}
+    return assemble_closed_loop(scenario, "dac" if learning else "dac_nominal", add)
+
+
+def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
+    """The learning ablation: build_dac_diagram with the learner switched off (the
+    integrator on the nominal RHS B0, D0; the excitation stays, so that learning is
+    the only difference)."""
+    return build_dac_diagram(scenario, learning=False)
+
+
+def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: bool,
+                identifier=None) -> Dict[str, object]:
+    """The DAC controller's RHS side: the port observer, the regression filter
+    (regularized mode), the learner and the RHS integrator, wired to the LHS
+    controller ``lhs`` (its outputs ``reduced_model`` and ``tau_request``, its input
+    ``chi``) and to the controller's inputs q, qdot; exports ``u``,
+    ``tau_observed``, ``rhs_log``, ``learner_log``, ``estimates``. The gain rule
+    (eq. 48) uses the robot's LHS rates (robots.Robot.GainRuleRates); the RHS
+    period is checked for the largest c it allows (gain_rule.check_rhs_period).
+    With the LHS's InertialIdentifier ``identifier``, the learner also watches the
+    model the observer uses (Learner.model_change). Returns the named systems."""
+    scenario, model = loop.scenario, loop.model
+    rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
+    Kd_max, lambda_min_M = loop.robot.GainRuleRates()
+    check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
+                         rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
+                     (1 + rhs_settings.c_margin) * c_lower_bound(
+                         rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
+                     rhs_settings.beta_max)
+    builder = controller.builder
+    regularized = settings.mode == "regularized"
+    observer = builder.AddNamedSystem("port_observer", PortObserver(
+        num_joints=model.num_joints, sample_period=periods.rhs,
+        noise_std=rhs_settings.observer_noise, seed=scenario.seed,
+        anti_alias_cutoff=settings.band[1] if regularized else 0.0))
+    prefilter = (builder.AddNamedSystem("regression_filter", RegressionFilter(
+        settings=settings, num_joints=model.num_joints,
+        period=periods.learner_sample)) if regularized else None)
+    learner = builder.AddNamedSystem("learner", RhsLearner(
+        model=model, settings=settings, period=periods.learner,
+        sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
+        D0=scenario.uncertainty.D0, seed=scenario.seed, q0=scenario.q0,
+        learning=learning, watch_model=identifier is not None))
+    if identifier is not None:
+        builder.Connect(identifier.GetOutputPort("model_epoch"),
+                        learner.GetInputPort("model_epoch"))
+    rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
+        model=model, network=learner.exported, settings=rhs_settings,
+        Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,
+        D0=scenario.uncertainty.D0, period=periods.rhs,
+        model_period=periods.learner_sample, stress=scenario.stress))
+    # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
+    # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
+    for signal in ("q", "qdot"):
+        controller.Input(observer.GetInputPort(signal), signal)
+    for system in (observer, learner, rhs):      # M for p = M qdot, the observer's
+        builder.Connect(lhs.GetOutputPort("reduced_model"),
+                        system.GetInputPort("reduced_model"))
+    builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
+    port_sample = observer.GetOutputPort("port_sample")
+    if prefilter is not None:
+        builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
+        port_sample = prefilter.GetOutputPort("filtered_sample")
+    builder.Connect(port_sample, learner.GetInputPort("port_sample"))
+    builder.Connect(port_sample, rhs.GetInputPort("port_sample"))
+    for signal in ("q", "qdot"):
+        controller.Input(learner.GetInputPort(signal), signal)
+    builder.Connect(observer.GetOutputPort("tau_observed"),
+                    rhs.GetInputPort("tau_observed"))
+    builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
+    builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
+    builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
+    for signal in ("q", "qdot"):
+        controller.Input(rhs.GetInputPort(signal), signal)
+    builder.ExportOutput(rhs.GetOutputPort("u"), "u")
+    builder.Connect(rhs.GetOutputPort("chi"), lhs.GetInputPort("chi"))
+    for name, port in [("tau_observed", observer.GetOutputPort("tau_observed")),
+                       ("rhs_log", rhs.GetOutputPort("rhs_log")),
+                       ("learner_log", learner.GetOutputPort("learner_log")),
+                       ("estimates", learner.GetOutputPort("estimates"))]:
+        builder.ExportOutput(port, name)
+    systems = {"port_observer": observer, "learner": learner, "rhs_integrator": rhs}
+    if prefilter is not None:
+        systems["regression_filter"] = prefilter
+    return systems

@@ -1,0 +1,29 @@
+"""The model-based baseline (docs/equations.md, SPEC settings): the robot's LHS
+controller with a constant chi (task.gains.chi_model_based) and the static
+inversion u = B0^-1 (tau_c^r + D0 qdot); no integrator, no learning."""
+from pydrake.systems.primitives import ConstantVectorSource
+
+from dacph_drake.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
+                                     assemble_closed_loop)
+from dacph_drake.scenario import Excitation, Scenario
+from dacph_drake.systems.model_based_inverter import ModelBasedInverter
+
+
+def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
+    """The baseline loop of ``scenario``'s robot. On a nominal ground truth the
+    inversion is exact: the plant receives the LHS's request."""
+    def add(loop: ClosedLoop, controller: ControllerBuilder):
+        lhs, systems = AddLhsSide(loop, controller, Excitation(amplitude=0.0),
+                                  identify=False)
+        builder = controller.builder
+        fixed_chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
+            [scenario.task.gains.chi_model_based]))
+        builder.Connect(fixed_chi.get_output_port(), lhs.GetInputPort("chi"))
+        inverter = builder.AddNamedSystem("model_based_inverter",
+                                          ModelBasedInverter(scenario))
+        builder.Connect(lhs.GetOutputPort("tau_request"),
+                        inverter.GetInputPort("tau_request"))
+        controller.Input(inverter.GetInputPort("qdot"), "qdot")
+        builder.ExportOutput(inverter.GetOutputPort("u"), "u")
+        return {**systems, "model_based_inverter": inverter}
+    return assemble_closed_loop(scenario, "model_based", add)

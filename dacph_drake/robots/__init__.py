@@ -1,0 +1,104 @@
+"""Robots: what a closed loop needs of the robot it controls, for every robot alike.
+
+A scenario's ``robot:`` section is one of two typed variants (scenario.PlanarArm,
+scenario.DescribedArm) and its ``task:`` one of two (scenario.EndEffectorAngle,
+scenario.EndEffectorAttitude); ``robot_of(scenario)`` is the one place that
+dispatches on them, returning an object with the Robot protocol below
+(robots.planar.PlanarRobot, robots.described.DescribedRobot). The loop builder
+(loop.closed_loop), ``loop.simulate``, the metrics, the figures, ``dacph verify``
+and the animations use that protocol only."""
+import importlib
+from typing import Callable, Dict, Optional, Protocol, Tuple
+
+import numpy as np
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.scenario import (DescribedArm, EndEffectorAngle, EndEffectorAttitude,
+                                  PlanarArm, Scenario)
+
+
+class ReducedModel(Protocol):
+    """The controller's reduced model of a free-floating arm at zero momentum
+    (reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel
+    for described ones): M(q) qdot = p is the port's momentum."""
+    num_joints: int
+
+    def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
+
+    def MassMatrix(self, q: np.ndarray) -> np.ndarray: ...
+
+
+class Robot(Protocol):
+    """A robot and its task, as the loop builder and the tools use it."""
+    scenario: Scenario
+    num_joints: int
+    model: ReducedModel             # the controller's model (its inertias nominal)
+    lhs_name: str                   # the LHS controller's system name
+    lhs_log: str                    # the name of its log output
+    task_panels: Tuple[str, ...]    # figures.make_panels' panels of this task
+
+    def AddGroundTruth(self, builder) -> Tuple[object, object]:
+        """Adds the ground-truth MultibodyPlant ("plant") and its SceneGraph."""
+
+    def MakeTrueRhs(self, plant):
+        """The port's true RHS system for ``plant`` (inputs u, state,
+        disturbance_model; outputs tau, true_matrices)."""
+
+    def RequireRunnableStart(self) -> None:
+        """ConfigError unless a run can start at the scenario's q0."""
+
+    def GainRuleRates(self) -> Tuple[float, float]:
+        """(lambda_max(K_d), inf_q lambda_min(M)) of the LHS for eq. (48)."""
+
+    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
+        """Adds the LHS controller (outputs tau_request, reduced_model and its log;
+        input chi) and, with ``identify``, an InertialIdentifier feeding it, into
+        the controller's builder; returns the named systems."""
+
+    def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
+        """q -> the ground truth's link-base clearance [m] for the run's monitor,
+        or None where the ground truth has no such measure."""
+
+    def LiveView(self, loop, meshcat):
+        """An animation.LiveView drawing the loop's ground truth."""
+
+    def WriteAnimation(self, logs, out_html):
+        """A self-contained HTML replay of a run's logs."""
+
+    def TaskSignals(self, logs) -> Tuple[np.ndarray, ...]:
+        """(tracking error, s, link-base clearance [m], base turn [rad]) over time."""
+
+    def TaskMetrics(self, logs) -> Dict[str, float]:
+        """The task's own metrics beside metrics.run_metrics' shared ones."""
+
+    def TotalMass(self) -> float:
+        """The ground truth's total mass [kg]."""
+
+    def VerifyLhs(self, logs):
+        """analysis.verify.LhsSide: what dacph verify checks of this LHS."""
+
+
+# Each robot variant, its task and the module:class of its Robot.
+_ROBOTS = {PlanarArm: (EndEffectorAngle, "dacph_drake.robots.planar:PlanarRobot"),
+           DescribedArm: (EndEffectorAttitude,
+                          "dacph_drake.robots.described:DescribedRobot")}
+
+
+def robot_type(scenario: Scenario):
+    """The class of ``scenario``'s Robot (its class attributes, such as
+    task_panels, without building or validating it); ConfigError when the task is
+    not the one this robot tracks."""
+    task, path = _ROBOTS[type(scenario.robot)]
+    if type(scenario.task) is not task:
+        raise ConfigError(
+            f"task: !{type(scenario.task).__name__} with robot: "
+            f"!{type(scenario.robot).__name__}; allowed: task: !{task.__name__} "
+            f"(the task this robot's LHS controller tracks)")
+    module, name = path.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def robot_of(scenario: Scenario) -> Robot:
+    """The Robot of ``scenario`` (validating the scenario against it: ConfigError
+    naming the first invalid setting)."""
+    return robot_type(scenario)(scenario)

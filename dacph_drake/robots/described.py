@@ -1,0 +1,169 @@
+"""An arm from a description file (scenario.DescribedArm: URDF/SDF, the root body
+the free base) tracking its end effector's 3D attitude
+(scenario.EndEffectorAttitude): the ground truth parsed from the description
+(description.py), the controller's model of the same description with its
+inertias scaled (floating_model.FloatingBaseModel), the clearance potential from
+its collision geometry, and the AttitudeController."""
+from typing import Dict
+
+import numpy as np
+
+from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
+from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.inertial_parameters import PER_BODY, InertialParameters
+from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.plant import ArmCoordinates
+from dacph_drake.scenario import Scenario
+from dacph_drake.spatial_potential import BaseClearancePotential
+from dacph_drake.systems.attitude_controller import AttitudeController
+from dacph_drake.systems.inertial_identifier import InertialIdentifier
+from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
+
+SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
+# Configurations sampled for sup_q max_i M_ii of the arm in VerifyLhs, and the
+# margin on the largest sample. It enters only the envelope's lower bound (a faster
+# allowed decay), so an underestimate can flag a false violation, never hide one.
+DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
+
+
+class DescribedRobot:
+    """robots.Robot for a scenario whose robot is a DescribedArm."""
+    lhs_name, lhs_log = "attitude_controller", "attitude_log"
+    task_panels = ("e_attitude_dac_vs_model_based",)
+
+    def __init__(self, scenario: Scenario):
+        self.scenario = scenario
+        arm = scenario.robot
+        self.model = FloatingBaseModel(MakeRobotPlant(arm.description))
+        self.num_joints = self.model.num_joints
+        arm.Validate(len(self.model.parameters.bodies))
+        scenario.ValidateShared(self.num_joints)
+        if arm.nominal_inertia_scale:
+            self.model.SetInertialParameters(self.model.inertial_parameters * np.repeat(
+                arm.nominal_inertia_scale, PER_BODY))
+
+    def AddGroundTruth(self, builder):
+        return AddRobotFromDescription(builder, self.scenario.robot.description)
+
+    def MakeTrueRhs(self, plant) -> SpatialTrueRhs:
+        return SpatialTrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
+                              phases=self.scenario.phases)
+
+    def RequireRunnableStart(self) -> None:
+        """Nothing checked yet at q0 (the reliability issue's clearance check)."""
+
+    def GainRuleRates(self):
+        """K_d = damping_rate M(q): the LHS rate lambda_max(K_d) / inf
+        lambda_min(M) is damping_rate for every arm
+        (gain_rule.inertia_scaled_c_lower_bound)."""
+        return self.scenario.task.gains.damping_rate, 1.0
+
+    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
+        """The AttitudeController (with the clearance potential unless its gain is
+        0), fed by an InertialIdentifier (scenario.inertia) with ``identify``."""
+        scenario, builder, arm = self.scenario, controller.builder, self.scenario.robot
+        potential = (BaseClearancePotential(
+            description=arm.description, model=self.model, gain=arm.potential.gain,
+            margin=arm.potential.margin) if arm.potential.gain > 0 else None)
+        lhs = builder.AddNamedSystem(self.lhs_name, AttitudeController(
+            model=self.model, reference=scenario.task.reference,
+            gains=scenario.task.gains, period=scenario.periods.lhs, q0=scenario.q0,
+            potential=potential, eta=arm.potential.eta, excitation=excitation,
+            identify=identify))
+        for signal in ("base_pose", "base_velocity", "q", "qdot"):
+            controller.Input(lhs.GetInputPort(signal), signal)
+        if not identify:
+            return {self.lhs_name: lhs}
+        identifier = builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
+            plant=self.model.plant, prior=self.model.inertial_parameters,
+            settings=scenario.inertia, period=scenario.periods.learner_sample))
+        return {self.lhs_name: lhs, "inertial_identifier": identifier}
+
+    def Clearance(self):
+        return None
+
+    def LiveView(self, loop, meshcat):
+        """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
+        from dacph_drake.animation import LiveView, SpatialViewer
+        viewer = SpatialViewer(self.scenario.robot.description, meshcat)
+        controller = loop.systems[self.lhs_name]
+        return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
+            x, controller.DesiredAttitude(t)[0]))
+
+    def WriteAnimation(self, logs, out_html):
+        from dacph_drake.animation import write_spatial_animation
+        return write_spatial_animation(self.scenario.robot.description, logs, out_html)
+
+    def TaskSignals(self, logs):
+        """|e|, ||s||, the signed link-base distance (attitude_log) and the angle
+        of the base's rotation from its start."""
+        log, A = logs["attitude_log"], AttitudeLog()
+        base_q = ArmCoordinates.FromPlant(self.model.plant).base_q
+        quaternion = logs["state"][:, base_q[:4]]       # the free base's (w, x, y, z)
+        quaternion = quaternion / np.linalg.norm(quaternion, axis=1, keepdims=True)
+        cosine = np.clip(np.abs(quaternion @ quaternion[0]), 0.0, 1.0)
+        return log[:, A.e_norm], log[:, A.s_norm], log[:, A.clearance], 2 * np.arccos(cosine)
+
+    def TaskMetrics(self, logs) -> Dict[str, float]:
+        """Attitude error |e| (final, RMS and max after SETTLING_TIME) [rad], the
+        smallest link-base distance [m] (nan without the potential, which measures
+        it) and the largest |spatial momentum| over the logged states."""
+        layout = AttitudeLog()
+        t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
+        settled = t >= SETTLING_TIME
+        clearance = logs["attitude_log"][:, layout.clearance]
+        plant = MakeRobotPlant(self.scenario.robot.description)
+        context = plant.CreateDefaultContext()
+        momentum = 0.0
+        for x in logs["state"]:
+            plant.SetPositionsAndVelocities(context, x)
+            momentum = max(momentum, float(np.max(np.abs(
+                plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3)
+                                                           ).get_coeffs()))))
+        nan = float("nan")
+        return {
+            "attitude_error_final": float(error[-1]) if len(error) else nan,
+            "attitude_error_rms_settled": (float(np.sqrt(np.mean(error[settled]**2)))
+                                           if settled.any() else nan),
+            "attitude_error_max_settled": (float(np.max(error[settled]))
+                                           if settled.any() else nan),
+            "min_clearance": (float(np.min(clearance)) if np.all(np.isfinite(clearance))
+                              and len(clearance) else nan),
+            "max_momentum": momentum}
+
+    def TotalMass(self) -> float:
+        plant = MakeRobotPlant(self.scenario.robot.description)
+        return float(sum(body.default_mass()
+                         for body in InertialParameters(plant).bodies))
+
+    def VerifyLhs(self, logs):
+        """The LHS with K_d = damping_rate M and the inertia-scaled boundary layer
+        (EnvelopeConstants.ForInertiaScaled), with the controller's model and, when
+        it ran one, the inertial identifier's last estimate: the bounds of both."""
+        from dacph_drake.analysis.lyapunov_envelope import EnvelopeConstants
+        from dacph_drake.analysis.region_of_attraction import (
+            attitude_region_of_attraction)
+        from dacph_drake.analysis.verify import LhsSide
+        from dacph_drake.inertia_bound import search_inertia_bound
+        scenario, model = self.scenario, self.model
+        models = [model]
+        if "inertial_parameters" in logs:
+            models.append(DescribedRobot(scenario).model)
+            models[-1].SetInertialParameters(logs["inertial_parameters"][-1])
+        n, gains = model.num_joints, scenario.task.gains
+        lambda_min_M = min(search_inertia_bound(m).lambda_min for m in models)
+        samples = np.random.default_rng(0).uniform(-np.pi, np.pi, (DIAGONAL_SAMPLES, n))
+        max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
+            float(np.max(np.diag(m.MassMatrix(q)))) for q in samples for m in models)
+        L = AttitudeLog()
+        return LhsSide(
+            V=logs["attitude_log"][:, L.lyapunov_V],
+            s0_norm=float(logs["attitude_log"][0, L.s_norm]),
+            constants=EnvelopeConstants.ForInertiaScaled(
+                gains.damping_rate, lambda_min_M, max_diagonal_M, gains.epsilon,
+                gains.boundary_rate, n),
+            lambda_lhs=2 * gains.damping_rate,
+            region=attitude_region_of_attraction(model, np.asarray(scenario.q0),
+                                                 gains.damping_rate),
+            settings={"inf_lambda_min_M": lambda_min_M,
+                      "sup_max_diagonal_M": max_diagonal_M})

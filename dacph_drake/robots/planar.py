@@ -1,0 +1,158 @@
+"""The planar n-link arm (scenario.PlanarArm) tracking its end effector's angle
+(scenario.EndEffectorAngle): the ground truth built directly (plant.py), the
+controller's closed-form reduced model with its compiled kernels
+(reduced_model.ReducedOrderModel), the kinematic base-repulsion potential, and the
+sliding-mode LhsController."""
+from typing import Dict
+
+import numpy as np
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.inertial_parameters import InertialParameters
+from dacph_drake.log_layout import LhsLog
+from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
+from dacph_drake.potential import BaseRepulsionPotential
+from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.reference import OrientationReference
+from dacph_drake.scenario import Scenario
+from dacph_drake.systems.inertial_identifier import InertialIdentifier
+from dacph_drake.systems.lhs_controller import LhsController, boundary_layer_per_chi
+from dacph_drake.systems.true_rhs import TrueRhs
+
+
+class PlanarRobot:
+    """robots.Robot for a scenario whose robot is a PlanarArm."""
+    lhs_name, lhs_log = "lhs_controller", "lhs_log"
+    task_panels = ("e_dac_vs_model_based", "f_inputs_and_states")
+
+    def __init__(self, scenario: Scenario):
+        self.scenario = scenario
+        self.num_joints = scenario.robot.Validate()
+        scenario.ValidateShared(self.num_joints)
+        self._model, self._bounds = None, None
+
+    @property
+    def model(self) -> ReducedOrderModel:
+        if self._model is None:
+            self._model = ReducedOrderModel(MakeArmPlant(self.scenario.robot.nominal))
+        return self._model
+
+    @property
+    def mass_matrix_bounds(self):
+        """(inf_q lambda_min(M), sup_q lambda_max(M)) of the nominal robot."""
+        if self._bounds is None:
+            self._bounds = mass_matrix_bounds(self.model)
+        return self._bounds
+
+    def AddGroundTruth(self, builder):
+        return AddFreeFloatingArm(builder, self.scenario.robot.truth)
+
+    def MakeTrueRhs(self, plant) -> TrueRhs:
+        return TrueRhs(self.scenario)
+
+    def RequireRunnableStart(self) -> None:
+        """Every link of the ground-truth arm lies outside the base at q0 (clearance
+        of the link outline > 0, as potential.BaseRepulsionPotential measures it),
+        and the controller's task Jacobian D(q0) (1 x n, d alpha / d qdot) is far
+        enough from singular for D+ = D^T / (D D^T): ||D(q0)|| >=
+        task.gains.min_task_singular_value."""
+        scenario = self.scenario
+        q0 = np.asarray(scenario.q0, float)
+        clearance = self.Clearance()(q0)
+        if clearance <= 0:
+            raise ConfigError(f"q0 = {list(scenario.q0)} puts the arm into the base "
+                              f"(clearance {clearance:.3f} m); allowed: a configuration "
+                              "with every link outside the base")
+        sigma = float(np.linalg.norm(self.model.Evaluate(q0, np.zeros_like(q0)).D))
+        bound = scenario.task.gains.min_task_singular_value
+        if sigma < bound:
+            raise ConfigError(
+                f"q0 = {list(scenario.q0)} is near a singularity of the task Jacobian D "
+                f"(||D(q0)|| = {sigma:.3g}); allowed: a q0 with ||D(q0)|| >= "
+                f"task.gains.min_task_singular_value = {bound:g}")
+
+    def GainRuleRates(self):
+        """K_d = Kd I over the nominal robot's inf_q lambda_min(M)."""
+        return self.scenario.task.gains.Kd, self.mass_matrix_bounds[0]
+
+    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
+        """The LhsController (the nominal robot's potential, theta0(0) = 0), fed by
+        an InertialIdentifier (scenario.inertia) with ``identify``."""
+        scenario, builder = self.scenario, controller.builder
+        identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
+            plant=self.model.plant, settings=scenario.inertia,
+            period=scenario.periods.learner_sample)) if identify else None)
+        lhs = builder.AddNamedSystem(self.lhs_name, LhsController(
+            model=self.model, potential=BaseRepulsionPotential(
+                scenario.robot.nominal, scenario.robot.potential),
+            reference=OrientationReference(scenario.task.reference,
+                                           float(np.sum(scenario.q0))),
+            gains=scenario.task.gains, period=scenario.periods.lhs,
+            excitation=excitation, lambda_min_M=self.GainRuleRates()[1],
+            inertial_parameters=identifier.parameters if identify else None))
+        for signal in ("base_pose", "q", "qdot"):
+            controller.Input(lhs.GetInputPort(signal), signal)
+        return {self.lhs_name: lhs, **({"inertial_identifier": identifier}
+                                       if identify else {})}
+
+    def Clearance(self):
+        return BaseRepulsionPotential(self.scenario.robot.truth,
+                                      self.scenario.robot.potential).MinClearance
+
+    def LiveView(self, loop, meshcat):
+        from dacph_drake.animation import LiveView
+        return LiveView.ForPlanarLoop(loop, meshcat)
+
+    def WriteAnimation(self, logs, out_html):
+        from dacph_drake.animation import write_animation
+        return write_animation(self.scenario, logs, out_html)
+
+    def TaskSignals(self, logs):
+        """alpha~, s (n columns), the kinematic clearance of the ground truth and
+        theta0 - theta0(0)."""
+        n = self.num_joints
+        lhs, L = logs["lhs_log"], LhsLog(n)
+        base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
+        clearance = self.Clearance()
+        return (lhs[:, L.alpha_error], lhs[:, L.s],
+                np.array([clearance(joints) for joints in q]),
+                base_pose[:, 2] - base_pose[0, 2])
+
+    def TaskMetrics(self, logs) -> Dict[str, float]:
+        return {}
+
+    def TotalMass(self) -> float:
+        truth = self.scenario.robot.truth
+        return truth.base.mass + sum(link.mass for link in truth.links)
+
+    def VerifyLhs(self, logs):
+        """V is s^T M s / 2 with the M the controller ran on: the nominal robot's
+        until the inertial identifier's start, the identified one's after it
+        (logs["inertial_parameters"]); the envelope and eq. (45) take the inertia
+        bounds of both (the smallest inf lambda_min, the largest sup lambda_max)."""
+        from dacph_drake.analysis.lyapunov_envelope import EnvelopeConstants
+        from dacph_drake.analysis.region_of_attraction import sliding_region_of_attraction
+        from dacph_drake.analysis.verify import LhsSide
+        scenario, n, model = self.scenario, self.num_joints, self.model
+        models = [model]
+        if "inertial_parameters" in logs:
+            models.append(model.WithInertialParameters(
+                InertialParameters(model.plant), logs["inertial_parameters"][-1]))
+        bounds = np.array([mass_matrix_bounds(m) for m in models])
+        lambda_min_M, lambda_max_M = float(bounds[:, 0].min()), float(bounds[:, 1].max())
+        gains = scenario.task.gains
+        Kd, epsilon = gains.Kd, gains.epsilon
+        # The boundary layer as the controller built it, from the nominal robot's bound.
+        layer_per_chi = boundary_layer_per_chi(gains, bounds[0, 0])
+        L = LhsLog(n)
+        return LhsSide(
+            V=logs["lhs_log"][:, L.lyapunov_V],
+            s0_norm=float(np.linalg.norm(logs["lhs_log"][0, L.s])),
+            constants=EnvelopeConstants.ForConstantDamping(
+                Kd, Kd, lambda_min_M, lambda_max_M, epsilon, n, layer_per_chi),
+            lambda_lhs=2 * Kd / lambda_min_M,
+            region=sliding_region_of_attraction(
+                model, np.asarray(scenario.q0), Kd, scenario.rhs.chi_initial,
+                epsilon + layer_per_chi * scenario.rhs.chi_initial),
+            settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M,
+                      "models": len(models)})
