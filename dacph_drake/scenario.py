@@ -14,8 +14,8 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
-from dacph_drake.robot import RobotParams, load_yaml_dataclass
-from dacph_drake.simulation import FixedStepConfig, validate_simulator_config
+from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass
+from dacph_drake.loop.simulator import FixedStepConfig, validate_simulator_config
 
 
 @dataclass
@@ -415,7 +415,7 @@ class Stress:
 
 @dataclass
 class PlanarArm:
-    """robot: a planar n-link arm on a free base (robot.RobotParams): ``truth`` is
+    """robot: a planar n-link arm on a free base (arm_parameters.RobotParams): ``truth`` is
     the ground truth, ``nominal`` the controller's model of it (their difference is
     the controller's model error), ``potential`` the null-space potential keeping
     the links off the base and unfolded. Its task: EndEffectorAngle."""
@@ -484,7 +484,7 @@ class PlanarArm:
 @dataclass
 class ClearancePotential:
     """The null-space potential of a described arm
-    (spatial_potential.BaseClearancePotential): U = gain / 2 sum_k max(0, margin -
+    (robots.clearance_potential.BaseClearancePotential): U = gain / 2 sum_k max(0, margin -
     phi_k)^2 over the link-base signed distances, xi = -eta grad U; gain = 0
     switches it off."""
     gain: float = 1.0

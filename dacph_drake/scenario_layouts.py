@@ -18,14 +18,14 @@ from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.robot import RobotParams, load_yaml_dataclass, read_yaml
+from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass, read_yaml
 from dacph_drake.scenario import (
     AttitudeGains, AttitudeReference, ClearancePotential, DescribedArm, Disturbance,
     EndEffectorAngle, EndEffectorAttitude, Excitation, InertiaIdentification, Learner,
     LhsGains, Periods, Phases, PlanarArm, Potential, Reference, Rhs, Scenario, Stress,
     Uncertainty, described_arm_learner, described_arm_rhs, move_integration_scheme,
     six_dof_disturbance, six_dof_uncertainty)
-from dacph_drake.simulation import FixedStepConfig
+from dacph_drake.loop.simulator import FixedStepConfig
 
 # The YAML lines of settings added after planar runs were first saved, at their
 # defaults, and the sections added since: left out of PlanarLayoutV1's saved forms
@@ -44,6 +44,9 @@ ADDED_SECTION_DEFAULTS = (
 
 @dataclass(eq=False)
 class PlanarLayoutV1:
+    """A planar scenario's fields as they stood before the robot: and task: sections,
+    in their order (the YAML text, hence a saved run's fingerprint, follows it): a
+    frozen record of that format, never edited."""
     robot: RobotParams = field(default_factory=RobotParams)
     nominal_robot: RobotParams = field(default_factory=RobotParams)
     q0: List[float] = field(default_factory=lambda: [0.3, 1.0])
@@ -101,6 +104,8 @@ class PlanarLayoutV1:
 
 @dataclass(eq=False)
 class SpatialLayoutV1:
+    """A described arm's scenario (SpatialScenario) as it stood, with its defaults: a
+    frozen record of that format, never edited."""
     robot: str = "satellite_6dof"
     q0: List[float] = field(default_factory=lambda: [0.3, -0.8, 1.6, 0.2, 0.6, -0.3])
     duration: float = 8.0

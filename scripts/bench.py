@@ -12,14 +12,14 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from dacph_drake.free_flight import run_free_flight
+from dacph_drake.app.free_flight import run_free_flight
 from dacph_drake.kernels.arm import reduced_dynamics
-from dacph_drake.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.robot import RobotParams
-from dacph_drake.run import simulate
+from dacph_drake.robots.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import short_scenario
-from dacph_drake.simulation import MakeSimulator
+from dacph_drake.loop.simulator import MakeSimulator
 
 
 def _best_of(fn, repeats=5, number=2000) -> float:
@@ -124,7 +124,7 @@ def bench_quick_reproduction():
     import tempfile
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "dacph_drake.cli", "reproduce", "--quick",
+        subprocess.run([sys.executable, "-m", "dacph_drake.app.cli", "reproduce", "--quick",
                         "--out", out], check=True, capture_output=True)
         wall = time.perf_counter() - start
     print(f"quick reproduction (dacph reproduce --quick, 3 controllers, one process): "
@@ -139,7 +139,7 @@ def bench_kernel_compilation():
     import sys
     import tempfile
     code = ("import time; t = time.perf_counter(); "
-            "from dacph_drake.run import simulate; "
+            "from dacph_drake.loop.simulate import simulate; "
             "from dacph_drake.scenario import short_scenario; "
             "simulate(short_scenario(), 'dac', duration=0.01); "
             "print(time.perf_counter() - t)")

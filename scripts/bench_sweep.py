@@ -22,7 +22,7 @@ from pathlib import Path
 from dacph_drake.montecarlo.definition import load_sweep, sample_trial
 from dacph_drake.montecarlo.executors import dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
-from dacph_drake.run import simulate
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, save_scenario, short_scenario
 
 SWEEP = """\

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dacph_drake.metrics import PHASES, run_metrics
-from dacph_drake.run import simulate
+from dacph_drake.analysis.metrics import PHASES, run_metrics
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Scenario, short_scenario
 
 

@@ -20,8 +20,8 @@ import numpy as np
 
 from dacph_drake.analysis.verify import verify_logs
 from dacph_drake.log_layout import RhsLog
-from dacph_drake.metrics import run_metrics
-from dacph_drake.run import simulate
+from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault, short_scenario
 
 START = [[0.3, 1.0], [0.45, 0.85]]          # q0 of seed 0, 1

@@ -8,8 +8,8 @@ metrics to --out (JSON). About 6 minutes on one core.
 import argparse
 import json
 
-from dacph_drake.metrics import run_metrics
-from dacph_drake.run import simulate
+from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import load_scenario
 
 RUNS = [("dac", 0), ("dac", 1), ("dac-nominal", 0), ("dac-nominal", 1),

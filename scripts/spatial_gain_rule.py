@@ -1,5 +1,5 @@
 """The RHS gain rule at scale: inf_q lambda_min(M) by multi-start search
-(dacph_drake.inertia_bound) for the planar arms and the shipped spatial robots, and
+(dacph_drake.dynamics.inertia_bound) for the planar arms and the shipped spatial robots, and
 the decay rate c_min (eq. 48) and RHS period it asks for at the default scenario's
 gains (Td, Kd, rhs.beta_max, rhs.c_margin), and with the LHS damping scaled to the
 inertia instead (K_d = damping_rate M, the spatial loop's AttitudeGains).
@@ -13,14 +13,14 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import three_link_robot  # noqa: E402
 
-from dacph_drake.description import SPATIAL_ROBOTS, MakeRobotPlant  # noqa: E402
-from dacph_drake.floating_model import FloatingBaseModel  # noqa: E402
+from dacph_drake.robots.description import SPATIAL_ROBOTS, MakeRobotPlant  # noqa: E402
+from dacph_drake.dynamics.floating_model import FloatingBaseModel  # noqa: E402
 from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,  # noqa: E402
                                    inertia_scaled_c_lower_bound)
-from dacph_drake.inertia_bound import search_inertia_bound  # noqa: E402
-from dacph_drake.plant import MakeArmPlant  # noqa: E402
-from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
-from dacph_drake.robot import RobotParams  # noqa: E402
+from dacph_drake.dynamics.inertia_bound import search_inertia_bound  # noqa: E402
+from dacph_drake.robots.plant import MakeArmPlant  # noqa: E402
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
+from dacph_drake.arm_parameters import RobotParams  # noqa: E402
 from dacph_drake.scenario import AttitudeGains, Scenario  # noqa: E402
 
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from dacph_drake.robot import LinkParams, RobotParams
+from dacph_drake.arm_parameters import LinkParams, RobotParams
 
 
 def three_link_robot() -> RobotParams:
@@ -40,7 +40,7 @@ def pytest_collection_modifyitems(config, items):
 def quick_reproduction(tmp_path_factory):
     """`dacph reproduce --quick --animate` run once per session, end to end through
     the CLI: (exit status, output directory)."""
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     out = tmp_path_factory.mktemp("reproduce_quick")
     status = main(["reproduce", "--quick", "--animate", "--out", str(out)])
     return status, out

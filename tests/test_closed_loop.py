@@ -8,9 +8,9 @@ import pytest
 
 from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN
 from dacph_drake.log_layout import LearnerLog, RhsLog
-from dacph_drake.metrics import comparison, run_metrics
-from dacph_drake.reproduce import CONTROLLERS
-from dacph_drake.run import load_logs
+from dacph_drake.analysis.metrics import comparison, run_metrics
+from dacph_drake.app.reproduce import CONTROLLERS
+from dacph_drake.loop.run_store import load_logs
 from dacph_drake.scenario import load_scenario, short_scenario
 
 
@@ -135,7 +135,7 @@ def test_driving_the_diagram_yourself_is_the_same_run():
     """The README's snippet: loop.CreateSimulator() has the scenario's integrator and
     initial state, so advancing it gives the logs simulate() gives, bit for bit."""
     from dacph_drake.controllers.model_based import build_model_based_diagram
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     scenario = short_scenario()
     loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()

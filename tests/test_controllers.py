@@ -4,14 +4,14 @@ import numpy as np
 import pytest
 
 from dacph_drake import controllers
-from dacph_drake.cli import main
+from dacph_drake.app.cli import main
 from dacph_drake.errors import ConfigError
 
 
 def test_every_command_offers_exactly_the_registered_controllers(capsys):
     names = tuple(controllers.REGISTRY)
     from dacph_drake.montecarlo.definition import Sweep
-    from dacph_drake.reproduce import CONTROLLERS
+    from dacph_drake.app.reproduce import CONTROLLERS
     assert CONTROLLERS == names
     assert tuple(Sweep().controllers) == names
     for command in (["simulate", "short", "--out", "x"], ["diagram", "short"],
@@ -22,7 +22,7 @@ def test_every_command_offers_exactly_the_registered_controllers(capsys):
 
 
 def test_every_registered_controller_builds_a_closed_loop():
-    from dacph_drake.closed_loop import ClosedLoop
+    from dacph_drake.loop.closed_loop import ClosedLoop
     from dacph_drake.scenario import short_scenario
     for name in controllers.REGISTRY:
         loop = controllers.build_closed_loop(name, short_scenario())
@@ -39,7 +39,7 @@ def build_hold_still_diagram(scenario):
     """A new controller written against the port contract: u = -0.01 qdot (a joint
     damper), in a few lines."""
     from pydrake.systems.primitives import Gain
-    from dacph_drake.closed_loop import assemble_closed_loop
+    from dacph_drake.loop.closed_loop import assemble_closed_loop
 
     def add(loop, controller):
         damper = controller.builder.AddNamedSystem(
@@ -51,7 +51,7 @@ def build_hold_still_diagram(scenario):
 
 
 def test_a_new_controller_is_one_function_and_one_registry_line(monkeypatch):
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import short_scenario
     monkeypatch.setitem(controllers.REGISTRY, "hold-still", controllers.Controller(
         "test_controllers:build_hold_still_diagram", "a joint damper"))
@@ -77,14 +77,14 @@ def build_dac_well_damped_diagram(scenario):
 def _register(monkeypatch, name: str, entry) -> None:
     """controllers.REGISTRY[name] = entry, as an added line there would be seen by
     the modules that read the names at import."""
-    import dacph_drake.cli
+    import dacph_drake.app.cli
     import dacph_drake.montecarlo.definition
-    import dacph_drake.reproduce
+    import dacph_drake.app.reproduce
     monkeypatch.setitem(controllers.REGISTRY, name, entry)
     names = tuple(controllers.REGISTRY)
     monkeypatch.setattr(controllers, "NAMES", names)
-    for module in (dacph_drake.cli, dacph_drake.montecarlo.definition,
-                   dacph_drake.reproduce):
+    for module in (dacph_drake.app.cli, dacph_drake.montecarlo.definition,
+                   dacph_drake.app.reproduce):
         monkeypatch.setattr(module, "CONTROLLERS", names)
 
 
@@ -104,12 +104,12 @@ def test_a_new_controller_appears_in_every_command(robot, tmp_path, monkeypatch,
     summary and `dacph verify --controller` take it, on a planar and on a described
     arm alike."""
     import json
-    from dacph_drake.figures import make_panels
+    from dacph_drake.app.figures import make_panels
     from dacph_drake.montecarlo.definition import load_sweep
     from dacph_drake.montecarlo.executors import InProcessExecutor
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.montecarlo.summary import write_summary
-    from dacph_drake.run import load_logs
+    from dacph_drake.loop.run_store import load_logs
     from dacph_drake.scenario import load_scenario, save_scenario
     name = "dac-well-damped"
     _register(monkeypatch, name, controllers.Controller(

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from dacph_drake.controllers import NAMES, build_closed_loop
-from dacph_drake.graph import diagram_graphviz
+from dacph_drake.app.graph import diagram_graphviz
 from dacph_drake.scenario import load_scenario
 
 DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
@@ -29,7 +29,7 @@ def test_rendered_graphs_are_in_sync(name, controller):
 def test_dacph_diagram_writes_to_the_current_directory(tmp_path, monkeypatch):
     """Without --out, the files go to the current directory, never next to the
     scenario file (in a checkout, that would overwrite the committed graphs)."""
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     before = {p.name: p.stat().st_mtime_ns for p in SCENARIOS.iterdir()}
     monkeypatch.chdir(tmp_path)
     assert main(["diagram", str(SCENARIOS / "short.yaml"), "--controller",

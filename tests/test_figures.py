@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import three_link_robot
-from dacph_drake.figures import COLUMNS, DAC_PANELS, envelope, make_panels
+from dacph_drake.app.figures import COLUMNS, DAC_PANELS, envelope, make_panels
 from dacph_drake.log_layout import LhsLog, RhsLog
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.scenario import PlanarArm, Scenario, Uncertainty, paper_scenario

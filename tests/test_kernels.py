@@ -6,13 +6,13 @@ import pytest
 from dacph_drake.kernels.arm import joint_momentum, reduced_dynamics
 from dacph_drake.kernels.loop import integrator_sample, pack_true_rhs, true_torque
 from dacph_drake.kernels.potential import potential
-from dacph_drake.plant import ArmCoordinates, MakeArmPlant
-from dacph_drake.potential import BaseRepulsionPotential
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.robot import LinkParams, RobotParams
+from dacph_drake.robots.plant import ArmCoordinates, MakeArmPlant
+from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.arm_parameters import LinkParams, RobotParams
 from dacph_drake.scenario import Potential, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
-from dacph_drake.uncertainty import TrueRhsModel
+from dacph_drake.dynamics.uncertainty import TrueRhsModel
 
 ROBOTS = {"2-link": RobotParams(),
           "3-link": RobotParams(links=[LinkParams(), LinkParams(mass=0.7),

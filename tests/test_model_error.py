@@ -11,18 +11,18 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from dacph_drake.analysis.verify import verify_logs
-from dacph_drake.description import MakeRobotPlant
+from dacph_drake.robots.description import MakeRobotPlant
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import stays_stable_if_wrong
 from dacph_drake.identification import PortEvidence, PortSample, RhsIdentifier
-from dacph_drake.inertial_parameters import (InertialParameters, identify_parameters,
+from dacph_drake.dynamics.inertial_parameters import (InertialParameters, identify_parameters,
                                              prior_scales)
 from dacph_drake.log_layout import RhsLog
-from dacph_drake.metrics import run_metrics
+from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.montecarlo.definition import load_sweep, sample_trial
-from dacph_drake.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.run import simulate
+from dacph_drake.robots.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault, Learner, Scenario, short_scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.true_rhs import TrueRhs
@@ -60,7 +60,7 @@ def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
     np.testing.assert_allclose(after[1], 0.4 * before[1], rtol=1e-12)  # joint 2 x 0.4
     D = matrices.Eval(context)[4:]
     np.testing.assert_allclose(tau.Eval(context), after @ u - D * qdot, rtol=1e-12)
-    from dacph_drake.uncertainty import TrueRhsModel
+    from dacph_drake.dynamics.uncertainty import TrueRhsModel
     p = model.MassMatrix(q) @ qdot
     np.testing.assert_allclose(TrueRhsModel(scenario.uncertainty, scenario.phases)
                                .Matrices(70.0, q, p)[0], after, rtol=1e-9)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from dacph_drake.reproduce import reproduce
+from dacph_drake.app.reproduce import reproduce
 from dacph_drake.scenario import paper_scenario
 
 

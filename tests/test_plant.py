@@ -1,5 +1,5 @@
 """The ground truth: momentum and energy bookkeeping of the free-floating plant."""
-from dacph_drake.free_flight import run_free_flight
+from dacph_drake.app.free_flight import run_free_flight
 
 
 def test_free_flight_conserves_momentum_and_energy(robot, rng):

@@ -13,9 +13,9 @@ import time
 import numpy as np
 import pytest
 
-from dacph_drake.cli import main
+from dacph_drake.app.cli import main
 from dacph_drake.errors import ConfigError
-from dacph_drake.run import simulate
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import short_scenario
 from test_scenario import BAD_SCENARIO_FILES
 
@@ -104,7 +104,7 @@ def _interrupt_simulate(out, sig, extra=(), after=1.0, scenario="short"):
     """Starts `dacph simulate SCENARIO` (with ``extra`` arguments), sends ``sig``
     ``after`` seconds into the progress bar, and returns the exit status."""
     process = subprocess.Popen(
-        [sys.executable, "-m", "dacph_drake.cli", "simulate", scenario, "--out", str(out),
+        [sys.executable, "-m", "dacph_drake.app.cli", "simulate", scenario, "--out", str(out),
          *extra],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -126,7 +126,7 @@ def _interrupt_simulate(out, sig, extra=(), after=1.0, scenario="short"):
 @pytest.mark.parametrize("scenario", SCENARIOS)
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_an_interrupted_run_saves_what_it_has(tmp_path, sig, scenario):
-    from dacph_drake.run import scenario_fingerprint
+    from dacph_drake.loop.run_store import scenario_fingerprint
     from dacph_drake.scenario import load_scenario
     out = tmp_path / "run"
     assert _interrupt_simulate(out, sig, scenario=scenario) == 130
@@ -142,7 +142,7 @@ def test_an_interrupted_run_saves_what_it_has(tmp_path, sig, scenario):
 def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
     """A DAC run and a model-based run of another scenario, or of another duration,
     in one directory: report names the problem instead of printing a table."""
-    from dacph_drake.reproduce import report
+    from dacph_drake.app.reproduce import report
     scenario = short_scenario()
     other = short_scenario()
     other.disturbance.scale = 2.0
@@ -182,7 +182,7 @@ def test_runs_of_two_robots_never_share_a_directory(tmp_path, capsys):
     """A described arm's run into a planar run's directory, the reverse, and either
     into a directory of the older spatial layout (run.json, logs.npz) are refused
     before any simulated time, and the directory's runs stay readable."""
-    from dacph_drake.run import load_run
+    from dacph_drake.loop.run_store import load_run
     from dacph_drake.scenario import load_scenario
     planar, described = tmp_path / "planar", tmp_path / "described"
     simulate(short_scenario(), "dac", duration=0.1, out_dir=planar)
@@ -289,10 +289,10 @@ def test_a_killed_run_keeps_its_last_checkpoint(tmp_path, scenario):
 
 def test_a_run_in_contact_stops_with_the_named_reason(monkeypatch):
     """The ground truth has no collision geometry: the run's monitor checks the
-    links' kinematic clearance every run.MONITOR_PERIOD. A start inside the base,
+    links' kinematic clearance every loop.simulate.MONITOR_PERIOD. A start inside the base,
     let through the build-time check here, stops at the first check."""
     from dacph_drake.robots.planar import PlanarRobot
-    from dacph_drake.run import MONITOR_PERIOD
+    from dacph_drake.loop.simulate import MONITOR_PERIOD
     monkeypatch.setattr(PlanarRobot, "RequireRunnableStart", lambda robot: None)
     scenario = short_scenario()
     scenario.q0 = [2.5, 0.5]
@@ -308,7 +308,7 @@ def test_logs_of_a_run_stopped_between_two_loggers_are_cut_to_a_common_length():
     sample more than others, and the metrics would index them with a mask of the
     wrong length. The saved logs hold only the samples every logger has."""
     from types import SimpleNamespace
-    from dacph_drake.run import collect_logs
+    from dacph_drake.loop.simulate import collect_logs
 
     def logger(rows):
         log = SimpleNamespace(data=lambda: np.arange(2.0 * rows).reshape(2, rows),
@@ -325,7 +325,7 @@ def test_progress_to_a_log_file_stays_a_few_lines(capsys):
     """Progress bars (tqdm) written to a non-terminal stderr are redrawn at most once
     a minute: a run and a 50-trial sweep each leave a handful of lines."""
     from dacph_drake.montecarlo.runner import _Progress
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     simulate(short_scenario(), "model-based", duration=2.0, progress=True)
     err = capsys.readouterr().err
     segments = [s for s in re.split(r"[\r\n]", err) if s.strip()]
@@ -342,8 +342,8 @@ def test_progress_to_a_log_file_stays_a_few_lines(capsys):
 def test_live_meshcat_shows_the_run_without_changing_it():
     """simulate(meshcat=...) draws the robot and both orientation bars into Meshcat
     while it runs; the logs are bit for bit those of a run without it."""
-    from dacph_drake.animation import DESIRED_PATH, MEASURED_PATH, QuietMeshcat
-    from dacph_drake.run import simulate
+    from dacph_drake.app.animation import DESIRED_PATH, MEASURED_PATH, QuietMeshcat
+    from dacph_drake.loop.simulate import simulate
     meshcat = QuietMeshcat()
     watched = simulate(short_scenario(), "model-based", duration=0.5, meshcat=meshcat)
     for path in ("/drake/visualizer", DESIRED_PATH, MEASURED_PATH):

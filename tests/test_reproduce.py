@@ -6,11 +6,11 @@ import json
 import numpy as np
 import pytest
 
-from dacph_drake.figures import DAC_PANELS
-from dacph_drake.metrics import run_metrics
-from dacph_drake.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
+from dacph_drake.app.figures import DAC_PANELS
+from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.app.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
 from dacph_drake.robots.planar import PlanarRobot
-from dacph_drake.run import load_logs
+from dacph_drake.loop.run_store import load_logs
 from dacph_drake.scenario import load_scenario
 from headless_chromium import run_chromium
 
@@ -88,7 +88,7 @@ def test_animation_explains_itself(quick_reproduction, tmp_path):
     time; the time has moved on from 0), and the screenshot shows the overlay's box with text in it."""
     import re
     import matplotlib.image
-    from dacph_drake.animation import OVERLAY_BACKGROUND
+    from dacph_drake.app.animation import OVERLAY_BACKGROUND
     _, out = quick_reproduction
     page = (out / "animation_dac.html").resolve().as_uri()
     dom = run_chromium(page, "--dump-dom", virtual_time_ms=20000)
@@ -112,7 +112,7 @@ def test_animation_explains_itself(quick_reproduction, tmp_path):
 def test_writing_an_animation_starts_no_announced_server(quick_reproduction, tmp_path,
                                                          caplog, capsys):
     """Only a file is written: no "Meshcat listening for connections" message."""
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     _, out = quick_reproduction
     assert main(["animate", str(out), "--out", str(tmp_path / "a.html")]) == 0
     assert (tmp_path / "a.html").stat().st_size > 100_000
@@ -121,7 +121,7 @@ def test_writing_an_animation_starts_no_announced_server(quick_reproduction, tmp
 
 
 def test_tables_say_which_phases_a_run_never_reached():
-    from dacph_drake.reproduce import NOT_REACHED, ablation_markdown
+    from dacph_drake.app.reproduce import NOT_REACHED, ablation_markdown
     text = ablation_markdown([{"metric": "RMS |x|", "unit": "rad",
                                "phases": [2e-5, float("nan"), float("nan")]}], "t")
     assert text.count(NOT_REACHED) == 2 and "nan" not in text and "2e-05 rad" in text

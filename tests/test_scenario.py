@@ -124,8 +124,8 @@ def test_files_of_the_older_layout_load(tmp_path, caplog):
     """A top-level integration_scheme: (before the scenario embedded Drake's
     SimulatorConfig) is read as simulator: {integration_scheme, max_step_size:
     periods.rhs}, with a note; saved runs of it still belong to the scenario."""
-    from dacph_drake.run import scenario_fingerprints
-    from dacph_drake.simulation import FixedStepConfig
+    from dacph_drake.loop.run_store import scenario_fingerprints
+    from dacph_drake.loop.simulator import FixedStepConfig
     path = tmp_path / "s.yaml"
     path.write_text("integration_scheme: runge_kutta3\nperiods: {rhs: 1.25e-4}\n")
     scenario = load_scenario(path)
@@ -152,7 +152,7 @@ def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplo
     in results/paper (saved in the older layout) keeps its fingerprint, so report()
     still reads it."""
     import json
-    from dacph_drake.reproduce import check_runs_belong_together
+    from dacph_drake.app.reproduce import check_runs_belong_together
     from dacph_drake.scenario_layouts import PlanarLayoutV1
     results = Path(__file__).resolve().parents[1] / "results" / "paper"
     with caplog.at_level("WARNING"):
@@ -249,6 +249,6 @@ def test_built_in_names_load_and_unknown_ones_are_named(tmp_path):
 
 @pytest.mark.parametrize("duration", [-1.0, 0.0, float("nan"), float("inf")])
 def test_simulate_refuses_a_bad_duration_before_building(duration):
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     with pytest.raises(ConfigError, match=r"duration = .* allowed: > 0 s"):
         simulate(BUILT_IN_SCENARIOS["short"](), "dac", duration=duration)

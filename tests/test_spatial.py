@@ -9,13 +9,13 @@ from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Sine
 
-from dacph_drake.description import (SPATIAL_ROBOTS, AddRobotFromDescription,
+from dacph_drake.robots.description import (SPATIAL_ROBOTS, AddRobotFromDescription,
                                      MakeRobotPlant)
 from dacph_drake.errors import ConfigError
-from dacph_drake.floating_model import FloatingBaseModel
-from dacph_drake.plant import MakeArmPlant
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.simulation import FixedStepConfig, MakeSimulator
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.robots.plant import MakeArmPlant
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
 
 
 @pytest.fixture(scope="module", params=list(SPATIAL_ROBOTS))
@@ -241,7 +241,7 @@ def test_planar_closed_form_equals_the_generic_model(links, rng):
     """For the planar arms, the compiled closed form (ReducedOrderModel) and the
     generic model from the plant agree on M, C' and the base velocity."""
     from conftest import three_link_robot
-    from dacph_drake.robot import RobotParams
+    from dacph_drake.arm_parameters import RobotParams
     robot = RobotParams() if links == 2 else three_link_robot()
     plant = MakeArmPlant(robot)
     closed_form, generic = ReducedOrderModel(plant), FloatingBaseModel(plant)
@@ -261,9 +261,9 @@ def test_inertia_bound_search_finds_the_grids_minimum(links):
     """The multi-start search reaches the 73^n grid's inf lambda_min(M) or below
     (the grid only samples), within 0.5 %."""
     from conftest import three_link_robot
-    from dacph_drake.inertia_bound import search_inertia_bound
-    from dacph_drake.reduced_model import mass_matrix_bounds
-    from dacph_drake.robot import RobotParams
+    from dacph_drake.dynamics.inertia_bound import search_inertia_bound
+    from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
+    from dacph_drake.arm_parameters import RobotParams
     plant = MakeArmPlant(RobotParams() if links == 2 else three_link_robot())
     grid, _ = mass_matrix_bounds(ReducedOrderModel(plant))
     bound = search_inertia_bound(FloatingBaseModel(plant))
@@ -272,7 +272,7 @@ def test_inertia_bound_search_finds_the_grids_minimum(links):
 
 
 def test_inertia_bound_of_a_spatial_arm_is_below_every_sample(spatial, rng):
-    from dacph_drake.inertia_bound import search_inertia_bound
+    from dacph_drake.dynamics.inertia_bound import search_inertia_bound
     _, model = spatial
     bound = search_inertia_bound(model)
     samples = rng.uniform(-np.pi, np.pi, (500, model.num_joints))
@@ -285,7 +285,7 @@ def test_inertia_bound_of_a_spatial_arm_is_below_every_sample(spatial, rng):
 def test_attitude_error_is_the_rotation_vector_to_first_order(rng):
     from pydrake.common.eigen_geometry import AngleAxis
     from pydrake.math import RotationMatrix
-    from dacph_drake.attitude import attitude_error
+    from dacph_drake.tasks.attitude import attitude_error
     R_d = RotationMatrix(RollPitchYaw(rng.uniform(-np.pi, np.pi, 3)))
     assert np.all(attitude_error(R_d, R_d) == 0.0)
     for angle in (1e-3, 0.5, 3.0):
@@ -300,7 +300,7 @@ def test_attitude_error_is_the_rotation_vector_to_first_order(rng):
 
 
 def test_damped_pseudo_inverse_keeps_the_null_space(rng):
-    from dacph_drake.attitude import damped_pseudo_inverse, reference_rates
+    from dacph_drake.tasks.attitude import damped_pseudo_inverse, reference_rates
     D = rng.standard_normal((3, 6))
     xi = rng.standard_normal(6)
     exact = reference_rates(D, np.zeros(3), np.zeros(3), 1.0, xi, damping=0.0)
@@ -319,7 +319,7 @@ def test_the_attitude_law_tracks_a_3d_reference_on_the_six_dof_arm():
     exp(-Lambda t) while R_d(t) turns, down to 1e-3 of its start in 4 s."""
     from pydrake.common.eigen_geometry import AngleAxis
     from pydrake.math import RotationMatrix
-    from dacph_drake.attitude import attitude_error, reference_rates
+    from dacph_drake.tasks.attitude import attitude_error, reference_rates
     model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
     plant = model.plant
     context = plant.CreateDefaultContext()
@@ -367,7 +367,7 @@ def test_clearance_potential_gradient_matches_the_motion(rng):
     +- h times the twist zero momentum gives it."""
     from pydrake.common.eigen_geometry import AngleAxis, Quaternion
     from pydrake.math import RotationMatrix
-    from dacph_drake.spatial_potential import BaseClearancePotential
+    from dacph_drake.robots.clearance_potential import BaseClearancePotential
     model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
     potential = BaseClearancePotential(description="satellite_6dof", model=model,
                                        gain=1.0, margin=0.1)
@@ -394,9 +394,9 @@ def test_clearance_potential_gradient_matches_the_motion(rng):
 
 def test_planar_arms_through_the_description_path(robot, rng):
     """RobotParams generates its URDF (description.planar_arm_urdf): the plant parsed
-    from it is the one plant.py builds (same layout, mass matrix, end-effector pose),
+    from it is the one robots/plant.py builds (same layout, mass matrix, end-effector pose),
     and its generic reduced model equals the planar closed form."""
-    from dacph_drake.plant import END_EFFECTOR, ArmCoordinates
+    from dacph_drake.robots.plant import END_EFFECTOR, ArmCoordinates
     parsed, built = MakeRobotPlant(robot), MakeArmPlant(robot)
     for a, b in zip(vars(ArmCoordinates.FromPlant(parsed)).values(),
                     vars(ArmCoordinates.FromPlant(built)).values()):

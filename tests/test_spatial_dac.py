@@ -8,8 +8,8 @@ import pytest
 from dacph_drake.controllers import build_closed_loop
 from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
-from dacph_drake.metrics import run_metrics
-from dacph_drake.run import simulate
+from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import AttitudeGains, Phases, load_scenario, save_scenario
 
 
@@ -23,7 +23,7 @@ def _short_3dof():
 def test_spatial_true_rhs_is_the_port_model_at_the_plant_state(rng):
     """tau = B~(q, p) u - D~(p) qdot + d(t) with p = M(q) qdot at a random state of
     zero momentum in every phase, B~, D~ from uncertainty.TrueRhsModel."""
-    from dacph_drake.uncertainty import TrueRhsModel
+    from dacph_drake.dynamics.uncertainty import TrueRhsModel
     scenario = _short_3dof()
     loop = build_closed_loop("dac", scenario)
     truth, model = loop.systems["true_rhs"], loop.model
@@ -75,7 +75,7 @@ def test_spatial_dac_tracks_through_the_phases_and_verifies(tmp_path):
     below 1e-3 rad from 3 s on (the disturbance phase); the momentum stays zero, the arm keeps > 0.1 m from the
     base, the model-based baseline on the same run is worse in the disturbance
     phase, and `dacph verify` passes on the saved run."""
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     scenario = _short_3dof()
     dac = simulate(scenario, "dac", out_dir=tmp_path / "dac")
     baseline = simulate(scenario, "model-based")
@@ -100,7 +100,7 @@ def test_spatial_dac_tracks_through_the_phases_and_verifies(tmp_path):
 
 
 def test_verify_refuses_a_spatial_baseline_run(tmp_path, capsys):
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     simulate(_short_3dof(), "model-based", duration=0.1, out_dir=tmp_path)
     assert main(["verify", str(tmp_path)]) == 2
     assert "logs_dac.npz is missing" in capsys.readouterr().err
@@ -143,8 +143,8 @@ def test_spatial_panels_show_dac_against_the_baseline(tmp_path, capsys):
     attitude panel (e), whose first axis holds every controller's |e|; the former
     `dacph spatial --panels` points there."""
     import matplotlib.image
-    from dacph_drake.cli import main
-    from dacph_drake.figures import DAC_PANELS
+    from dacph_drake.app.cli import main
+    from dacph_drake.app.figures import DAC_PANELS
     from dacph_drake.robots.described import DescribedRobot
     scenario = _short_3dof()
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)

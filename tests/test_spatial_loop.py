@@ -7,7 +7,7 @@ from pydrake.systems.analysis import SimulatorConfig
 from dacph_drake.controllers.model_based import build_model_based_diagram
 from dacph_drake.errors import ConfigError
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.run import collect_logs
+from dacph_drake.loop.simulate import collect_logs
 from dacph_drake.scenario import (AttitudeGains, ClearancePotential, Phases,
                                   satellite_6dof_scenario)
 
@@ -78,7 +78,7 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     import re
     import matplotlib.image
     from headless_chromium import run_chromium
-    from dacph_drake.animation import write_spatial_animation
+    from dacph_drake.app.animation import write_spatial_animation
     scenario = _nominal_6dof(1.0)
     loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
@@ -102,7 +102,7 @@ def test_the_clearance_potential_keeps_the_arm_off_the_base():
     potential; with it the clearance never drops below its start, reaches the
     0.1 m margin, and the attitude error is the same (the potential acts in the
     task's null space)."""
-    from dacph_drake.spatial_potential import BaseClearancePotential
+    from dacph_drake.robots.clearance_potential import BaseClearancePotential
     runs = {}
     for gain in (1.0, 0.0):
         scenario = _nominal_6dof(3.0)
@@ -157,9 +157,9 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
     """`dacph spatial satellite_3dof` (now `dacph simulate`, with a note) end to end:
     metrics printed, the run saved, its scenario file loads back to the same
     settings; a bad name is named."""
-    from dacph_drake.cli import main
-    from dacph_drake.metrics import run_metrics
-    from dacph_drake.run import load_run
+    from dacph_drake.app.cli import main
+    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.run_store import load_run
     from dacph_drake.scenario import BUILT_IN_SCENARIOS
     out = tmp_path / "run"
     assert main(["spatial", "satellite_3dof", "--out", str(out), "--duration", "2",
@@ -189,8 +189,8 @@ def test_shipped_spatial_scenario_files_are_the_built_ins(name):
 
 
 def test_live_meshcat_shows_a_spatial_run_without_changing_it():
-    from dacph_drake.animation import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
-    from dacph_drake.run import simulate
+    from dacph_drake.app.animation import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
+    from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import load_scenario
     meshcat = QuietMeshcat()
     scenario = load_scenario("satellite_3dof")
@@ -203,7 +203,7 @@ def test_live_meshcat_shows_a_spatial_run_without_changing_it():
 
 
 def test_dacph_spatial_checks_out_before_simulating(tmp_path, capsys):
-    from dacph_drake.cli import main
+    from dacph_drake.app.cli import main
     taken = tmp_path / "file"
     taken.write_text("")
     assert main(["spatial", "satellite_3dof", "--out", str(taken)]) == 2

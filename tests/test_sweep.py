@@ -12,14 +12,14 @@ import numpy as np
 import pyarrow.parquet
 import pytest
 
-from dacph_drake.cli import main
+from dacph_drake.app.cli import main
 from dacph_drake.errors import ConfigError
 from dacph_drake.montecarlo.definition import load_sweep
 from dacph_drake.montecarlo.executors import InProcessExecutor, dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.montecarlo.store import ROWS, RowStore, read_rows, sorted_rows
 from dacph_drake.montecarlo.summary import write_summary
-from dacph_drake.robot import LinkParams, link_inertia_bound
+from dacph_drake.arm_parameters import LinkParams, link_inertia_bound
 from dacph_drake.scenario import Phases, load_scenario, save_scenario, short_scenario
 
 SWEEPS = Path(__file__).resolve().parents[1] / "sweeps"
@@ -114,7 +114,7 @@ def _alive(pid: int) -> bool:
 
 
 def _start_cli_sweep(path: Path, out: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "dacph_drake.cli", "sweep", str(path),
+    return subprocess.Popen([sys.executable, "-m", "dacph_drake.app.cli", "sweep", str(path),
                              "--out", str(out), "--workers", "2"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
@@ -148,7 +148,7 @@ def test_sweep_killed_with_sigkill_resumes_without_loss_or_duplicates(serial, tm
     assert workers and not any(_alive(w) for w in workers)   # died with their parent
     with open(out / ROWS, "a") as f:         # a row cut short by the kill
         f.write('{"trial": 3, "status": "o')
-    resumed = subprocess.run([sys.executable, "-m", "dacph_drake.cli", "sweep", str(path),
+    resumed = subprocess.run([sys.executable, "-m", "dacph_drake.app.cli", "sweep", str(path),
                               "--out", str(out)], capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming: {finished} of {TRIALS} trials already done" in resumed.stderr

@@ -3,10 +3,10 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from dacph_drake.plant import FixStateInputs, MakeArmPlant
-from dacph_drake.potential import BaseRepulsionPotential
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.reference import OrientationReference
+from dacph_drake.robots.plant import FixStateInputs, MakeArmPlant
+from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.tasks.reference import OrientationReference
 from dacph_drake.scenario import Disturbance, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.lhs_controller import LhsController
@@ -214,8 +214,8 @@ def test_port_observer_on_a_known_trajectory():
     at the sample instant it is off by the half-sample delay (over 1 %)."""
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, Sine
-    from dacph_drake.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
-    from dacph_drake.simulation import MakeSimulator
+    from dacph_drake.robots.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
+    from dacph_drake.loop.simulator import MakeSimulator
     scenario = Scenario()
     h = scenario.periods.rhs
     builder = DiagramBuilder()

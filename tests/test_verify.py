@@ -11,11 +11,11 @@ from dacph_drake.analysis.lyapunov_envelope import check_lyapunov_envelope
 from dacph_drake.analysis.region_of_attraction import sliding_region_of_attraction
 from dacph_drake.analysis.rhs_loop import check_rhs_loop, rhs_loop_system
 from dacph_drake.analysis.verify import verify_logs, verify_run
-from dacph_drake.cli import main
-from dacph_drake.plant import MakeArmPlant
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.robot import RobotParams
-from dacph_drake.run import simulate
+from dacph_drake.app.cli import main
+from dacph_drake.robots.plant import MakeArmPlant
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Stress, short_scenario
 
 H, LAMBDA_LHS, TD = 2.5e-4, 196.35, 2.0

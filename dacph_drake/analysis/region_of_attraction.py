@@ -29,7 +29,7 @@ from pydrake.systems.analysis import (RegionOfAttraction,
                                       RegionOfAttractionOptions)
 from pydrake.systems.primitives import SymbolicVectorSystem
 
-from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 
 
 @dataclass

@@ -34,7 +34,7 @@ from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # no
 from dacph_drake.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
 from dacph_drake.robots import robot_of  # noqa: E402
-from dacph_drake.run import load_run  # noqa: E402
+from dacph_drake.loop.run_store import load_run  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 

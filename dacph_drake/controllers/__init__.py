@@ -9,7 +9,7 @@ shortest). REGISTRY maps its name to that function, as "module:function" so that
 the command line can list the names without loading Drake, with how tables and
 figures show it. `dacph simulate --controller`, `dacph diagram`, `dacph animate`,
 `dacph reproduce` (which runs every registered controller into its tables and
-panels), the sweep's ``controllers:`` and its summary, and ``run.simulate`` all
+panels), the sweep's ``controllers:`` and its summary, and ``loop.simulate.simulate`` all
 take their names from here. To add a controller, write its module and add one
 entry below."""
 import importlib

@@ -3,7 +3,7 @@ controller with chi from the RHS loop and the learner's excitation, the port
 observer, the regression filter, the learner and the RHS integrator."""
 from typing import Dict
 
-from dacph_drake.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
+from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.scenario import Scenario

@@ -3,7 +3,7 @@
 the DAC loop on the short scenario."""
 import time
 
-from dacph_drake.run import simulate
+from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import short_scenario
 
 start = time.perf_counter()

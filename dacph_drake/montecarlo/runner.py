@@ -11,7 +11,7 @@ from dacph_drake.montecarlo.executors import (default_workers, local_process_poo
                                               stop_local_pool)
 from dacph_drake.montecarlo.store import RowStore, sorted_rows
 from dacph_drake.montecarlo.trial import Trial, failed_row, run_trial
-from dacph_drake.progress import progress_bar
+from dacph_drake.loop.progress import progress_bar
 
 
 def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor] = None,
@@ -26,7 +26,7 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
     too is recorded as failed. A Dask KilledWorker is recorded the same way. A
     trial's row is the same whichever executor, worker count or order ran it
     (except its wall times)."""
-    from dacph_drake.run import versions
+    from dacph_drake.loop.run_store import versions
     slots = slots or default_workers()
     label = (f"{type(executor).__name__}, {slots} slots" if executor
              else f"local process pool, {slots} workers")

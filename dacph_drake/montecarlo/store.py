@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Dict, List
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.files import replaced_atomically
+from dacph_drake.loop.files import replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
 from dacph_drake.scenario import save_scenario
 

@@ -28,8 +28,8 @@ def run_trial(task: Trial) -> Dict:
     scenario (ConfigError), a divergence or an exception in a run is recorded with
     its reason."""
     import torch
-    from dacph_drake.metrics import run_metrics
-    from dacph_drake.run import simulate
+    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.simulate import simulate
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()
     try:

@@ -8,13 +8,13 @@ from typing import Dict
 
 import numpy as np
 
-from dacph_drake.description import AddRobotFromDescription, MakeRobotPlant
-from dacph_drake.floating_model import FloatingBaseModel
-from dacph_drake.inertial_parameters import PER_BODY, InertialParameters
+from dacph_drake.robots.description import AddRobotFromDescription, MakeRobotPlant
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.plant import ArmCoordinates
+from dacph_drake.robots.plant import ArmCoordinates
 from dacph_drake.scenario import Scenario
-from dacph_drake.spatial_potential import BaseClearancePotential
+from dacph_drake.robots.clearance_potential import BaseClearancePotential
 from dacph_drake.systems.attitude_controller import AttitudeController
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
@@ -84,14 +84,14 @@ class DescribedRobot:
 
     def LiveView(self, loop, meshcat):
         """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
-        from dacph_drake.animation import LiveView, SpatialViewer
+        from dacph_drake.app.animation import LiveView, SpatialViewer
         viewer = SpatialViewer(self.scenario.robot.description, meshcat)
         controller = loop.systems[self.lhs_name]
         return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
             x, controller.DesiredAttitude(t)[0]))
 
     def WriteAnimation(self, logs, out_html):
-        from dacph_drake.animation import write_spatial_animation
+        from dacph_drake.app.animation import write_spatial_animation
         return write_spatial_animation(self.scenario.robot.description, logs, out_html)
 
     def TaskSignals(self, logs):
@@ -144,7 +144,7 @@ class DescribedRobot:
         from dacph_drake.analysis.region_of_attraction import (
             attitude_region_of_attraction)
         from dacph_drake.analysis.verify import LhsSide
-        from dacph_drake.inertia_bound import search_inertia_bound
+        from dacph_drake.dynamics.inertia_bound import search_inertia_bound
         scenario, model = self.scenario, self.model
         models = [model]
         if "inertial_parameters" in logs:

@@ -1,5 +1,5 @@
 """The planar n-link arm (scenario.PlanarArm) tracking its end effector's angle
-(scenario.EndEffectorAngle): the ground truth built directly (plant.py), the
+(scenario.EndEffectorAngle): the ground truth built directly (robots/plant.py), the
 controller's closed-form reduced model with its compiled kernels
 (reduced_model.ReducedOrderModel), the kinematic base-repulsion potential, and the
 sliding-mode LhsController."""
@@ -8,12 +8,12 @@ from typing import Dict
 import numpy as np
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.inertial_parameters import InertialParameters
+from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
-from dacph_drake.potential import BaseRepulsionPotential
-from dacph_drake.reduced_model import ReducedOrderModel, mass_matrix_bounds
-from dacph_drake.reference import OrientationReference
+from dacph_drake.robots.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
+from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.tasks.reference import OrientationReference
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.lhs_controller import LhsController, boundary_layer_per_chi
@@ -52,7 +52,7 @@ class PlanarRobot:
 
     def RequireRunnableStart(self) -> None:
         """Every link of the ground-truth arm lies outside the base at q0 (clearance
-        of the link outline > 0, as potential.BaseRepulsionPotential measures it),
+        of the link outline > 0, as robots.base_repulsion.BaseRepulsionPotential measures it),
         and the controller's task Jacobian D(q0) (1 x n, d alpha / d qdot) is far
         enough from singular for D+ = D^T / (D D^T): ||D(q0)|| >=
         task.gains.min_task_singular_value."""
@@ -100,11 +100,11 @@ class PlanarRobot:
                                       self.scenario.robot.potential).MinClearance
 
     def LiveView(self, loop, meshcat):
-        from dacph_drake.animation import LiveView
+        from dacph_drake.app.animation import LiveView
         return LiveView.ForPlanarLoop(loop, meshcat)
 
     def WriteAnimation(self, logs, out_html):
-        from dacph_drake.animation import write_animation
+        from dacph_drake.app.animation import write_animation
         return write_animation(self.scenario, logs, out_html)
 
     def TaskSignals(self, logs):

@@ -6,12 +6,12 @@ from pydrake.common.eigen_geometry import AngleAxis, Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.attitude import attitude_error, reference_rates
-from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.tasks.attitude import attitude_error, reference_rates
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.plant import END_EFFECTOR
+from dacph_drake.robots.plant import END_EFFECTOR
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
-from dacph_drake.spatial_potential import BaseClearancePotential
+from dacph_drake.robots.clearance_potential import BaseClearancePotential
 
 NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
 
@@ -32,7 +32,7 @@ class AttitudeController(LeafSystem):
     learner's excitation (``excitation``, scenario.Excitation). nu_dot
     is the central difference of nu along the current motion (q +- h qdot, the base
     turned by +- h omega_b, t +- h; h = NU_DOT_STEP). U is the link-base clearance
-    potential (``potential``: spatial_potential.BaseClearancePotential, or None).
+    potential (``potential``: robots.clearance_potential.BaseClearancePotential, or None).
     Output ``tau_request`` is held between updates; ``attitude_log``
     (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, smallest link-base distance [m]
     (inf without a potential), R_d(t) as a quaternion], which a replay reads;

@@ -5,9 +5,9 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.inertial_parameters import (MASS, PER_BODY, InertialParameters,
+from dacph_drake.dynamics.inertial_parameters import (MASS, PER_BODY, InertialParameters,
                                              identify_parameters, prior_scales)
-from dacph_drake.plant import ArmCoordinates
+from dacph_drake.robots.plant import ArmCoordinates
 from dacph_drake.scenario import InertiaIdentification
 
 

@@ -6,7 +6,7 @@ from dacph_drake.identification import (ChangeDetector, NewestRows, PortSample,
                                         RhsIdentifier)
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.network import ExportedNetwork, coupling_factors
-from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Learner
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
 

@@ -3,12 +3,12 @@ field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41).
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.inertial_parameters import InertialParameters
+from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.kernels.loop import lhs_sample, pack_lhs
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.potential import BaseRepulsionPotential
-from dacph_drake.reduced_model import ReducedOrderModel
-from dacph_drake.reference import OrientationReference
+from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.tasks.reference import OrientationReference
 from dacph_drake.scenario import Excitation, LhsGains
 
 

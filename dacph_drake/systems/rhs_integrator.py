@@ -9,7 +9,7 @@ from dacph_drake.identification import PortEvidence, PortSample
 from dacph_drake.kernels.loop import integrator_sample
 from dacph_drake.log_layout import RhsLog, RhsState
 from dacph_drake.network import ExportedNetwork
-from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Stress
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
 

@@ -5,10 +5,10 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.loop import disturbance, true_matrices
-from dacph_drake.plant import ArmCoordinates
+from dacph_drake.robots.plant import ArmCoordinates
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
-from dacph_drake.uncertainty import TrueRhsModel
+from dacph_drake.dynamics.uncertainty import TrueRhsModel
 
 
 class SpatialTrueRhs(LeafSystem):

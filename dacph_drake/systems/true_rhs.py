@@ -4,10 +4,10 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.arm import joint_momentum
 from dacph_drake.kernels.loop import pack_true_rhs, true_matrices, true_torque
-from dacph_drake.plant import ArmCoordinates, MakeArmPlant
-from dacph_drake.reduced_model import ReducedOrderModel
+from dacph_drake.robots.plant import ArmCoordinates, MakeArmPlant
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Scenario
-from dacph_drake.uncertainty import TrueRhsModel
+from dacph_drake.dynamics.uncertainty import TrueRhsModel
 
 
 class TrueRhs(LeafSystem):

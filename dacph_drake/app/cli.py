@@ -12,8 +12,8 @@ from dacph_drake.errors import ConfigError, require_nonnegative
 
 
 def _free_flight(args) -> int:
-    from dacph_drake.free_flight import run_free_flight
-    from dacph_drake.robot import RobotParams, load_robot
+    from dacph_drake.app.free_flight import run_free_flight
+    from dacph_drake.arm_parameters import RobotParams, load_robot
     robot = load_robot(args.robot) if args.robot else RobotParams()
     n = robot.num_links
     result = run_free_flight(robot, args.duration, amplitudes=np.full(n, 0.006),
@@ -30,9 +30,9 @@ def _free_flight(args) -> int:
 
 def _simulate(args) -> int:
     from pathlib import Path
-    from dacph_drake.metrics import PHASES, run_metrics
+    from dacph_drake.analysis.metrics import PHASES, run_metrics
     from dacph_drake.robots import robot_of
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
@@ -74,7 +74,7 @@ def _spatial(args) -> int:
 
 def _diagram(args) -> int:
     from pathlib import Path
-    from dacph_drake.graph import render_diagram
+    from dacph_drake.app.graph import render_diagram
     from dacph_drake.scenario import load_scenario
     scenario = load_scenario(args.scenario)
     out = Path(args.out) if args.out else Path.cwd()
@@ -88,7 +88,7 @@ def _diagram(args) -> int:
 
 
 def _print_table(summary) -> None:
-    from dacph_drake.reproduce import NOT_REACHED, format_value
+    from dacph_drake.app.reproduce import NOT_REACHED, format_value
     for row in summary["table"]:
         print(f"  {row['metric']:52s} paper {format_value(row['paper'], row['unit']):>14s}"
               f"   here {format_value(row['this_project'], row['unit']):>14s}")
@@ -102,7 +102,7 @@ def _print_table(summary) -> None:
 def _animate_run(run_dir, controller: str, out=None):
     from pathlib import Path
     from dacph_drake.robots import robot_of
-    from dacph_drake.run import load_run
+    from dacph_drake.loop.run_store import load_run
     logs, scenario, _ = load_run(run_dir, controller)
     out = (Path(out) if out else
            Path(run_dir) / f"animation_{controller.replace('-', '_')}.html")
@@ -111,7 +111,7 @@ def _animate_run(run_dir, controller: str, out=None):
 
 def _reproduce(args) -> int:
     import time
-    from dacph_drake.reproduce import reproduce
+    from dacph_drake.app.reproduce import reproduce
     from dacph_drake.scenario import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
@@ -124,7 +124,7 @@ def _reproduce(args) -> int:
 
 
 def _report(args) -> int:
-    from dacph_drake.reproduce import report
+    from dacph_drake.app.reproduce import report
     _print_table(report(args.run_dir))
     return 0
 
@@ -139,7 +139,7 @@ def _verify(args) -> int:
     first; exit status 1 when a check fails."""
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
-    from dacph_drake.run import simulate
+    from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import load_scenario
     target = Path(args.target)
     if target.is_dir():
@@ -208,7 +208,7 @@ def _LiveViewing(args, scenario):
         scenario.simulator.target_realtime_rate = args.realtime_rate
     if not args.meshcat:
         return None
-    from dacph_drake.animation import QuietMeshcat
+    from dacph_drake.app.animation import QuietMeshcat
     meshcat = QuietMeshcat()
     print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
     return meshcat

@@ -47,7 +47,7 @@ def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarr
     ``inertial_parameters``, InertialIdentifier) over the true robot's
     (``total_mass``), the common factor momentum data leave to the prior (1 without
     an identifier)."""
-    from dacph_drake.inertial_parameters import MASS, PER_BODY
+    from dacph_drake.dynamics.inertial_parameters import MASS, PER_BODY
     if "inertial_parameters" not in logs:
         return np.ones(len(logs["time"]))
     return logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1) / total_mass

@@ -1,5 +1,5 @@
 """The arm in Meshcat: ArmViewer draws a plant state (live during a simulation,
-run.simulate(meshcat=...)), and write_animation replays a run's logs into a
+loop.simulate.simulate(meshcat=...)), and write_animation replays a run's logs into a
 self-contained HTML file, with an overlay that names what is drawn and shows the
 simulated time and the current phase while it plays.
 """
@@ -15,10 +15,10 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
-from dacph_drake.description import AddRobotFromDescription
+from dacph_drake.robots.description import AddRobotFromDescription
 from dacph_drake.errors import require_positive
 from dacph_drake.log_layout import AttitudeLog, LhsLog
-from dacph_drake.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
+from dacph_drake.robots.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
 from dacph_drake.scenario import Scenario
 

@@ -24,7 +24,7 @@ from pydrake.multibody.tree import (FixedOffsetFrame, PlanarJoint,
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Selector, SelectorParams
 
-from dacph_drake.robot import RobotParams
+from dacph_drake.arm_parameters import RobotParams
 
 BASE_JOINT = "base_joint"
 END_EFFECTOR = "end_effector"

@@ -13,10 +13,10 @@ from pydrake.multibody.tree import RevoluteJoint
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
-from dacph_drake.robot import RobotParams
+from dacph_drake.robots.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
+from dacph_drake.arm_parameters import RobotParams
 
-MODELS = Path(__file__).resolve().parent / "models"
+MODELS = Path(__file__).resolve().parents[1] / "models"
 # scripts/make_spatial_models.py writes them.
 SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
                   "satellite_6dof": MODELS / "satellite_6dof.urdf"}
@@ -36,7 +36,7 @@ def robot_description(name_or_path) -> Path:
 
 
 def planar_arm_urdf(robot: RobotParams) -> str:
-    """The URDF of a planar arm (robot.RobotParams): the same bodies, inertias, joint
+    """The URDF of a planar arm (arm_parameters.RobotParams): the same bodies, inertias, joint
     and frame names as plant.AddFreeFloatingArm builds directly (a planar joint
     for the base, continuous z-axis joints, the end effector a massless link)."""
     def inertial(mass, com, ixx, iyy, izz):
@@ -98,7 +98,7 @@ def AddRobotFromDescription(builder: DiagramBuilder, name_or_path,
     registered with a SceneGraph (for Meshcat), added to ``builder``. Its collision
     geometry is dropped unless ``collision_geometry``: the ground truth, like the
     planar one, has no contact (a controller's clearance potential queries its own
-    copy, spatial_potential.BaseClearancePotential)."""
+    copy, robots.clearance_potential.BaseClearancePotential)."""
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
     PopulateFromDescription(plant, name_or_path)
     if not collision_geometry:

@@ -11,7 +11,7 @@ closed form; U does not depend on the base pose.
 """
 import numpy as np
 
-from dacph_drake.robot import RobotParams
+from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import Potential
 
 _RHO_FLOOR = 1e-4      # clearances are clamped here (inside the base U is finite)

@@ -24,8 +24,8 @@ from pydrake.autodiffutils import (AutoDiffXd, ExtractGradient, ExtractValue,
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable, SpatialInertia_, UnitInertia_
 
-from dacph_drake.inertial_parameters import InertialParameters
-from dacph_drake.plant import ArmCoordinates
+from dacph_drake.dynamics.inertial_parameters import InertialParameters
+from dacph_drake.robots.plant import ArmCoordinates
 
 
 class FloatingBaseModel:

@@ -13,10 +13,10 @@ from typing import Dict, List, Optional
 from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduce()
                                      REFERENCE)                         # runs them all
 from dacph_drake.errors import ConfigError
-from dacph_drake.figures import plot_panels
-from dacph_drake.metrics import PHASES, comparison, run_metrics
-from dacph_drake.run import (load_logs, load_run_meta, require_run_files,
-                             scenario_fingerprints, simulate, versions)
+from dacph_drake.app.figures import plot_panels
+from dacph_drake.analysis.metrics import PHASES, comparison, run_metrics
+from dacph_drake.loop.simulate import simulate
+from dacph_drake.loop.run_store import load_logs, load_run_meta, require_run_files, scenario_fingerprints, versions
 from dacph_drake.scenario import Scenario, load_scenario, save_scenario
 
 REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without

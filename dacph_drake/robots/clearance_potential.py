@@ -17,8 +17,8 @@ import numpy as np
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-from dacph_drake.description import PopulateFromDescription
-from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.robots.description import PopulateFromDescription
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
 
 
 @dataclass

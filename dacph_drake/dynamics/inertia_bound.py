@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dacph_drake.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
 
 
 @dataclass

@@ -1,0 +1,2 @@
+"""The application layer: the command line, the paper's reproduction, figures,
+animations and diagram graphs."""

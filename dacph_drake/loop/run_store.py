@@ -1,0 +1,185 @@
+"""The run layout: a run directory holds scenario.yaml and, per controller,
+logs_CONTROLLER.npz and run_CONTROLLER.json (status, reason, times, seed, the
+scenario's fingerprint, versions), all runs of one scenario, whatever the robot;
+one writer per run (LockRun); every file replaced atomically."""
+import fcntl
+import hashlib
+import json
+import os
+import platform
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.loop.files import replaced_atomically
+from dacph_drake.scenario import Scenario, load_scenario, save_scenario, saved_forms
+
+
+@dataclass
+class RunResult:
+    controller: str
+    status: str                    # "ok", "diverged", "interrupted" or, in a
+    #                                checkpoint of a run still going, "incomplete"
+    reason: str
+    final_time: float
+    wall_time: float
+    logs: Dict[str, np.ndarray] = field(default_factory=dict)   # name -> (T, k); "time"
+    peak_memory_mib: float = float("nan")    # of this process so far (ru_maxrss)
+    duration: float = float("nan")           # the duration asked for [s]
+
+
+def scenario_fingerprint(scenario: Scenario) -> str:
+    """A hash of every setting of ``scenario`` (its YAML form): run.json records it,
+    so that report() can refuse runs of different scenarios in one directory."""
+    return scenario_fingerprints(scenario)[0]
+
+
+def scenario_fingerprints(scenario: Scenario) -> List[str]:
+    """scenario_fingerprint and the fingerprints the same settings had in the older
+    layouts a saved run may come from (scenario.saved_forms)."""
+    return [hashlib.sha256(text.encode()).hexdigest()[:16]
+            for text in saved_forms(scenario)]
+
+
+def versions() -> Dict[str, str]:
+    import drake
+    import torch
+    out = {"python": platform.python_version(), "numpy": np.__version__,
+           "torch": torch.__version__}
+    try:
+        from importlib.metadata import version
+        out["drake"] = version("drake")
+    except Exception:   # a source build of drake has no distribution metadata
+        out["drake"] = getattr(drake, "__version__", "unknown")
+    from dacph_drake import __version__
+    out["dacph_drake"] = __version__
+    return out
+
+
+def prepare_out_dir(out_dir) -> Path:
+    """Creates ``out_dir`` and checks that it is a writable directory, before any
+    simulation time is spent (ConfigError naming the path otherwise)."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out = {str(out)!r} is an existing file; allowed: a "
+                          "directory (created if missing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ConfigError(f"--out = {str(out)!r} cannot be created ({e.strerror}); "
+                          "allowed: a writable directory") from e
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out = {str(out)!r} is not writable; allowed: a writable "
+                          "directory")
+    return out
+
+
+def LockRun(out: Path, controller: str):
+    """An exclusive lock on out/.run_CONTROLLER.lock, held while the run simulates
+    and saves (ConfigError when another process holds it)."""
+    lock = open(out / f".run_{controller}.lock", "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        lock.close()
+        raise ConfigError(f"--out = {str(out)!r}: another process is writing a "
+                          f"{controller} run there; allowed: one writer per run")
+    return lock
+
+
+def require_run_files(run_dir, controllers) -> Path:
+    """ConfigError naming the first file that ``save_run`` would have written for
+    ``controllers`` and that run_dir lacks (scenario.yaml, logs_C.npz, run_C.json)."""
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise ConfigError(f"{str(run_dir)!r} is not a directory; allowed: a run "
+                          "directory saved by dacph simulate or reproduce")
+    names = ["scenario.yaml"] + [f"{kind}_{c}.{ext}" for c in controllers
+                                 for kind, ext in (("logs", "npz"), ("run", "json"))]
+    for name in names:
+        if not (run_dir / name).is_file():
+            raise ConfigError(f"{run_dir}: {name} is missing; allowed: a run directory "
+                              "saved by dacph simulate or reproduce")
+    return run_dir
+
+
+def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = True
+             ) -> Path:
+    """Writes logs_C.npz, scenario.yaml and run_C.json into out_dir, each replaced
+    atomically (a reader or a crash never sees half a file)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with replaced_atomically(out / f"logs_{result.controller}.npz") as path, \
+            open(path, "wb") as f:
+        (np.savez_compressed if compress else np.savez)(f, **result.logs)
+    with replaced_atomically(out / "scenario.yaml") as path:
+        save_scenario(scenario, path)
+    meta = {"controller": result.controller, "status": result.status,
+            "reason": result.reason, "final_time": result.final_time,
+            "wall_time": result.wall_time, "seed": scenario.seed,
+            "duration": result.duration,
+            "scenario_fingerprint": scenario_fingerprint(scenario),
+            "peak_memory_mib": result.peak_memory_mib,
+            "versions": versions()}
+    with replaced_atomically(out / f"run_{result.controller}.json") as path, \
+            open(path, "w") as f:
+        json.dump(meta, f, indent=2)
+    return out
+
+
+def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
+    """ConfigError when ``out`` holds a run that a run of ``controller`` on
+    ``scenario`` would leave beside runs of another scenario (report() then
+    refuses the directory): another controller's run_C.json whose scenario
+    fingerprint is not ``scenario``'s, or a run of the layout before one run
+    layout (run.json, logs.npz)."""
+    if (out / "run.json").is_file() or (out / "logs.npz").is_file():
+        raise ConfigError(f"--out = {str(out)!r} holds a run of the older spatial "
+                          "layout (run.json, logs.npz); allowed: a directory without it")
+    fingerprints = scenario_fingerprints(scenario)
+    for path in sorted(out.glob("run_*.json")):
+        other = path.stem[len("run_"):]
+        if other == controller:
+            continue
+        try:
+            recorded = json.loads(path.read_text()).get("scenario_fingerprint")
+        except (OSError, ValueError):
+            recorded = None
+        if recorded not in fingerprints:
+            raise ConfigError(
+                f"--out = {str(out)!r} holds a {other} run of another scenario; "
+                "allowed: a directory whose runs are of this scenario (runs of one "
+                "scenario in one directory), or another directory")
+
+
+def load_run(run_dir, controller: str):
+    """(logs, scenario, run.json contents) of ``controller``'s run saved in run_dir
+    (ConfigError naming a missing or damaged file)."""
+    run_dir = require_run_files(run_dir, [controller])
+    scenario = load_scenario(run_dir / "scenario.yaml")
+    return load_logs(run_dir, controller), scenario, load_run_meta(run_dir, controller)
+
+
+def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
+    """logs_CONTROLLER.npz of run_dir (ConfigError naming it when damaged)."""
+    path = Path(run_dir) / f"logs_{controller}.npz"
+    try:
+        with np.load(path) as data:
+            return {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
+        raise ConfigError(f"{path} is damaged ({type(e).__name__}: {e}); allowed: a "
+                          "logs file saved by dacph simulate") from e
+
+
+def load_run_meta(run_dir, controller: str) -> Dict:
+    """run_CONTROLLER.json of run_dir (ConfigError naming it when damaged)."""
+    path = Path(run_dir) / f"run_{controller}.json"
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise ConfigError(f"{path} is damaged ({e}); allowed: a run file saved by "
+                          "dacph simulate") from e
