@@ -111,7 +111,7 @@ class ExportedNetwork:
                  coupling: np.ndarray = None):
         self.n = n
         self._momentum_scale = momentum_scale
-        self._coupling = np.ones((n, n)) if coupling is None else np.asarray(coupling, float)
+        self.coupling = np.ones((n, n)) if coupling is None else np.asarray(coupling, float)
         shapes = []
         for _ in range(2):                    # body_B then body_D
             width = 2 * n
@@ -125,6 +125,17 @@ class ExportedNetwork:
         self.size = int(sum(np.prod(s) for s in self._shapes))
         self._layers = len(hidden)
         self._unpacked_from, self._unpacked = None, None
+
+    @staticmethod
+    def ForLearner(settings, model, q0) -> "ExportedNetwork":
+        """The evaluator of the network that a learner with ``settings``
+        (scenario.Learner) trains for ``model`` (num_joints, MassMatrix), its
+        coupling scale from diag M(q0) (coupling_factors): the learner and every
+        system reading its ``weights`` port build their own from the same
+        settings."""
+        return ExportedNetwork(model.num_joints, settings.hidden, settings.momentum_scale,
+                               coupling_factors(settings.coupling, np.diag(
+                                   model.MassMatrix(np.asarray(q0, float)))))
 
     def _Unpack(self, weights):
         """The parameter arrays (copies); the last unpacking is reused while the
@@ -149,6 +160,6 @@ class ExportedNetwork:
             hB = np.tanh(params[i] @ hB + params[i + 1])
             hD = np.tanh(params[L + i] @ hD + params[L + i + 1])
         W_B, b_B, W_D, b_D = params[2 * L:]
-        B = (W_B @ hB + b_B).reshape(self.n, self.n) * self._coupling
+        B = (W_B @ hB + b_B).reshape(self.n, self.n) * self.coupling
         D = np.logaddexp(0.0, W_D @ hD + b_D)          # softplus
         return B, D

@@ -6,6 +6,7 @@ from typing import Dict
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
+from dacph_drake.network import ExportedNetwork
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.port_observer import PortObserver
@@ -72,7 +73,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: 
         builder.Connect(identifier.GetOutputPort("model_epoch"),
                         learner.GetInputPort("model_epoch"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        model=model, network=learner.exported, settings=rhs_settings,
+        model=model, network=ExportedNetwork.ForLearner(settings, model, scenario.q0),
+        settings=rhs_settings,
         Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,
         D0=scenario.uncertainty.D0, period=periods.rhs,
         model_period=periods.learner_sample, stress=scenario.stress))

@@ -12,20 +12,10 @@ from typing import Callable, Dict, Optional, Protocol, Tuple
 
 import numpy as np
 
+from dacph_drake.dynamics import ReducedModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.scenario import (DescribedArm, EndEffectorAngle, EndEffectorAttitude,
                                   PlanarArm, Scenario)
-
-
-class ReducedModel(Protocol):
-    """The controller's reduced model of a free-floating arm at zero momentum
-    (reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel
-    for described ones): M(q) qdot = p is the port's momentum."""
-    num_joints: int
-
-    def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
-
-    def MassMatrix(self, q: np.ndarray) -> np.ndarray: ...
 
 
 class Robot(Protocol):

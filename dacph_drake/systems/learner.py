@@ -5,8 +5,8 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.identification import (ChangeDetector, NewestRows, PortSample,
                                         RhsIdentifier)
 from dacph_drake.log_layout import LearnerLog
-from dacph_drake.network import ExportedNetwork, coupling_factors
-from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.network import ExportedNetwork
+from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Learner
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
@@ -42,7 +42,7 @@ class RhsLearner(LeafSystem):
     a diagram with a learner simulates one trajectory at a time (build one diagram
     per run, as the package's builders do)."""
 
-    def __init__(self, *, model: ReducedOrderModel, settings: Learner, period: float,
+    def __init__(self, *, model: ReducedModel, settings: Learner, period: float,
                  sample_period: float, B0, D0, seed: int, q0,
                  learning: bool = True, watch_model: bool = False):
         super().__init__()
@@ -54,13 +54,11 @@ class RhsLearner(LeafSystem):
         self._regularized = settings.mode == "regularized"
         # Samples the window must hold before a fit (settings.min_window), at least 2.
         self._min_samples = max(2, int(round(settings.min_window / sample_period)))
-        coupling = coupling_factors(settings.coupling, np.diag(
-            model.MassMatrix(np.asarray(q0, float))))
-        self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed, coupling)
+        self._network = ExportedNetwork.ForLearner(settings, model, q0)
+        self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed,
+                                         self._network.coupling)
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
-        self.exported = ExportedNetwork(n, settings.hidden, settings.momentum_scale,
-                                        coupling)
         initial_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
@@ -162,7 +160,7 @@ class RhsLearner(LeafSystem):
 
     def _CalcEstimates(self, context, output):
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        B, D = self.exported.Evaluate(
+        B, D = self._network.Evaluate(
             context.get_discrete_state(self._weights).get_value(), q,
             self._reduced_model.Momentum(context, q, qdot))
         output.SetFromVector(np.concatenate([B.reshape(-1), D]))

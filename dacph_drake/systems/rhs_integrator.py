@@ -9,7 +9,7 @@ from dacph_drake.identification import PortEvidence, PortSample
 from dacph_drake.kernels.loop import integrator_sample
 from dacph_drake.log_layout import RhsLog, RhsState
 from dacph_drake.network import ExportedNetwork
-from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Rhs, Stress
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
@@ -70,7 +70,7 @@ class RhsIntegrator(LeafSystem):
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
     c_min, dic_ok, trusted]."""
 
-    def __init__(self, *, model: ReducedOrderModel, network: ExportedNetwork,
+    def __init__(self, *, model: ReducedModel, network: ExportedNetwork,
                  settings: Rhs, Kd_max: float, lambda_min_M: float,
                  B0: np.ndarray, D0: np.ndarray, period: float, model_period: float,
                  stress: Stress = Stress()):
