@@ -63,7 +63,7 @@ class RobotParams:
                  across part m w^2 / 4 the largest over the width);
           base:  0 < I <= m a^2 / 2                 (all mass in the square's corners).
         The 3D lamina tensor built from these satisfies the triangle inequality
-        Ixx + Iyy >= Izz (see robots/plant.py) exactly because of the bound.
+        Ixx + Iyy >= Izz (see dynamics/plant.py) exactly because of the bound.
         """
         b = self.base
         require_positive(f"{name}.base.mass", b.mass, "kg")

@@ -1,9 +1,8 @@
-"""Scenario: every setting of a closed-loop run, loaded from YAML with
-``pydrake.common.yaml.yaml_load_typed`` (the defaults are the paper's scenario, 1500 s,
-with the SPEC settings listed in docs/equations.md)."""
-import logging
+"""Scenario: every setting of a closed-loop run (the defaults are the paper's
+scenario, 1500 s, with the SPEC settings listed in docs/equations.md), its sections,
+their validation and the built-in scenarios; scenario_files reads and writes them
+(YAML with ``pydrake.common.yaml.yaml_load_typed``)."""
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import List, Union
 
 import numpy as np
@@ -14,7 +13,7 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
-from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass
+from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulator import FixedStepConfig, validate_simulator_config
 
 
@@ -474,11 +473,9 @@ class PlanarArm:
             self.nominal.base.mass *= base
             self.nominal.base.inertia *= base
 
-    def OlderForms(self, scenario) -> List[str]:
-        """The YAML texts of ``scenario`` (whose robot this is) in the layouts
-        before the robot: and task: sections (scenario_layouts.PlanarLayoutV1)."""
-        from dacph_drake.scenario_layouts import PlanarLayoutV1
-        return PlanarLayoutV1.From(scenario).SavedForms()
+    # The older file layouts that can express a scenario of this robot
+    # (scenario_files: a saved run's fingerprint may come from them).
+    OLDER_LAYOUTS = ("PlanarLayoutV1",)
 
 
 @dataclass
@@ -530,9 +527,8 @@ class DescribedArm:
             self.nominal_inertia_scale = ([1.0 if base is None else base]
                                           + list(links or [1.0] * num_joints))
 
-    def OlderForms(self, scenario) -> List[str]:
-        """None: runs of described arms were first fingerprinted in this layout."""
-        return []
+    OLDER_LAYOUTS = ()              # runs of described arms were first fingerprinted
+    #                                 in the current layout
 
 
 @dataclass
@@ -794,46 +790,6 @@ def _require_length(name: str, values, n: int, meaning: str = "one per joint"
                           f"({meaning})")
 
 
-def load_scenario(path) -> Scenario:
-    """Loads and validates a scenario: a built-in name (BUILT_IN_SCENARIOS) where no
-    file of that name exists, or a YAML file (unknown keys and wrong types are
-    errors that name the file and the key; a file without a robot: section gets the
-    paper's arm and a logged warning saying so). Files of the layouts before the
-    robot: and task: sections (scenario_layouts) load with a logged note."""
-    from dacph_drake.scenario_layouts import load_older_layout
-    if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
-        return BUILT_IN_SCENARIOS[str(path)]()
-    if not Path(path).is_file():
-        raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
-                          f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
-    scenario = load_older_layout(path) or load_yaml_dataclass(
-        path, Scenario, noted_defaults=("robot",), migrate=move_integration_scheme)
-    scenario.Validate()
-    return scenario
-
-
-def move_integration_scheme(raw, path):
-    """Files saved before the scenario embedded Drake's SimulatorConfig have a
-    top-level ``integration_scheme: X``: it is read as ``simulator:
-    {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
-    settings it implied; the rest are the simulator's defaults (FixedStepConfig)."""
-    if not (isinstance(raw, dict) and "integration_scheme" in raw):
-        return None
-    if "simulator" in raw:
-        raise ConfigError(f"{path}: both integration_scheme: and simulator: are set; "
-                          "allowed: simulator: {integration_scheme: ...} only")
-    migrated = dict(raw)
-    migrated["simulator"] = {"integration_scheme": migrated.pop("integration_scheme")}
-    periods = raw.get("periods")
-    if isinstance(periods, dict) and "rhs" in periods:     # the step it implied
-        migrated["simulator"]["max_step_size"] = periods["rhs"]
-    logging.getLogger(__name__).warning(
-        "%s: integration_scheme: is read as simulator: {integration_scheme: %s} (the "
-        "scenario now embeds Drake's SimulatorConfig; save it again to update the file)", path,
-        migrated["simulator"]["integration_scheme"])
-    return migrated
-
-
 def paper_scenario() -> Scenario:
     """The paper's scenario (1500 s): the defaults; scenarios/paper.yaml is its
     file."""
@@ -941,16 +897,3 @@ def satellite_3dof_scenario() -> Scenario:
 BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario,
                       "satellite_6dof": satellite_6dof_scenario,
                       "satellite_3dof": satellite_3dof_scenario}
-
-
-def saved_forms(scenario: Scenario) -> List[str]:
-    """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
-    its current form and the forms of the same settings in the layouts before
-    (scenario_layouts: a planar arm's scenario before the robot: and task:
-    sections, and before that the top-level integration_scheme:)."""
-    return [yaml_dump_typed(scenario)] + scenario.robot.OlderForms(scenario)
-
-
-def save_scenario(scenario: Scenario, path) -> None:
-    with open(path, "w") as f:
-        f.write(yaml_dump_typed(scenario))

@@ -14,7 +14,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.app.free_flight import run_free_flight
 from dacph_drake.kernels.arm import reduced_dynamics
-from dacph_drake.robots.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
+from dacph_drake.dynamics.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulate import simulate
@@ -160,7 +160,8 @@ def bench_spatial(duration: float, planar_dac: float):
     and the DAC loop, the DAC one beside the planar DAC loop's ``planar_dac`` of the
     same run (the spatial LHS is Python, without compiled kernels yet)."""
     from dacph_drake.controllers import build_closed_loop
-    from dacph_drake.scenario import Phases, load_scenario
+    from dacph_drake.scenario import Phases
+    from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario("satellite_6dof")
     scenario.phases = Phases(warmup=duration / 8, linear=duration / 4,
                              nonlinear=duration / 4, disturbance=3 * duration / 8)

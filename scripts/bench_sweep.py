@@ -23,7 +23,8 @@ from dacph_drake.montecarlo.definition import load_sweep, sample_trial
 from dacph_drake.montecarlo.executors import dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import Phases, save_scenario, short_scenario
+from dacph_drake.scenario import Phases, short_scenario
+from dacph_drake.scenario_files import save_scenario
 
 SWEEP = """\
 scenario: bench.yaml

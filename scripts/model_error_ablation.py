@@ -38,7 +38,7 @@ SPATIAL = {   # name -> (robot, the controller's factors per body, warm-up [s])
 
 def scenario_of(name: str, seed: int):
     if name in SPATIAL:
-        from dacph_drake.scenario import load_scenario
+        from dacph_drake.scenario_files import load_scenario
         robot, factors, warmup = SPATIAL[name]
         s = load_scenario(robot)
         s.seed, s.robot.nominal_inertia_scale = seed, factors

@@ -18,7 +18,7 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel  # noqa: E402
 from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,  # noqa: E402
                                    inertia_scaled_c_lower_bound)
 from dacph_drake.dynamics.inertia_bound import search_inertia_bound  # noqa: E402
-from dacph_drake.robots.plant import MakeArmPlant  # noqa: E402
+from dacph_drake.dynamics.plant import MakeArmPlant  # noqa: E402
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
 from dacph_drake.arm_parameters import RobotParams  # noqa: E402
 from dacph_drake.scenario import AttitudeGains, Scenario  # noqa: E402

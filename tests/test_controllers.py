@@ -90,7 +90,8 @@ def _register(monkeypatch, name: str, entry) -> None:
 
 def _tiny(robot: str):
     """A planar or a described arm's scenario of 0.2 + 0.3 + 0.3 + 0.3 s."""
-    from dacph_drake.scenario import Phases, load_scenario
+    from dacph_drake.scenario import Phases
+    from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario({"planar": "short", "described": "satellite_3dof"}[robot])
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
     return scenario
@@ -110,7 +111,7 @@ def test_a_new_controller_appears_in_every_command(robot, tmp_path, monkeypatch,
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.montecarlo.summary import write_summary
     from dacph_drake.loop.run_store import load_logs
-    from dacph_drake.scenario import load_scenario, save_scenario
+    from dacph_drake.scenario_files import load_scenario, save_scenario
     name = "dac-well-damped"
     _register(monkeypatch, name, controllers.Controller(
         "test_controllers:build_dac_well_damped_diagram",

@@ -6,7 +6,7 @@ import pytest
 from dacph_drake.kernels.arm import joint_momentum, reduced_dynamics
 from dacph_drake.kernels.loop import integrator_sample, pack_true_rhs, true_torque
 from dacph_drake.kernels.potential import potential
-from dacph_drake.robots.plant import ArmCoordinates, MakeArmPlant
+from dacph_drake.dynamics.plant import ArmCoordinates, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.arm_parameters import LinkParams, RobotParams

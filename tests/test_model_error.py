@@ -20,7 +20,7 @@ from dacph_drake.dynamics.inertial_parameters import (InertialParameters, identi
 from dacph_drake.log_layout import RhsLog
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.montecarlo.definition import load_sweep, sample_trial
-from dacph_drake.robots.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
+from dacph_drake.dynamics.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault, Learner, Scenario, short_scenario
@@ -37,7 +37,8 @@ def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
     scenario = Scenario()
     scenario.uncertainty.B_scale = [0.5, 3.0]
     scenario.uncertainty.faults = [ActuatorFault(time=70.0, joint=2, gain=0.4)]
-    truth = TrueRhs(scenario)
+    truth = TrueRhs(plant=MakeArmPlant(scenario.robot.truth),
+                    uncertainty=scenario.uncertainty, phases=scenario.phases)
     context = truth.CreateDefaultContext()
     model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
     q, qdot, u = np.array([0.5, -0.2]), np.array([0.1, 0.3]), np.array([0.2, -0.1])

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
-from dacph_drake.robots.plant import (AddFreeFloatingArm, END_EFFECTOR, MakeArmPlant,
+from dacph_drake.dynamics.plant import (AddFreeFloatingArm, END_EFFECTOR, MakeArmPlant,
                                link_name)
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.arm_parameters import RobotParams

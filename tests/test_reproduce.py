@@ -11,7 +11,7 @@ from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.app.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.loop.run_store import load_logs
-from dacph_drake.scenario import load_scenario
+from dacph_drake.scenario_files import load_scenario
 from headless_chromium import run_chromium
 
 
@@ -88,7 +88,7 @@ def test_animation_explains_itself(quick_reproduction, tmp_path):
     time; the time has moved on from 0), and the screenshot shows the overlay's box with text in it."""
     import re
     import matplotlib.image
-    from dacph_drake.app.animation import OVERLAY_BACKGROUND
+    from dacph_drake.robots.viewers import OVERLAY_BACKGROUND
     _, out = quick_reproduction
     page = (out / "animation_dac.html").resolve().as_uri()
     dom = run_chromium(page, "--dump-dom", virtual_time_ms=20000)

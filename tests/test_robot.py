@@ -64,7 +64,7 @@ def test_each_invalid_field_is_named(robot, message):
 def test_rod_bound_is_tight():
     # At the bound the lamina tensor still satisfies the triangle inequality and
     # Drake accepts it; just above it the description is refused.
-    from dacph_drake.robots.plant import MakeArmPlant
+    from dacph_drake.dynamics.plant import MakeArmPlant
     from dacph_drake.arm_parameters import link_inertia_bound
     link = LinkParams(mass=1.0, length=0.3, com=0.1, width=0.02)
     link.inertia = link_inertia_bound(link)

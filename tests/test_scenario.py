@@ -7,8 +7,8 @@ from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
 from pydrake.common.yaml import yaml_dump_typed
 
-from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
-                                  save_scenario, saved_forms)
+from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario
+from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -153,7 +153,7 @@ def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplo
     still reads it."""
     import json
     from dacph_drake.app.reproduce import check_runs_belong_together
-    from dacph_drake.scenario_layouts import PlanarLayoutV1
+    from dacph_drake.scenario_files import PlanarLayoutV1
     results = Path(__file__).resolve().parents[1] / "results" / "paper"
     with caplog.at_level("WARNING"):
         scenario = load_scenario(results / "scenario.yaml")

@@ -13,7 +13,7 @@ from dacph_drake.robots.description import (SPATIAL_ROBOTS, AddRobotFromDescript
                                      MakeRobotPlant)
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.robots.plant import MakeArmPlant
+from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
 
@@ -394,9 +394,9 @@ def test_clearance_potential_gradient_matches_the_motion(rng):
 
 def test_planar_arms_through_the_description_path(robot, rng):
     """RobotParams generates its URDF (description.planar_arm_urdf): the plant parsed
-    from it is the one robots/plant.py builds (same layout, mass matrix, end-effector pose),
+    from it is the one dynamics/plant.py builds (same layout, mass matrix, end-effector pose),
     and its generic reduced model equals the planar closed form."""
-    from dacph_drake.robots.plant import END_EFFECTOR, ArmCoordinates
+    from dacph_drake.dynamics.plant import END_EFFECTOR, ArmCoordinates
     parsed, built = MakeRobotPlant(robot), MakeArmPlant(robot)
     for a, b in zip(vars(ArmCoordinates.FromPlant(parsed)).values(),
                     vars(ArmCoordinates.FromPlant(built)).values()):

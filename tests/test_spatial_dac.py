@@ -10,7 +10,8 @@ from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import AttitudeGains, Phases, load_scenario, save_scenario
+from dacph_drake.scenario import AttitudeGains, Phases
+from dacph_drake.scenario_files import load_scenario, save_scenario
 
 
 def _short_3dof():

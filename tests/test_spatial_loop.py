@@ -78,7 +78,7 @@ def test_spatial_run_replays_in_3d_offline(tmp_path):
     import re
     import matplotlib.image
     from headless_chromium import run_chromium
-    from dacph_drake.app.animation import write_spatial_animation
+    from dacph_drake.robots.viewers import write_spatial_animation
     scenario = _nominal_6dof(1.0)
     loop = build_model_based_diagram(scenario)
     simulator = loop.CreateSimulator()
@@ -182,16 +182,17 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
 def test_shipped_spatial_scenario_files_are_the_built_ins(name):
     from pathlib import Path
     from pydrake.common.yaml import yaml_dump_typed
-    from dacph_drake.scenario import BUILT_IN_SCENARIOS, load_scenario
+    from dacph_drake.scenario import BUILT_IN_SCENARIOS
+    from dacph_drake.scenario_files import load_scenario
     path = Path(__file__).resolve().parents[1] / "scenarios" / f"{name}.yaml"
     assert yaml_dump_typed(load_scenario(path)) == yaml_dump_typed(
         BUILT_IN_SCENARIOS[name]())
 
 
 def test_live_meshcat_shows_a_spatial_run_without_changing_it():
-    from dacph_drake.app.animation import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
+    from dacph_drake.robots.viewers import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario import load_scenario
+    from dacph_drake.scenario_files import load_scenario
     meshcat = QuietMeshcat()
     scenario = load_scenario("satellite_3dof")
     watched = simulate(scenario, "model-based", duration=0.3, meshcat=meshcat)

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from dacph_drake.robots.plant import FixStateInputs, MakeArmPlant
+from dacph_drake.dynamics.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.tasks.reference import OrientationReference
@@ -41,7 +41,8 @@ def test_disturbance_source_hand_values():
 
 def test_true_rhs_by_phase(model):
     scenario = Scenario()
-    truth = TrueRhs(scenario)
+    truth = TrueRhs(plant=MakeArmPlant(scenario.robot.truth),
+                    uncertainty=scenario.uncertainty, phases=scenario.phases)
     context = truth.CreateDefaultContext()
     q, qdot = np.array([0.5, -0.2]), np.array([0.1, 0.3])
     u, d = np.array([0.2, -0.1]), np.array([0.01, 0.02])
@@ -214,14 +215,15 @@ def test_port_observer_on_a_known_trajectory():
     at the sample instant it is off by the half-sample delay (over 1 %)."""
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, Sine
-    from dacph_drake.robots.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
+    from dacph_drake.dynamics.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
     from dacph_drake.loop.simulator import MakeSimulator
     scenario = Scenario()
     h = scenario.periods.rhs
     builder = DiagramBuilder()
     plant, _ = AddFreeFloatingArm(builder, scenario.robot.truth)
     model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
-    truth = builder.AddSystem(TrueRhs(scenario))
+    truth = builder.AddSystem(TrueRhs(plant=plant, uncertainty=scenario.uncertainty,
+                                       phases=scenario.phases))
     source = builder.AddSystem(DisturbanceSource(scenario.disturbance, 0.0))
     u = builder.AddSystem(Sine([0.02, 0.015], [9.0, 13.0], [0.0, 1.0], 2))
     lhs = builder.AddSystem(LhsController(

@@ -12,7 +12,7 @@ from dacph_drake.analysis.region_of_attraction import sliding_region_of_attracti
 from dacph_drake.analysis.rhs_loop import check_rhs_loop, rhs_loop_system
 from dacph_drake.analysis.verify import verify_logs, verify_run
 from dacph_drake.app.cli import main
-from dacph_drake.robots.plant import MakeArmPlant
+from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulate import simulate

@@ -33,7 +33,7 @@ def _simulate(args) -> int:
     from dacph_drake.analysis.metrics import PHASES, run_metrics
     from dacph_drake.robots import robot_of
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario import load_scenario
+    from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
@@ -75,7 +75,7 @@ def _spatial(args) -> int:
 def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.app.graph import render_diagram
-    from dacph_drake.scenario import load_scenario
+    from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     out = Path(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
@@ -112,7 +112,7 @@ def _animate_run(run_dir, controller: str, out=None):
 def _reproduce(args) -> int:
     import time
     from dacph_drake.app.reproduce import reproduce
-    from dacph_drake.scenario import load_scenario
+    from dacph_drake.scenario_files import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
     summary = reproduce(load_scenario(name), args.out, jobs=args.jobs)
@@ -140,7 +140,7 @@ def _verify(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario import load_scenario
+    from dacph_drake.scenario_files import load_scenario
     target = Path(args.target)
     if target.is_dir():
         run_dir = target
@@ -208,7 +208,7 @@ def _LiveViewing(args, scenario):
         scenario.simulator.target_realtime_rate = args.realtime_rate
     if not args.meshcat:
         return None
-    from dacph_drake.app.animation import QuietMeshcat
+    from dacph_drake.robots.viewers import QuietMeshcat
     meshcat = QuietMeshcat()
     print(f"Meshcat: open {meshcat.web_url()} to watch the run", flush=True)
     return meshcat

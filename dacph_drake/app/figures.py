@@ -32,7 +32,7 @@ from matplotlib.patches import Patch  # noqa: E402
 from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
 from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
 from dacph_drake.analysis.metrics import nominal_estimates  # noqa: E402
-from dacph_drake.robots.plant import ArmCoordinates  # noqa: E402
+from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
 from dacph_drake.robots import robot_type  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 

@@ -7,7 +7,7 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import Sine
 
-from dacph_drake.robots.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
+from dacph_drake.dynamics.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
                                total_momentum)
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator

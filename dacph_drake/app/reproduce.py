@@ -17,7 +17,8 @@ from dacph_drake.app.figures import plot_panels
 from dacph_drake.analysis.metrics import PHASES, comparison, run_metrics
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.loop.run_store import load_logs, load_run_meta, require_run_files, scenario_fingerprints, versions
-from dacph_drake.scenario import Scenario, load_scenario, save_scenario
+from dacph_drake.scenario import Scenario
+from dacph_drake.scenario_files import load_scenario, save_scenario
 
 REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
 #                                        the other controllers' runs

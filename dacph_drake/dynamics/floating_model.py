@@ -25,7 +25,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable, SpatialInertia_, UnitInertia_
 
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
-from dacph_drake.robots.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates
 
 
 class FloatingBaseModel:

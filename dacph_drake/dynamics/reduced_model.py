@@ -31,7 +31,7 @@ from pydrake.autodiffutils import ExtractGradient, InitializeAutoDiff
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable
 
-from dacph_drake.robots.plant import ArmCoordinates, END_EFFECTOR, link_name
+from dacph_drake.dynamics.plant import ArmCoordinates, END_EFFECTOR, link_name
 
 @dataclass(slots=True)
 class ReducedDynamics:
@@ -59,7 +59,7 @@ class ReducedDynamics:
 
 
 class ReducedOrderModel:
-    """Evaluates the reduced model of ``plant``, an arm built by robots/plant.py.
+    """Evaluates the reduced model of ``plant``, an arm built by dynamics/plant.py.
 
     One scratch context is made here and reused by every evaluation.
     """
@@ -72,7 +72,7 @@ class ReducedOrderModel:
         if not (np.array_equal(coordinates.base_v, np.arange(3))
                 and np.array_equal(coordinates.joint_v, np.arange(3, 3 + n))):
             raise ValueError("ReducedOrderModel needs the base joint's velocities "
-                             "first and the arm joints after them (robots/plant.py's layout)")
+                             "first and the arm joints after them (dynamics/plant.py's layout)")
         self._num_joints = n
         self._coordinates = coordinates
         self._ones = np.ones(n)

@@ -16,7 +16,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from dacph_drake.gain_rule import c_lower_bound
-from dacph_drake.robots.plant import AddStateSplitter, SetArmAtRest
+from dacph_drake.dynamics.plant import AddStateSplitter, SetArmAtRest
 from dacph_drake.robots import Robot, robot_of
 from dacph_drake.scenario import Scenario
 from dacph_drake.loop.simulator import MakeSimulator

@@ -16,7 +16,8 @@ import numpy as np
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import replaced_atomically
-from dacph_drake.scenario import Scenario, load_scenario, save_scenario, saved_forms
+from dacph_drake.scenario import Scenario
+from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
 
 
 @dataclass

@@ -15,7 +15,7 @@ from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
 from dacph_drake.loop.run_store import (LockRun, RunResult, prepare_out_dir,
                                         require_one_scenario, save_run)
-from dacph_drake.robots.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario import Scenario
 
 

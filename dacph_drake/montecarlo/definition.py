@@ -36,8 +36,8 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.arm_parameters import load_yaml_dataclass
-from dacph_drake.scenario import (BUILT_IN_SCENARIOS, Scenario, load_scenario,
-                                  saved_forms)
+from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario
+from dacph_drake.scenario_files import load_scenario, saved_forms
 
 # The ground-truth robot's distributions (planar arms only).
 ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",

@@ -22,7 +22,7 @@ from typing import Dict, List
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
-from dacph_drake.scenario import save_scenario
+from dacph_drake.scenario_files import save_scenario
 
 ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 

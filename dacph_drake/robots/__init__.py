@@ -14,13 +14,11 @@ import numpy as np
 
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.errors import ConfigError
-from dacph_drake.scenario import (DescribedArm, EndEffectorAngle, EndEffectorAttitude,
-                                  PlanarArm, Scenario)
 
 
 class Robot(Protocol):
     """A robot and its task, as the loop builder and the tools use it."""
-    scenario: Scenario
+    scenario: object                # the scenario.Scenario it was made from
     num_joints: int
     model: ReducedModel             # the controller's model (its inertias nominal)
     lhs_name: str                   # the LHS controller's system name
@@ -68,27 +66,28 @@ class Robot(Protocol):
         """analysis.verify.LhsSide: what dacph verify checks of this LHS."""
 
 
-# Each robot variant, its task and the module:class of its Robot.
-_ROBOTS = {PlanarArm: (EndEffectorAngle, "dacph_drake.robots.planar:PlanarRobot"),
-           DescribedArm: (EndEffectorAttitude,
-                          "dacph_drake.robots.described:DescribedRobot")}
+# Each robot section (scenario.PlanarArm, scenario.DescribedArm, by class name: the
+# scenario module imports this one, not the reverse), the task section its LHS
+# tracks, and the module:class of its Robot.
+_ROBOTS = {"PlanarArm": ("EndEffectorAngle", "dacph_drake.robots.planar:PlanarRobot"),
+           "DescribedArm": ("EndEffectorAttitude",
+                            "dacph_drake.robots.described:DescribedRobot")}
 
 
-def robot_type(scenario: Scenario):
+def robot_type(scenario):
     """The class of ``scenario``'s Robot (its class attributes, such as
     task_panels, without building or validating it); ConfigError when the task is
     not the one this robot tracks."""
-    task, path = _ROBOTS[type(scenario.robot)]
-    if type(scenario.task) is not task:
-        raise ConfigError(
-            f"task: !{type(scenario.task).__name__} with robot: "
-            f"!{type(scenario.robot).__name__}; allowed: task: !{task.__name__} "
-            f"(the task this robot's LHS controller tracks)")
+    robot, given = type(scenario.robot).__name__, type(scenario.task).__name__
+    task, path = _ROBOTS[robot]
+    if given != task:
+        raise ConfigError(f"task: !{given} with robot: !{robot}; allowed: task: !{task} "
+                          "(the task this robot's LHS controller tracks)")
     module, name = path.split(":")
     return getattr(importlib.import_module(module), name)
 
 
-def robot_of(scenario: Scenario) -> Robot:
-    """The Robot of ``scenario`` (validating the scenario against it: ConfigError
-    naming the first invalid setting)."""
+def robot_of(scenario) -> Robot:
+    """The Robot of ``scenario`` (a scenario.Scenario; validating the scenario
+    against it: ConfigError naming the first invalid setting)."""
     return robot_type(scenario)(scenario)

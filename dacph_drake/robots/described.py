@@ -12,7 +12,7 @@ from dacph_drake.robots.description import AddRobotFromDescription, MakeRobotPla
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.robots.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario import Scenario
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 from dacph_drake.systems.attitude_controller import AttitudeController
@@ -84,14 +84,14 @@ class DescribedRobot:
 
     def LiveView(self, loop, meshcat):
         """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
-        from dacph_drake.app.animation import LiveView, SpatialViewer
+        from dacph_drake.robots.viewers import LiveView, SpatialViewer
         viewer = SpatialViewer(self.scenario.robot.description, meshcat)
         controller = loop.systems[self.lhs_name]
         return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
             x, controller.DesiredAttitude(t)[0]))
 
     def WriteAnimation(self, logs, out_html):
-        from dacph_drake.app.animation import write_spatial_animation
+        from dacph_drake.robots.viewers import write_spatial_animation
         return write_spatial_animation(self.scenario.robot.description, logs, out_html)
 
     def TaskSignals(self, logs):

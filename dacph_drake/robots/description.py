@@ -13,7 +13,7 @@ from pydrake.multibody.tree import RevoluteJoint
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.robots.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
+from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
 
 MODELS = Path(__file__).resolve().parents[1] / "models"

@@ -1,5 +1,5 @@
 """The planar n-link arm (scenario.PlanarArm) tracking its end effector's angle
-(scenario.EndEffectorAngle): the ground truth built directly (robots/plant.py), the
+(scenario.EndEffectorAngle): the ground truth built directly (dynamics/plant.py), the
 controller's closed-form reduced model with its compiled kernels
 (reduced_model.ReducedOrderModel), the kinematic base-repulsion potential, and the
 sliding-mode LhsController."""
@@ -10,7 +10,7 @@ import numpy as np
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.robots.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
+from dacph_drake.dynamics.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.tasks.reference import OrientationReference
@@ -48,7 +48,8 @@ class PlanarRobot:
         return AddFreeFloatingArm(builder, self.scenario.robot.truth)
 
     def MakeTrueRhs(self, plant) -> TrueRhs:
-        return TrueRhs(self.scenario)
+        return TrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
+                       phases=self.scenario.phases)
 
     def RequireRunnableStart(self) -> None:
         """Every link of the ground-truth arm lies outside the base at q0 (clearance
@@ -100,11 +101,11 @@ class PlanarRobot:
                                       self.scenario.robot.potential).MinClearance
 
     def LiveView(self, loop, meshcat):
-        from dacph_drake.app.animation import LiveView
+        from dacph_drake.robots.viewers import LiveView
         return LiveView.ForPlanarLoop(loop, meshcat)
 
     def WriteAnimation(self, logs, out_html):
-        from dacph_drake.app.animation import write_animation
+        from dacph_drake.robots.viewers import write_animation
         return write_animation(self.scenario, logs, out_html)
 
     def TaskSignals(self, logs):

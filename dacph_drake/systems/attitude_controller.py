@@ -9,7 +9,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.tasks.attitude import attitude_error, reference_rates
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.robots.plant import END_EFFECTOR
+from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 

@@ -7,7 +7,7 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.dynamics.inertial_parameters import (MASS, PER_BODY, InertialParameters,
                                              identify_parameters, prior_scales)
-from dacph_drake.robots.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario import InertiaIdentification
 
 

@@ -5,7 +5,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.loop import disturbance, true_matrices
-from dacph_drake.robots.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
 from dacph_drake.dynamics.uncertainty import TrueRhsModel

@@ -1,13 +1,14 @@
 """The ground truth's actuator: the RHS of the port (docs/equations.md E19)."""
 import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics.uncertainty import TrueRhsModel
 from dacph_drake.kernels.arm import joint_momentum
 from dacph_drake.kernels.loop import pack_true_rhs, true_matrices, true_torque
-from dacph_drake.robots.plant import ArmCoordinates, MakeArmPlant
-from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.scenario import Scenario
-from dacph_drake.dynamics.uncertainty import TrueRhsModel
+from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.scenario import Phases, Uncertainty
 
 
 class TrueRhs(LeafSystem):
@@ -20,16 +21,19 @@ class TrueRhs(LeafSystem):
 
     p is the joint rows of H(q_full) v (kernels.arm.joint_momentum): at zero momentum
     this equals M(q) qdot exactly (the base rows of H v are the conserved momentum).
-    Output ``true_matrices``: [vec(B~) (row-major), diag(D~)] for the metrics."""
+    Output ``true_matrices``: [vec(B~) (row-major), diag(D~)] for the metrics.
+    ``plant`` is the planar ground truth (finalized): its mass matrix's closed form
+    (ReducedOrderModel) is fitted once here."""
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, *, plant: MultibodyPlant, uncertainty: Uncertainty,
+                 phases: Phases):
         super().__init__()
-        n = scenario.robot.truth.num_links
-        model = ReducedOrderModel(MakeArmPlant(scenario.robot.truth))
+        model = ReducedOrderModel(plant)
+        n = model.num_joints
         self._coordinates = ArmCoordinates.FromPlant(model.plant)
         self._indices = self._coordinates.StateIndices()
         self._representation = model.trigonometric_representation
-        self._uncertainty = TrueRhsModel(scenario.uncertainty, scenario.phases).kernel_arguments
+        self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
         self._packed = pack_true_rhs(*self._representation, self._uncertainty)
         self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
             self, n, model.plant.num_positions() + model.plant.num_velocities())

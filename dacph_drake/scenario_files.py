@@ -1,6 +1,7 @@
-"""The scenario layouts before the robot: and task: sections (issue 23), read so
-that older files keep loading (with a logged note) and saved runs keep their
-fingerprints:
+"""Scenario files: load_scenario and save_scenario, the texts a saved run's
+fingerprint is taken from (saved_forms), and the layouts before the robot: and
+task: sections (issue 23), read so that older files keep loading (with a logged
+note) and saved runs keep their fingerprints:
 
 - PlanarLayoutV1: a planar arm's scenario with top-level robot:, nominal_robot:,
   lhs:, potential: and reference: (now robot: {truth, nominal, potential} and
@@ -12,6 +13,7 @@ fingerprints:
 import logging
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import List, Optional
 
 from pydrake.common.yaml import yaml_dump_typed
@@ -23,7 +25,7 @@ from dacph_drake.scenario import (
     AttitudeGains, AttitudeReference, ClearancePotential, DescribedArm, Disturbance,
     EndEffectorAngle, EndEffectorAttitude, Excitation, InertiaIdentification, Learner,
     LhsGains, Periods, Phases, PlanarArm, Potential, Reference, Rhs, Scenario, Stress,
-    Uncertainty, described_arm_learner, described_arm_rhs, move_integration_scheme,
+    BUILT_IN_SCENARIOS, Uncertainty, described_arm_learner, described_arm_rhs,
     six_dof_disturbance, six_dof_uncertainty)
 from dacph_drake.loop.simulator import FixedStepConfig
 
@@ -189,3 +191,58 @@ def load_older_layout(path) -> Optional[Scenario]:
         "again to update the file", path, note)
     return load_yaml_dataclass(path, layout,
                                migrate=move_integration_scheme).ToScenario(path)
+
+
+def load_scenario(path) -> Scenario:
+    """Loads and validates a scenario: a built-in name (BUILT_IN_SCENARIOS) where no
+    file of that name exists, or a YAML file (unknown keys and wrong types are
+    errors that name the file and the key; a file without a robot: section gets the
+    paper's arm and a logged warning saying so). Files of the layouts before the
+    robot: and task: sections (PlanarLayoutV1, SpatialLayoutV1) load with a logged
+    note."""
+    if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
+        return BUILT_IN_SCENARIOS[str(path)]()
+    if not Path(path).is_file():
+        raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
+                          f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
+    scenario = load_older_layout(path) or load_yaml_dataclass(
+        path, Scenario, noted_defaults=("robot",), migrate=move_integration_scheme)
+    scenario.Validate()
+    return scenario
+
+
+def move_integration_scheme(raw, path):
+    """Files saved before the scenario embedded Drake's SimulatorConfig have a
+    top-level ``integration_scheme: X``: it is read as ``simulator:
+    {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
+    settings it implied; the rest are the simulator's defaults (FixedStepConfig)."""
+    if not (isinstance(raw, dict) and "integration_scheme" in raw):
+        return None
+    if "simulator" in raw:
+        raise ConfigError(f"{path}: both integration_scheme: and simulator: are set; "
+                          "allowed: simulator: {integration_scheme: ...} only")
+    migrated = dict(raw)
+    migrated["simulator"] = {"integration_scheme": migrated.pop("integration_scheme")}
+    periods = raw.get("periods")
+    if isinstance(periods, dict) and "rhs" in periods:     # the step it implied
+        migrated["simulator"]["max_step_size"] = periods["rhs"]
+    logging.getLogger(__name__).warning(
+        "%s: integration_scheme: is read as simulator: {integration_scheme: %s} (the "
+        "scenario now embeds Drake's SimulatorConfig; save it again to update the file)", path,
+        migrated["simulator"]["integration_scheme"])
+    return migrated
+
+
+def saved_forms(scenario: Scenario) -> List[str]:
+    """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
+    its current form and the forms of the same settings in the layouts before
+    (the robot section's OLDER_LAYOUTS: a planar arm's scenario before the robot:
+    and task: sections, and before that the top-level integration_scheme:)."""
+    return [yaml_dump_typed(scenario)] + [
+        form for layout in scenario.robot.OLDER_LAYOUTS
+        for form in globals()[layout].From(scenario).SavedForms()]
+
+
+def save_scenario(scenario: Scenario, path) -> None:
+    with open(path, "w") as f:
+        f.write(yaml_dump_typed(scenario))

@@ -18,7 +18,7 @@ from pydrake.systems.framework import DiagramBuilder
 from dacph_drake.robots.description import AddRobotFromDescription
 from dacph_drake.errors import require_positive
 from dacph_drake.log_layout import AttitudeLog, LhsLog
-from dacph_drake.robots.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
+from dacph_drake.dynamics.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
 from dacph_drake.scenario import Scenario
 
