@@ -3,6 +3,7 @@ scenario, 1500 s, with the SPEC settings listed in docs/equations.md), its secti
 their validation and the built-in scenarios; scenario_files reads and writes them
 (YAML with ``pydrake.common.yaml.yaml_load_typed``)."""
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import List, Union
 
 import numpy as np
@@ -489,18 +490,74 @@ class ClearancePotential:
     eta: float = 20.0               # [1/s]
 
 
+JOINT_DAMPING = ("keep", "zero")               # DescribedArm.joint_damping
+
+
+@dataclass
+class ArmBase:
+    """robot.base: the free-floating body an arm's own description is mounted on,
+    a uniform box of ``mass`` [kg] and ``size`` [m] (its inertia and its collision
+    shape, which the clearance potential keeps the links from), the arm's root
+    frame welded to it at ``mount`` = [x, y, z] [m], [roll, pitch, yaw] [rad] in the
+    box's centre frame. ``mass`` 0: no base is added, the description is the whole
+    robot (its root body is the free base)."""
+    mass: float = 0.0               # [kg]
+    size: List[float] = field(default_factory=lambda: [1.0, 1.0, 1.0])      # [m]
+    mount: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
+
+
+@dataclass
+class EndEffectorFrame:
+    """robot.end_effector: the frame whose attitude the task tracks, ``offset`` [m]
+    from the description's frame ``frame``; ``frame`` empty: the description's own
+    frame named end_effector."""
+    frame: str = ""
+    offset: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])     # [m]
+
+
 @dataclass
 class DescribedArm:
     """robot: !DescribedArm, an arm from a description file (``description``: a
-    shipped name, description.SPATIAL_ROBOTS, or a .urdf/.sdf path; the root body
-    is the free base). ``nominal_inertia_scale`` is the controller's model error: one
-    factor per body with mass in the description's order (base first;
-    inertial_parameters.InertialParameters), by which the controller's model
-    multiplies that body's mass and rotational inertia (its centre of mass stays);
-    empty: the description's own inertias. Its task: EndEffectorAttitude."""
+    shipped name, description.SPATIAL_ROBOTS, or a .urdf/.sdf path), on the free
+    base ``base`` (ArmBase; by default the description's root body is the base),
+    tracking the attitude of ``end_effector`` (EndEffectorFrame). ``package_paths``:
+    folders holding ROS packages (a package.xml) whose package:// URIs the
+    description uses, besides those on ROS_PACKAGE_PATH. ``joint_damping``: what
+    becomes of the description's joint damping (URDF <dynamics damping>), which acts
+    in the ground truth beside the port's D~: "keep" counts it in the ground truth's
+    logged D~ (true_matrices), so that the D errors compare against what acts;
+    "zero" removes it (a logged note), as the planar arms have none.
+    ``nominal_inertia_scale`` is the controller's model error: one factor per body with mass in the
+    description's order (base first; inertial_parameters.InertialParameters), by
+    which the controller's model multiplies that body's mass and rotational inertia
+    (its centre of mass stays); empty: the description's own inertias. Its task:
+    EndEffectorAttitude."""
     description: str = "satellite_6dof"
+    base: ArmBase = field(default_factory=ArmBase)
+    end_effector: EndEffectorFrame = field(default_factory=EndEffectorFrame)
+    package_paths: List[str] = field(default_factory=list)
+    joint_damping: str = "keep"     # JOINT_DAMPING
     nominal_inertia_scale: List[float] = field(default_factory=list)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
+
+    def ValidateAssembly(self) -> None:
+        """ConfigError naming the first invalid setting of how the robot is put
+        together (base, mount, end effector, package paths), before it is parsed."""
+        require_one_of("robot.joint_damping", self.joint_damping, JOINT_DAMPING)
+        require_nonnegative("robot.base.mass", self.base.mass, "kg")
+        for name, values, count in (("base.size", self.base.size, 3),
+                                    ("base.mount", self.base.mount, 6),
+                                    ("end_effector.offset", self.end_effector.offset, 3)):
+            _require_length(f"robot.{name}", values, count,
+                            {3: "x, y, z", 6: "x, y, z, roll, pitch, yaw"}[count])
+            require_finite_numbers(f"robot.{name}", list(values))
+        for i, side in enumerate(self.base.size):
+            require_positive(f"robot.base.size[{i}]", side, "m")
+        for i, folder in enumerate(self.package_paths):
+            if not Path(folder).is_dir():
+                raise ConfigError(f"robot.package_paths[{i}] = {folder!r} is not a "
+                                  "folder; allowed: folders holding ROS packages "
+                                  "(package.xml)")
 
     def Validate(self, num_bodies: int) -> None:
         """ConfigError naming the first invalid setting (``num_bodies``: the

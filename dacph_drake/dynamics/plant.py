@@ -244,3 +244,12 @@ def total_momentum(plant: MultibodyPlant, context) -> np.ndarray:
     a planar system's spatial momentum are identically zero."""
     h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
     return np.array([h.rotational()[2], h.translational()[0], h.translational()[1]])
+
+
+def joint_damping(plant: MultibodyPlant, joint_v) -> np.ndarray:
+    """The damping [N m s/rad] of the joints whose velocities are ``joint_v`` (the
+    description's, which Drake applies in the plant's dynamics)."""
+    by_velocity = {plant.get_joint(j).velocity_start(): plant.get_joint(j)
+                   for j in plant.GetJointIndices()
+                   if plant.get_joint(j).num_velocities() == 1}
+    return np.array([by_velocity[int(v)].default_damping() for v in joint_v])

@@ -10,10 +10,13 @@ form instead).
 phi_k the signed distance between link k and the base, p_A, p_B its witness points
 on the link and on the base, nhat_BA the unit normal from the base towards the link,
 J_bar the translational rows of the generalized Jacobians (the base moves too: zero
-momentum). Link pairs joined to the base by a joint are filtered by Drake."""
+momentum). The links joined by a joint to the base, or to a body welded to it (an
+arm's root mounted on it, scenario.ArmBase), are not measured against it: their
+joint sits on its surface (Drake filters the first kind itself)."""
 from dataclasses import dataclass
 
 import numpy as np
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
@@ -38,6 +41,7 @@ class BaseClearancePotential:
         self._plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
         PopulateFromDescription(self._plant, description)
         self._plant.Finalize()
+        _FilterLinksOnTheBase(self._plant, scene_graph)
         self._context = builder.Build().CreateDefaultContext()
         self._plant_context = self._plant.GetMyContextFromRoot(self._context)
         self._inspector = scene_graph.model_inspector()
@@ -80,3 +84,20 @@ class BaseClearancePotential:
             U += 0.5 * self._gain * depth**2
             gradient -= self._gain * depth * (J[0] - J[1]).T @ nhat
         return Clearance(U=U, gradient=gradient, min_distance=nearest)
+
+
+def _FilterLinksOnTheBase(plant, scene_graph) -> None:
+    """Excludes the collision pairs of the base with each body whose joint's parent
+    is welded to the base (the bodies Drake leaves unfiltered when the arm's root is
+    a body of its own, welded to the base)."""
+    base = plant.get_body(next(iter(plant.GetFloatingBaseBodies())))
+    welded = {body.index() for body in plant.GetBodiesWeldedTo(base)}
+    on_base = [plant.get_joint(j).child_body() for j in plant.GetJointIndices()
+               if plant.get_joint(j).parent_body().index() in welded
+               and plant.get_joint(j).child_body().index() not in welded]
+    geometries = [g for body in on_base for g in plant.GetCollisionGeometriesForBody(body)]
+    if geometries:
+        scene_graph.collision_filter_manager().Apply(
+            CollisionFilterDeclaration().ExcludeBetween(
+                GeometrySet(plant.GetCollisionGeometriesForBody(base)),
+                GeometrySet(geometries)))

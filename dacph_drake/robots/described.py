@@ -34,7 +34,8 @@ class DescribedRobot:
     def __init__(self, scenario: Scenario):
         self.scenario = scenario
         arm = scenario.robot
-        self.model = FloatingBaseModel(MakeRobotPlant(arm.description))
+        arm.ValidateAssembly()
+        self.model = FloatingBaseModel(MakeRobotPlant(arm))
         self.num_joints = self.model.num_joints
         arm.Validate(len(self.model.parameters.bodies))
         scenario.ValidateShared(self.num_joints)
@@ -43,7 +44,7 @@ class DescribedRobot:
                 arm.nominal_inertia_scale, PER_BODY))
 
     def AddGroundTruth(self, builder):
-        return AddRobotFromDescription(builder, self.scenario.robot.description)
+        return AddRobotFromDescription(builder, self.scenario.robot)
 
     def MakeTrueRhs(self, plant) -> SpatialTrueRhs:
         return SpatialTrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
@@ -63,7 +64,7 @@ class DescribedRobot:
         0), fed by an InertialIdentifier (scenario.inertia) with ``identify``."""
         scenario, builder, arm = self.scenario, controller.builder, self.scenario.robot
         potential = (BaseClearancePotential(
-            description=arm.description, model=self.model, gain=arm.potential.gain,
+            description=arm, model=self.model, gain=arm.potential.gain,
             margin=arm.potential.margin) if arm.potential.gain > 0 else None)
         lhs = builder.AddNamedSystem(self.lhs_name, AttitudeController(
             model=self.model, reference=scenario.task.reference,
@@ -85,14 +86,14 @@ class DescribedRobot:
     def LiveView(self, loop, meshcat):
         """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
         from dacph_drake.robots.viewers import LiveView, SpatialViewer
-        viewer = SpatialViewer(self.scenario.robot.description, meshcat)
+        viewer = SpatialViewer(self.scenario.robot, meshcat)
         controller = loop.systems[self.lhs_name]
         return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
             x, controller.DesiredAttitude(t)[0]))
 
     def WriteAnimation(self, logs, out_html):
         from dacph_drake.robots.viewers import write_spatial_animation
-        return write_spatial_animation(self.scenario.robot.description, logs, out_html)
+        return write_spatial_animation(self.scenario.robot, logs, out_html)
 
     def TaskSignals(self, logs):
         """|e|, ||s||, the signed link-base distance (attitude_log) and the angle
@@ -112,7 +113,7 @@ class DescribedRobot:
         t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
         settled = t >= SETTLING_TIME
         clearance = logs["attitude_log"][:, layout.clearance]
-        plant = MakeRobotPlant(self.scenario.robot.description)
+        plant = MakeRobotPlant(self.scenario.robot)
         context = plant.CreateDefaultContext()
         momentum = 0.0
         for x in logs["state"]:
@@ -132,7 +133,7 @@ class DescribedRobot:
             "max_momentum": momentum}
 
     def TotalMass(self) -> float:
-        plant = MakeRobotPlant(self.scenario.robot.description)
+        plant = MakeRobotPlant(self.scenario.robot)
         return float(sum(body.default_mass()
                          for body in InertialParameters(plant).bodies))
 

@@ -4,17 +4,22 @@ so nq = nv + 1), every revolute joint of the arm is actuated, gravity is zero.
 
 The project ships its own descriptions (Drake's bundled models are fetched from the
 internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
+import logging
 from pathlib import Path
 
-from pydrake.geometry import Role, SceneGraph
+
+from pydrake.geometry import Box, Role, SceneGraph
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.parsing import Parser
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
-from pydrake.multibody.tree import RevoluteJoint
+from pydrake.multibody.plant import (AddMultibodyPlantSceneGraph, CoulombFriction,
+                                     MultibodyPlant)
+from pydrake.multibody.tree import FixedOffsetFrame, RevoluteJoint, SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 # scripts/make_spatial_models.py writes them.
@@ -63,23 +68,48 @@ def planar_arm_urdf(robot: RobotParams) -> str:
     return "".join(parts)
 
 
+def described_arm(description) -> DescribedArm:
+    """A scenario's robot section (scenario.DescribedArm) as it is, or the section of
+    a bare description name or path (the description is the whole robot)."""
+    return (description if hasattr(description, "description")
+            else DescribedArm(description=str(description)))
+
+
 def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
-    """Parses the description (a shipped name, a .urdf/.sdf path, or a planar
-    RobotParams through planar_arm_urdf) into ``plant`` (not finalized), actuates
-    each revolute joint the description leaves unactuated (in its joint order; no
-    effort limit) and switches gravity off."""
+    """Parses the description into ``plant`` (not finalized): a shipped name, a
+    .urdf/.sdf path, a scenario.DescribedArm (the arm mounted on its base, its
+    end-effector frame added, package:// URIs resolved through its package_paths
+    and ROS_PACKAGE_PATH), or a planar RobotParams through planar_arm_urdf. Each
+    revolute joint the description leaves unactuated is actuated (in its joint
+    order; no effort limit); a joint of another kind is refused by name; gravity is
+    switched off."""
     if isinstance(name_or_path, RobotParams):
         name_or_path.Validate()
         Parser(plant).AddModelsFromString(planar_arm_urdf(name_or_path), "urdf")
         path = "the planar arm's description"
     else:
-        path = robot_description(name_or_path)
+        arm = described_arm(name_or_path)
+        path = robot_description(arm.description)
+        parser = Parser(plant)
+        parser.package_map().PopulateFromRosPackagePath()
+        for folder in arm.package_paths:
+            parser.package_map().PopulateFromFolder(str(folder))
         try:
-            Parser(plant).AddModels(str(path))
+            instances = parser.AddModels(str(path))
+            if arm.base.mass > 0:
+                _MountOnBase(plant, instances, arm.base)
         except RuntimeError as e:
             raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
-    joints = [plant.get_joint(i) for i in plant.GetJointIndices()
-              if isinstance(plant.get_joint(i), RevoluteJoint)]
+    moving = [plant.get_joint(i) for i in plant.GetJointIndices()
+              if plant.get_joint(i).num_velocities() > 0]
+    for joint in moving:
+        if not isinstance(joint, RevoluteJoint) and joint.parent_body().index() != \
+                plant.world_body().index():
+            raise ConfigError(f"{path}: joint {joint.name()!r} is a "
+                              f"{joint.type_name()} joint; allowed: revolute joints "
+                              "between the base and the end effector (fix the others "
+                              "in the description)")
+    joints = [joint for joint in moving if isinstance(joint, RevoluteJoint)]
     if not joints:
         raise ConfigError(f"{path} has no revolute joint; allowed: an arm of revolute "
                           "joints on a free base")
@@ -89,6 +119,59 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
         if joint.index() not in actuated:
             plant.AddJointActuator(f"tau_{joint.name()}", joint)
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
+    if not isinstance(name_or_path, RobotParams):
+        arm = described_arm(name_or_path)
+        _AddEndEffector(plant, arm.end_effector, path)
+        damped = [joint for joint in joints if joint.default_damping() > 0]
+        if damped and arm.joint_damping == "zero":
+            for joint in damped:
+                joint.set_default_damping(0.0)
+            logging.getLogger(__name__).warning(
+                "%s: the joint damping of %s is set to zero (robot.joint_damping: zero)",
+                path, ", ".join(joint.name() for joint in damped))
+
+
+def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
+    """A uniform box body "base" of base.mass and base.size (with its collision and
+    visual box where the plant has a SceneGraph), the arm's root body (the one no
+    joint of the description moves) welded to it at base.mount."""
+    roots = [plant.get_body(b) for instance in instances
+             for b in plant.GetBodyIndices(instance)]
+    children = {plant.get_joint(j).child_body().index() for instance in instances
+                for j in plant.GetJointIndices(instance)}
+    root = next(body for body in roots if body.index() not in children)
+    body = plant.AddRigidBody("base", plant.AddModelInstance("base"),
+                              SpatialInertia.SolidBoxWithMass(base.mass, *base.size))
+    if plant.geometry_source_is_registered():
+        box = Box(*base.size)
+        plant.RegisterCollisionGeometry(body, RigidTransform(), box, "base_collision",
+                                        CoulombFriction(1.0, 1.0))
+        plant.RegisterVisualGeometry(body, RigidTransform(), box, "base_visual",
+                                     [0.75, 0.75, 0.8, 1.0])
+    plant.WeldFrames(body.body_frame(), root.body_frame(), RigidTransform(
+        RollPitchYaw(base.mount[3:]), base.mount[:3]))
+
+
+def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path) -> None:
+    """The frame named END_EFFECTOR at end_effector.offset from end_effector.frame
+    (or the description's own END_EFFECTOR frame when end_effector.frame is empty);
+    ConfigError naming the frame otherwise."""
+    if not end_effector.frame:
+        if not plant.HasFrameNamed(END_EFFECTOR):
+            raise ConfigError(
+                f"{path} has no frame named {END_EFFECTOR!r}; allowed: a description "
+                "with one, or robot.end_effector.frame naming a frame of it (e.g. its "
+                "last link)")
+        return
+    if not plant.HasFrameNamed(end_effector.frame):
+        raise ConfigError(f"robot.end_effector.frame = {end_effector.frame!r} is not a "
+                          f"frame of {path}; allowed: one of its frames (its links')")
+    if plant.HasFrameNamed(END_EFFECTOR):
+        raise ConfigError(f"robot.end_effector.frame = {end_effector.frame!r} with "
+                          f"{path}, which has its own frame {END_EFFECTOR!r}; allowed: "
+                          "an empty robot.end_effector.frame (that frame is used)")
+    plant.AddFrame(FixedOffsetFrame(END_EFFECTOR, plant.GetFrameByName(end_effector.frame),
+                                    RigidTransform(end_effector.offset)))
 
 
 def AddRobotFromDescription(builder: DiagramBuilder, name_or_path,
@@ -124,5 +207,11 @@ def _RequireFreeFloating(plant: MultibodyPlant, name_or_path) -> None:
         return                                  # its base is on a planar joint
     floating = plant.GetFloatingBaseBodies()
     if len(floating) != 1:
-        raise ConfigError(f"{name_or_path}: {len(floating)} free bodies; allowed: one "
-                          "root body (the base), the arm attached to it by joints")
+        raise ConfigError(f"{described_arm(name_or_path).description}: {len(floating)} "
+                          "free bodies; allowed: one root body (the base), the arm "
+                          "attached to it by joints (or robot.base to mount it on one)")
+    base = plant.get_body(next(iter(floating)))
+    if not base.default_mass() > 0:
+        raise ConfigError(f"{described_arm(name_or_path).description}: the free base "
+                          f"{base.name()!r} has no mass; allowed: a description whose "
+                          "root body has mass, or robot.base to mount the arm on one")

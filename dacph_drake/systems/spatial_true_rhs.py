@@ -5,7 +5,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.loop import disturbance, true_matrices
-from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates, joint_damping
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
@@ -20,7 +20,9 @@ class SpatialTrueRhs(LeafSystem):
 
     Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
     plant's) and time, so it adds no delay; it feeds the plant's actuation input.
-    Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics.
+    Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics, D~
+    with the description's joint damping, which the plant applies itself
+    (scenario.DescribedArm.joint_damping "keep"; zero otherwise).
     ``plant`` is the ground truth (finalized); the scratch context for its mass
     matrix is made here."""
 
@@ -34,6 +36,7 @@ class SpatialTrueRhs(LeafSystem):
         self._v_index = coordinates.joint_v
         self._nq = plant.num_positions()
         n = coordinates.num_joints
+        self._joint_damping = joint_damping(plant, self._v_index)
         self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
         self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
             self, n, plant.num_positions() + plant.num_velocities())
@@ -54,4 +57,4 @@ class SpatialTrueRhs(LeafSystem):
 
     def _CalcMatrices(self, context, output):
         B, D, _ = self._Matrices(context)
-        output.SetFromVector(np.concatenate([B.reshape(-1), D]))
+        output.SetFromVector(np.concatenate([B.reshape(-1), D + self._joint_damping]))
