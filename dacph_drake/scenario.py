@@ -4,7 +4,7 @@ their validation and the built-in scenarios; scenario_files reads and writes the
 (YAML with ``pydrake.common.yaml.yaml_load_typed``)."""
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List, Union
+from typing import Dict, List, Union
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
@@ -527,6 +527,9 @@ class DescribedArm:
     in the ground truth beside the port's D~: "keep" counts it in the ground truth's
     logged D~ (true_matrices), so that the D errors compare against what acts;
     "zero" removes it (a logged note), as the planar arms have none.
+    ``locked_joints``: joints welded at a position (name: [rad] or [m]): a
+    gripper's and any other joint that is not the arm's. Every prismatic joint is
+    locked, at its position here or 0 (a logged note names them).
     ``nominal_inertia_scale`` is the controller's model error: one factor per body with mass in the
     description's order (base first; inertial_parameters.InertialParameters), by
     which the controller's model multiplies that body's mass and rotational inertia
@@ -537,6 +540,7 @@ class DescribedArm:
     end_effector: EndEffectorFrame = field(default_factory=EndEffectorFrame)
     package_paths: List[str] = field(default_factory=list)
     joint_damping: str = "keep"     # JOINT_DAMPING
+    locked_joints: Dict[str, float] = field(default_factory=dict)
     nominal_inertia_scale: List[float] = field(default_factory=list)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
 
@@ -544,6 +548,8 @@ class DescribedArm:
         """ConfigError naming the first invalid setting of how the robot is put
         together (base, mount, end effector, package paths), before it is parsed."""
         require_one_of("robot.joint_damping", self.joint_damping, JOINT_DAMPING)
+        for name, position in self.locked_joints.items():
+            require_finite_numbers(f"robot.locked_joints.{name}", [position])
         require_nonnegative("robot.base.mass", self.base.mass, "kg")
         for name, values, count in (("base.size", self.base.size, 3),
                                     ("base.mount", self.base.mount, 6),

@@ -127,15 +127,48 @@ def test_package_uris_resolve_through_package_paths_or_ros_package_path(
     assert plant.num_velocities() == 6 + 3
 
 
-def test_a_joint_that_is_not_revolute_is_refused_by_name(arm_file):
+def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
+    """A gripper's slide (a prismatic joint) is welded at 0 with a note; a revolute
+    joint named in robot.locked_joints is welded at its position: the arm's
+    reduced mass matrix is then the full arm's at that position without the
+    locked joint's row and column, and its end-effector pose the same; a planar
+    joint, or a locked name that is no joint, is refused naming it."""
+    full = FloatingBaseModel(MakeRobotPlant(DescribedArm(description=str(arm_file),
+                                                         base=MOUNT)))
     prismatic = arm_file.with_name("prismatic.urdf")
     prismatic.write_text(arm_file.read_text().replace(
         '<joint name="joint2" type="continuous">',
         '<joint name="joint2" type="prismatic"><limit lower="-0.1" upper="0.1" '
         'effort="10" velocity="1"/>'))
-    with pytest.raises(ConfigError, match=r"joint 'joint2' is a prismatic joint; "
-                                          r"allowed: revolute joints"):
-        MakeRobotPlant(DescribedArm(description=str(prismatic), base=MOUNT))
+    with caplog.at_level("WARNING"):
+        slid = FloatingBaseModel(MakeRobotPlant(DescribedArm(description=str(prismatic),
+                                                             base=MOUNT)))
+    assert slid.num_joints == 2 and "locked (welded) joints: joint2 at 0" in caplog.text
+    locked = FloatingBaseModel(MakeRobotPlant(DescribedArm(
+        description=str(arm_file), base=MOUNT, locked_joints={"joint2": 0.4})))
+    assert locked.num_joints == 2
+    for _ in range(3):
+        q1, q3 = rng.uniform(-np.pi, np.pi, 2)
+        M = full.MassMatrix(np.array([q1, 0.4, q3]))
+        np.testing.assert_allclose(locked.MassMatrix(np.array([q1, q3])),
+                                   M[np.ix_([0, 2], [0, 2])], rtol=1e-12, atol=1e-12)
+        poses = []
+        for model, q in ((full, [q1, 0.4, q3]), (locked, [q1, q3])):
+            context = model.plant.CreateDefaultContext()
+            model.plant.SetPositions(context, model.FullPositions(np.array(q)))
+            poses.append(model.plant.GetFrameByName("end_effector").CalcPoseInWorld(
+                context).GetAsMatrix4())
+        np.testing.assert_allclose(poses[0], poses[1], atol=1e-12)
+    planar = arm_file.with_name("planar.urdf")
+    planar.write_text(arm_file.read_text().replace(
+        '<joint name="joint2" type="continuous">', '<joint name="joint2" type="planar">'))
+    with pytest.raises(ConfigError, match=r"joint 'joint2' is a .* joint; allowed: "
+                                          r"revolute joints"):
+        MakeRobotPlant(DescribedArm(description=str(planar), base=MOUNT))
+    with pytest.raises(ConfigError, match=r"robot.locked_joints names 'gripper', which is "
+                                          r"not a revolute or prismatic joint"):
+        MakeRobotPlant(DescribedArm(description=str(arm_file), base=MOUNT,
+                                    locked_joints={"gripper": 0.0}))
 
 
 @pytest.mark.parametrize("change, message", [

@@ -7,13 +7,16 @@ internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."
 import logging
 from pathlib import Path
 
+import numpy as np
 
 from pydrake.geometry import Box, Role, SceneGraph
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import (AddMultibodyPlantSceneGraph, CoulombFriction,
                                      MultibodyPlant)
-from pydrake.multibody.tree import FixedOffsetFrame, RevoluteJoint, SpatialInertia
+from pydrake.multibody.tree import (FixedOffsetFrame, PrismaticJoint, RevoluteJoint,
+                                   SpatialInertia)
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
@@ -100,6 +103,7 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
                 _MountOnBase(plant, instances, arm.base)
         except RuntimeError as e:
             raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
+        _LockJoints(plant, arm.locked_joints, path)
     moving = [plant.get_joint(i) for i in plant.GetJointIndices()
               if plant.get_joint(i).num_velocities() > 0]
     for joint in moving:
@@ -107,8 +111,8 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
                 plant.world_body().index():
             raise ConfigError(f"{path}: joint {joint.name()!r} is a "
                               f"{joint.type_name()} joint; allowed: revolute joints "
-                              "between the base and the end effector (fix the others "
-                              "in the description)")
+                              "between the base and the end effector, and revolute or "
+                              "prismatic joints locked (robot.locked_joints)")
     joints = [joint for joint in moving if isinstance(joint, RevoluteJoint)]
     if not joints:
         raise ConfigError(f"{path} has no revolute joint; allowed: an arm of revolute "
@@ -150,6 +154,39 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
                                      [0.75, 0.75, 0.8, 1.0])
     plant.WeldFrames(body.body_frame(), root.body_frame(), RigidTransform(
         RollPitchYaw(base.mount[3:]), base.mount[:3]))
+
+
+def _LockJoints(plant: MultibodyPlant, locked, path) -> None:
+    """Welds, at its position, each joint named in ``locked`` (name: position,
+    revolute or prismatic) and every other prismatic joint (at 0): a gripper's
+    fingers and any joint that is not the arm's; a logged note names them.
+    ConfigError for a name that is not a joint of the description."""
+    wanted, welded = dict(locked), []
+    for index in list(plant.GetJointIndices()):
+        joint = plant.get_joint(index)
+        revolute, prismatic = (isinstance(joint, RevoluteJoint),
+                               isinstance(joint, PrismaticJoint))
+        if not (prismatic or (revolute and joint.name() in wanted)):
+            continue
+        position = float(wanted.pop(joint.name(), 0.0))
+        motion = (RigidTransform(RotationMatrix(AngleAxis(position, joint.revolute_axis())),
+                                 np.zeros(3)) if revolute
+                  else RigidTransform(position * joint.translation_axis()))
+        parent, child = joint.frame_on_parent(), joint.frame_on_child()
+        for actuator in list(plant.GetJointActuatorIndices()):
+            if plant.get_joint_actuator(actuator).joint().index() == index:
+                plant.RemoveJointActuator(plant.get_joint_actuator(actuator))
+        plant.RemoveJoint(joint)
+        plant.WeldFrames(parent, child, motion)
+        welded.append(f"{joint.name()} at {position:g}")
+    if wanted:
+        raise ConfigError(f"robot.locked_joints names {next(iter(wanted))!r}, which is "
+                          f"not a revolute or prismatic joint of {path}; allowed: the "
+                          "names of its joints")
+    if welded:
+        logging.getLogger(__name__).warning(
+            "%s: locked (welded) joints: %s (robot.locked_joints)", path,
+            ", ".join(welded))
 
 
 def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path) -> None:
