@@ -165,3 +165,30 @@ def test_stress_beyond_the_bound_is_flagged_before_it_diverges(tmp_path):
     assert guarded.status == "ok" and guarded_report["ok"]
     rejected = guarded_report["estimates_rejected_by_the_integrator"]
     assert 1.0 <= rejected["first_rejection_time"] <= 1.02
+
+
+def test_a_region_beyond_its_budget_is_skipped_with_the_reason(quick_reproduction,
+                                                               tmp_path, capsys):
+    """The region of attraction's SOS program runs in a process of its own with a
+    wall-time budget (dacph verify --region-budget): one too short for it stops the
+    program and reports the check as skipped, saying why, while every other check
+    runs; the certificate within budget is the in-process one's."""
+    import shutil
+    from dacph_drake.analysis.region_of_attraction import _Region
+    run_dir = tmp_path / "run"                  # a copy: the session's run stays as is
+    shutil.copytree(quick_reproduction[1], run_dir)
+    assert main(["verify", str(run_dir), "--region-budget", "0.001"]) == 0
+    printed = capsys.readouterr().out
+    assert "skipped: the sums-of-squares program for 2 joints did not finish within " \
+           "the budget of 0.001 s" in printed and "(1 check skipped)" in printed
+    report = verify_run(run_dir, tmp_path, region_budget=0.001)
+    region = report["checks"]["region_of_attraction"]
+    assert region["ok"] and region["skipped"] and region["radius"] != region["radius"]
+    assert report["checks"]["rhs_loop_truth"]["evaluated"] > 100
+    model = ReducedOrderModel(MakeArmPlant(RobotParams()))
+    q = np.array([0.3, 1.0])
+    budgeted = sliding_region_of_attraction(model, q, 0.5, 0.05, 0.2)
+    M = model.Evaluate(q, np.zeros(2)).M
+    Gamma = [model.Evaluate(q, np.eye(2)[k]).C for k in range(2)]
+    assert budgeted == _Region(q, M, Gamma, 0.5 * np.eye(2), 0.05, np.full(2, 5.0))
+    assert main(["verify", str(run_dir), "--region-budget", "0"]) == 2

@@ -19,6 +19,7 @@ drops the robust term instead: s_i tanh(w_i s_i) >= 0, so it only lowers
 dV/dt = s^T M sdot, and a region certified without it holds with it:
 
     M(q) sdot = -C'(q, s) s - damping_rate M s."""
+import multiprocessing
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -38,6 +39,7 @@ class RegionCertificate:
     rho: float                      # level of V = s^T M s / 2 [J]
     radius: float                   # a ball ||s|| <= radius inside the region [rad/s]
     assumptions: str
+    skipped: str = ""               # why no certificate was computed (budget), or ""
 
     def as_dict(self):
         return asdict(self)
@@ -47,13 +49,21 @@ ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; tanh replaced by its 
                "cubic Taylor polynomial; candidate V = s^T M(q) s / 2")
 
 
+# The wall time the sums-of-squares program may take [s] (dacph verify
+# --region-budget): it grows steeply with the number of joints (about 1 s for 3, 2 min
+# for 6, more than 15 min for 7).
+REGION_BUDGET = 300.0
+
+
 def sliding_region_of_attraction(model: ReducedOrderModel, q: np.ndarray, Kd: float,
-                                 chi: float, epsilon: float) -> RegionCertificate:
+                                 chi: float, epsilon: float,
+                                 budget: float = REGION_BUDGET) -> RegionCertificate:
     """The planar LHS: K_d = Kd I, tanh(s / epsilon)."""
     n = model.num_joints
     M = model.Evaluate(q, np.zeros(n)).M
     Gamma = [model.Evaluate(q, np.eye(n)[k]).C for k in range(n)]
-    return _Region(q, M, Gamma, Kd * np.eye(n), chi, np.full(n, 1.0 / epsilon))
+    return _BudgetedRegion(budget, q, M, Gamma, Kd * np.eye(n), chi,
+                           np.full(n, 1.0 / epsilon))
 
 
 SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust term "
@@ -61,16 +71,34 @@ SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust te
                        "V = s^T M(q) s / 2")
 
 
-def attitude_region_of_attraction(model, q: np.ndarray,
-                                  damping_rate: float) -> RegionCertificate:
+def attitude_region_of_attraction(model, q: np.ndarray, damping_rate: float,
+                                  budget: float = REGION_BUDGET) -> RegionCertificate:
     """A spatial arm's LHS (``model``: floating_model.FloatingBaseModel) with
     K_d = damping_rate M(q), for every chi (module docstring)."""
     n = model.num_joints
     M = model.MassMatrix(q)
     Gamma = [model.Coriolis(q, np.eye(n)[k]) for k in range(n)]
-    region = _Region(q, M, Gamma, damping_rate * M, 0.0, np.zeros(n))
+    region = _BudgetedRegion(budget, q, M, Gamma, damping_rate * M, 0.0, np.zeros(n))
     region.assumptions = SPATIAL_ASSUMPTIONS
     return region
+
+
+def _BudgetedRegion(budget: float, q, *arguments) -> RegionCertificate:
+    """_Region(q, *arguments) in a process of its own, stopped after ``budget``
+    seconds of wall time: then a certificate with no region (rho, radius nan) that
+    says why it was skipped."""
+    context = multiprocessing.get_context("spawn")
+    with context.Pool(1) as pool:      # leaving the block terminates the worker
+        pending = pool.apply_async(_Region, (q, *arguments))
+        try:
+            return pending.get(timeout=budget)
+        except multiprocessing.TimeoutError:
+            return RegionCertificate(
+                q=[float(v) for v in q], rho=float("nan"), radius=float("nan"),
+                assumptions=ASSUMPTIONS,
+                skipped=f"the sums-of-squares program for {len(q)} joints did not finish "
+                        f"within the budget of {budget:g} s (dacph verify "
+                        "--region-budget)")
 
 
 def _Region(q, M, Gamma, K_d, chi: float, weights) -> RegionCertificate:

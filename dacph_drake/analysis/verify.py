@@ -30,6 +30,7 @@ import numpy as np  # noqa: E402
 
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
+from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
 from dacph_drake.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
@@ -100,11 +101,11 @@ class LhsSide:
 
 
 def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
-                out_dir=None) -> Dict:
+                out_dir=None, region_budget: float = REGION_BUDGET) -> Dict:
     """All checks on the logs of a DAC run of ``scenario``; writes verification.{md,json} and plots into out_dir when
     given. Returns the report dictionary (``ok`` is the verdict)."""
     n = len(scenario.q0)
-    lhs = robot_of(scenario).VerifyLhs(logs)
+    lhs = robot_of(scenario).VerifyLhs(logs, region_budget)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
@@ -124,8 +125,10 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
         "lhs_envelope": envelope.as_dict(),
         "rhs_loop_learned": learned.summary(),
         "rhs_loop_truth": truth.summary(),
+        # A region the budget did not allow is reported as skipped, with why.
         "region_of_attraction": {**lhs.region.as_dict(), "s0_norm": lhs.s0_norm,
-                                 "ok": lhs.s0_norm <= lhs.region.radius},
+                                 "ok": bool(lhs.region.skipped)
+                                 or lhs.s0_norm <= lhs.region.radius},
     }
     estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
                  "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
@@ -142,7 +145,8 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
     return report
 
 
-def verify_run(run_dir, out_dir=None, controller: str = "dac") -> Dict:
+def verify_run(run_dir, out_dir=None, controller: str = "dac",
+               region_budget: float = REGION_BUDGET) -> Dict:
     """verify_logs on the run of ``controller`` (one with the RHS integrator: DAC,
     its ablation, or a registered variant) saved in run_dir (by ``dacph simulate``
     or ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
@@ -151,7 +155,8 @@ def verify_run(run_dir, out_dir=None, controller: str = "dac") -> Dict:
         raise ConfigError(f"{run_dir}: the {controller} run has no RHS loop to verify "
                           "(no rhs_log); allowed: the run of a controller with the RHS "
                           "integrator (dac, dac-nominal)")
-    return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir)
+    return verify_logs(logs, scenario, meta, run_dir if out_dir is None else out_dir,
+                       region_budget)
 
 
 def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants,

@@ -62,8 +62,9 @@ class Robot(Protocol):
     def TotalMass(self) -> float:
         """The ground truth's total mass [kg]."""
 
-    def VerifyLhs(self, logs):
-        """analysis.verify.LhsSide: what dacph verify checks of this LHS."""
+    def VerifyLhs(self, logs, region_budget: float):
+        """analysis.verify.LhsSide: what dacph verify checks of this LHS (the
+        region of attraction's program stopped after region_budget seconds)."""
 
 
 # Each robot section (scenario.PlanarArm, scenario.DescribedArm, by class name: the

@@ -137,7 +137,7 @@ class DescribedRobot:
         return float(sum(body.default_mass()
                          for body in InertialParameters(plant).bodies))
 
-    def VerifyLhs(self, logs):
+    def VerifyLhs(self, logs, region_budget: float):
         """The LHS with K_d = damping_rate M and the inertia-scaled boundary layer
         (EnvelopeConstants.ForInertiaScaled), with the controller's model and, when
         it ran one, the inertial identifier's last estimate: the bounds of both."""
@@ -165,6 +165,6 @@ class DescribedRobot:
                 gains.boundary_rate, n),
             lambda_lhs=2 * gains.damping_rate,
             region=attitude_region_of_attraction(model, np.asarray(scenario.q0),
-                                                 gains.damping_rate),
+                                                 gains.damping_rate, region_budget),
             settings={"inf_lambda_min_M": lambda_min_M,
                       "sup_max_diagonal_M": max_diagonal_M})

@@ -126,7 +126,7 @@ class PlanarRobot:
         truth = self.scenario.robot.truth
         return truth.base.mass + sum(link.mass for link in truth.links)
 
-    def VerifyLhs(self, logs):
+    def VerifyLhs(self, logs, region_budget: float):
         """V is s^T M s / 2 with the M the controller ran on: the nominal robot's
         until the inertial identifier's start, the identified one's after it
         (logs["inertial_parameters"]); the envelope and eq. (45) take the inertia
@@ -154,6 +154,6 @@ class PlanarRobot:
             lambda_lhs=2 * Kd / lambda_min_M,
             region=sliding_region_of_attraction(
                 model, np.asarray(scenario.q0), Kd, scenario.rhs.chi_initial,
-                epsilon + layer_per_chi * scenario.rhs.chi_initial),
+                epsilon + layer_per_chi * scenario.rhs.chi_initial, region_budget),
             settings={"inf_lambda_min_M": lambda_min_M, "sup_lambda_max_M": lambda_max_M,
                       "models": len(models)})
