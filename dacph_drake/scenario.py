@@ -522,7 +522,10 @@ class DescribedArm:
     base ``base`` (ArmBase; by default the description's root body is the base),
     tracking the attitude of ``end_effector`` (EndEffectorFrame). ``package_paths``:
     folders holding ROS packages (a package.xml) whose package:// URIs the
-    description uses, besides those on ROS_PACKAGE_PATH. ``joint_damping``: what
+    description uses, besides those on ROS_PACKAGE_PATH; ``packages``: package name
+    -> folder, for the URIs whose package name is not the one its package.xml
+    declares (example-robot-data's files use package://example-robot-data/ while
+    its package.xml is example_robot_descriptions). ``joint_damping``: what
     becomes of the description's joint damping (URDF <dynamics damping>), which acts
     in the ground truth beside the port's D~: "keep" counts it in the ground truth's
     logged D~ (true_matrices), so that the D errors compare against what acts;
@@ -539,6 +542,7 @@ class DescribedArm:
     base: ArmBase = field(default_factory=ArmBase)
     end_effector: EndEffectorFrame = field(default_factory=EndEffectorFrame)
     package_paths: List[str] = field(default_factory=list)
+    packages: Dict[str, str] = field(default_factory=dict)
     joint_damping: str = "keep"     # JOINT_DAMPING
     locked_joints: Dict[str, float] = field(default_factory=dict)
     nominal_inertia_scale: List[float] = field(default_factory=list)
@@ -564,6 +568,10 @@ class DescribedArm:
                 raise ConfigError(f"robot.package_paths[{i}] = {folder!r} is not a "
                                   "folder; allowed: folders holding ROS packages "
                                   "(package.xml)")
+        for name, folder in self.packages.items():
+            if not Path(folder).is_dir():
+                raise ConfigError(f"robot.packages.{name} = {folder!r} is not a folder; "
+                                  "allowed: the folder package://NAME/ stands for")
 
     def Validate(self, num_bodies: int) -> None:
         """ConfigError naming the first invalid setting (``num_bodies``: the

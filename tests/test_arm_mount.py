@@ -245,3 +245,55 @@ def test_the_descriptions_joint_damping_is_counted_or_zeroed(arm_file, caplog):
         logged[setting] = truth.GetOutputPort("true_matrices").Eval(context)[9:]
     np.testing.assert_allclose(logged["keep"] - logged["zero"], [0.0, 0.03, 0.0])
     assert "joint damping of joint2 is set to zero" in caplog.text
+
+
+def _stl(triangles: np.ndarray, binary: bool) -> bytes:
+    """An STL file of ``triangles`` (k, 3, 3)."""
+    if binary:
+        records = np.zeros(len(triangles), np.dtype([("normal", "<f4", 3),
+                                                     ("vertices", "<f4", (3, 3)),
+                                                     ("attribute", "<u2")]))
+        records["vertices"] = triangles
+        return b"\0" * 80 + np.uint32(len(triangles)).tobytes() + records.tobytes()
+    facets = "".join("facet normal 0 0 0\n outer loop\n" + "".join(
+        f"  vertex {x!r} {y!r} {z!r}\n" for x, y, z in triangle) + " endloop\nendfacet\n"
+        for triangle in triangles.tolist())
+    return f"solid box\n{facets}endsolid box\n".encode()
+
+
+@pytest.mark.parametrize("binary", [True, False])
+def test_stl_collision_meshes_are_read_as_their_convex_hull(arm_file, tmp_path, binary):
+    """A collision mesh given as STL (binary or ASCII, as ROS packages ship them,
+    through a package:// URI whose package name differs from its package.xml's:
+    robot.packages) is converted to OBJ: the clearance potential measures the same
+    distance as with the same box given as a primitive."""
+    from dacph_drake.robots.clearance_potential import BaseClearancePotential
+    from dacph_drake.robots.meshes import stl_triangles
+    half = np.array([0.06, 0.06, 0.1])
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    triangles = corners[np.array(faces)]
+    np.testing.assert_allclose(stl_triangles(_stl(triangles, binary), "box"), triangles,
+                               atol=1e-8)     # binary STL holds single precision
+    folder = tmp_path / "share" / "vendor_arm"
+    (folder / "meshes").mkdir(parents=True)
+    (folder / "meshes" / "link1.stl").write_bytes(_stl(triangles, binary))
+    cylinder = '<geometry><cylinder radius="0.06" length="0.2"/></geometry>'
+    text = arm_file.read_text()
+    boxed = text.replace(cylinder, '<geometry><box size="0.12 0.12 0.2"/></geometry>')
+    meshed = text.replace(cylinder, '<geometry><mesh filename="package://vendor-arm/'
+                                    'meshes/link1.stl"/></geometry>')
+    distances = []
+    for name, urdf_text, packages in (("boxed", boxed, {}),
+                                      ("meshed", meshed, {"vendor-arm": str(folder)})):
+        path = tmp_path / f"{name}.urdf"
+        path.write_text(urdf_text)
+        arm = DescribedArm(description=str(path), base=MOUNT, packages=packages)
+        model = FloatingBaseModel(MakeRobotPlant(arm))
+        potential = BaseClearancePotential(description=arm, model=model, gain=1.0,
+                                           margin=0.1)
+        q = np.array([0.3, 2.2, 0.5])             # the upper arm tilted towards the base
+        distances.append(potential.Evaluate(q, None).min_distance)
+    assert np.isfinite(distances[0]) and distances[1] == pytest.approx(distances[0],
+                                                                       abs=1e-6)

@@ -20,6 +20,7 @@ from pydrake.multibody.tree import (FixedOffsetFrame, PrismaticJoint, RevoluteJo
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.robots.meshes import urdf_with_obj_meshes
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
@@ -81,8 +82,9 @@ def described_arm(description) -> DescribedArm:
 def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
     """Parses the description into ``plant`` (not finalized): a shipped name, a
     .urdf/.sdf path, a scenario.DescribedArm (the arm mounted on its base, its
-    end-effector frame added, package:// URIs resolved through its package_paths
-    and ROS_PACKAGE_PATH), or a planar RobotParams through planar_arm_urdf. Each
+    end-effector frame added, package:// URIs resolved through its package_paths,
+    packages and ROS_PACKAGE_PATH, STL meshes read as OBJ: robots.meshes), or a
+    planar RobotParams through planar_arm_urdf. Each
     revolute joint the description leaves unactuated is actuated (in its joint
     order; no effort limit); a joint of another kind is refused by name; gravity is
     switched off."""
@@ -97,8 +99,13 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
         parser.package_map().PopulateFromRosPackagePath()
         for folder in arm.package_paths:
             parser.package_map().PopulateFromFolder(str(folder))
+        for name, folder in arm.packages.items():
+            parser.package_map().Add(name, str(folder))
+        converted = (urdf_with_obj_meshes(path, parser.package_map())
+                     if path.suffix == ".urdf" else None)
         try:
-            instances = parser.AddModels(str(path))
+            instances = (parser.AddModels(str(path)) if converted is None
+                         else parser.AddModelsFromString(converted, "urdf"))
             if arm.base.mass > 0:
                 _MountOnBase(plant, instances, arm.base)
         except RuntimeError as e:
@@ -159,16 +166,22 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
 def _LockJoints(plant: MultibodyPlant, locked, path) -> None:
     """Welds, at its position, each joint named in ``locked`` (name: position,
     revolute or prismatic) and every other prismatic joint (at 0): a gripper's
-    fingers and any joint that is not the arm's; a logged note names them.
+    fingers and any joint that is not the arm's; a logged note names them. The
+    description's joint constraints (a gripper's mimic couplers) go with them.
     ConfigError for a name that is not a joint of the description."""
     wanted, welded = dict(locked), []
+    if any(isinstance(plant.get_joint(j), PrismaticJoint) or plant.get_joint(j).name()
+           in wanted for j in plant.GetJointIndices()):
+        for constraint in plant.GetConstraintIds():
+            plant.RemoveConstraint(constraint)
     for index in list(plant.GetJointIndices()):
         joint = plant.get_joint(index)
         revolute, prismatic = (isinstance(joint, RevoluteJoint),
                                isinstance(joint, PrismaticJoint))
         if not (prismatic or (revolute and joint.name() in wanted)):
             continue
-        position = float(wanted.pop(joint.name(), 0.0))
+        name = joint.name()         # the joint object is gone after RemoveJoint
+        position = float(wanted.pop(name, 0.0))
         motion = (RigidTransform(RotationMatrix(AngleAxis(position, joint.revolute_axis())),
                                  np.zeros(3)) if revolute
                   else RigidTransform(position * joint.translation_axis()))
@@ -178,7 +191,7 @@ def _LockJoints(plant: MultibodyPlant, locked, path) -> None:
                 plant.RemoveJointActuator(plant.get_joint_actuator(actuator))
         plant.RemoveJoint(joint)
         plant.WeldFrames(parent, child, motion)
-        welded.append(f"{joint.name()} at {position:g}")
+        welded.append(f"{name} at {position:g}")
     if wanted:
         raise ConfigError(f"robot.locked_joints names {next(iter(wanted))!r}, which is "
                           f"not a revolute or prismatic joint of {path}; allowed: the "
