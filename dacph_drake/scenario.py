@@ -491,6 +491,7 @@ class ClearancePotential:
 
 
 JOINT_DAMPING = ("keep", "zero")               # DescribedArm.joint_damping
+JOINT_LIMITS = ("stop", "ignore")              # DescribedArm.joint_limits
 
 
 @dataclass
@@ -530,14 +531,17 @@ class DescribedArm:
     in the ground truth beside the port's D~: "keep" counts it in the ground truth's
     logged D~ (true_matrices), so that the D errors compare against what acts;
     "zero" removes it (a logged note), as the planar arms have none.
+    ``joint_limits``: the description's joint position limits, which the ground
+    truth does not enforce: "stop" refuses a q0 outside them and stops a run that
+    leaves them with a named reason; "ignore" leaves them unchecked.
     ``locked_joints``: joints welded at a position (name: [rad] or [m]): a
     gripper's and any other joint that is not the arm's. Every prismatic joint is
     locked, at its position here or 0 (a logged note names them).
-    ``nominal_inertia_scale`` is the controller's model error: one factor per body with mass in the
-    description's order (base first; inertial_parameters.InertialParameters), by
-    which the controller's model multiplies that body's mass and rotational inertia
-    (its centre of mass stays); empty: the description's own inertias. Its task:
-    EndEffectorAttitude."""
+    ``nominal_inertia_scale`` is the controller's model error: one factor per body
+    with mass in the description's order (base first;
+    inertial_parameters.InertialParameters), by which the controller's model
+    multiplies that body's mass and rotational inertia (its centre of mass stays);
+    empty: the description's own inertias. Its task: EndEffectorAttitude."""
     description: str = "satellite_6dof"
     base: ArmBase = field(default_factory=ArmBase)
     end_effector: EndEffectorFrame = field(default_factory=EndEffectorFrame)
@@ -545,6 +549,7 @@ class DescribedArm:
     packages: Dict[str, str] = field(default_factory=dict)
     joint_damping: str = "keep"     # JOINT_DAMPING
     locked_joints: Dict[str, float] = field(default_factory=dict)
+    joint_limits: str = "stop"      # JOINT_LIMITS
     nominal_inertia_scale: List[float] = field(default_factory=list)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
 
@@ -552,6 +557,7 @@ class DescribedArm:
         """ConfigError naming the first invalid setting of how the robot is put
         together (base, mount, end effector, package paths), before it is parsed."""
         require_one_of("robot.joint_damping", self.joint_damping, JOINT_DAMPING)
+        require_one_of("robot.joint_limits", self.joint_limits, JOINT_LIMITS)
         for name, position in self.locked_joints.items():
             require_finite_numbers(f"robot.locked_joints.{name}", [position])
         require_nonnegative("robot.base.mass", self.base.mass, "kg")

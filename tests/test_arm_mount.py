@@ -297,3 +297,49 @@ def test_stl_collision_meshes_are_read_as_their_convex_hull(arm_file, tmp_path, 
         distances.append(potential.Evaluate(q, None).min_distance)
     assert np.isfinite(distances[0]) and distances[1] == pytest.approx(distances[0],
                                                                        abs=1e-6)
+
+
+def test_each_parser_warning_prints_once(arm_file, caplog):
+    """Drake's parser warnings (here an unsupported URDF tag on every joint) print
+    once per process, however often the description is parsed (ground truth,
+    controller's model, clearance potential, a sweep's trials)."""
+    from dacph_drake.controllers import build_closed_loop
+    from dacph_drake.scenario import satellite_3dof_scenario
+    tagged = arm_file.with_name("tagged.urdf")
+    tagged.write_text(arm_file.read_text().replace(
+        '<joint name="joint2" type="continuous">',
+        '<joint name="joint2" type="continuous"><safety_controller k_velocity="1"/>'))
+    scenario = satellite_3dof_scenario()
+    scenario.robot.description, scenario.robot.base = str(tagged), MOUNT
+    with caplog.at_level("WARNING", logger="drake"):
+        for _ in range(2):
+            build_closed_loop("dac", scenario)
+    warnings = [r for r in caplog.records if "safety_controller" in r.getMessage()]
+    assert len(warnings) == 1, [r.getMessage() for r in warnings]
+
+
+def test_joint_limits_stop_a_run_by_name(arm_file):
+    """The description's position limits, which the ground truth does not enforce:
+    a run that leaves them stops with the joint named (robot.joint_limits "stop"),
+    a q0 outside them is refused; "ignore" runs on."""
+    from dacph_drake.loop.simulate import simulate
+    from dacph_drake.scenario import satellite_3dof_scenario
+    limited = arm_file.with_name("limited.urdf")
+    limited.write_text(arm_file.read_text().replace(
+        '<joint name="joint2" type="continuous">',
+        '<joint name="joint2" type="revolute"><limit lower="-0.85" upper="-0.75" '
+        'effort="100" velocity="2"/>'))
+    scenario = satellite_3dof_scenario()
+    scenario.robot.description, scenario.robot.base = str(limited), MOUNT
+    stopped = simulate(scenario, "model-based", duration=1.0)
+    assert stopped.status == "diverged" and stopped.reason.startswith(
+        "joint limit: joint 'joint2' at "), stopped.reason
+    assert "beyond its limits [-0.8500, -0.7500] rad" in stopped.reason
+    scenario.robot.joint_limits = "ignore"
+    assert simulate(scenario, "model-based", duration=1.0).status == "ok"
+    scenario.robot.joint_limits = "stop"
+    scenario.q0 = [0.3, -0.9, 1.6]
+    with pytest.raises(ConfigError, match=r"q0 = \[0.3, -0.9, 1.6\]: joint 'joint2' at "
+                                          r"-0.9000 rad beyond .* robot.joint_limits: "
+                                          r"ignore"):
+        simulate(scenario, "model-based", duration=0.1)

@@ -93,6 +93,7 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     plant_context = plant.GetMyContextFromRoot(context)
     coordinates = ArmCoordinates.FromPlant(plant)
     clearance = loop.robot.Clearance()
+    limits = loop.robot.LimitViolation()
 
     def check(t: float):
         """The reason to stop at time t, or None: a non-finite state, a joint rate
@@ -104,6 +105,9 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
         _, q, base_velocity, qdot = coordinates.Split(x)
         if max(np.max(np.abs(base_velocity)), np.max(np.abs(qdot))) > MAX_JOINT_RATE:
             return f"runaway: a rate exceeded {MAX_JOINT_RATE} rad/s at t = {t:.4f} s"
+        beyond = limits(q) if limits is not None else None
+        if beyond:
+            return f"joint limit: {beyond} at t = {t:.4f} s"
         rho = clearance(q) if clearance is not None else np.inf
         if rho <= 0:
             return (f"collision: a link touched the base at t = {t:.4f} s (clearance "

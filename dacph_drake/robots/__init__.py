@@ -43,6 +43,10 @@ class Robot(Protocol):
         input chi) and, with ``identify``, an InertialIdentifier feeding it, into
         the controller's builder; returns the named systems."""
 
+    def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
+        """q -> why the joints are beyond the robot's position limits (or None),
+        for the run's monitor; None where the robot has no limits to check."""
+
     def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
         """q -> the ground truth's link-base clearance [m] for the run's monitor,
         or None where the ground truth has no such measure."""

@@ -8,6 +8,7 @@ from typing import Dict
 
 import numpy as np
 
+from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import AddRobotFromDescription, MakeRobotPlant
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
@@ -51,7 +52,39 @@ class DescribedRobot:
                               phases=self.scenario.phases)
 
     def RequireRunnableStart(self) -> None:
-        """Nothing checked yet at q0 (the reliability issue's clearance check)."""
+        """q0 within the description's joint limits (robot.joint_limits "stop");
+        the clearance at q0 is not checked yet (the reliability issue)."""
+        violation = self.LimitViolation()
+        reason = violation(np.asarray(self.scenario.q0, float)) if violation else None
+        if reason:
+            raise ConfigError(f"q0 = {list(self.scenario.q0)}: {reason}; allowed: a q0 "
+                              "within the limits, or robot.joint_limits: ignore")
+
+    def LimitViolation(self):
+        """With robot.joint_limits "stop" and finite limits: q -> "joint NAME at X
+        rad beyond [LOWER, UPPER] rad" for the first joint out of its limits, or
+        None."""
+        if self.scenario.robot.joint_limits != "stop":
+            return None
+        plant, coordinates = self.model.plant, self.model.coordinates
+        joints = {plant.get_joint(j).position_start(): plant.get_joint(j)
+                  for j in plant.GetJointIndices()
+                  if plant.get_joint(j).num_positions() == 1}
+        arm = [joints[int(i)] for i in coordinates.joint_q]
+        names = [joint.name() for joint in arm]
+        lower = np.array([joint.position_lower_limits()[0] for joint in arm])
+        upper = np.array([joint.position_upper_limits()[0] for joint in arm])
+        if not (np.any(np.isfinite(lower)) or np.any(np.isfinite(upper))):
+            return None
+
+        def violation(q):
+            outside = np.flatnonzero((q < lower) | (q > upper))
+            if not len(outside):
+                return None
+            k = outside[0]
+            return (f"joint {names[k]!r} at {q[k]:.4f} rad beyond its limits "
+                    f"[{lower[k]:.4f}, {upper[k]:.4f}] rad")
+        return violation
 
     def GainRuleRates(self):
         """K_d = damping_rate M(q): the LHS rate lambda_max(K_d) / inf

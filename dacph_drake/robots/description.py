@@ -26,6 +26,27 @@ from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+class _EachWarningOnce(logging.Filter):
+    """Passes each distinct message once per process: a run parses its description
+    for the ground truth, the controller's model and the clearance potential (and a
+    sweep for every trial), so each of Drake's parser warnings would otherwise
+    print three times or more."""
+
+    def __init__(self):
+        super().__init__()
+        self._seen = set()
+
+    def filter(self, record) -> bool:
+        message = record.getMessage()
+        if message in self._seen:
+            return False
+        self._seen.add(message)
+        return True
+
+
+logging.getLogger("drake").addFilter(_EachWarningOnce())
 # scripts/make_spatial_models.py writes them.
 SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
                   "satellite_6dof": MODELS / "satellite_6dof.urdf"}

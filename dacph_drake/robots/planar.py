@@ -96,6 +96,9 @@ class PlanarRobot:
         return {self.lhs_name: lhs, **({"inertial_identifier": identifier}
                                        if identify else {})}
 
+    def LimitViolation(self):
+        return None                 # the planar arm's joints turn freely
+
     def Clearance(self):
         return BaseRepulsionPotential(self.scenario.robot.truth,
                                       self.scenario.robot.potential).MinClearance
