@@ -492,6 +492,7 @@ class ClearancePotential:
 
 JOINT_DAMPING = ("keep", "zero")               # DescribedArm.joint_damping
 JOINT_LIMITS = ("stop", "ignore")              # DescribedArm.joint_limits
+EFFORT_LIMITS = ("saturate", "ignore")         # DescribedArm.effort_limits
 
 
 @dataclass
@@ -534,6 +535,10 @@ class DescribedArm:
     ``joint_limits``: the description's joint position limits, which the ground
     truth does not enforce: "stop" refuses a q0 outside them and stops a run that
     leaves them with a named reason; "ignore" leaves them unchecked.
+    ``effort_limits``: the URDF's joint effort limits (<limit effort>): "saturate"
+    clips each actuator's command u_j to them in the ground truth and logs where it
+    did (the log ``saturated``, the metric ``effort_saturated_share``); "ignore"
+    leaves u as the controller sent it.
     ``locked_joints``: joints welded at a position (name: [rad] or [m]): a
     gripper's and any other joint that is not the arm's. Every prismatic joint is
     locked, at its position here or 0 (a logged note names them).
@@ -550,6 +555,7 @@ class DescribedArm:
     joint_damping: str = "keep"     # JOINT_DAMPING
     locked_joints: Dict[str, float] = field(default_factory=dict)
     joint_limits: str = "stop"      # JOINT_LIMITS
+    effort_limits: str = "saturate"  # EFFORT_LIMITS
     nominal_inertia_scale: List[float] = field(default_factory=list)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
 
@@ -558,6 +564,7 @@ class DescribedArm:
         together (base, mount, end effector, package paths), before it is parsed."""
         require_one_of("robot.joint_damping", self.joint_damping, JOINT_DAMPING)
         require_one_of("robot.joint_limits", self.joint_limits, JOINT_LIMITS)
+        require_one_of("robot.effort_limits", self.effort_limits, EFFORT_LIMITS)
         for name, position in self.locked_joints.items():
             require_finite_numbers(f"robot.locked_joints.{name}", [position])
         require_nonnegative("robot.base.mass", self.base.mass, "kg")

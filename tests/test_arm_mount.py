@@ -343,3 +343,30 @@ def test_joint_limits_stop_a_run_by_name(arm_file):
                                           r"-0.9000 rad beyond .* robot.joint_limits: "
                                           r"ignore"):
         simulate(scenario, "model-based", duration=0.1)
+
+
+def test_effort_limits_saturate_the_command_and_are_reported(arm_file):
+    """A URDF's <limit effort> clips the actuator's command u in the ground truth
+    (robot.effort_limits "saturate"), logged per joint (``saturated``) and reported
+    (effort_saturated_share); "ignore" leaves u as sent. The 0.3 rad start asks
+    joint 2 for far more than 0.2 N m."""
+    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.simulate import simulate
+    from dacph_drake.scenario import satellite_3dof_scenario
+    limited = arm_file.with_name("effort.urdf")
+    limited.write_text(arm_file.read_text().replace(
+        '<joint name="joint2" type="continuous">',
+        '<joint name="joint2" type="continuous"><limit effort="0.2" velocity="2"/>'))
+    scenario = satellite_3dof_scenario()
+    scenario.robot.description, scenario.robot.base = str(limited), MOUNT
+    runs = {}
+    for setting in ("saturate", "ignore"):
+        scenario.robot.effort_limits = setting
+        result = simulate(scenario, "model-based", duration=0.3)
+        runs[setting] = result.logs, run_metrics(result.logs, scenario)
+    logs, metrics = runs["saturate"]
+    assert np.any(np.abs(logs["u"][:, 1]) > 0.2)           # asked for more ...
+    assert np.all(logs["saturated"][np.abs(logs["u"][:, 1]) > 0.2, 1] == 1.0)
+    assert metrics["effort_saturated_share"] > 0.0          # ... and clipped, reported
+    assert not runs["ignore"][0]["saturated"].any()
+    assert runs["ignore"][1]["effort_saturated_share"] == 0.0

@@ -253,3 +253,12 @@ def joint_damping(plant: MultibodyPlant, joint_v) -> np.ndarray:
                    for j in plant.GetJointIndices()
                    if plant.get_joint(j).num_velocities() == 1}
     return np.array([by_velocity[int(v)].default_damping() for v in joint_v])
+
+
+def effort_limits(plant: MultibodyPlant, joint_v) -> np.ndarray:
+    """The effort limit [N m] of the actuator of each joint whose velocity is in
+    ``joint_v`` (inf where it has none)."""
+    by_velocity = {plant.get_joint_actuator(a).joint().velocity_start():
+                   plant.get_joint_actuator(a).effort_limit()
+                   for a in plant.GetJointActuatorIndices()}
+    return np.array([by_velocity.get(int(v), np.inf) for v in joint_v])

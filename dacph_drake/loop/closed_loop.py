@@ -104,10 +104,10 @@ def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> Close
         port = controller.get_input_port(i)
         builder.Connect(splitter.GetOutputPort(port.get_name()), port)
     builder.Connect(controller.GetOutputPort("u"), truth.GetInputPort("u"))
-    logged = [("state", plant.get_state_output_port()),
-              ("tau", truth.GetOutputPort("tau")),
-              ("true_matrices", truth.GetOutputPort("true_matrices")),
-              ("disturbance", disturbance.GetOutputPort("disturbance"))]
+    logged = [("state", plant.get_state_output_port())]
+    logged += [(truth.get_output_port(i).get_name(), truth.get_output_port(i))
+               for i in range(truth.num_output_ports())]      # tau, true_matrices, ...
+    logged += [("disturbance", disturbance.GetOutputPort("disturbance"))]
     logged += [(controller.get_output_port(i).get_name(), controller.get_output_port(i))
                for i in range(controller.num_output_ports())]
     for signal, port in logged:

@@ -163,7 +163,11 @@ class DescribedRobot:
                                            if settled.any() else nan),
             "min_clearance": (float(np.min(clearance)) if np.all(np.isfinite(clearance))
                               and len(clearance) else nan),
-            "max_momentum": momentum}
+            "max_momentum": momentum,
+            # Samples where some actuator's command was clipped to its effort limit.
+            "effort_saturated_share": (float(np.mean(np.any(logs["saturated"] > 0.5,
+                                                            axis=1)))
+                                       if "saturated" in logs and len(t) else nan)}
 
     def TotalMass(self) -> float:
         plant = MakeRobotPlant(self.scenario.robot)

@@ -8,7 +8,6 @@ import logging
 from pathlib import Path
 
 import numpy as np
-
 from pydrake.geometry import Box, Role, SceneGraph
 from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
@@ -109,6 +108,7 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
     revolute joint the description leaves unactuated is actuated (in its joint
     order; no effort limit); a joint of another kind is refused by name; gravity is
     switched off."""
+    efforts = {}
     if isinstance(name_or_path, RobotParams):
         name_or_path.Validate()
         Parser(plant).AddModelsFromString(planar_arm_urdf(name_or_path), "urdf")
@@ -124,6 +124,8 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
             parser.package_map().Add(name, str(folder))
         converted = (urdf_with_obj_meshes(path, parser.package_map())
                      if path.suffix == ".urdf" else None)
+        efforts = (_UrdfEffortLimits(path) if path.suffix == ".urdf"
+                   and arm.effort_limits == "saturate" else {})
         try:
             instances = (parser.AddModels(str(path)) if converted is None
                          else parser.AddModelsFromString(converted, "urdf"))
@@ -149,7 +151,8 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
                 for i in plant.GetJointActuatorIndices()}     # by the file's transmissions
     for joint in joints:
         if joint.index() not in actuated:
-            plant.AddJointActuator(f"tau_{joint.name()}", joint)
+            plant.AddJointActuator(f"tau_{joint.name()}", joint,
+                                   efforts.get(joint.name(), np.inf))
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
     if not isinstance(name_or_path, RobotParams):
         arm = described_arm(name_or_path)
@@ -182,6 +185,21 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
                                      [0.75, 0.75, 0.8, 1.0])
     plant.WeldFrames(body.body_frame(), root.body_frame(), RigidTransform(
         RollPitchYaw(base.mount[3:]), base.mount[:3]))
+
+
+def _UrdfEffortLimits(path: Path) -> dict:
+    """Joint name -> the URDF's <limit effort> [N m] (joints with a positive one)."""
+    import xml.etree.ElementTree as ElementTree
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError as e:
+        raise ConfigError(f"{path}: {e}") from e
+    limits = {}
+    for joint in root.iter("joint"):
+        limit = joint.find("limit")
+        if limit is not None and float(limit.get("effort", "0") or 0) > 0:
+            limits[joint.get("name")] = float(limit.get("effort"))
+    return limits
 
 
 def _LockJoints(plant: MultibodyPlant, locked, path) -> None:

@@ -5,7 +5,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.loop import disturbance, true_matrices
-from dacph_drake.dynamics.plant import ArmCoordinates, joint_damping
+from dacph_drake.dynamics.plant import ArmCoordinates, effort_limits, joint_damping
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
@@ -20,6 +20,8 @@ class SpatialTrueRhs(LeafSystem):
 
     Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
     plant's) and time, so it adds no delay; it feeds the plant's actuation input.
+    u is clipped to the actuators' effort limits (scenario.DescribedArm.effort_limits;
+    output ``saturated``: 1 for each joint whose command was clipped).
     Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics, D~
     with the description's joint damping, which the plant applies itself
     (scenario.DescribedArm.joint_damping "keep"; zero otherwise).
@@ -37,9 +39,12 @@ class SpatialTrueRhs(LeafSystem):
         self._nq = plant.num_positions()
         n = coordinates.num_joints
         self._joint_damping = joint_damping(plant, self._v_index)
+        self._effort_limit = effort_limits(plant, self._v_index)
         self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
         self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
             self, n, plant.num_positions() + plant.num_velocities())
+        self.DeclareVectorOutputPort("saturated", n, self._CalcSaturated,
+                                     prerequisites_of_calc={self._u.ticket()})
 
     def _Matrices(self, context):
         """(B~, diag D~, qdot) at the context's time and input state."""
@@ -52,8 +57,13 @@ class SpatialTrueRhs(LeafSystem):
 
     def _CalcTau(self, context, output):
         B, D, qdot = self._Matrices(context)
-        output.SetFromVector(B @ self._u.Eval(context) - D * qdot + disturbance(
+        u = np.clip(self._u.Eval(context), -self._effort_limit, self._effort_limit)
+        output.SetFromVector(B @ u - D * qdot + disturbance(
             context.get_time(), self._disturbance_model.Eval(context)))
+
+    def _CalcSaturated(self, context, output):
+        output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)
+                             .astype(float))
 
     def _CalcMatrices(self, context, output):
         B, D, _ = self._Matrices(context)
