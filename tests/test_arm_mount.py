@@ -33,6 +33,15 @@ def arm_file(tmp_path):
     return path
 
 
+def _joint2_as(arm_file, name: str, opening: str):
+    """A copy of the arm's file named ``name`` whose joint 2 opens with ``opening``
+    (another type, or extra elements) instead of its continuous joint tag."""
+    path = arm_file.with_name(name)
+    path.write_text(arm_file.read_text().replace(
+        '<joint name="joint2" type="continuous">', opening))
+    return path
+
+
 def test_a_mounted_arm_is_the_combined_description(arm_file, rng):
     """The arm alone on a 250 kg, 1 m box at the shoulder's place has the combined
     file's reduced mass matrix at any configuration (the file's base inertia is
@@ -135,11 +144,9 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
     joint, or a locked name that is no joint, is refused naming it."""
     full = FloatingBaseModel(MakeRobotPlant(DescribedArm(description=str(arm_file),
                                                          base=MOUNT)))
-    prismatic = arm_file.with_name("prismatic.urdf")
-    prismatic.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">',
-        '<joint name="joint2" type="prismatic"><limit lower="-0.1" upper="0.1" '
-        'effort="10" velocity="1"/>'))
+    prismatic = _joint2_as(arm_file, "prismatic.urdf",
+                           '<joint name="joint2" type="prismatic"><limit lower="-0.1" '
+                           'upper="0.1" effort="10" velocity="1"/>')
     with caplog.at_level("WARNING"):
         slid = FloatingBaseModel(MakeRobotPlant(DescribedArm(description=str(prismatic),
                                                              base=MOUNT)))
@@ -159,9 +166,7 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
             poses.append(model.plant.GetFrameByName("end_effector").CalcPoseInWorld(
                 context).GetAsMatrix4())
         np.testing.assert_allclose(poses[0], poses[1], atol=1e-12)
-    planar = arm_file.with_name("planar.urdf")
-    planar.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">', '<joint name="joint2" type="planar">'))
+    planar = _joint2_as(arm_file, "planar.urdf", '<joint name="joint2" type="planar">')
     with pytest.raises(ConfigError, match=r"joint 'joint2' is a .* joint; allowed: "
                                           r"revolute joints"):
         MakeRobotPlant(DescribedArm(description=str(planar), base=MOUNT))
@@ -220,10 +225,8 @@ def test_the_descriptions_joint_damping_is_counted_or_zeroed(arm_file, caplog):
     with a note."""
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.scenario import satellite_3dof_scenario
-    damped = arm_file.with_name("damped.urdf")
-    damped.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">',
-        '<joint name="joint2" type="continuous"><dynamics damping="0.03"/>'))
+    damped = _joint2_as(arm_file, "damped.urdf", '<joint name="joint2" '
+                        'type="continuous"><dynamics damping="0.03"/>')
     logged = {}
     for setting in ("keep", "zero"):
         scenario = satellite_3dof_scenario()
@@ -305,10 +308,8 @@ def test_each_parser_warning_prints_once(arm_file, caplog):
     controller's model, clearance potential, a sweep's trials)."""
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.scenario import satellite_3dof_scenario
-    tagged = arm_file.with_name("tagged.urdf")
-    tagged.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">',
-        '<joint name="joint2" type="continuous"><safety_controller k_velocity="1"/>'))
+    tagged = _joint2_as(arm_file, "tagged.urdf", '<joint name="joint2" '
+                        'type="continuous"><safety_controller k_velocity="1"/>')
     scenario = satellite_3dof_scenario()
     scenario.robot.description, scenario.robot.base = str(tagged), MOUNT
     with caplog.at_level("WARNING", logger="drake"):
@@ -324,11 +325,9 @@ def test_joint_limits_stop_a_run_by_name(arm_file):
     a q0 outside them is refused; "ignore" runs on."""
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import satellite_3dof_scenario
-    limited = arm_file.with_name("limited.urdf")
-    limited.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">',
-        '<joint name="joint2" type="revolute"><limit lower="-0.85" upper="-0.75" '
-        'effort="100" velocity="2"/>'))
+    limited = _joint2_as(arm_file, "limited.urdf",
+                         '<joint name="joint2" type="revolute"><limit lower="-0.85" '
+                         'upper="-0.75" effort="100" velocity="2"/>')
     scenario = satellite_3dof_scenario()
     scenario.robot.description, scenario.robot.base = str(limited), MOUNT
     stopped = simulate(scenario, "model-based", duration=1.0)
@@ -353,10 +352,8 @@ def test_effort_limits_saturate_the_command_and_are_reported(arm_file):
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import satellite_3dof_scenario
-    limited = arm_file.with_name("effort.urdf")
-    limited.write_text(arm_file.read_text().replace(
-        '<joint name="joint2" type="continuous">',
-        '<joint name="joint2" type="continuous"><limit effort="0.2" velocity="2"/>'))
+    limited = _joint2_as(arm_file, "effort.urdf", '<joint name="joint2" '
+                         'type="continuous"><limit effort="0.2" velocity="2"/>')
     scenario = satellite_3dof_scenario()
     scenario.robot.description, scenario.robot.base = str(limited), MOUNT
     runs = {}
