@@ -33,7 +33,7 @@ REGISTRY = {
                       "DAC-pH", "C0", "-"),
     "dac-nominal": Controller("dacph_drake.controllers.dac:build_dac_nominal_diagram",
                               "DAC-pH with the learner off (the learning ablation)",
-                              "dac-nominal", "C2", ":"),
+                              "dac-nominal", "C4", ":"),
     "model-based": Controller("dacph_drake.controllers.model_based:"
                               "build_model_based_diagram",
                               "the LHS controller with u = B0^-1 (tau_c^r + D0 qdot)",
