@@ -566,7 +566,7 @@ class DescribedArm:
         require_one_of("robot.joint_limits", self.joint_limits, JOINT_LIMITS)
         require_one_of("robot.effort_limits", self.effort_limits, EFFORT_LIMITS)
         for name, position in self.locked_joints.items():
-            require_finite_numbers(f"robot.locked_joints.{name}", [position])
+            require_finite_numbers(f"robot.locked_joints.{name}", position)
         require_nonnegative("robot.base.mass", self.base.mass, "kg")
         for name, values, count in (("base.size", self.base.size, 3),
                                     ("base.mount", self.base.mount, 6),

@@ -183,6 +183,14 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
      r"robot.base.mount has 3 entries; allowed: 6"),
     (dict(package_paths=["/no/such/folder"]), r"robot.package_paths\[0\] = "),
     (dict(joint_damping="ignore"), r"robot.joint_damping = 'ignore'; allowed: keep, zero"),
+    (dict(joint_limits="clip"), r"robot.joint_limits = 'clip'; allowed: stop, ignore"),
+    (dict(effort_limits="scale"), r"robot.effort_limits = 'scale'; allowed: saturate, "
+                                  r"ignore"),
+    (dict(packages={"my_arm": "/no/such/folder"}), r"robot.packages.my_arm = "),
+    (dict(locked_joints={"joint2": float("nan")}),
+     r"robot.locked_joints.joint2 = nan is not finite"),
+    (dict(end_effector=EndEffectorFrame("link3", [0.1, 0.0])),
+     r"robot.end_effector.offset has 2 entries; allowed: 3"),
 ])
 def test_bad_assembly_settings_are_named(change, message):
     from dacph_drake.robots import robot_of
