@@ -4,6 +4,7 @@ the free base) tracking its end effector's 3D attitude
 (description.py), the controller's model of the same description with its
 inertias scaled (floating_model.FloatingBaseModel), the clearance potential from
 its collision geometry, and the AttitudeController."""
+import functools
 from typing import Dict
 
 import numpy as np
@@ -43,6 +44,12 @@ class DescribedRobot:
         if arm.nominal_inertia_scale:
             self.model.SetInertialParameters(self.model.inertial_parameters * np.repeat(
                 arm.nominal_inertia_scale, PER_BODY))
+
+    @functools.cached_property
+    def truth_plant(self):
+        """The ground truth's plant without geometry (its inertias, not the
+        controller's), parsed once for the metrics that read it."""
+        return MakeRobotPlant(self.scenario.robot)
 
     def AddGroundTruth(self, builder):
         return AddRobotFromDescription(builder, self.scenario.robot)
@@ -146,7 +153,7 @@ class DescribedRobot:
         t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
         settled = t >= SETTLING_TIME
         clearance = logs["attitude_log"][:, layout.clearance]
-        plant = MakeRobotPlant(self.scenario.robot)
+        plant = self.truth_plant
         context = plant.CreateDefaultContext()
         momentum = 0.0
         for x in logs["state"]:
@@ -170,9 +177,8 @@ class DescribedRobot:
                                        if "saturated" in logs and len(t) else nan)}
 
     def TotalMass(self) -> float:
-        plant = MakeRobotPlant(self.scenario.robot)
         return float(sum(body.default_mass()
-                         for body in InertialParameters(plant).bodies))
+                         for body in InertialParameters(self.truth_plant).bodies))
 
     def VerifyLhs(self, logs, region_budget: float):
         """The LHS with K_d = damping_rate M and the inertia-scaled boundary layer

@@ -103,10 +103,11 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
     """Parses the description into ``plant`` (not finalized): a shipped name, a
     .urdf/.sdf path, a scenario.DescribedArm (the arm mounted on its base, its
     end-effector frame added, package:// URIs resolved through its package_paths,
-    packages and ROS_PACKAGE_PATH, STL meshes read as OBJ: robots.meshes), or a
-    planar RobotParams through planar_arm_urdf. Each
+    packages and ROS_PACKAGE_PATH, STL meshes read as OBJ: robots.meshes, its
+    locked joints welded), or a planar RobotParams through planar_arm_urdf. Each
     revolute joint the description leaves unactuated is actuated (in its joint
-    order; no effort limit); a joint of another kind is refused by name; gravity is
+    order, with the URDF's effort limit when robot.effort_limits is "saturate",
+    else none); a moving joint of another kind is refused by name; gravity is
     switched off."""
     efforts = {}
     if isinstance(name_or_path, RobotParams):
