@@ -10,7 +10,7 @@ import pytest
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import (MODELS, AddRobotFromDescription,
-                                            MakeRobotPlant)
+                                            MakeRobotPlant, ParsedDescription)
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
 
 MOUNT = ArmBase(mass=250.0, size=[1.0, 1.0, 1.0], mount=[0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
@@ -302,7 +302,7 @@ def test_stl_collision_meshes_are_read_as_their_convex_hull(arm_file, tmp_path, 
         path.write_text(urdf_text)
         arm = DescribedArm(description=str(path), base=MOUNT, packages=packages)
         model = FloatingBaseModel(MakeRobotPlant(arm))
-        potential = BaseClearancePotential(description=arm, model=model, gain=1.0,
+        potential = BaseClearancePotential(parsed=ParsedDescription(arm), model=model, gain=1.0,
                                            margin=0.1)
         q = np.array([0.3, 2.2, 0.5])             # the upper arm tilted towards the base
         distances.append(potential.Evaluate(q, None).min_distance)

@@ -10,7 +10,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Sine
 
 from dacph_drake.robots.description import (SPATIAL_ROBOTS, AddRobotFromDescription,
-                                     MakeRobotPlant)
+                                     MakeRobotPlant, ParsedDescription)
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.plant import MakeArmPlant
@@ -369,7 +369,7 @@ def test_clearance_potential_gradient_matches_the_motion(rng):
     from pydrake.math import RotationMatrix
     from dacph_drake.robots.clearance_potential import BaseClearancePotential
     model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
-    potential = BaseClearancePotential(description="satellite_6dof", model=model,
+    potential = BaseClearancePotential(parsed=ParsedDescription("satellite_6dof"), model=model,
                                        gain=1.0, margin=0.1)
     q = np.array([0.3, -0.8, 2.1, 0.2, 0.6, -0.3])        # 4.4 cm from the base
     base = np.array([1.0, 0, 0, 0, 0.1, -0.2, 0.3])

@@ -103,6 +103,7 @@ def test_the_clearance_potential_keeps_the_arm_off_the_base():
     0.1 m margin, and the attitude error is the same (the potential acts in the
     task's null space)."""
     from dacph_drake.robots.clearance_potential import BaseClearancePotential
+    from dacph_drake.robots.description import ParsedDescription
     runs = {}
     for gain in (1.0, 0.0):
         scenario = _nominal_6dof(3.0)
@@ -113,8 +114,8 @@ def test_the_clearance_potential_keeps_the_arm_off_the_base():
         simulator.AdvanceTo(scenario.duration)
         context = simulator.get_context()
         states = loop.loggers["state"].FindLog(context).data().T
-        measure = BaseClearancePotential(description=scenario.robot.description, model=loop.model,
-                                         gain=1.0, margin=0.1)
+        measure = BaseClearancePotential(parsed=ParsedDescription(scenario.robot),
+                                         model=loop.model, gain=1.0, margin=0.1)
         joints, base = loop.model.coordinates.joint_q, loop.model.coordinates.base_q
         clearance = np.array([measure.Evaluate(x[joints], x[base]).min_distance
                               for x in states])

@@ -17,10 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
-from pydrake.systems.framework import DiagramBuilder
 
-from dacph_drake.robots.description import PopulateFromDescription
+from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 
 
@@ -32,19 +30,18 @@ class Clearance:
 
 
 class BaseClearancePotential:
-    """U(q) at a base pose for the robot ``description`` (module docstring); its
-    own plant and SceneGraph (with collision geometry), scratch context made once."""
+    """U(q) at a base pose for the robot ``parsed`` (description.ParsedDescription:
+    the plant and SceneGraph the ground truth runs on, queried in contexts of its
+    own with the collision geometry; module docstring), its Jacobians from ``model``
+    (the controller's model: the same bodies by name)."""
 
-    def __init__(self, *, description, model: FloatingBaseModel, gain: float,
-                 margin: float, query_distance: float = 1.0):
-        builder = DiagramBuilder()
-        self._plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
-        PopulateFromDescription(self._plant, description)
-        self._plant.Finalize()
-        _FilterLinksOnTheBase(self._plant, scene_graph)
-        self._context = builder.Build().CreateDefaultContext()
-        self._plant_context = self._plant.GetMyContextFromRoot(self._context)
-        self._inspector = scene_graph.model_inspector()
+    def __init__(self, *, parsed: ParsedDescription, model: FloatingBaseModel,
+                 gain: float, margin: float, query_distance: float = 1.0):
+        self._parsed, self._plant = parsed, parsed.plant
+        self._plant_context, self._scene_graph_context = parsed.ClearanceContexts()
+        _FilterLinksOnTheBase(self._plant, parsed.scene_graph, self._scene_graph_context)
+        self._query = parsed.scene_graph.get_query_output_port()
+        self._inspector = parsed.scene_graph.model_inspector()
         self._model, self._gain, self._margin = model, gain, margin
         self._query_distance = max(query_distance, margin)
         base = self._plant.get_body(next(iter(self._plant.GetFloatingBaseBodies())))
@@ -60,7 +57,8 @@ class BaseClearancePotential:
     def Evaluate(self, q, base_pose) -> Clearance:
         self._plant.SetPositions(self._plant_context,
                                  self._model.FullPositions(q, base_pose))
-        query = self._plant.get_geometry_query_input_port().Eval(self._plant_context)
+        self._parsed.UpdatePoses(self._plant_context, self._scene_graph_context)
+        query = self._query.Eval(self._scene_graph_context)
         pairs = query.ComputeSignedDistancePairwiseClosestPoints(self._query_distance)
         U, gradient, nearest = 0.0, np.zeros(self._model.num_joints), np.inf
         for pair in pairs:
@@ -86,10 +84,10 @@ class BaseClearancePotential:
         return Clearance(U=U, gradient=gradient, min_distance=nearest)
 
 
-def _FilterLinksOnTheBase(plant, scene_graph) -> None:
+def _FilterLinksOnTheBase(plant, scene_graph, context) -> None:
     """Excludes the collision pairs of the base with each body whose joint's parent
     is welded to the base (the bodies Drake leaves unfiltered when the arm's root is
-    a body of its own, welded to the base)."""
+    a body of its own, welded to the base), in the SceneGraph ``context``."""
     base = plant.get_body(next(iter(plant.GetFloatingBaseBodies())))
     welded = {body.index() for body in plant.GetBodiesWeldedTo(base)}
     on_base = [plant.get_joint(j).child_body() for j in plant.GetJointIndices()
@@ -97,7 +95,7 @@ def _FilterLinksOnTheBase(plant, scene_graph) -> None:
                and plant.get_joint(j).child_body().index() not in welded]
     geometries = [g for body in on_base for g in plant.GetCollisionGeometriesForBody(body)]
     if geometries:
-        scene_graph.collision_filter_manager().Apply(
+        scene_graph.collision_filter_manager(context).Apply(
             CollisionFilterDeclaration().ExcludeBetween(
                 GeometrySet(plant.GetCollisionGeometriesForBody(base)),
                 GeometrySet(geometries)))

@@ -1,16 +1,16 @@
 """An arm from a description file (scenario.DescribedArm: URDF/SDF, the root body
 the free base) tracking its end effector's 3D attitude
-(scenario.EndEffectorAttitude): the ground truth parsed from the description
-(description.py), the controller's model of the same description with its
-inertias scaled (floating_model.FloatingBaseModel), the clearance potential from
-its collision geometry, and the AttitudeController."""
-import functools
+(scenario.EndEffectorAttitude): the description parsed once per diagram
+(description.ParsedDescription) into the ground truth's plant, which the
+controller's model evaluates in contexts of its own with its inertias scaled
+(floating_model.FloatingBaseModel) and the clearance potential queries with its
+collision geometry; and the AttitudeController."""
 from typing import Dict
 
 import numpy as np
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.robots.description import AddRobotFromDescription, MakeRobotPlant
+from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
 from dacph_drake.log_layout import AttitudeLog
@@ -37,7 +37,8 @@ class DescribedRobot:
         self.scenario = scenario
         arm = scenario.robot
         arm.ValidateAssembly()
-        self.model = FloatingBaseModel(MakeRobotPlant(arm))
+        self.parsed = ParsedDescription(arm)
+        self.model = FloatingBaseModel(self.parsed.plant)
         self.num_joints = self.model.num_joints
         arm.Validate(len(self.model.parameters.bodies))
         scenario.ValidateShared(self.num_joints)
@@ -45,14 +46,16 @@ class DescribedRobot:
             self.model.SetInertialParameters(self.model.inertial_parameters * np.repeat(
                 arm.nominal_inertia_scale, PER_BODY))
 
-    @functools.cached_property
+    @property
     def truth_plant(self):
-        """The ground truth's plant without geometry (its inertias, not the
-        controller's), parsed once for the metrics that read it."""
-        return MakeRobotPlant(self.scenario.robot)
+        """The ground truth's plant (its default context holds the description's
+        inertias; the controller's model evaluates it with its own)."""
+        return self.parsed.plant
 
     def AddGroundTruth(self, builder):
-        return AddRobotFromDescription(builder, self.scenario.robot)
+        """The parsed plant and its SceneGraph (ParsedDescription.AddTo): the
+        description is parsed once per diagram."""
+        return self.parsed.AddTo(builder)
 
     def MakeTrueRhs(self, plant) -> SpatialTrueRhs:
         return SpatialTrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
@@ -104,7 +107,7 @@ class DescribedRobot:
         0), fed by an InertialIdentifier (scenario.inertia) with ``identify``."""
         scenario, builder, arm = self.scenario, controller.builder, self.scenario.robot
         potential = (BaseClearancePotential(
-            description=arm, model=self.model, gain=arm.potential.gain,
+            parsed=self.parsed, model=self.model, gain=arm.potential.gain,
             margin=arm.potential.margin) if arm.potential.gain > 0 else None)
         lhs = builder.AddNamedSystem(self.lhs_name, AttitudeController(
             model=self.model, reference=scenario.task.reference,

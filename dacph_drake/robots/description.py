@@ -8,14 +8,14 @@ import logging
 from pathlib import Path
 
 import numpy as np
-from pydrake.geometry import Box, Role, SceneGraph
+from pydrake.geometry import (Box, CollisionFilterDeclaration, GeometrySet,
+                             ProximityProperties, Role, SceneGraph)
 from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.multibody.parsing import Parser
-from pydrake.multibody.plant import (AddMultibodyPlantSceneGraph, CoulombFriction,
-                                     MultibodyPlant)
-from pydrake.multibody.tree import (FixedOffsetFrame, PrismaticJoint, RevoluteJoint,
-                                   SpatialInertia)
+from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PrismaticJoint,
+                                   RevoluteJoint, SpatialInertia)
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
@@ -264,22 +264,88 @@ def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path)
                                     RigidTransform(end_effector.offset)))
 
 
-def AddRobotFromDescription(builder: DiagramBuilder, name_or_path,
-                            collision_geometry: bool = False
+class ParsedDescription:
+    """A description parsed once (a shipped name, a path or a scenario.DescribedArm,
+    as PopulateFromDescription reads it): its finalized continuous ``plant``,
+    registered with its own ``scene_graph``, not yet in any diagram. One parse serves
+    a whole closed loop: AddTo puts the pair into the loop's builder as the ground
+    truth, the controller's model evaluates the same plant in contexts of its own
+    (floating_model.FloatingBaseModel; its inertias are context parameters), and the
+    clearance potential queries the collision geometry in its own SceneGraph context
+    (ClearanceContexts). The collision geometry's proximity role is taken off the
+    SceneGraph's model: the ground truth, like the planar one, has no contact (a
+    continuous plant would otherwise compute contact forces from it)."""
+
+    def __init__(self, name_or_path):
+        self.plant, self.scene_graph = MultibodyPlant(time_step=0.0), SceneGraph()
+        self.plant.RegisterAsSourceForSceneGraph(self.scene_graph)
+        PopulateFromDescription(self.plant, name_or_path)
+        self.plant.Finalize()
+        _RequireFreeFloating(self.plant, name_or_path)
+        inspector, source = self.scene_graph.model_inspector(), self.plant.get_source_id()
+        self._proximity = {geometry: ProximityProperties(
+            inspector.GetProximityProperties(geometry))
+            for geometry in inspector.GetAllGeometryIds(Role.kProximity)}
+        for geometry in self._proximity:
+            self.scene_graph.RemoveRole(source, geometry, Role.kProximity)
+        self._added = False
+
+    def AddTo(self, builder: DiagramBuilder) -> "tuple[MultibodyPlant, SceneGraph]":
+        """Adds the plant and its SceneGraph, connected, to ``builder`` (once: a
+        system belongs to one diagram)."""
+        if self._added:
+            raise RuntimeError("a ParsedDescription's plant is already in a diagram; "
+                               "parse the description again for another one")
+        self._added = True
+        plant, scene_graph = self.plant, self.scene_graph
+        builder.AddNamedSystem("plant", plant)
+        builder.AddNamedSystem("scene_graph", scene_graph)
+        builder.Connect(plant.get_geometry_pose_output_port(),
+                        scene_graph.get_source_pose_port(plant.get_source_id()))
+        builder.Connect(scene_graph.get_query_output_port(),
+                        plant.get_geometry_query_input_port())
+        return plant, scene_graph
+
+    def ClearanceContexts(self):
+        """(plant context, SceneGraph context) of the plant and its SceneGraph alone,
+        the collision geometry's proximity role given back in the latter with the
+        filters MultibodyPlant.Finalize declares (none between the bodies a joint
+        connects, none within a group of bodies welded together): set the plant's
+        positions, then UpdatePoses, then query."""
+        plant, context = self.plant, self.scene_graph.CreateDefaultContext()
+        for geometry, properties in self._proximity.items():
+            self.scene_graph.AssignRole(context, plant.get_source_id(), geometry,
+                                        properties)
+
+        def geometries(bodies):
+            return GeometrySet([g for body in bodies
+                                for g in plant.GetCollisionGeometriesForBody(body)])
+        filters = CollisionFilterDeclaration()
+        for index in plant.GetJointIndices():
+            joint = plant.get_joint(index)
+            filters.ExcludeBetween(geometries([joint.parent_body()]),
+                                   geometries([joint.child_body()]))
+        for group in {tuple(sorted(int(b.index()) for b in plant.GetBodiesWeldedTo(
+                plant.get_body(BodyIndex(i))))) for i in range(plant.num_bodies())}:
+            filters.ExcludeWithin(geometries([plant.get_body(BodyIndex(b))
+                                              for b in group]))
+        self.scene_graph.collision_filter_manager(context).Apply(filters)
+        return plant.CreateDefaultContext(), context
+
+    def UpdatePoses(self, plant_context, scene_graph_context) -> None:
+        """The SceneGraph context's geometry poses from the plant context's
+        positions."""
+        self.scene_graph.get_source_pose_port(self.plant.get_source_id()).FixValue(
+            scene_graph_context,
+            self.plant.get_geometry_pose_output_port().Eval(plant_context))
+
+
+def AddRobotFromDescription(builder: DiagramBuilder, name_or_path
                             ) -> "tuple[MultibodyPlant, SceneGraph]":
     """The finalized continuous plant of the description, with its visual geometry
-    registered with a SceneGraph (for Meshcat), added to ``builder``. Its collision
-    geometry is dropped unless ``collision_geometry``: the ground truth, like the
-    planar one, has no contact (a controller's clearance potential queries its own
-    copy, robots.clearance_potential.BaseClearancePotential)."""
-    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
-    PopulateFromDescription(plant, name_or_path)
-    if not collision_geometry:
-        for geometry in scene_graph.model_inspector().GetAllGeometryIds(Role.kProximity):
-            scene_graph.RemoveRole(plant.get_source_id(), geometry, Role.kProximity)
-    plant.Finalize()
-    _RequireFreeFloating(plant, name_or_path)
-    return plant, scene_graph
+    registered with a SceneGraph (for Meshcat), added to ``builder``
+    (ParsedDescription: no contact)."""
+    return ParsedDescription(name_or_path).AddTo(builder)
 
 
 def MakeRobotPlant(name_or_path) -> MultibodyPlant:
