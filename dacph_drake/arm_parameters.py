@@ -123,13 +123,15 @@ def read_yaml(path):
     return raw if raw is not None else {}
 
 
-def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
+def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None,
+                        defaults=None):
     """yaml_load_typed with one-line errors that name the file: malformed YAML (with
     its line and column), a value of the wrong kind (naming the setting), unknown
     keys. Each top-level section in ``noted_defaults`` that the file leaves out is
     named in a logged warning (it takes the schema's default). ``migrate(raw, path)``,
     if given, returns the parsed file with settings of an older layout moved to
-    their current place (or None when there is nothing to move)."""
+    their current place (or None when there is nothing to move). ``defaults``: the
+    schema object whose settings the file's replace (default: the schema's own)."""
     raw = read_yaml(path)
     migrated = migrate(raw, path) if migrate is not None else None
     raw = migrated if migrated is not None else raw
@@ -142,9 +144,9 @@ def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None):
             " or ".join(f"{name}:" for name in missing))
     try:
         if migrated is not None:
-            return yaml_load_typed(schema=schema, data=yaml.dump(migrated,
-                                                             Dumper=_TaggedDumper))
-        return yaml_load_typed(schema=schema, filename=str(path))
+            return yaml_load_typed(schema=schema, data=yaml.dump(
+                migrated, Dumper=_TaggedDumper), defaults=defaults)
+        return yaml_load_typed(schema=schema, filename=str(path), defaults=defaults)
     except (RuntimeError, ValueError, TypeError) as e:
         raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
 

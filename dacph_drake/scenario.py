@@ -4,7 +4,7 @@ their validation and the built-in scenarios; scenario_files reads and writes the
 (YAML with ``pydrake.common.yaml.yaml_load_typed``)."""
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Union
+from typing import Dict, List, Optional, Union
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
@@ -474,6 +474,10 @@ class PlanarArm:
             self.nominal.base.mass *= base
             self.nominal.base.inertia *= base
 
+    def SizedDefaults(self, q0, task) -> Optional["Scenario"]:
+        """None: a planar arm's defaults are Scenario's own (the paper's)."""
+        return None
+
     # The older file layouts that can express a scenario of this robot
     # (scenario_files: a saved run's fingerprint may come from them).
     OLDER_LAYOUTS = ("PlanarLayoutV1",)
@@ -598,6 +602,13 @@ class DescribedArm:
         require_nonnegative("robot.potential.gain", self.potential.gain)
         require_positive("robot.potential.margin", self.potential.margin, "m")
         require_nonnegative("robot.potential.eta", self.potential.eta, "1/s")
+
+    def SizedDefaults(self, q0, task) -> "Scenario":
+        """The scenario whose settings a file naming this robot starts from: every
+        per-joint setting sized to the arm (arm_defaults.arm_scenario; ``q0`` and
+        ``task`` None where the file leaves them out)."""
+        from dacph_drake.arm_defaults import arm_scenario
+        return arm_scenario(self, q0, task)
 
     SAMPLED_SETTINGS = ()           # a description has no link parameters to sample
 

@@ -180,7 +180,8 @@ def load_older_layout(path) -> Optional[Scenario]:
             "!EndEffectorAttitude {reference, gains} and periods:, and the duration "
             "is the phases' end")
     elif any(key in raw for key in PlanarLayoutV1.KEYS) or (
-            isinstance(robot, dict) and not {"truth", "nominal", "potential"} & set(robot)):
+            isinstance(robot, dict) and not getattr(robot, "tag", "")
+            and not {"truth", "nominal", "potential"} & set(robot)):
         layout, note = PlanarLayoutV1, (
             "robot:, nominal_robot:, potential:, lhs: and reference: are now robot: "
             "{truth, nominal, potential} and task: {gains, reference}")
@@ -205,10 +206,27 @@ def load_scenario(path) -> Scenario:
     if not Path(path).is_file():
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
-    scenario = load_older_layout(path) or load_yaml_dataclass(
-        path, Scenario, noted_defaults=("robot",), migrate=move_integration_scheme)
+    scenario = load_older_layout(path) or _load_current_layout(path)
     scenario.Validate()
     return scenario
+
+
+def _load_current_layout(path) -> Scenario:
+    """A file of the current layout, read over its robot's defaults: Scenario's own
+    for a planar arm; for an arm from its description, the settings sized to it
+    (scenario.DescribedArm.SizedDefaults), so that a file naming only the robot
+    and q0 runs."""
+    scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
+                                   migrate=move_integration_scheme)
+    raw = read_yaml(path)
+    given = raw if isinstance(raw, dict) else {}
+    defaults = scenario.robot.SizedDefaults(
+        scenario.q0 if "q0" in given else None,
+        scenario.task if "task" in given else None)
+    if defaults is None:
+        return scenario
+    return load_yaml_dataclass(path, Scenario, migrate=move_integration_scheme,
+                               defaults=defaults)
 
 
 def move_integration_scheme(raw, path):

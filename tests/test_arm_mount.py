@@ -272,38 +272,82 @@ def _stl(triangles: np.ndarray, binary: bool) -> bytes:
     return f"solid box\n{facets}endsolid box\n".encode()
 
 
-@pytest.mark.parametrize("binary", [True, False])
-def test_stl_collision_meshes_are_read_as_their_convex_hull(arm_file, tmp_path, binary):
-    """A collision mesh given as STL (binary or ASCII, as ROS packages ship them,
-    through a package:// URI whose package name differs from its package.xml's:
-    robot.packages) is converted to OBJ: the clearance potential measures the same
+def _dae(half_cm: np.ndarray) -> bytes:
+    """A Collada box in centimetres (<unit meter="0.01">), its six faces a polylist
+    of quads, its geometry's half sizes ``half_cm`` (x, y, z) turned by +90 deg
+    about x and moved by 0 through its node's rotate and translate: the box of half
+    sizes (x, z, y) cm in the file's frame."""
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+                       ) * half_cm
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4),
+             (1, 5, 7, 3)]
+    return f"""<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+ <asset><unit name="centimeter" meter="0.01"/><up_axis>Z_UP</up_axis></asset>
+ <library_geometries><geometry id="box-mesh"><mesh>
+  <source id="box-positions"><float_array id="a" count="24">{" ".join(
+        map(repr, corners.ravel().tolist()))}</float_array></source>
+  <vertices id="box-vertices"><input semantic="POSITION" source="#box-positions"/>
+  </vertices>
+  <polylist count="6"><input semantic="VERTEX" source="#box-vertices" offset="0"/>
+   <vcount>4 4 4 4 4 4</vcount><p>{" ".join(str(i) for quad in quads for i in quad)}</p>
+  </polylist></mesh></geometry></library_geometries>
+ <library_visual_scenes><visual_scene id="scene"><node id="box">
+  <translate>0 0 0</translate><rotate>1 0 0 90</rotate>
+  <instance_geometry url="#box-mesh"/></node></visual_scene></library_visual_scenes>
+ <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+""".encode()
+
+
+@pytest.mark.parametrize("kind", ["binary stl", "ascii stl", "dae"])
+def test_stl_collision_meshes_are_read_as_their_convex_hull(arm_file, tmp_path, kind):
+    """A collision mesh given as STL (binary or ASCII, as ROS packages ship them)
+    or as Collada (.dae, in centimetres, placed by its node's transforms), through a
+    package:// URI whose package name differs from its package.xml's
+    (robot.packages), is converted to OBJ: the clearance potential measures the same
     distance as with the same box given as a primitive."""
     from dacph_drake.robots.clearance_potential import BaseClearancePotential
-    from dacph_drake.robots.meshes import stl_triangles
+    from dacph_drake.robots.meshes import dae_triangles, stl_triangles
     half = np.array([0.06, 0.06, 0.1])
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
     faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
              (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
     triangles = corners[np.array(faces)]
-    np.testing.assert_allclose(stl_triangles(_stl(triangles, binary), "box"), triangles,
-                               atol=1e-8)     # binary STL holds single precision
+    binary = kind == "binary stl"
+    if kind == "dae":
+        data, suffix = _dae(100 * half[[0, 2, 1]]), "dae"
+        read = dae_triangles(data, "box").reshape(-1, 3)
+        assert len(read) == 6 * 2 * 3               # each quad fanned into 2 triangles
+        np.testing.assert_allclose(read.min(axis=0), -half, atol=1e-12)
+        np.testing.assert_allclose(read.max(axis=0), half, atol=1e-12)
+    else:
+        data, suffix = _stl(triangles, binary), "stl"
+        np.testing.assert_allclose(stl_triangles(data, "box"), triangles,
+                                   atol=1e-8)     # binary STL holds single precision
     folder = tmp_path / "share" / "vendor_arm"
     (folder / "meshes").mkdir(parents=True)
-    (folder / "meshes" / "link1.stl").write_bytes(_stl(triangles, binary))
+    (folder / "meshes" / f"link1.{suffix}").write_bytes(data)
     cylinder = '<geometry><cylinder radius="0.06" length="0.2"/></geometry>'
     text = arm_file.read_text()
     boxed = text.replace(cylinder, '<geometry><box size="0.12 0.12 0.2"/></geometry>')
     meshed = text.replace(cylinder, '<geometry><mesh filename="package://vendor-arm/'
-                                    'meshes/link1.stl"/></geometry>')
+                                    f'meshes/link1.{suffix}"/></geometry>')
     distances = []
     for name, urdf_text, packages in (("boxed", boxed, {}),
                                       ("meshed", meshed, {"vendor-arm": str(folder)})):
         path = tmp_path / f"{name}.urdf"
         path.write_text(urdf_text)
         arm = DescribedArm(description=str(path), base=MOUNT, packages=packages)
+        if name == "meshed" and kind == "dae":     # the visual .dae is kept as it is
+            from dacph_drake.robots.description import package_map_of
+            from dacph_drake.robots.meshes import urdf_with_obj_meshes
+            from pydrake.multibody.parsing import PackageMap
+            read = urdf_with_obj_meshes(path, package_map_of(arm, PackageMap()))
+            assert read.count("link1.dae") == 1 and read.count(".obj") == 1
         model = FloatingBaseModel(MakeRobotPlant(arm))
-        potential = BaseClearancePotential(parsed=ParsedDescription(arm), model=model, gain=1.0,
-                                           margin=0.1)
+        potential = BaseClearancePotential(parsed=ParsedDescription(arm), model=model,
+                                           gain=1.0, margin=0.1)
         q = np.array([0.3, 2.2, 0.5])             # the upper arm tilted towards the base
         distances.append(potential.Evaluate(q, None).min_distance)
     assert np.isfinite(distances[0]) and distances[1] == pytest.approx(distances[0],

@@ -300,9 +300,10 @@ def main(argv=None) -> int:
     ver.add_argument("--controller", choices=CONTROLLERS, default="dac",
                      help="the run to verify (one with the RHS integrator; default: dac)")
     ver.add_argument("--region-budget", type=float, default=300.0, metavar="SECONDS",
-                     help="wall time for the region of attraction's sums-of-squares "
-                          "program (it grows steeply with the joints: 2 min for 6); "
-                          "beyond it the check is reported as skipped (default 300)")
+                     help="wall time for a planar arm's region-of-attraction "
+                          "sums-of-squares program (it grows steeply with the links); "
+                          "beyond it the check is reported as skipped (default 300). "
+                          "Spatial arms' certificate takes milliseconds")
     ver.set_defaults(run=_verify)
     swp = commands.add_parser(
         "sweep", help="Monte Carlo sweep over uncertainty (resumes where it stopped)")

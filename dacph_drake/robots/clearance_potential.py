@@ -51,7 +51,7 @@ class BaseClearancePotential:
         """The model plant's frame of the body owning ``geometry`` and the
         geometry's pose in that body."""
         body = self._plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry))
-        return (self._model.plant.GetBodyByName(body.name()).body_frame(),
+        return (self._model.plant.get_body(body.index()).body_frame(),
                 self._inspector.GetPoseInFrame(geometry))
 
     def Evaluate(self, q, base_pose) -> Clearance:

@@ -5,6 +5,8 @@ so nq = nv + 1), every revolute joint of the arm is actuated, gravity is zero.
 The project ships its own descriptions (Drake's bundled models are fetched from the
 internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
 import logging
+import os
+import sysconfig
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +14,7 @@ from pydrake.geometry import (Box, CollisionFilterDeclaration, GeometrySet,
                              ProximityProperties, Role, SceneGraph)
 from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
-from pydrake.multibody.parsing import Parser
+from pydrake.multibody.parsing import PackageMap, Parser
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PrismaticJoint,
                                    RevoluteJoint, SpatialInertia)
@@ -46,22 +48,59 @@ class _EachWarningOnce(logging.Filter):
 
 
 logging.getLogger("drake").addFilter(_EachWarningOnce())
+logging.getLogger(__name__).addFilter(_EachWarningOnce())
 # scripts/make_spatial_models.py writes them.
 SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
                   "satellite_6dof": MODELS / "satellite_6dof.urdf"}
 
 
-def robot_description(name_or_path) -> Path:
-    """The description file of a shipped robot (SPATIAL_ROBOTS) or a path to a
-    .urdf / .sdf file (ConfigError naming what is allowed otherwise)."""
+def robot_description(name_or_path, package_map=None) -> Path:
+    """The description file of a shipped robot (SPATIAL_ROBOTS), a package:// URI
+    resolved through ``package_map`` (package_map_of) or a path to a .urdf / .sdf
+    file (ConfigError naming what is allowed otherwise)."""
     if str(name_or_path) in SPATIAL_ROBOTS:
         return SPATIAL_ROBOTS[str(name_or_path)]
-    path = Path(name_or_path)
+    text = str(name_or_path)
+    if text.startswith("package://"):
+        package, _, rest = text[len("package://"):].partition("/")
+        if package_map is None or not package_map.Contains(package):
+            raise ConfigError(f"robot description {text!r}: unknown package {package!r}; "
+                              "allowed: a package on robot.package_paths, "
+                              "robot.packages, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH, or "
+                              "one installed with pip (e.g. pip install "
+                              "'dacph-drake[robots]' for example-robot-data)")
+        path = Path(package_map.GetPath(package)) / rest
+    else:
+        path = Path(name_or_path)
     if path.suffix not in (".urdf", ".sdf") or not path.is_file():
-        raise ConfigError(f"robot description {str(name_or_path)!r}: no such .urdf or "
-                          f".sdf file; allowed: a file, or one of "
-                          f"{', '.join(SPATIAL_ROBOTS)}")
+        raise ConfigError(f"robot description {text!r}: no such .urdf or .sdf file; "
+                          f"allowed: a file, or one of {', '.join(SPATIAL_ROBOTS)}, or "
+                          "a package:// URI of a file")
     return path
+
+
+def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
+    """``package_map`` with the packages a described arm's package:// URIs may name:
+    robot.packages (name -> folder), the packages under robot.package_paths (their
+    package.xml), those on ROS_PACKAGE_PATH, and the ROS 2 way, the ament index of
+    every prefix on AMENT_PREFIX_PATH and of the prefix pip installs ROS packages
+    into (cmeel's, site-packages/cmeel.prefix: example-robot-data, whose
+    package.xml names itself example_robot_descriptions, is found there as
+    example-robot-data). The first place that names a package wins."""
+    for name, folder in arm.packages.items():
+        package_map.Add(name, str(folder))
+    for folder in arm.package_paths:
+        package_map.PopulateFromFolder(str(folder))
+    package_map.PopulateFromRosPackagePath()
+    prefixes = [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(":") if p]
+    prefixes.append(Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix")
+    for prefix in prefixes:
+        index = prefix / "share" / "ament_index" / "resource_index" / "packages"
+        for entry in (sorted(index.iterdir()) if index.is_dir() else []):
+            if not package_map.Contains(entry.name) and (prefix / "share" / entry.name
+                                                         ).is_dir():
+                package_map.Add(entry.name, str(prefix / "share" / entry.name))
+    return package_map
 
 
 def planar_arm_urdf(robot: RobotParams) -> str:
@@ -116,13 +155,9 @@ def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
         path = "the planar arm's description"
     else:
         arm = described_arm(name_or_path)
-        path = robot_description(arm.description)
         parser = Parser(plant)
-        parser.package_map().PopulateFromRosPackagePath()
-        for folder in arm.package_paths:
-            parser.package_map().PopulateFromFolder(str(folder))
-        for name, folder in arm.packages.items():
-            parser.package_map().Add(name, str(folder))
+        path = robot_description(arm.description,
+                                 package_map_of(arm, parser.package_map()))
         converted = (urdf_with_obj_meshes(path, parser.package_map())
                      if path.suffix == ".urdf" else None)
         efforts = (_UrdfEffortLimits(path) if path.suffix == ".urdf"
@@ -173,6 +208,7 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
     joint of the description moves) welded to it at base.mount."""
     roots = [plant.get_body(b) for instance in instances
              for b in plant.GetBodyIndices(instance)]
+    _DropWorldAnchors(plant, instances)
     children = {plant.get_joint(j).child_body().index() for instance in instances
                 for j in plant.GetJointIndices(instance)}
     root = next(body for body in roots if body.index() not in children)
@@ -186,6 +222,26 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
                                      [0.75, 0.75, 0.8, 1.0])
     plant.WeldFrames(body.body_frame(), root.body_frame(), RigidTransform(
         RollPitchYaw(base.mount[3:]), base.mount[:3]))
+
+
+def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
+    """Removes each weld of the description to the world (a fixed-base arm's file,
+    such as a UR5's world_joint), with a logged note: the arm is mounted on the
+    base instead. ConfigError for a moving joint to the world."""
+    world = plant.world_body().index()
+    for index in [j for instance in instances for j in plant.GetJointIndices(instance)]:
+        joint = plant.get_joint(index)
+        if joint.parent_body().index() != world:
+            continue
+        if joint.num_velocities() > 0:
+            raise ConfigError(f"joint {joint.name()!r} moves the arm against the world "
+                              f"({joint.type_name()}); allowed: a weld to the world "
+                              "(dropped when the arm is mounted on robot.base) or none")
+        name = joint.name()
+        plant.RemoveJoint(joint)
+        logging.getLogger(__name__).warning(
+            "the description's weld %r to the world is dropped: the arm is mounted on "
+            "robot.base", name)
 
 
 def _UrdfEffortLimits(path: Path) -> dict:
@@ -278,6 +334,8 @@ class ParsedDescription:
 
     def __init__(self, name_or_path):
         self.plant, self.scene_graph = MultibodyPlant(time_step=0.0), SceneGraph()
+        self.plant.set_name("plant")        # names SceneGraph's plant_pose port
+        self.scene_graph.set_name("scene_graph")
         self.plant.RegisterAsSourceForSceneGraph(self.scene_graph)
         PopulateFromDescription(self.plant, name_or_path)
         self.plant.Finalize()
@@ -291,17 +349,20 @@ class ParsedDescription:
         self._added = False
 
     def AddTo(self, builder: DiagramBuilder) -> "tuple[MultibodyPlant, SceneGraph]":
-        """Adds the plant and its SceneGraph, connected, to ``builder`` (once: a
-        system belongs to one diagram)."""
+        """Adds the plant and its SceneGraph, connected as
+        AddMultibodyPlantSceneGraph connects them, to ``builder`` (once: a system
+        belongs to one diagram)."""
         if self._added:
             raise RuntimeError("a ParsedDescription's plant is already in a diagram; "
                                "parse the description again for another one")
         self._added = True
         plant, scene_graph = self.plant, self.scene_graph
-        builder.AddNamedSystem("plant", plant)
-        builder.AddNamedSystem("scene_graph", scene_graph)
+        builder.AddSystem(plant)
+        builder.AddSystem(scene_graph)
         builder.Connect(plant.get_geometry_pose_output_port(),
                         scene_graph.get_source_pose_port(plant.get_source_id()))
+        builder.Connect(plant.get_deformable_body_configuration_output_port(),
+                        scene_graph.get_source_configuration_port(plant.get_source_id()))
         builder.Connect(scene_graph.get_query_output_port(),
                         plant.get_geometry_query_input_port())
         return plant, scene_graph

@@ -1,10 +1,19 @@
 """Meshes as robot packages ship them, for Drake's SceneGraph: a collision mesh must
 be .obj, .vtk or .gltf (SceneGraph takes its convex hull), while URDFs from ROS
-packages (example-robot-data's Panda, Universal Robots' arms) give STL. The rule:
-every STL mesh a URDF names is converted, triangle for triangle, to an OBJ in a
-cache folder (named by the STL's content hash), and the URDF is read with those
-names; the convex hull SceneGraph then takes is the STL's. Other meshes are left as
-they are (their relative paths made absolute file:// URIs)."""
+packages give STL (example-robot-data's Panda, Universal Robots' arms) and Collada
+.dae (Baxter's collision meshes). The rule: every STL mesh a URDF names, and every
+.dae mesh of a <collision>, is converted, triangle for triangle, to an OBJ in a
+cache folder (named by the file's content hash), and the URDF is read with those
+names; the convex hull SceneGraph then takes is the original's. A .dae's triangles
+are its geometries' (triangles, polylist and polygons, fanned) placed by the
+<visual_scene>'s nodes that instance them (matrix, translate, rotate and scale, in
+document order), in metres (<unit meter>); a .dae without a visual scene gives
+its geometries as they are. The file's <up_axis> is not applied: a description's
+meshes are drawn in their link's frame as ROS's tools read them (example-robot-
+data's Borinot base declares Y_UP, an exporter's default, and its flat body lies
+in the link's x-y plane only as written). Visual .dae meshes are left as they are, with their
+materials (Meshcat draws them); other meshes too (their relative paths made
+absolute file:// URIs)."""
 import hashlib
 import re
 import tempfile
@@ -17,18 +26,26 @@ from dacph_drake.errors import ConfigError
 
 CACHE = Path(tempfile.gettempdir()) / "dacph_drake_meshes"
 _MESH = re.compile(r'(<mesh\s[^>]*filename\s*=\s*")([^"]+)(")')
+_COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
 
 
 def urdf_with_obj_meshes(path: Path, package_map) -> Optional[str]:
-    """The URDF text of ``path`` with its STL meshes replaced by converted OBJs and
-    its relative mesh paths made absolute, or None when it names no STL mesh."""
+    """The URDF text of ``path`` with its STL meshes and its collision .dae meshes
+    replaced by converted OBJs and its relative mesh paths made absolute, or None
+    when it names no mesh to convert."""
     text = path.read_text(encoding="utf-8")
-    if not any(name.lower().endswith(".stl") for _, name, _ in _MESH.findall(text)):
+    collision = [match.span() for match in _COLLISION.finditer(text)]
+
+    def converted(match) -> bool:
+        suffix = Path(match.group(2)).suffix.lower()
+        return suffix == ".stl" or (suffix == ".dae" and any(
+            start <= match.start() < end for start, end in collision))
+    if not any(converted(match) for match in _MESH.finditer(text)):
         return None
 
     def replace(match):
         name = match.group(2)
-        if name.lower().endswith(".stl"):
+        if converted(match):
             name = "file://" + str(_ObjOf(_Resolve(name, path, package_map)))
         elif "://" not in name:          # a string's URIs have no folder of their own
             name = "file://" + str((path.parent / name).resolve())
@@ -50,19 +67,21 @@ def _Resolve(name: str, path: Path, package_map) -> Path:
     return path.parent / name
 
 
-def _ObjOf(stl: Path) -> Path:
-    """The cached OBJ of an STL file (ConfigError naming a missing or bad file)."""
+def _ObjOf(mesh: Path) -> Path:
+    """The cached OBJ of an STL or .dae file (ConfigError naming a missing or bad
+    file)."""
     try:
-        data = stl.read_bytes()
+        data = mesh.read_bytes()
     except OSError as e:
-        raise ConfigError(f"mesh {str(stl)!r} cannot be read ({e.strerror})") from e
+        raise ConfigError(f"mesh {str(mesh)!r} cannot be read ({e.strerror})") from e
     obj = CACHE / f"{hashlib.sha256(data).hexdigest()[:20]}.obj"
     if not obj.is_file():
-        triangles = stl_triangles(data, stl)
+        read = dae_triangles if mesh.suffix.lower() == ".dae" else stl_triangles
+        triangles = read(data, mesh)
         CACHE.mkdir(parents=True, exist_ok=True)
         lines = [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in triangles.reshape(-1, 3)]
         lines += [f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}" for k in range(len(triangles))]
-        partial = obj.with_suffix(f".{hashlib.sha256(str(stl).encode()).hexdigest()[:8]}")
+        partial = obj.with_suffix(f".{hashlib.sha256(str(mesh).encode()).hexdigest()[:8]}")
         partial.write_text("\n".join(lines) + "\n")
         partial.replace(obj)                # atomic: concurrent workers agree
     return obj
@@ -82,3 +101,103 @@ def stl_triangles(data: bytes, name) -> np.ndarray:
         raise ConfigError(f"mesh {str(name)!r} is not an STL file; allowed: binary or "
                           "ASCII STL")
     return np.array(vertices, dtype=float).reshape(-1, 3, 3)
+
+
+def dae_triangles(data: bytes, name) -> np.ndarray:
+    """The triangles (k, 3 vertices, xyz) [m] of a Collada file's bytes (module
+    docstring: its rule)."""
+    import xml.etree.ElementTree as ElementTree
+    try:
+        root = ElementTree.fromstring(data)
+    except ElementTree.ParseError as e:
+        raise ConfigError(f"mesh {str(name)!r} is not a Collada file ({e}); allowed: "
+                          "Collada .dae") from e
+    for element in root.iter():                      # drop the namespace
+        element.tag = element.tag.rpartition("}")[2]
+    unit = root.find("asset/unit")
+    scale = float(unit.get("meter", "1")) if unit is not None else 1.0
+    geometries = {g.get("id"): _GeometryTriangles(g) for g in root.iter("geometry")}
+    placed = []
+    scene = root.find("library_visual_scenes/visual_scene")
+    if scene is None:
+        placed = list(geometries.values())
+    else:
+        def visit(node, X):
+            X = X @ _NodeTransform(node)
+            for instance in node.findall("instance_geometry"):
+                triangles = geometries.get(instance.get("url", "").lstrip("#"))
+                if triangles is not None and len(triangles):
+                    points = triangles.reshape(-1, 3) @ X[:3, :3].T + X[:3, 3]
+                    placed.append(points.reshape(-1, 3, 3))
+            for child in node.findall("node"):
+                visit(child, X)
+        for node in scene.findall("node"):
+            visit(node, np.eye(4))
+    if not placed or not sum(len(t) for t in placed):
+        raise ConfigError(f"mesh {str(name)!r} has no triangles; allowed: a Collada "
+                          "file with triangles, polylist or polygons")
+    return np.concatenate(placed) * scale
+
+
+def _GeometryTriangles(geometry) -> np.ndarray:
+    """The triangles of a <geometry>'s <mesh> in its own frame (polygons fanned)."""
+    mesh = geometry.find("mesh")
+    if mesh is None:
+        return np.zeros((0, 3, 3))
+    sources = {s.get("id"): np.array((s.findtext("float_array") or "").split(), float)
+               for s in mesh.findall("source")}
+    vertices = {}
+    for element in mesh.findall("vertices"):
+        for put in element.findall("input"):
+            if put.get("semantic") == "POSITION":
+                vertices[element.get("id")] = sources[put.get("source").lstrip("#")]
+    out = []
+    for primitive in [*mesh.findall("triangles"), *mesh.findall("polylist"),
+                      *mesh.findall("polygons")]:
+        inputs = primitive.findall("input")
+        stride = 1 + max(int(i.get("offset", 0)) for i in inputs)
+        vertex = next(i for i in inputs if i.get("semantic") == "VERTEX")
+        positions = vertices[vertex.get("source").lstrip("#")].reshape(-1, 3)
+        offset = int(vertex.get("offset", 0))
+        lists = [p.text or "" for p in primitive.findall("p")]
+        if primitive.tag == "triangles":
+            counts = None
+        elif primitive.tag == "polylist":
+            counts = np.array((primitive.findtext("vcount") or "").split(), int)
+        else:                                            # polygons: one <p> each
+            counts = np.array([len(text.split()) // stride for text in lists], int)
+        index = np.array(" ".join(lists).split(), int)[offset::stride]
+        if counts is None:
+            out.append(positions[index.reshape(-1, 3)])
+            continue
+        start = 0
+        for count in counts:
+            polygon = index[start:start + count]
+            start += count
+            out += [positions[[polygon[0], polygon[k], polygon[k + 1]]][None]
+                    for k in range(1, count - 1)]
+    return np.concatenate(out) if out else np.zeros((0, 3, 3))
+
+
+def _NodeTransform(node) -> np.ndarray:
+    """The 4x4 transform of a <node>'s matrix, translate, rotate and scale
+    elements, in document order."""
+    X = np.eye(4)
+    for element in node:
+        values = np.array((element.text or "").split(), float)
+        step = np.eye(4)
+        if element.tag == "matrix":
+            step = values.reshape(4, 4)
+        elif element.tag == "translate":
+            step[:3, 3] = values
+        elif element.tag == "scale":
+            step[:3, :3] = np.diag(values)
+        elif element.tag == "rotate":
+            axis, angle = values[:3] / np.linalg.norm(values[:3]), np.radians(values[3])
+            K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]],
+                          [-axis[1], axis[0], 0]])
+            step[:3, :3] = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+        else:
+            continue
+        X = X @ step
+    return X

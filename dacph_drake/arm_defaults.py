@@ -1,0 +1,115 @@
+"""The scenario of an arm from its own description (scenario.DescribedArm) with every
+per-joint setting sized to the arm, so that a scenario naming only the robot, its
+base and q0 runs DAC (scenario files: scenario_files.load_scenario starts from it;
+Python: arm_scenario).
+
+The rule. Two scales per joint j, from the description at q0 and the task's
+reference:
+
+    M_j = M_jj(q0)      the joint's inertia in the reduced model (docs/equations.md
+                        E5-E9: base free, zero momentum) [kg m^2]
+    w   = 2 pi a / T    the reference's peak angular rate (task.reference amplitude
+                        a, at least MIN_AMPLITUDE, period T) [rad/s]; p_j = M_j w, the joint's momentum
+                        turning at that rate [kg m^2/s]; tau_j = M_j w 2 pi / T, its
+                        inertial torque at the reference's peak acceleration [N m]
+
+and the ground truth's RHS of the paper's form (eq. 19, scenario.Uncertainty) sized
+by them, with signs alternating over the joints as the paper's two:
+
+    B0_j = 1,  D0_j = DAMPING_RATE M_j
+    D_offset_j = 0.25 D0_j,  D_linear_j = 0.25 D0_j / p_j,  D_quadratic_j = -+0.1 D0_j / p_j^2
+        (the linear group adds 0.5 D0_j at p_j, the nonlinear one -+0.1 D0_j)
+    B_linear: the paper's 2x2 block [[-0.1, 0], [0.05, 0.15]] on each pair of joints
+        [1/rad];  B_quadratic_j = +-0.1 / p_j^2;  B_q1_squared: the paper's
+        [[0, -0.1], [0.4, 0]] between joints 1 and 2
+    d: lf_offset_j = +-0.3 tau_j, lf_amplitude_j = 0.2 tau_j, lf_frequency_j =
+        0.05 + 0.01 j Hz, hf_amplitude = 0.05 max_j tau_j along hf_direction_j =
+        +-tau_j / max_k tau_k (at the paper's 20 Hz)
+
+The other sections are those of the shipped spatial scenarios (satellite_6dof):
+scenario.SATELLITE_PHASES, described_arm_periods, described_arm_rhs and
+described_arm_learner."""
+from typing import Optional, Sequence
+
+import numpy as np
+
+from dacph_drake.scenario import (SATELLITE_PHASES, DescribedArm, Disturbance,
+                                  EndEffectorAttitude, Phases, Scenario, Uncertainty,
+                                  described_arm_learner, described_arm_periods,
+                                  described_arm_rhs)
+
+DAMPING_RATE = 2.0              # [1/s] D0_j / M_j: a free joint's speed decays over 0.5 s
+MIN_AMPLITUDE = 0.1             # [rad] the amplitude the scales assume for a still reference
+
+
+def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
+                 task: Optional[EndEffectorAttitude] = None) -> Scenario:
+    """The scenario of ``robot`` tracking ``task`` (default EndEffectorAttitude())
+    from ``q0`` (default: every joint at 0, or at the middle of its limits where 0
+    lies outside them), its per-joint settings sized by the module's rule."""
+    from dacph_drake.dynamics.floating_model import FloatingBaseModel
+    from dacph_drake.robots.description import MakeRobotPlant
+    robot.ValidateAssembly()
+    model = FloatingBaseModel(MakeRobotPlant(robot))
+    q0 = np.asarray(rest_configuration(model) if q0 is None else q0, float)
+    task = EndEffectorAttitude() if task is None else task
+    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
+                        phases=Phases(**SATELLITE_PHASES), rhs=described_arm_rhs(),
+                        periods=described_arm_periods(), learner=described_arm_learner())
+    if len(q0) != model.num_joints:
+        return scenario         # Validate names q0's length; nothing to size by
+    reference = task.reference
+    rate = 2 * np.pi * max(reference.amplitude, MIN_AMPLITUDE) / reference.period
+    inertia = np.diag(model.MassMatrix(q0))
+    scenario.uncertainty = sized_uncertainty(inertia, rate)
+    scenario.disturbance = sized_disturbance(inertia * rate * 2 * np.pi / reference.period)
+    return scenario
+
+
+def rest_configuration(model) -> np.ndarray:
+    """Every joint at 0, or at the middle of its position limits where 0 lies
+    outside them."""
+    plant, q = model.plant, np.zeros(model.num_joints)
+    lower = plant.GetPositionLowerLimits()[model.coordinates.joint_q]
+    upper = plant.GetPositionUpperLimits()[model.coordinates.joint_q]
+    outside = (lower > 0) | (upper < 0)
+    q[outside] = 0.5 * (lower[outside] + upper[outside])
+    return q
+
+
+def _alternating(n: int, first: float = 1.0) -> np.ndarray:
+    return first * (-1.0) ** np.arange(n)
+
+
+def sized_uncertainty(inertia: np.ndarray, rate: float) -> Uncertainty:
+    """The ground truth's RHS of joints with inertias ``inertia`` [kg m^2] moving at
+    ``rate`` [rad/s] (module docstring)."""
+    n = len(inertia)
+    D0 = DAMPING_RATE * inertia
+    p = inertia * rate
+    block = np.array([[-0.1, 0.0], [0.05, 0.15]])
+    B_linear = np.zeros((n, n))
+    for k in range(0, n - 1, 2):
+        B_linear[k:k + 2, k:k + 2] = block
+    if n % 2:
+        B_linear[n - 1, n - 1] = block[0, 0]
+    coupling = np.zeros((n, n))
+    coupling[:2, :2] = np.array([[0.0, -0.1], [0.4, 0.0]])[:n, :n]
+    return Uncertainty(
+        B0=[1.0] * n, D0=D0.tolist(), D_offset=(0.25 * D0).tolist(),
+        D_linear=(0.25 * D0 / p).tolist(),
+        D_quadratic=(_alternating(n, -0.1) * D0 / p**2).tolist(),
+        B_linear=B_linear.tolist(), B_quadratic=(_alternating(n, 0.1) / p**2).tolist(),
+        B_q1_squared=coupling.tolist())
+
+
+def sized_disturbance(torque: np.ndarray) -> Disturbance:
+    """d(t) on joints whose inertial torque at the reference's peak acceleration is
+    ``torque`` [N m] (module docstring)."""
+    n, largest = len(torque), float(np.max(torque))
+    return Disturbance(
+        lf_offset=(_alternating(n, 0.3) * torque).tolist(),
+        lf_amplitude=(0.2 * torque).tolist(),
+        lf_frequency=(0.05 + 0.01 * np.arange(n)).tolist(),
+        hf_amplitude=0.05 * largest,
+        hf_direction=(_alternating(n) * torque / largest).tolist())
