@@ -9,9 +9,10 @@ reference:
     M_j = M_jj(q0)      the joint's inertia in the reduced model (docs/equations.md
                         E5-E9: base free, zero momentum) [kg m^2]
     w   = 2 pi a / T    the reference's peak angular rate (task.reference amplitude
-                        a, at least MIN_AMPLITUDE, period T) [rad/s]; p_j = M_j w, the joint's momentum
-                        turning at that rate [kg m^2/s]; tau_j = M_j w 2 pi / T, its
-                        inertial torque at the reference's peak acceleration [N m]
+                        a, at least MIN_AMPLITUDE, period T) [rad/s];
+                        p_j = M_j w, the joint's momentum turning at that rate
+                        [kg m^2/s]; tau_j = M_j w 2 pi / T, its inertial torque at
+                        the reference's peak acceleration [N m]
 
 and the ground truth's RHS of the paper's form (eq. 19, scenario.Uncertainty) sized
 by them, with signs alternating over the joints as the paper's two:

@@ -33,7 +33,7 @@ class BaseClearancePotential:
     """U(q) at a base pose for the robot ``parsed`` (description.ParsedDescription:
     the plant and SceneGraph the ground truth runs on, queried in contexts of its
     own with the collision geometry; module docstring), its Jacobians from ``model``
-    (the controller's model: the same bodies by name)."""
+    (the controller's model of the same description: the same body indices)."""
 
     def __init__(self, *, parsed: ParsedDescription, model: FloatingBaseModel,
                  gain: float, margin: float, query_distance: float = 1.0):
