@@ -460,3 +460,54 @@ def test_the_homogeneous_region_of_attraction_is_the_full_programs(rng):
     s *= np.sqrt(2 * 0.999 * region.rho / np.einsum("ni,ij,nj->n", s, M, s))[:, None]
     Vdot = [-x @ np.einsum("k,kij,j->i", x, Gamma, x) - 20.0 * x @ M @ x for x in s]
     assert max(Vdot) < 0
+
+
+@pytest.mark.parametrize("robot", [*SPATIAL_ROBOTS, "planar 3 links"])
+def test_the_compiled_model_is_drakes(robot, rng):
+    """FloatingBaseModel's compiled kernel (kernels/spatial.py) against Drake at
+    random configurations and base poses: M the Schur complement of CalcMassMatrix
+    (relative 1e-13), dM/dq from Drake's AutoDiff of H (1e-12), the end effector's
+    generalized Jacobian J_m - J_b H_bb^-1 H_bm from CalcJacobianSpatialVelocity
+    (1e-12) and the zero-momentum base velocity (1e-12)."""
+    from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
+    from conftest import three_link_robot
+    plant = (MakeArmPlant(three_link_robot()) if robot.startswith("planar")
+             else MakeRobotPlant(robot))
+    model = FloatingBaseModel(plant)
+    context, ad_plant = plant.CreateDefaultContext(), plant.ToAutoDiffXd()
+    ad_context = ad_plant.CreateDefaultContext()
+    n, b, m = model.num_joints, model.coordinates.base_v, model.coordinates.joint_v
+    selector = np.zeros((plant.num_positions(), n))
+    selector[model.coordinates.joint_q, np.arange(n)] = 1.0
+    end_effector = plant.GetFrameByName("end_effector")
+    for _ in range(5):
+        q, qdot = rng.uniform(-np.pi, np.pi, n), rng.normal(size=n)
+        base = model.coordinates.base_origin + rng.uniform(-1, 1,
+                                                           len(model.coordinates.base_q))
+        if len(base) == 7:
+            base[:4] /= np.linalg.norm(base[:4])
+        ad_plant.SetPositions(ad_context, InitializeAutoDiff(model.FullPositions(q),
+                                                            selector))
+        H_ad = ad_plant.CalcMassMatrix(ad_context)
+        H = ExtractValue(H_ad)
+        N = H.shape[0]
+        dH = ExtractGradient(H_ad.reshape(-1)).reshape(N, N, n).transpose(2, 0, 1)
+        A = np.linalg.solve(H[np.ix_(b, b)], H[np.ix_(b, m)])
+        M = H[np.ix_(m, m)] - H[np.ix_(m, b)] @ A
+        dM = np.array([d[np.ix_(m, m)] - d[np.ix_(m, b)] @ A - A.T @ d[np.ix_(b, m)]
+                       + A.T @ d[np.ix_(b, b)] @ A for d in dH])
+        M_k, dM_k = model.MassMatrixAndDerivatives(q)
+        scale = np.abs(M).max()
+        np.testing.assert_allclose(M_k, M, rtol=0, atol=1e-13 * scale)
+        np.testing.assert_allclose(dM_k, dM, rtol=0, atol=1e-12 * scale)
+        plant.SetPositions(context, model.FullPositions(q, base))
+        H = plant.CalcMassMatrix(context)
+        J = plant.CalcJacobianSpatialVelocity(
+            context, JacobianWrtVariable.kV, end_effector, np.zeros(3),
+            plant.world_frame(), plant.world_frame())
+        A = np.linalg.solve(H[np.ix_(b, b)], H[np.ix_(b, m)])
+        np.testing.assert_allclose(model.GeneralizedJacobian(q, end_effector,
+                                                             base_positions=base),
+                                   J[:, m] - J[:, b] @ A, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(model.BaseVelocity(q, qdot, base), -A @ qdot,
+                                   rtol=0, atol=1e-12 * np.abs(qdot).max())

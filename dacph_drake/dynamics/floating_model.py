@@ -9,40 +9,44 @@ with M the Schur complement of the plant's mass matrix H over the base velocitie
 
     M = H_mm - H_mb H_bb^-1 H_bm,
 
-C' in Christoffel form from dM/dq (AutoDiff of H, closed-form Schur derivative), the
+C' in Christoffel form from dM/dq (closed-form Schur derivative), the
 base velocity implied by zero momentum v_b = -H_bb^-1 H_bm qdot, and the generalized
 Jacobian (GJM) of any frame, J_bar = J_m - J_b H_bb^-1 H_bm. M and C' do not depend on
 the base's pose (the base sits at the plant's default pose here); v_b and the GJM are
 expressed in the world frame at the base pose given.
 
-planar arms keep their closed-form, compiled ReducedOrderModel (reduced_model.py) on
-the fast path; this model is the reference that holds for every robot, and the
-planar model is tested against it."""
+H and dH/dq come from the plant's kinematic tree (kinematic_tree.KinematicTree) by a
+compiled kernel (kernels/spatial.py: composite inertias and their rotation about
+each joint's axis), about 60 us for 6 joints where Drake's AutoDiff of H took 320
+us; tests/test_spatial.py checks them against Drake's CalcMassMatrix and its
+AutoDiff derivatives. Planar arms keep their closed-form, compiled
+ReducedOrderModel (reduced_model.py) on the fast path; this model holds for every
+robot, and the planar model is tested against it."""
 import numpy as np
-from pydrake.autodiffutils import (AutoDiffXd, ExtractGradient, ExtractValue,
-                                   InitializeAutoDiff)
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RotationMatrix
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import JacobianWrtVariable, SpatialInertia_, UnitInertia_
 
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
+from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.kernels import spatial
 
 
 class FloatingBaseModel:
-    """Reduced model of a finalized free-floating ``plant``; one scratch context
-    (double and AutoDiff) made here and reused by every evaluation."""
+    """Reduced model of a finalized free-floating ``plant`` whose moving joints are
+    its free base and revolute joints; a scratch context of the plant holds the
+    inertias it evaluates with."""
 
     def __init__(self, plant: MultibodyPlant):
         self._plant = plant
         self._context = plant.CreateDefaultContext()
-        self._ad_plant = plant.ToAutoDiffXd()
-        self._ad_context = self._ad_plant.CreateDefaultContext()
         self.coordinates = ArmCoordinates.FromPlant(plant)
-        n = self.num_joints
-        self._selector = np.zeros((plant.num_positions(), n))   # d q_full / d q
-        self._selector[self.coordinates.joint_q, np.arange(n)] = 1.0
+        self.tree = KinematicTree.FromPlant(plant)
         self.parameters = InertialParameters(plant)
         self._inertial_parameters = self.parameters.FromContext(self._context)
+        self._inertias = self.tree.Inertias(self._context)
+        self._frames = {}
 
     @property
     def inertial_parameters(self) -> np.ndarray:
@@ -59,15 +63,7 @@ class FloatingBaseModel:
             return
         self._inertial_parameters = pi.copy()
         self.parameters.Apply(self._context, pi)
-        ad_bodies = [self._ad_plant.get_body(body.index()) for body in self.parameters.bodies]
-        for body, inertia in zip(ad_bodies, self.parameters.SpatialInertias(pi)):
-            G = inertia.get_unit_inertia()
-            moments, products = G.get_moments(), G.get_products()
-            ad = [AutoDiffXd(float(x)) for x in (*moments, *products)]
-            body.SetSpatialInertiaInBodyFrame(self._ad_context, SpatialInertia_[AutoDiffXd](
-                AutoDiffXd(inertia.get_mass()),
-                np.array([AutoDiffXd(float(x)) for x in inertia.get_com()]),
-                UnitInertia_[AutoDiffXd](*ad), True))
+        self._inertias = self.tree.Inertias(self._context)
 
     @property
     def num_joints(self) -> int:
@@ -82,33 +78,27 @@ class FloatingBaseModel:
         base joint's own coordinates; default: the origin), ArmCoordinates.Positions."""
         return self.coordinates.Positions(q, base_positions)
 
-    def _Blocks(self, H: np.ndarray):
-        b, m = self.coordinates.base_v, self.coordinates.joint_v
-        return H[np.ix_(b, b)], H[np.ix_(b, m)], H[np.ix_(m, m)]
+    @property
+    def kernel_tree(self) -> tuple:
+        """The tree's arrays in kernels.spatial's argument order, then the inertias."""
+        t = self.tree
+        return (t.base_subspace, t.parent, t.joint, t.X_PF, t.axis, t.X_MC, t.below,
+                t.joint_below, *self._inertias)
+
+    def Evaluate(self, q, derivatives: bool = True):
+        """(M, dM, A = H_bb^-1 H_bm, X (body poses), S (joint motion subspaces)),
+        the base at the identity pose (dM zero unless ``derivatives``)."""
+        return spatial.reduced_model(*self.kernel_tree, np.asarray(q, float),
+                                     derivatives)
 
     def MassMatrix(self, q) -> np.ndarray:
         """M(q) = H_mm - H_mb H_bb^-1 H_bm (n x n)."""
-        self._plant.SetPositions(self._context, self.FullPositions(q))
-        Hbb, Hbm, Hmm = self._Blocks(self._plant.CalcMassMatrix(self._context))
-        return Hmm - Hbm.T @ np.linalg.solve(Hbb, Hbm)
+        return self.Evaluate(q, derivatives=False)[0]
 
     def MassMatrixAndDerivatives(self, q):
-        """(M, dM) with dM[k] = dM/dq_k (n x n x n), from the AutoDiff derivatives of
-        H: dM = dH_mm - dH_mb A - A^T dH_bm + A^T dH_bb A, A = H_bb^-1 H_bm."""
-        n = self.num_joints
-        self._ad_plant.SetPositions(self._ad_context, InitializeAutoDiff(
-            self.FullPositions(q), self._selector))
-        H_ad = self._ad_plant.CalcMassMatrix(self._ad_context)
-        H = ExtractValue(H_ad)
-        N = H.shape[0]
-        dH = ExtractGradient(H_ad.reshape(-1)).reshape(N, N, n).transpose(2, 0, 1)
-        Hbb, Hbm, Hmm = self._Blocks(H)
-        A = np.linalg.solve(Hbb, Hbm)
-        M = Hmm - Hbm.T @ A
-        dM = np.empty((n, n, n))
-        for k in range(n):
-            dbb, dbm, dmm = self._Blocks(dH[k])
-            dM[k] = dmm - dbm.T @ A - A.T @ dbm + A.T @ dbb @ A
+        """(M, dM) with dM[k] = dM/dq_k (n x n x n):
+        dM = dH_mm - dH_mb A - A^T dH_bm + A^T dH_bb A, A = H_bb^-1 H_bm."""
+        M, dM, _, _, _ = self.Evaluate(q)
         return M, dM
 
     def Coriolis(self, q, qdot) -> np.ndarray:
@@ -118,33 +108,57 @@ class FloatingBaseModel:
         return self.MassAndCoriolis(q, qdot)[1]
 
     def MassAndCoriolis(self, q, qdot):
-        """(M(q), C'(q, qdot)) from one AutoDiff evaluation of H."""
-        M, dM = self.MassMatrixAndDerivatives(q)
-        qdot = np.asarray(qdot, float)
-        Mdot = np.tensordot(qdot, dM, axes=(0, 0))       # sum_k dM_ij/dq_k qdot_k
-        second = np.einsum("jik,k->ij", dM, qdot)          # sum_k dM_ik/dq_j qdot_k
-        third = np.einsum("ijk,k->ij", dM, qdot)           # sum_k dM_jk/dq_i qdot_k
-        return M, 0.5 * (Mdot + second - third)
+        """(M(q), C'(q, qdot)) from one evaluation."""
+        M, dM, _, _, _ = self.Evaluate(q)
+        return M, spatial.christoffel(dM, np.asarray(qdot, float))
 
     def Momentum(self, q, qdot) -> np.ndarray:
         """p = M(q) qdot, the port's momentum at zero total momentum."""
         return self.MassMatrix(q) @ np.asarray(qdot, float)
 
+    def _BaseRotation(self, base_positions) -> np.ndarray:
+        """R_WB of the base joint's coordinates (identity for None): a free base's
+        quaternion (qw, qx, qy, qz, ...) or a planar base's angle (x, y, theta)."""
+        if base_positions is None:
+            return np.eye(3)
+        if self.tree.base_subspace.shape[1] == 3:
+            return RotationMatrix.MakeZRotation(float(base_positions[2])).matrix()
+        quaternion = np.asarray(base_positions[:4], float)
+        return RotationMatrix(Quaternion(quaternion / np.linalg.norm(quaternion))
+                              ).matrix()
+
     def BaseVelocity(self, q, qdot, base_positions=None) -> np.ndarray:
         """The base joint's velocities implied by zero momentum,
-        v_b = -H_bb^-1 H_bm qdot, at the base pose given."""
-        self._plant.SetPositions(self._context, self.FullPositions(q, base_positions))
-        Hbb, Hbm, _ = self._Blocks(self._plant.CalcMassMatrix(self._context))
-        return -np.linalg.solve(Hbb, Hbm @ np.asarray(qdot, float))
+        v_b = -H_bb^-1 H_bm qdot, at the base pose given (a free base's omega_W,
+        v_W; a planar base's vx, vy, omega)."""
+        R, Sb = self._BaseRotation(base_positions), self.tree.base_subspace
+        twist = Sb @ (-self.Evaluate(q, derivatives=False)[2] @ np.asarray(qdot, float))
+        twist = np.concatenate([R @ twist[:3], R @ twist[3:]])
+        return Sb.T @ twist
+
+    def FramePose(self, frame, evaluation, base_positions=None) -> np.ndarray:
+        """R_WF (3 x 3) of a plant frame at an Evaluate result, the base at
+        ``base_positions``."""
+        node, X_CF = self.FrameNode(frame)
+        return self._BaseRotation(base_positions) @ evaluation[3][node, :3, :3] @ X_CF[:3, :3]
+
+    def FrameNode(self, frame):
+        """(node, X_CF) of a plant frame in the kinematic tree (cached)."""
+        key = int(frame.index())
+        if key not in self._frames:
+            self._frames[key] = self.tree.Node(frame)
+        return self._frames[key]
 
     def GeneralizedJacobian(self, q, frame, p_FoP_F=np.zeros(3),
-                            base_positions=None) -> np.ndarray:
+                            base_positions=None, evaluation=None) -> np.ndarray:
         """J_bar (6 x n) of point P fixed in ``frame``: [omega; v] of P in the world
-        (Drake's order) = J_bar qdot at zero momentum."""
-        self._plant.SetPositions(self._context, self.FullPositions(q, base_positions))
-        Hbb, Hbm, _ = self._Blocks(self._plant.CalcMassMatrix(self._context))
-        J = self._plant.CalcJacobianSpatialVelocity(
-            self._context, JacobianWrtVariable.kV, frame, p_FoP_F,
-            self._plant.world_frame(), self._plant.world_frame())
-        b, m = self.coordinates.base_v, self.coordinates.joint_v
-        return J[:, m] - J[:, b] @ np.linalg.solve(Hbb, Hbm)
+        (Drake's order) = J_bar qdot at zero momentum. ``evaluation``: this model's
+        Evaluate(q), when the caller has it."""
+        _, _, A, X, S = (self.Evaluate(q, derivatives=False) if evaluation is None
+                         else evaluation)
+        node, X_CF = self.FrameNode(frame)
+        p_W = X[node, :3, :3] @ (X_CF[:3, :3] @ p_FoP_F + X_CF[:3, 3]) + X[node, :3, 3]
+        J = spatial.point_jacobian(self.tree.base_subspace, self.tree.parent,
+                                   self.tree.joint, X, S, A, node, p_W)
+        R = self._BaseRotation(base_positions)
+        return np.vstack([R @ J[:3], R @ J[3:]])

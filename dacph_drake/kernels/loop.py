@@ -88,20 +88,44 @@ def true_torque(t, x, indices, u, disturbance_model, packed):
     o += N * N * (1 + 2 * R)
     ranges = packed[o:o + R * n].reshape(R, n)
     o += R * n
-    B0, D0, D_offset, D_linear = (packed[o:o + n], packed[o + n:o + 2 * n],
-                                  packed[o + 2 * n:o + 3 * n], packed[o + 3 * n:o + 4 * n])
-    o += 4 * n
+    p = joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges)
+    return _packed_torque(t, q, p, qdot, u, disturbance_model, packed[o:])
+
+
+@njit(cache=True)
+def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
+    """B~ u - D~ qdot + d(t) with the uncertainty's arguments packed as
+    pack_true_rhs packs them after the robot's."""
+    n = u.shape[0]
+    B0, D0, D_offset, D_linear = (packed[0:n], packed[n:2 * n], packed[2 * n:3 * n],
+                                  packed[3 * n:4 * n])
+    o = 4 * n
     B_linear = packed[o:o + n * n].reshape(n, n)
     o += n * n
     D_quadratic, B_quadratic = packed[o:o + n], packed[o + n:o + 2 * n]
     o += 2 * n
     B_q1_squared = packed[o:o + n * n].reshape(n, n)
     o += n * n
-    p = joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges)
     B, D = true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear,
                          D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1],
                          packed[o + 2:])
     return matvec(B, u) - D * qdot + disturbance(t, disturbance_model)
+
+
+@njit(cache=True)
+def spatial_true_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed):
+    """tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial arm (SpatialTrueRhs): u_c
+    the command clipped to +-``limit``, p the joint rows of H v (H the plant's mass
+    matrix at x), ``packed`` = pack_true_rhs((), (), uncertainty)."""
+    n = u.shape[0]
+    nq = x.shape[0] - H.shape[0]
+    v = x[nq:]
+    Hv = matvec(H, v)
+    q, p, qdot, clipped = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for j in range(n):
+        q[j], p[j], qdot[j] = x[q_index[j]], Hv[v_index[j]], v[v_index[j]]
+        clipped[j] = min(max(u[j], -limit[j]), limit[j])
+    return _packed_torque(t, q, p, qdot, clipped, disturbance_model, packed)
 
 
 def pack_lhs(ranges, geometry, link_of, fraction, radius,

@@ -42,7 +42,7 @@ class BaseClearancePotential:
         _FilterLinksOnTheBase(self._plant, parsed.scene_graph, self._scene_graph_context)
         self._query = parsed.scene_graph.get_query_output_port()
         self._inspector = parsed.scene_graph.model_inspector()
-        self._model, self._gain, self._margin = model, gain, margin
+        self._model, self._gain, self.margin = model, gain, margin
         self._query_distance = max(query_distance, margin)
         base = self._plant.get_body(next(iter(self._plant.GetFloatingBaseBodies())))
         self._base_geometries = set(self._plant.GetCollisionGeometriesForBody(base))
@@ -54,12 +54,19 @@ class BaseClearancePotential:
         return (self._model.plant.get_body(body.index()).body_frame(),
                 self._inspector.GetPoseInFrame(geometry))
 
-    def Evaluate(self, q, base_pose) -> Clearance:
+    def Evaluate(self, q, base_pose, evaluation=None, query_distance=None
+                 ) -> Clearance:
+        """U, its gradient and the nearest distance (inf beyond ``query_distance``,
+        default the one it was made with; U needs the margin only) at joints q and
+        the base pose (``evaluation``: the model's Evaluate(q), when the caller has
+        it)."""
         self._plant.SetPositions(self._plant_context,
                                  self._model.FullPositions(q, base_pose))
         self._parsed.UpdatePoses(self._plant_context, self._scene_graph_context)
         query = self._query.Eval(self._scene_graph_context)
-        pairs = query.ComputeSignedDistancePairwiseClosestPoints(self._query_distance)
+        pairs = query.ComputeSignedDistancePairwiseClosestPoints(
+            self._query_distance if query_distance is None
+            else max(query_distance, self.margin))
         U, gradient, nearest = 0.0, np.zeros(self._model.num_joints), np.inf
         for pair in pairs:
             if (pair.id_A in self._base_geometries) == (pair.id_B in self._base_geometries):
@@ -71,14 +78,15 @@ class BaseClearancePotential:
             p_link, p_base = ((pair.p_ACa, pair.p_BCb) if link == pair.id_A
                               else (pair.p_BCb, pair.p_ACa))
             nearest = min(nearest, pair.distance)
-            depth = self._margin - pair.distance
+            depth = self.margin - pair.distance
             if depth <= 0:
                 continue
             J = []
             for geometry, p_G in ((link, p_link), (base, p_base)):
                 frame, X_BG = self._BodyFrame(geometry)
                 J.append(self._model.GeneralizedJacobian(
-                    q, frame, X_BG.multiply(p_G), base_positions=base_pose)[3:])
+                    q, frame, X_BG.multiply(p_G), base_positions=base_pose,
+                    evaluation=evaluation)[3:])
             U += 0.5 * self._gain * depth**2
             gradient -= self._gain * depth * (J[0] - J[1]).T @ nhat
         return Clearance(U=U, gradient=gradient, min_distance=nearest)

@@ -2,11 +2,11 @@
 end-effector attitude as its task (attitude.py) and the damping and the robust
 term's boundary layer scaled to the inertia (scenario.AttitudeGains)."""
 import numpy as np
-from pydrake.common.eigen_geometry import AngleAxis, Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.tasks.attitude import attitude_error, reference_rates
+from dacph_drake.kernels.attitude import rotation_quaternion, task_rates, turned
+from dacph_drake.kernels.spatial import christoffel
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.dynamics.plant import END_EFFECTOR
@@ -14,6 +14,9 @@ from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 
 NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
+# [m] beyond the potential's margin, the nearest link keeps xi = -eta grad U zero at
+# q +- h qdot (it would move faster than FAR / NU_DOT_STEP = 1000 m/s to reach it).
+FAR = 0.01
 
 
 class AttitudeController(LeafSystem):
@@ -31,11 +34,17 @@ class AttitudeController(LeafSystem):
     bound on ||e_tau|| in DAC, a constant in the baseline) and tau_pe the
     learner's excitation (``excitation``, scenario.Excitation). nu_dot
     is the central difference of nu along the current motion (q +- h qdot, the base
-    turned by +- h omega_b, t +- h; h = NU_DOT_STEP). U is the link-base clearance
-    potential (``potential``: robots.clearance_potential.BaseClearancePotential, or None).
+    turned by +- h omega_b, t +- h; h = NU_DOT_STEP), with xi evaluated there too
+    unless every link is FAR beyond the potential's margin (xi = 0 at all three).
+    M, C' and the Jacobians come from one compiled evaluation of the model per
+    configuration (floating_model.FloatingBaseModel.Evaluate). U is the link-base
+    clearance potential (``potential``: robots.clearance_potential.
+    BaseClearancePotential, or None).
     Output ``tau_request`` is held between updates; ``attitude_log``
-    (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, smallest link-base distance [m]
-    (inf without a potential), R_d(t) as a quaternion], which a replay reads;
+    (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, R_d(t) as a quaternion] of the
+    last update, which a replay reads, with the smallest link-base distance [m] at
+    the current state (inf without a potential; the potential itself queries only
+    the pairs within its margin + FAR);
     ``reduced_model`` = [vec(M), vec(C')] of the same sample (row-major), for the
     port observer. With ``identify``, input ``inertial_parameters`` (an
     InertialIdentifier's estimate) sets the model's inertias before every update
@@ -53,11 +62,15 @@ class AttitudeController(LeafSystem):
         self._potential, self._eta = potential, eta
         self._excitation_amplitude = excitation.amplitude
         self._excitation_omega = 2 * np.pi * excitation.Frequencies(n)
-        self._context = model.plant.CreateDefaultContext()
-        self._end_effector = model.plant.GetFrameByName(END_EFFECTOR)
-        model.plant.SetPositions(self._context, model.FullPositions(q0))
-        self._R_d0 = reference.Start(self._end_effector.CalcPoseInWorld(
-            self._context).rotation())
+        end_effector = model.plant.GetFrameByName(END_EFFECTOR)
+        node, X_CE = model.FrameNode(end_effector)
+        self._end_effector_node = (node, np.ascontiguousarray(X_CE[:3, :3]))
+        self._R_d0 = reference.Start(RotationMatrix(model.FramePose(
+            end_effector, model.Evaluate(np.asarray(q0, float), derivatives=False))))
+        axis = np.asarray(reference.axis, float)
+        self._reference_arguments = (self._R_d0.matrix(), axis / np.linalg.norm(axis),
+                                     float(reference.amplitude),
+                                     2 * np.pi / reference.period)
         self._base_pose = self.DeclareVectorInputPort("base_pose", 7)
         self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6)
         self._q = self.DeclareVectorInputPort("q", n)
@@ -69,7 +82,10 @@ class AttitudeController(LeafSystem):
         self._log_index = self.DeclareDiscreteState(AttitudeLog().size)
         self._model_index = self.DeclareDiscreteState(2 * n * n)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
-        self.DeclareStateOutputPort("attitude_log", self._log_index)
+        self.DeclareVectorOutputPort(
+            "attitude_log", AttitudeLog().size, self._CalcAttitudeLog,
+            prerequisites_of_calc={self.discrete_state_ticket(self._log_index),
+                                   self._q.ticket(), self._base_pose.ticket()})
         self.DeclareStateOutputPort("reduced_model", self._model_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
@@ -78,34 +94,33 @@ class AttitudeController(LeafSystem):
         """(R_d(t), omega_d(t))."""
         return self._reference.At(self._R_d0, t)
 
-    def _ReferenceRates(self, t: float, q, base_pose):
-        """(nu, e, clearance, R_d) at time t, joints q, base pose (quaternion,
-        position)."""
-        self._model.plant.SetPositions(self._context,
-                                       self._model.FullPositions(q, base_pose))
-        R_WE = self._end_effector.CalcPoseInWorld(self._context).rotation()
-        R_d, omega_d = self.DesiredAttitude(t)
-        e = attitude_error(R_WE, R_d)
-        D = self._model.GeneralizedJacobian(q, self._end_effector,
-                                            base_positions=base_pose)[:3]
-        xi, clearance = np.zeros(self._model.num_joints), np.inf
-        if self._potential is not None:
-            potential = self._potential.Evaluate(q, base_pose)
-            xi, clearance = -self._eta * potential.gradient, potential.min_distance
-        nu = reference_rates(D, omega_d, e, self._gains.Lambda, xi,
-                             self._gains.task_damping)
-        return nu, e, clearance, R_d
+    def _Secondary(self, q, base_pose, evaluation):
+        """(xi = -eta grad U, the nearest link-base distance if within the
+        potential's margin + FAR, else inf) at q and the base pose."""
+        if self._potential is None:
+            return np.zeros(self._model.num_joints), np.inf
+        potential = self._potential.Evaluate(q, base_pose, evaluation,
+                                             query_distance=self._potential.margin + FAR)
+        return -self._eta * potential.gradient, potential.min_distance
 
-    @staticmethod
-    def _Turned(base_pose, rotation_vector):
-        """The base pose with its attitude turned by ``rotation_vector`` (world)."""
-        angle = np.linalg.norm(rotation_vector)
-        turn = (RotationMatrix(AngleAxis(angle, rotation_vector / angle)) if angle > 0
-                else RotationMatrix())
-        quaternion = Quaternion(base_pose[:4] / np.linalg.norm(base_pose[:4]))
-        turned = (turn @ RotationMatrix(quaternion)).ToQuaternion()
-        return np.concatenate([[turned.w(), turned.x(), turned.y(), turned.z()],
-                               base_pose[4:]])
+    def _CalcAttitudeLog(self, context, output):
+        """The update's log with the smallest link-base distance at the current
+        state (the full query, at the loggers' rate rather than every update)."""
+        log = context.get_discrete_state(self._log_index).CopyToVector()
+        if self._potential is not None:
+            log[AttitudeLog().clearance] = self._potential.Evaluate(
+                self._q.Eval(context), self._base_pose.Eval(context)).min_distance
+        output.SetFromVector(log)
+
+    def _ReferenceRates(self, t: float, base_pose, evaluation, xi):
+        """(nu, e, R_d) at time t, the base pose (quaternion, position), the
+        model's Evaluate(q) ``evaluation`` and the secondary motion xi
+        (kernels.attitude.task_rates)."""
+        tree = self._model.tree
+        return task_rates(tree.base_subspace, tree.parent, tree.joint, evaluation,
+                          base_pose[:4], t, self._reference_arguments,
+                          self._end_effector_node, xi, self._gains.Lambda,
+                          self._gains.task_damping)
 
     def _UpdateControl(self, context, discrete_state):
         if self._parameters is not None and self._parameters.HasValue(context):
@@ -114,14 +129,22 @@ class AttitudeController(LeafSystem):
         base_pose = self._base_pose.Eval(context)
         omega_base = self._base_velocity.Eval(context)[:3]
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        nu, e, clearance, R_d = self._ReferenceRates(t, q, base_pose)
-        h = NU_DOT_STEP
-        nu_plus = self._ReferenceRates(t + h, q + h * qdot,
-                                       self._Turned(base_pose, h * omega_base))[0]
-        nu_minus = self._ReferenceRates(t - h, q - h * qdot,
-                                        self._Turned(base_pose, -h * omega_base))[0]
-        nu_dot = (nu_plus - nu_minus) / (2 * h)
-        M, C = self._model.MassAndCoriolis(q, qdot)
+        evaluation = self._model.Evaluate(q)
+        xi, clearance = self._Secondary(q, base_pose, evaluation)
+        nu, e, R_d = self._ReferenceRates(t, base_pose, evaluation, xi)
+        h, rates = NU_DOT_STEP, []
+        far = self._potential is None or clearance > self._potential.margin + FAR
+        for sign in (1.0, -1.0):
+            q_h = q + sign * h * qdot
+            pose_h = np.concatenate([turned(base_pose[:4], sign * h * omega_base),
+                                     base_pose[4:]])
+            evaluation_h = self._model.Evaluate(q_h, derivatives=False)
+            xi_h = xi if far else self._Secondary(q_h, pose_h, evaluation_h)[0]
+            rates.append(self._ReferenceRates(t + sign * h, pose_h, evaluation_h,
+                                              xi_h)[0])
+        nu_dot = (rates[0] - rates[1]) / (2 * h)
+        M, dM = evaluation[0], evaluation[1]
+        C = christoffel(dM, qdot)
         s = qdot - nu
         chi = self._chi.Eval(context)[0]
         tau = (M @ nu_dot + C @ nu - self._gains.damping_rate * M @ s
@@ -132,7 +155,6 @@ class AttitudeController(LeafSystem):
         discrete_state.set_value(self._tau_index, tau)
         discrete_state.set_value(self._model_index,
                                  np.concatenate([M.reshape(-1), C.reshape(-1)]))
-        desired = R_d.ToQuaternion()
         discrete_state.set_value(self._log_index, np.concatenate(
-            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, clearance,
-                 desired.w(), desired.x(), desired.y(), desired.z()]]))
+            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, np.inf],
+             rotation_quaternion(R_d)]))

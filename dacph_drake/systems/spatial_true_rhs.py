@@ -4,7 +4,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.kernels.loop import disturbance, true_matrices
+from dacph_drake.kernels.loop import pack_true_rhs, spatial_true_torque, true_matrices
 from dacph_drake.dynamics.plant import ArmCoordinates, effort_limits, joint_damping
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
@@ -41,6 +41,7 @@ class SpatialTrueRhs(LeafSystem):
         self._joint_damping = joint_damping(plant, self._v_index)
         self._effort_limit = effort_limits(plant, self._v_index)
         self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
+        self._packed = pack_true_rhs((), (), self._uncertainty)
         self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
             self, n, plant.num_positions() + plant.num_velocities())
         self.DeclareVectorOutputPort("saturated", n, self._CalcSaturated,
@@ -56,10 +57,12 @@ class SpatialTrueRhs(LeafSystem):
         return B, D, v[self._v_index]
 
     def _CalcTau(self, context, output):
-        B, D, qdot = self._Matrices(context)
-        u = np.clip(self._u.Eval(context), -self._effort_limit, self._effort_limit)
-        output.SetFromVector(B @ u - D * qdot + disturbance(
-            context.get_time(), self._disturbance_model.Eval(context)))
+        x = self._state.Eval(context)
+        self._plant.SetPositionsAndVelocities(self._context, x)
+        output.SetFromVector(spatial_true_torque(
+            context.get_time(), x, self._plant.CalcMassMatrix(self._context),
+            self._q_index, self._v_index, self._u.Eval(context), self._effort_limit,
+            self._disturbance_model.Eval(context), self._packed))
 
     def _CalcSaturated(self, context, output):
         output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)

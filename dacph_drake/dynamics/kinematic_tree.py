@@ -1,0 +1,135 @@
+"""A free-floating plant's kinematic tree as plain arrays, for the compiled spatial
+kernels (kernels/spatial.py): the bodies in an order where each parent comes before
+its children (node 0 the base, on a free joint or, for the planar arms, a planar
+one, whose velocities' motion subspace at the identity pose is ``base_subspace``:
+the identity for a free base's (omega_W, v_W), the columns v_x, v_y, omega_z for a
+planar joint's (vx, vy, omega)), each body's inboard joint as a fixed transform
+X_PF from its parent's frame to the joint's frame F, a rotation about ``axis`` (in
+F) by the joint's angle for a revolute joint (none for a weld), and a fixed
+transform X_MC from the joint's moving frame M to the body's frame C:
+
+    X_WC = X_WP X_PF Rot(axis, q_j) X_MC.
+
+Joints are numbered in the plant's actuator order (dynamics.plant.ArmCoordinates),
+the order of the reduced model's q. The bodies' inertias are not part of the tree
+(they change with the controller's inertial parameters): Inertias(plant, context)
+reads them."""
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import BodyIndex, RevoluteJoint
+
+from dacph_drake.dynamics.plant import ArmCoordinates
+
+
+def _Matrix(X) -> np.ndarray:
+    return X.GetAsMatrix4()
+
+
+@dataclass
+class KinematicTree:
+    bodies: list                # the plant's bodies, node order
+    base_subspace: np.ndarray   # (6, base velocities)
+    parent: np.ndarray          # (nodes,) parent node, -1 for the base
+    joint: np.ndarray           # (nodes,) the joint moving the node (0..n-1), -1: a weld
+    X_PF: np.ndarray            # (nodes, 4, 4)
+    axis: np.ndarray            # (nodes, 3) unit axis in F (zero for a weld)
+    X_MC: np.ndarray            # (nodes, 4, 4)
+    below: np.ndarray           # (n, nodes) True where joint k moves the node
+    joint_below: np.ndarray     # (n, n) True where joint k moves joint j's axis (j != k)
+    joint_node: np.ndarray      # (n,) the node each joint moves
+
+    @staticmethod
+    def FromPlant(plant: MultibodyPlant) -> "KinematicTree":
+        """The tree of a finalized free-floating plant whose moving joints are its
+        free base and revolute joints (description.PopulateFromDescription)."""
+        coordinates = ArmCoordinates.FromPlant(plant)
+        joint_of_velocity = {int(v): j for j, v in enumerate(coordinates.joint_v)}
+        inboard = {}
+        for index in plant.GetJointIndices():
+            joint = plant.get_joint(index)
+            inboard[int(joint.child_body().index())] = joint
+        world = int(plant.world_body().index())
+        order, node_of = [], {}
+        on_world = [joint for joint in inboard.values()
+                    if int(joint.parent_body().index()) == world]
+        base_joint = on_world[0]
+        if base_joint.num_velocities() == 6:
+            base_subspace = np.eye(6)
+        elif base_joint.type_name() == "planar":
+            base_subspace = np.zeros((6, 3))
+            base_subspace[3, 0] = base_subspace[4, 1] = base_subspace[2, 2] = 1.0
+        else:
+            raise ValueError(f"base joint {base_joint.name()!r}: "
+                             f"{base_joint.type_name()}; allowed: free or planar")
+        frontier = [int(base_joint.child_body().index())]
+        children = {}
+        for child, joint in inboard.items():
+            children.setdefault(int(joint.parent_body().index()), []).append(child)
+        while frontier:
+            body = frontier.pop(0)
+            node_of[body] = len(order)
+            order.append(body)
+            frontier += sorted(children.get(body, []))
+        nodes = len(order)
+        n = coordinates.num_joints
+        parent = np.full(nodes, -1)
+        joint_index = np.full(nodes, -1)
+        X_PF = np.tile(np.eye(4), (nodes, 1, 1))
+        axis = np.zeros((nodes, 3))
+        X_MC = np.tile(np.eye(4), (nodes, 1, 1))
+        for node, body in enumerate(order[1:], start=1):
+            joint = inboard[body]
+            if int(joint.parent_body().index()) == world:
+                raise ValueError("one body on the world: the free base")
+            parent[node] = node_of[int(joint.parent_body().index())]
+            X_PF[node] = _Matrix(joint.frame_on_parent().GetFixedPoseInBodyFrame())
+            X_MC[node] = np.linalg.inv(
+                _Matrix(joint.frame_on_child().GetFixedPoseInBodyFrame()))
+            if isinstance(joint, RevoluteJoint):
+                joint_index[node] = joint_of_velocity[joint.velocity_start()]
+                axis[node] = joint.revolute_axis()
+            elif joint.num_velocities() == 0:
+                X_PF[node] = X_PF[node] @ _Matrix(joint.X_FM())
+            else:
+                raise ValueError(f"joint {joint.name()!r}: {joint.type_name()}; the "
+                                 "kinematic tree has revolute joints and welds")
+        below = np.zeros((n, nodes), bool)
+        for node in range(1, nodes):
+            ancestor = node
+            while ancestor > 0:
+                if joint_index[ancestor] >= 0:
+                    below[joint_index[ancestor], node] = True
+                ancestor = parent[ancestor]
+        joint_node = np.zeros(n, int)
+        for node in range(nodes):
+            if joint_index[node] >= 0:
+                joint_node[joint_index[node]] = node
+        joint_below = below[:, joint_node].copy()
+        joint_below[np.arange(n), np.arange(n)] = False
+        return KinematicTree(
+            bodies=[plant.get_body(BodyIndex(b)) for b in order],
+            base_subspace=base_subspace, parent=parent,
+            joint=joint_index, X_PF=X_PF, axis=axis, X_MC=X_MC, below=below,
+            joint_below=joint_below, joint_node=joint_node)
+
+    def Inertias(self, context):
+        """(mass (nodes,), first moment m c (nodes, 3), rotational inertia about the
+        body's origin (nodes, 3, 3)), in each body's frame, as the plant holds them
+        in ``context``."""
+        nodes = len(self.bodies)
+        mass, moment, inertia = np.zeros(nodes), np.zeros((nodes, 3)), np.zeros((nodes, 3, 3))
+        for node, body in enumerate(self.bodies):
+            M = body.CalcSpatialInertiaInBodyFrame(context)
+            mass[node] = M.get_mass()
+            moment[node] = M.get_mass() * M.get_com()
+            inertia[node] = M.CalcRotationalInertia().CopyToFullMatrix3()
+        return mass, moment, inertia
+
+    def Node(self, frame):
+        """(node, X_CF (4 x 4)) of a plant frame: its body's node and its pose in
+        that body."""
+        body = frame.body()
+        node = next(k for k, b in enumerate(self.bodies) if b.index() == body.index())
+        return node, _Matrix(frame.GetFixedPoseInBodyFrame())
