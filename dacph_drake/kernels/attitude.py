@@ -8,7 +8,8 @@ import numpy as np
 from numba import njit
 
 from dacph_drake.kernels.arm import matmul, matvec
-from dacph_drake.kernels.spatial import _rotation, point_jacobian
+from dacph_drake.kernels.spatial import (_rotation, christoffel, point_jacobian,
+                                         reduced_model)
 
 
 @njit(cache=True)
@@ -121,3 +122,49 @@ def task_rates(base_subspace, parent, joint, evaluation, quaternion, t, referenc
     D = matmul(R_WB, point_jacobian(base_subspace, parent, joint, X, S, A, node,
                                     X[node, :3, 3])[:3])
     return reference_rates(D, omega_d, e, Lambda, xi, damping), e, R_d
+
+
+@njit(cache=True)
+def attitude_update(tree, evaluation, q, qdot, quaternion, omega_base, t, h,
+                    reference, end_effector, xi, xi_plus, xi_minus, gains, chi,
+                    excitation):
+    """One AttitudeController update (its docstring states the law) from the
+    compiled model's ``evaluation`` at q (FloatingBaseModel.Evaluate with
+    derivatives; ``tree``: FloatingBaseModel.kernel_tree): nu and e there, nu_dot
+    by the central difference along the motion (q +- h qdot, the base turned by
+    +- h omega_base, t +- h; xi_plus, xi_minus the secondary motion there),
+    ``gains`` = (Lambda, task_damping, damping_rate, epsilon, boundary_rate),
+    ``excitation`` = (amplitude, 2 pi f_1, ..., 2 pi f_n). Returns (tau, M, C',
+    [e, |e|, ||s||, V], the quaternion of R_d)."""
+    (base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_below, mass,
+     moment, inertia) = tree
+    Lambda, damping, damping_rate, epsilon, boundary_rate = (
+        gains[0], gains[1], gains[2], gains[3], gains[4])
+    nu, e, R_d = task_rates(base_subspace, parent, joint, evaluation, quaternion, t,
+                            reference, end_effector, xi, Lambda, damping)
+    rates = np.empty((2, q.shape[0]))
+    for side in range(2):
+        sign = 1.0 - 2.0 * side
+        q_h = q + sign * h * qdot
+        quaternion_h = turned(quaternion, sign * h * omega_base)
+        evaluation_h = reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC,
+                                     below, joint_below, mass, moment, inertia, q_h,
+                                     False)
+        rates[side] = task_rates(base_subspace, parent, joint, evaluation_h,
+                                 quaternion_h, t + sign * h, reference, end_effector,
+                                 xi_plus if side == 0 else xi_minus, Lambda,
+                                 damping)[0]
+    nu_dot = (rates[0] - rates[1]) / (2 * h)
+    M, dM = evaluation[0], evaluation[1]
+    C = christoffel(dM, qdot)
+    s = qdot - nu
+    Ms = matvec(M, s)
+    phi = epsilon + chi / boundary_rate
+    tau = matvec(M, nu_dot) + matvec(C, nu) - damping_rate * Ms
+    for i in range(q.shape[0]):
+        tau[i] -= chi * np.tanh(M[i, i] * s[i] / phi)
+        if excitation[0] > 0:
+            tau[i] += excitation[0] * np.sin(excitation[1 + i] * t)
+    log = np.array([e[0], e[1], e[2], np.sqrt(np.sum(e * e)), np.sqrt(np.sum(s * s)),
+                    0.5 * np.sum(s * Ms)])
+    return tau, M, C, log, rotation_quaternion(R_d)

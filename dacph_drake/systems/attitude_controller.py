@@ -5,8 +5,7 @@ import numpy as np
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.kernels.attitude import rotation_quaternion, task_rates, turned
-from dacph_drake.kernels.spatial import christoffel
+from dacph_drake.kernels.attitude import attitude_update, turned
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.dynamics.plant import END_EFFECTOR
@@ -60,8 +59,11 @@ class AttitudeController(LeafSystem):
         n = model.num_joints
         self._model, self._reference, self._gains = model, reference, gains
         self._potential, self._eta = potential, eta
-        self._excitation_amplitude = excitation.amplitude
-        self._excitation_omega = 2 * np.pi * excitation.Frequencies(n)
+        self._excitation = np.concatenate([[excitation.amplitude],
+                                           2 * np.pi * excitation.Frequencies(n)])
+        self._gain_arguments = np.array([gains.Lambda, gains.task_damping,
+                                         gains.damping_rate, gains.epsilon,
+                                         gains.boundary_rate], float)
         end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         node, X_CE = model.FrameNode(end_effector)
         self._end_effector_node = (node, np.ascontiguousarray(X_CE[:3, :3]))
@@ -112,16 +114,6 @@ class AttitudeController(LeafSystem):
                 self._q.Eval(context), self._base_pose.Eval(context)).min_distance
         output.SetFromVector(log)
 
-    def _ReferenceRates(self, t: float, base_pose, evaluation, xi):
-        """(nu, e, R_d) at time t, the base pose (quaternion, position), the
-        model's Evaluate(q) ``evaluation`` and the secondary motion xi
-        (kernels.attitude.task_rates)."""
-        tree = self._model.tree
-        return task_rates(tree.base_subspace, tree.parent, tree.joint, evaluation,
-                          base_pose[:4], t, self._reference_arguments,
-                          self._end_effector_node, xi, self._gains.Lambda,
-                          self._gains.task_damping)
-
     def _UpdateControl(self, context, discrete_state):
         if self._parameters is not None and self._parameters.HasValue(context):
             self._model.SetInertialParameters(self._parameters.Eval(context))
@@ -131,30 +123,23 @@ class AttitudeController(LeafSystem):
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
         evaluation = self._model.Evaluate(q)
         xi, clearance = self._Secondary(q, base_pose, evaluation)
-        nu, e, R_d = self._ReferenceRates(t, base_pose, evaluation, xi)
-        h, rates = NU_DOT_STEP, []
+        h, secondary = NU_DOT_STEP, []
         far = self._potential is None or clearance > self._potential.margin + FAR
-        for sign in (1.0, -1.0):
+        for sign in (1.0, -1.0):        # xi along the motion, where it is not zero
+            if far:
+                secondary.append(xi)
+                continue
             q_h = q + sign * h * qdot
             pose_h = np.concatenate([turned(base_pose[:4], sign * h * omega_base),
                                      base_pose[4:]])
-            evaluation_h = self._model.Evaluate(q_h, derivatives=False)
-            xi_h = xi if far else self._Secondary(q_h, pose_h, evaluation_h)[0]
-            rates.append(self._ReferenceRates(t + sign * h, pose_h, evaluation_h,
-                                              xi_h)[0])
-        nu_dot = (rates[0] - rates[1]) / (2 * h)
-        M, dM = evaluation[0], evaluation[1]
-        C = christoffel(dM, qdot)
-        s = qdot - nu
-        chi = self._chi.Eval(context)[0]
-        tau = (M @ nu_dot + C @ nu - self._gains.damping_rate * M @ s
-               - chi * np.tanh(np.diag(M) * s / (self._gains.epsilon
-                                                 + chi / self._gains.boundary_rate)))
-        if self._excitation_amplitude > 0:
-            tau += self._excitation_amplitude * np.sin(self._excitation_omega * t)
+            secondary.append(self._Secondary(
+                q_h, pose_h, self._model.Evaluate(q_h, derivatives=False))[0])
+        tau, M, C, log, desired = attitude_update(
+            self._model.kernel_tree, evaluation, q, qdot, base_pose[:4], omega_base, t,
+            h, self._reference_arguments, self._end_effector_node, xi, *secondary,
+            self._gain_arguments, self._chi.Eval(context)[0], self._excitation)
         discrete_state.set_value(self._tau_index, tau)
         discrete_state.set_value(self._model_index,
                                  np.concatenate([M.reshape(-1), C.reshape(-1)]))
-        discrete_state.set_value(self._log_index, np.concatenate(
-            [e, [np.linalg.norm(e), np.linalg.norm(s), 0.5 * s @ M @ s, np.inf],
-             rotation_quaternion(R_d)]))
+        discrete_state.set_value(self._log_index, np.concatenate([log, [np.inf],
+                                                                  desired]))
