@@ -15,8 +15,9 @@ inertia of the bodies joint j moves,
     H_jl = S_j^T Ic_l S_l (j at or above l, 0 on separate branches),
 
 and a change of q_k turns everything joint k moves about S_k:
-dS_j/dq_k = crm(S_k) S_j for a joint j below k, dIc/dq_k = crf(S_k) Ic' - Ic' crm(S_k)
-for the part Ic' of a composite that joint k moves. The reduced model is then
+dS_j/dq_k = S_k x S_j for a joint j below k, and dIc/dq_k = crf(S_k) Ic' - Ic' crm(S_k)
+for the part Ic' of a composite that joint k moves (so d(Ic_j S_j)/dq_k =
+S_k x* (Ic_j S_j) when joint k moves joint j). The reduced model is then
 M = H_mm - H_bm^T A, A = H_bb^-1 H_bm, with
 dM_k = dH_mm - dH_bm^T A - A^T dH_bm + A^T dH_bb A (docs/equations.md E5-E9), and
 C' the Christoffel form of dM (floating_model.FloatingBaseModel.Coriolis)."""
@@ -85,34 +86,73 @@ def forward_kinematics(parent, joint, X_PF, axis, X_MC, q):
 def _spatial_inertias(X, mass, moment, inertia):
     """Each body's spatial inertia about O in world axes (zero for a massless body),
     from its mass, first moment m c and rotational inertia about its origin (body
-    frame)."""
+    frame): [[R I_c R^T - m [c]x^2, m [c]x], [-m [c]x, m 1]], c = p + R c_B, I_c the
+    inertia about the centre of mass."""
     nodes = X.shape[0]
     out = np.zeros((nodes, 6, 6))
+    I_c, RI = np.empty((3, 3)), np.empty((3, 3))
     for node in range(nodes):
         m = mass[node]
         if m <= 0.0:
             continue
-        R, p = X[node, :3, :3], X[node, :3, 3]
         c_B = moment[node] / m
-        I_c = inertia[node] + m * matmul(_skew(c_B), _skew(c_B))   # about the c.o.m.
-        c = p + matvec(R, c_B)
-        C = _skew(c)
-        out[node, :3, :3] = matmul(matmul(R, I_c), R.T) - m * matmul(C, C)
-        out[node, :3, 3:] = m * C
-        out[node, 3:, :3] = -m * C
+        cc = c_B[0] * c_B[0] + c_B[1] * c_B[1] + c_B[2] * c_B[2]
+        for i in range(3):                  # parallel axes: I_c = I_o - m (|c|^2 1 - c c^T)
+            for j in range(3):
+                I_c[i, j] = inertia[node, i, j] + m * c_B[i] * c_B[j]
+            I_c[i, i] -= m * cc
+        c = np.empty(3)
         for i in range(3):
+            c[i] = X[node, i, 3]
+            for k in range(3):
+                c[i] += X[node, i, k] * c_B[k]
+        for i in range(3):
+            for j in range(3):
+                value = 0.0
+                for k in range(3):
+                    value += X[node, i, k] * I_c[k, j]
+                RI[i, j] = value
+        cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+        for i in range(3):
+            for j in range(3):
+                value = 0.0
+                for k in range(3):
+                    value += RI[i, k] * X[node, j, k]
+                out[node, i, j] = value - m * c[i] * c[j]    # - m [c]x^2
+            out[node, i, i] += m * cc
             out[node, 3 + i, 3 + i] = m
+        out[node, 0, 4], out[node, 0, 5] = -m * c[2], m * c[1]      # m [c]x
+        out[node, 1, 3], out[node, 1, 5] = m * c[2], -m * c[0]
+        out[node, 2, 3], out[node, 2, 4] = -m * c[1], m * c[0]
+        for i in range(3):
+            for j in range(3):
+                out[node, 3 + i, j] = out[node, j, 3 + i]            # -m [c]x = (m [c]x)^T
     return out
 
 
 @njit(cache=True)
-def _crm(v):
-    """The motion cross product matrix: crm(v) w = v x w (spatial motions)."""
-    out = np.zeros((6, 6))
-    W, V = _skew(v[:3]), _skew(v[3:])
-    out[:3, :3] = W
-    out[3:, :3] = V
-    out[3:, 3:] = W
+def _motion_cross(a, b):
+    """a x b of spatial motions: (w_a x w_b; w_a x v_b + v_a x w_b)."""
+    out = np.empty(6)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    out[3] = a[1] * b[5] - a[2] * b[4] + a[4] * b[2] - a[5] * b[1]
+    out[4] = a[2] * b[3] - a[0] * b[5] + a[5] * b[0] - a[3] * b[2]
+    out[5] = a[0] * b[4] - a[1] * b[3] + a[3] * b[1] - a[4] * b[0]
+    return out
+
+
+@njit(cache=True)
+def _force_cross(a, f):
+    """a x* f of a motion a and a force f: (w_a x n + v_a x f; w_a x f)."""
+    out = np.empty(6)
+    out[0] = a[1] * f[2] - a[2] * f[1] + a[4] * f[5] - a[5] * f[4]
+    out[1] = a[2] * f[0] - a[0] * f[2] + a[5] * f[3] - a[3] * f[5]
+    out[2] = a[0] * f[1] - a[1] * f[0] + a[3] * f[4] - a[4] * f[3]
+    out[3] = a[1] * f[5] - a[2] * f[4]
+    out[4] = a[2] * f[3] - a[0] * f[5]
+    out[5] = a[0] * f[4] - a[1] * f[3]
     return out
 
 
@@ -135,11 +175,6 @@ def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, 
         for node in range(nodes):
             if below[j, node]:
                 Ic[j] += I[node]
-    crm = np.empty((n, 6, 6))
-    turned = np.empty((n, 6, 6))          # X_k(Ic_k) = crf(S_k) Ic_k - Ic_k crm(S_k)
-    for k in range(n):
-        crm[k] = _crm(S[k])
-        turned[k] = -matmul(crm[k].T, Ic[k]) - matmul(Ic[k], crm[k])
     N = nb + n
     H = np.zeros((N, N))
     dH = np.zeros((n, N, N))
@@ -156,27 +191,33 @@ def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, 
                 value = _dot(S[j], IcS[l])
                 H[nb + j, nb + l] = value
                 H[nb + l, nb + j] = value
+    if not derivatives:
+        return H, dH, X, S
     dS = np.zeros((n, 6))
     dIcS = np.zeros((n, 6))               # d(Ic_l S_l)/dq_k
-    for k in range(n if derivatives else 0):
-        # Joint k turns what it moves about S_k: a motion m by crm(S_k) m, an
-        # inertia's action Ic S by crf(S_k) Ic S - Ic crm(S_k) S.
+    turned = np.empty((6, 6))             # crf(S_k) Ic_k - Ic_k crm(S_k)
+    unit = np.zeros(6)
+    for k in range(n):
+        # Joint k turns what it moves about S_k: a motion m by S_k x m, an
+        # inertia's action Ic S by S_k x* (Ic S) - Ic (S_k x S).
+        for c in range(6):
+            unit[c] = 1.0
+            turned[:, c] = (_force_cross(S[k], Ic[k][:, c].copy())
+                            - matvec(Ic[k], _motion_cross(S[k], unit)))
+            unit[c] = 0.0
         for j in range(n):
             if joint_below[k, j]:
-                dS[j] = matvec(crm[k], S[j])
+                dS[j] = _motion_cross(S[k], S[j])
             else:
                 dS[j] = 0.0
         for j in range(n):
-            if joint_below[k, j]:               # Ic_j moves whole
-                part, partS = Ic[j], IcS[j]
+            if joint_below[k, j]:               # Ic_j and S_j turn as one
+                dIcS[j] = _force_cross(S[k], IcS[j])
             elif j == k or joint_below[j, k]:   # the part of Ic_j below k moves
-                part, partS = Ic[k], matvec(Ic[k], S[j])
+                dIcS[j] = matvec(turned, S[j])
             else:
                 dIcS[j] = 0.0                   # nothing of Ic_j moves, S_j neither
-                continue
-            dIcS[j] = (-matvec(crm[k].T, partS) - matvec(part, matvec(crm[k], S[j]))
-                       + matvec(Ic[j], dS[j]))
-        dH[k, :nb, :nb] = matmul(SbT, matmul(turned[k], Sb))
+        dH[k, :nb, :nb] = matmul(SbT, matmul(turned, Sb))
         for j in range(n):
             column = matvec(SbT, dIcS[j])
             dH[k, :nb, nb + j] = column
