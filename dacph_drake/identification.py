@@ -255,11 +255,13 @@ class RhsIdentifier:
                 parameter.copy_(value)
         return False
 
-    def Statistics(self, rows: np.ndarray, t_now: float) -> FitStatistics:
-        """FitStatistics on ``rows`` (weighted by recency in regularized mode, the
-        samples before a change included: they show the stale model's misfit)."""
+    def Statistics(self, rows: np.ndarray, t_now: float,
+                   window_start: float = -np.inf) -> FitStatistics:
+        """FitStatistics on ``rows`` (weighted by recency in regularized mode; by
+        default the samples before a change included: they show the stale model's
+        misfit)."""
         times, q, p, qdot, u, tau = self._Split(rows)
-        w = self.Weights(times, t_now, -np.inf)
+        w = self.Weights(times, t_now, window_start)
         with torch.no_grad():
             residual = tau - port_torque(*self.network(q, p), u, qdot)
             nominal = tau - port_torque(self._B0, self._D0, u, qdot)

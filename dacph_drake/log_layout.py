@@ -45,14 +45,17 @@ class RhsState:
 
 
 class LearnerLog:
-    """learner_log = [loss, beta_hat, nominal loss, holding]: the fit's weighted
-    squared residual, the gain rule's uncertainty estimate, the same residual of the
-    nominal RHS (B0, D0) on the same samples, and 1 while a detected change pauses
-    training (identification.ChangeDetector)."""
+    """learner_log = [loss, beta_hat, nominal loss, holding, network published]:
+    the fit's weighted squared residual, the gain rule's uncertainty estimate, the
+    same residual of the nominal RHS (B0, D0) on the same samples, 1 while a
+    detected change pauses training (identification.ChangeDetector), and 1 while
+    the published weights are the network's, 0 while they are the prior's
+    (Learner.prior_fallback; 0 in the learner-off ablation)."""
 
     def __init__(self):
-        self.loss, self.beta_hat, self.nominal_loss, self.holding = range(4)
-        self.size = 4
+        (self.loss, self.beta_hat, self.nominal_loss, self.holding,
+         self.network_published) = range(5)
+        self.size = 5
 
 
 class AttitudeLog:

@@ -38,7 +38,10 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  evidence_ratio: 0.5", "  evidence_window: 1.0",
                           "  min_window: 0.5", "  warm_start: true",
                           "  model_change: true", "  step_guard: 10.0",
-                          "  boundary_rate: 0.0")
+                          "  boundary_rate: 0.0", "  prior_fallback: false")
+# Settings added to the current layout since it was introduced, at their defaults:
+# a run saved before them was fingerprinted without their lines.
+ADDED_TO_CURRENT_LAYOUT = ("  prior_fallback: false",)
 ADDED_SECTION_DEFAULTS = (
     "inertia:\n  identify: true\n  prior_weight: 1.0e-12\n  start: 0.2\n"
     "  duration: 10.0\n  change_threshold: 0.05\n",)
@@ -253,10 +256,16 @@ def move_integration_scheme(raw, path):
 
 def saved_forms(scenario: Scenario) -> List[str]:
     """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
-    its current form and the forms of the same settings in the layouts before
-    (the robot section's OLDER_LAYOUTS: a planar arm's scenario before the robot:
-    and task: sections, and before that the top-level integration_scheme:)."""
-    return [yaml_dump_typed(scenario)] + [
+    its current form, without the settings added to the current layout since it
+    was introduced where they are at their defaults (ADDED_TO_CURRENT_LAYOUT: a
+    setting added at its default leaves a fingerprint as it was), and the forms
+    of the same settings in the layouts before (the robot section's
+    OLDER_LAYOUTS: a planar arm's scenario before the robot: and task: sections,
+    and before that the top-level integration_scheme:)."""
+    text = yaml_dump_typed(scenario)
+    for line in ADDED_TO_CURRENT_LAYOUT:
+        text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
+    return [text] + [
         form for layout in scenario.robot.OLDER_LAYOUTS
         for form in globals()[layout].From(scenario).SavedForms()]
 

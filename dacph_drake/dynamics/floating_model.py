@@ -81,9 +81,7 @@ class FloatingBaseModel:
     @property
     def kernel_tree(self) -> tuple:
         """The tree's arrays in kernels.spatial's argument order, then the inertias."""
-        t = self.tree
-        return (t.base_subspace, t.parent, t.joint, t.X_PF, t.axis, t.X_MC, t.below,
-                t.joint_below, *self._inertias)
+        return (*self.tree.KernelArrays(), *self._inertias)
 
     def Evaluate(self, q, derivatives: bool = True):
         """(M, dM, A = H_bb^-1 H_bm, X (body poses), S (joint motion subspaces)),

@@ -98,6 +98,26 @@ class InertialParameters:
         return out
 
 
+    def NodeInertias(self, tree, context):
+        """A map pi -> tree.Inertias (kinematic_tree.KinematicTree: mass, first
+        moment, rotational inertia about the origin, per node) with this layout's
+        bodies at pi and the others (massless ones) as the plant holds them in
+        ``context``: the compiled kernels' inertias without a Drake context."""
+        fixed = tree.Inertias(context)
+        node_of = {int(body.index()): node for node, body in enumerate(tree.bodies)}
+        nodes = np.array([node_of[int(body.index())] for body in self.bodies])
+        rows, columns = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+
+        def inertias(pi: np.ndarray):
+            blocks = np.asarray(pi, float).reshape(-1, PER_BODY)
+            mass, moment, inertia = (x.copy() for x in fixed)
+            mass[nodes] = blocks[:, MASS]
+            moment[nodes] = blocks[:, MOMENT]
+            inertia[nodes[:, None], rows, columns] = blocks[:, INERTIA]
+            inertia[nodes[:, None], columns, rows] = blocks[:, INERTIA]
+            return mass, moment, inertia
+        return inertias
+
     def Apply(self, context, pi: np.ndarray) -> None:
         """Sets the plant's bodies in ``context`` to the inertias pi."""
         for body, M in zip(self.bodies, self.SpatialInertias(pi)):

@@ -114,6 +114,12 @@ class KinematicTree:
             joint=joint_index, X_PF=X_PF, axis=axis, X_MC=X_MC, below=below,
             joint_below=joint_below, joint_node=joint_node)
 
+    def KernelArrays(self) -> tuple:
+        """The tree's arrays in kernels.spatial's argument order (the inertias
+        follow them there)."""
+        return (self.base_subspace, self.parent, self.joint, self.X_PF, self.axis,
+                self.X_MC, self.below, self.joint_below)
+
     def Inertias(self, context):
         """(mass (nodes,), first moment m c (nodes, 3), rotational inertia about the
         body's origin (nodes, 3, 3)), in each body's frame, as the plant holds them

@@ -16,7 +16,9 @@ joint sits on its surface (Drake filters the first kind itself)."""
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+from pydrake.geometry import (Box, Capsule, CollisionFilterDeclaration, Convex,
+                              Cylinder, Ellipsoid, GeometrySet, Mesh, Sphere)
+from pydrake.multibody.tree import BodyIndex
 
 from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
@@ -46,6 +48,18 @@ class BaseClearancePotential:
         self._query_distance = max(query_distance, margin)
         base = self._plant.get_body(next(iter(self._plant.GetFloatingBaseBodies())))
         self._base_geometries = set(self._plant.GetCollisionGeometriesForBody(base))
+        self._reach = _JointReach(model.tree, [
+            _BodyRadius(self._plant, self._inspector, body) for body in model.tree.bodies])
+        # The last query's q and a lower bound of every link-base distance there.
+        self._known_q, self._known_distance = None, -np.inf
+
+    def _Beyond(self, q, distance: float) -> bool:
+        """Whether every link-base distance at q is certainly above ``distance``:
+        the distances are functions of q alone (the base pose moves links and base
+        together), each within sum_j reach_j |dq_j| of its value at the last
+        query's q (_JointReach), so above known - reach . |q - q_known|."""
+        return (self._known_q is not None and self._known_distance
+                - self._reach @ np.abs(q - self._known_q) > distance)
 
     def _BodyFrame(self, geometry):
         """The model plant's frame of the body owning ``geometry`` and the
@@ -59,18 +73,29 @@ class BaseClearancePotential:
         """U, its gradient and the nearest distance (inf beyond ``query_distance``,
         default the one it was made with; U needs the margin only) at joints q and
         the base pose (``evaluation``: the model's Evaluate(q), when the caller has
-        it)."""
+        it). Where every link is certainly beyond the query distance (_Beyond), the
+        query is not made: its answer would be U = 0, a zero gradient and inf.
+        A query made looks CERTIFY further than asked, so that the next calls can
+        be answered from it."""
+        query_distance = (self._query_distance if query_distance is None
+                          else max(query_distance, self.margin))
+        q = np.asarray(q, float)
+        gradient = np.zeros(self._model.num_joints)
+        if self._Beyond(q, query_distance):
+            return Clearance(U=0.0, gradient=gradient, min_distance=np.inf)
         self._plant.SetPositions(self._plant_context,
                                  self._model.FullPositions(q, base_pose))
         self._parsed.UpdatePoses(self._plant_context, self._scene_graph_context)
         query = self._query.Eval(self._scene_graph_context)
-        pairs = query.ComputeSignedDistancePairwiseClosestPoints(
-            self._query_distance if query_distance is None
-            else max(query_distance, self.margin))
-        U, gradient, nearest = 0.0, np.zeros(self._model.num_joints), np.inf
+        looked = query_distance + CERTIFY
+        pairs = query.ComputeSignedDistancePairwiseClosestPoints(looked)
+        U, nearest, known = 0.0, np.inf, looked
         for pair in pairs:
             if (pair.id_A in self._base_geometries) == (pair.id_B in self._base_geometries):
                 continue                                   # not a link-base pair
+            known = min(known, pair.distance)
+            if pair.distance > query_distance:
+                continue                                   # beyond what was asked
             link, base = (pair.id_A, pair.id_B) if pair.id_B in self._base_geometries \
                 else (pair.id_B, pair.id_A)
             sign = 1.0 if link == pair.id_A else -1.0      # nhat points base -> link
@@ -89,21 +114,83 @@ class BaseClearancePotential:
                     evaluation=evaluation)[3:])
             U += 0.5 * self._gain * depth**2
             gradient -= self._gain * depth * (J[0] - J[1]).T @ nhat
+        self._known_q, self._known_distance = q.copy(), known
         return Clearance(U=U, gradient=gradient, min_distance=nearest)
 
 
+# [m] a query looks this far beyond the distance asked, so that a link moving
+# away from the margin is known to be beyond it for a while without a query.
+CERTIFY = 0.2
+
+# The radius of a shape's smallest ball about its frame's origin.
+_SHAPE_RADIUS = {
+    Sphere: lambda shape: shape.radius(),
+    Box: lambda shape: 0.5 * np.linalg.norm(shape.size()),
+    Cylinder: lambda shape: np.hypot(shape.radius(), 0.5 * shape.length()),
+    Capsule: lambda shape: shape.radius() + 0.5 * shape.length(),
+    Ellipsoid: lambda shape: max(shape.a(), shape.b(), shape.c()),
+    Convex: lambda shape: _HullRadius(shape.GetConvexHull()),
+    Mesh: lambda shape: _HullRadius(shape.GetConvexHull()),
+}
+
+
+def _HullRadius(hull) -> float:
+    return max(np.linalg.norm(hull.vertex(i)) for i in range(hull.num_vertices()))
+
+
+def _BodyRadius(plant, inspector, body) -> float:
+    """The radius about ``body``'s origin of a ball holding its collision
+    geometries (-inf without any; inf for a shape without a bound, a half space)."""
+    radius = -np.inf
+    for geometry in plant.GetCollisionGeometriesForBody(
+            plant.get_body(body.index())):
+        shape = inspector.GetShape(geometry)
+        bound = _SHAPE_RADIUS.get(type(shape), lambda shape: np.inf)(shape)
+        radius = max(radius, np.linalg.norm(inspector.GetPoseInFrame(geometry)
+                                            .translation()) + bound)
+    return radius
+
+
+def _JointReach(tree, radius) -> np.ndarray:
+    """reach_j: the largest distance of a collision geometry's point moved by joint
+    j from j's axis, bounded by the fixed offsets along the chain, so that
+    |d phi / d q_j| <= reach_j for every link-base distance phi (a revolute
+    joint moves a point at r from its axis at r per rad; kinematic_tree's
+    X_WC = X_WP X_PF Rot X_MC: the chain from joint j's origin to node k is the
+    offsets t(X_MC) of j's node, then t(X_PF) + t(X_MC) of each node after it,
+    each a fixed length, and ``radius``[k] holds node k's geometry about its
+    origin)."""
+    offset_in = np.linalg.norm(tree.X_PF[:, :3, 3], axis=1)
+    offset_out = np.linalg.norm(tree.X_MC[:, :3, 3], axis=1)
+    reach = np.zeros(len(tree.joint_node))
+    for j, start in enumerate(tree.joint_node):
+        chain = np.full(len(tree.bodies), np.nan)
+        chain[start] = offset_out[start]
+        for node in range(start + 1, len(tree.bodies)):
+            if tree.below[j, node]:
+                chain[node] = chain[tree.parent[node]] + offset_in[node] + offset_out[node]
+        moved = tree.below[j] & (np.asarray(radius) > -np.inf)
+        reach[j] = max([0.0] + list(chain[moved] + np.asarray(radius)[moved]))
+    return reach
+
+
 def _FilterLinksOnTheBase(plant, scene_graph, context) -> None:
-    """Excludes the collision pairs of the base with each body whose joint's parent
-    is welded to the base (the bodies Drake leaves unfiltered when the arm's root is
-    a body of its own, welded to the base), in the SceneGraph ``context``."""
+    """Excludes, in the SceneGraph ``context``, the collision pairs of the base with
+    each body whose joint's parent is welded to the base (the bodies Drake leaves
+    unfiltered when the arm's root is a body of its own, welded to the base), and
+    every pair of two links: the potential measures links against the base only,
+    and a query then computes those pairs alone."""
     base = plant.get_body(next(iter(plant.GetFloatingBaseBodies())))
     welded = {body.index() for body in plant.GetBodiesWeldedTo(base)}
     on_base = [plant.get_joint(j).child_body() for j in plant.GetJointIndices()
                if plant.get_joint(j).parent_body().index() in welded
                and plant.get_joint(j).child_body().index() not in welded]
     geometries = [g for body in on_base for g in plant.GetCollisionGeometriesForBody(body)]
+    manager = scene_graph.collision_filter_manager(context)
     if geometries:
-        scene_graph.collision_filter_manager(context).Apply(
-            CollisionFilterDeclaration().ExcludeBetween(
-                GeometrySet(plant.GetCollisionGeometriesForBody(base)),
-                GeometrySet(geometries)))
+        manager.Apply(CollisionFilterDeclaration().ExcludeBetween(
+            GeometrySet(plant.GetCollisionGeometriesForBody(base)),
+            GeometrySet(geometries)))
+    links = [g for index in range(plant.num_bodies()) if index != int(base.index())
+             for g in plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(index)))]
+    manager.Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(links)))

@@ -7,7 +7,9 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.dynamics.inertial_parameters import (MASS, PER_BODY, InertialParameters,
                                              identify_parameters, prior_scales)
+from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.kernels import spatial
 from dacph_drake.scenario import InertiaIdentification
 
 
@@ -55,6 +57,8 @@ class InertialIdentifier(LeafSystem):
         self.prior = (self.parameters.FromContext(self._context) if prior is None
                       else np.asarray(prior, float).copy())
         self._scales = prior_scales(self.parameters, self.prior)
+        self._tree = KinematicTree.FromPlant(plant)
+        self._node_inertias = self.parameters.NodeInertias(self._tree, self._context)
         size = self.parameters.size
         c = self._coordinates
         self._base_pose = self.DeclareVectorInputPort("base_pose", len(c.base_q))
@@ -90,22 +94,24 @@ class InertialIdentifier(LeafSystem):
             return
         estimate = identify_parameters(information.reshape(size, size), self.prior,
                                        self._scales, self._settings.prior_weight)
-        basis = self.parameters.MassMatrixBasis(self._context)
-        H = np.tensordot(estimate, basis, 1)
-        if not (np.all(estimate[MASS::PER_BODY] > 0)
-                and np.linalg.eigvalsh(0.5 * (H + H.T))[0] > 0):
+        q = self._q.Eval(context)
+        M = self._ReducedMassMatrix(estimate, q)
+        if not (np.all(estimate[MASS::PER_BODY] > 0) and M is not None
+                and np.linalg.eigvalsh(M)[0] > 0):
             return              # no mass matrix: keep the previous estimate
         discrete_state.get_mutable_vector(self._estimate).SetFromVector(estimate)
-        M = self._ReducedMassMatrix(H)
         epoch = context.get_discrete_state(self._epoch).get_value()
-        change = (np.abs(M - self._ReducedMassMatrix(np.tensordot(epoch[1:], basis, 1)))
+        change = (np.abs(M - self._ReducedMassMatrix(epoch[1:], q))
                   / np.sqrt(np.outer(np.diag(M), np.diag(M))))
         if np.max(change) > self._settings.change_threshold:
             discrete_state.get_mutable_vector(self._epoch).SetFromVector(
                 np.concatenate([[epoch[0] + 1], estimate]))
 
-    def _ReducedMassMatrix(self, H: np.ndarray) -> np.ndarray:
-        """M = H_mm - H_bm^T H_bb^-1 H_bm of a full mass matrix H."""
-        b, m = self._coordinates.base_v, self._coordinates.joint_v
-        H_bm = H[np.ix_(b, m)]
-        return H[np.ix_(m, m)] - H_bm.T @ np.linalg.solve(H[np.ix_(b, b)], H_bm)
+    def _ReducedMassMatrix(self, pi: np.ndarray, q: np.ndarray):
+        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm with the bodies' inertias pi (the
+        compiled kernel, kernels.spatial.reduced_model), or None where H_bb is not
+        positive definite (its Cholesky factor then is not finite): with M
+        positive definite too, the full mass matrix H is."""
+        M = spatial.reduced_model(*self._tree.KernelArrays(), *self._node_inertias(pi),
+                                  np.asarray(q, float), False)[0]
+        return M if np.all(np.isfinite(M)) else None

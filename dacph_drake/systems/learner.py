@@ -25,7 +25,9 @@ class RhsLearner(LeafSystem):
     ``watch_model``: settings.model_change);
     a fit needs settings.min_window seconds of samples in the window, and the first
     fit of the run starts from the window's best constant B (settings.warm_start,
-    RhsIdentifier.WarmStart).
+    RhsIdentifier.WarmStart). With settings.prior_fallback the published weights
+    are the prior's (B_hat = B0, D_hat = D0) whenever the network does not beat
+    them on the samples since the last change (_NetworkPublished).
 
     Outputs: ``weights`` (the exported parameter vector, held between updates; the
     fast loops evaluate it with numpy), ``beta_hat`` (FitStatistics.beta_hat, used
@@ -59,7 +61,7 @@ class RhsLearner(LeafSystem):
                                          self._network.coupling)
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
-        initial_weights = self._identifier.Export()
+        initial_weights = self._prior_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
         self._q = self.DeclareVectorInputPort("q", n)
@@ -125,8 +127,9 @@ class RhsLearner(LeafSystem):
             discrete_state.get_mutable_vector(self._detector_state).SetFromVector(detector)
         holding = ChangeDetector.Holding(detector, t)
         window_start = ChangeDetector.WindowStart(detector)
-        if (self._learning and not holding
-                and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples):
+        fitted = (self._learning and not holding
+                  and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples)
+        if fitted:
             warm_started = context.get_discrete_state(self._warm_started).get_value()[0]
             if (self._regularized and self._settings.warm_start
                     and warm_started == -np.inf):
@@ -134,14 +137,34 @@ class RhsLearner(LeafSystem):
                 discrete_state.get_mutable_vector(self._warm_started).SetFromVector(
                     [window_start])
             self._identifier.Fit(rows, t, window_start)
-            discrete_state.get_mutable_vector(self._weights).SetFromVector(
-                self._identifier.Export())
         stats = self._identifier.Statistics(rows, t)
+        published = self._learning and self._NetworkPublished(rows, t, window_start,
+                                                               fitted)
+        if self._learning:
+            discrete_state.get_mutable_vector(self._weights).SetFromVector(
+                self._identifier.Export() if published else self._prior_weights)
         log = LearnerLog()
         values = np.zeros(log.size)
-        values[[log.loss, log.beta_hat, log.nominal_loss, log.holding]] = [
-            stats.loss, stats.beta_hat, stats.nominal_loss, float(holding)]
+        values[[log.loss, log.beta_hat, log.nominal_loss, log.holding,
+                log.network_published]] = [stats.loss, stats.beta_hat,
+                                           stats.nominal_loss, float(holding),
+                                           float(published)]
         discrete_state.get_mutable_vector(self._log).SetFromVector(values)
+
+    def _NetworkPublished(self, rows, t, window_start, fitted) -> bool:
+        """Whether the network's weights, not the prior's, are published this update.
+        Always, unless settings.prior_fallback: then only when this update fitted
+        (not holding after a change, min_window seconds of samples since it) and the
+        network explains the samples since the change at least as well as (B0, D0)
+        do, FitStatistics.loss <= nominal_loss; the prior otherwise. After a
+        change the frozen network describes the old relation, and a refit on the
+        first window after it can be further off than the prior."""
+        if not self._settings.prior_fallback:
+            return True
+        if not fitted:
+            return False
+        current = self._identifier.Statistics(rows, t, window_start)
+        return current.loss <= current.nominal_loss
 
     def _ModelChange(self, context, discrete_state, detector, t):
         """The detector state after checking whether the LHS model changed since the
