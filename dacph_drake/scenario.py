@@ -357,7 +357,10 @@ class Learner:
       (seed 1: 2.36); with it 0.61-0.75 and 0.82-0.84 (eight such q0, three
       seeds). Its price is the holds' share of each phase: on satellite_6dof
       (two seeds) phase 2 went from 0.67-0.73 to 0.80-0.81 and phase 3 from
-      0.56-0.64 to 0.85-0.87, tracking within 2 %. False: the
+      0.56-0.64 to 0.85-0.87, and on the Panda and the UR5 (arm_defaults) B
+      went from 0.33-0.44 to 0.75-0.77 in phases 2-3 (the prior published for
+      half of each 4 s phase), tracking within 2 % but the UR5's phase 2
+      (1.44e-5 against 1.07e-5 rad, the learner-off loop's). False: the
       network is always published (the planar scenarios).
 
     ``coupling`` (either mode): how the network's n x n output enters B_hat
