@@ -7,7 +7,7 @@ each against the Python and Drake computation it replaces."""
 import numpy as np
 from numba import njit
 
-from dacph_drake.kernels.arm import matmul, matvec
+from dacph_drake.kernels.arm import inverse3, matmul, matvec
 from dacph_drake.kernels.spatial import (_rotation, christoffel, point_jacobian,
                                          reduced_model)
 
@@ -68,31 +68,13 @@ def attitude_error(R_WE, R_WD):
 
 
 @njit(cache=True)
-def _inverse3(A):
-    det = (A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
-           - A[0, 1] * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
-           + A[0, 2] * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]))
-    out = np.empty((3, 3))
-    out[0, 0] = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
-    out[0, 1] = A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]
-    out[0, 2] = A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]
-    out[1, 0] = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
-    out[1, 1] = A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]
-    out[1, 2] = A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]
-    out[2, 0] = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
-    out[2, 1] = A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]
-    out[2, 2] = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    return out / det
-
-
-@njit(cache=True)
 def reference_rates(D, omega_d, e, Lambda, xi, damping):
     """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi, D^+ = D^T (D D^T + mu^2 I)^-1
     (tasks.attitude.reference_rates)."""
     DDt = matmul(D, D.T)
     for i in range(3):
         DDt[i, i] += damping * damping
-    D_plus = matmul(D.T, _inverse3(DDt))
+    D_plus = matmul(D.T, inverse3(DDt))
     return matvec(D_plus, omega_d - Lambda * e) + xi - matvec(D_plus, matvec(D, xi))
 
 

@@ -24,7 +24,7 @@ C' the Christoffel form of dM (floating_model.FloatingBaseModel.Coriolis)."""
 import numpy as np
 from numba import njit
 
-from dacph_drake.kernels.arm import matmul, matvec
+from dacph_drake.kernels.arm import dot, matmul, matvec
 
 
 @njit(cache=True)
@@ -44,14 +44,6 @@ def _rotation(axis, angle):
 def _cross(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                      a[0] * b[1] - a[1] * b[0]])
-
-
-@njit(cache=True)
-def _dot(a, b):
-    out = 0.0
-    for i in range(a.shape[0]):
-        out += a[i] * b[i]
-    return out
 
 
 @njit(cache=True)
@@ -188,7 +180,7 @@ def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, 
     for j in range(n):
         for l in range(n):
             if j == l or joint_below[j, l]:
-                value = _dot(S[j], IcS[l])
+                value = dot(S[j], IcS[l])
                 H[nb + j, nb + l] = value
                 H[nb + l, nb + j] = value
     if not derivatives:
@@ -225,7 +217,7 @@ def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, 
         for j in range(n):
             for l in range(n):
                 if j == l or joint_below[j, l]:
-                    value = _dot(dS[j], IcS[l]) + _dot(S[j], dIcS[l])
+                    value = dot(dS[j], IcS[l]) + dot(S[j], dIcS[l])
                     dH[k, nb + j, nb + l] = value
                     dH[k, nb + l, nb + j] = value
     return H, dH, X, S
