@@ -12,9 +12,9 @@ note) and saved runs keep their fingerprints:
   (now derived from the phases)."""
 import logging
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
@@ -38,10 +38,26 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  evidence_ratio: 0.5", "  evidence_window: 1.0",
                           "  min_window: 0.5", "  warm_start: true",
                           "  model_change: true", "  step_guard: 10.0",
-                          "  boundary_rate: 0.0", "  prior_fallback: false")
-# Settings added to the current layout since it was introduced, at their defaults:
-# a run saved before them was fingerprinted without their lines.
-ADDED_TO_CURRENT_LAYOUT = ("  prior_fallback: false",)
+                          "  boundary_rate: 0.0")
+# Settings added to the current layout since it was introduced: (section, key, the
+# value that reproduces the behaviour before it). A file whose section lacks the key
+# was written before it and is read with that value (not the robot's sized default);
+# the key's line at that value is left out of the fingerprinted text, so a run
+# saved before it keeps its fingerprint (saved_forms).
+ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),)
+
+
+def _added_lines() -> Tuple[str, ...]:
+    """ADDED_TO_CURRENT_LAYOUT's lines as yaml_dump_typed writes them."""
+    return tuple(f"  {key}: {str(value).lower()}"
+                 for _, key, value in ADDED_TO_CURRENT_LAYOUT)
+
+
+def _without_lines(text: str, lines) -> str:
+    """``text`` without the whole lines ``lines``."""
+    for line in lines:
+        text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
+    return text
 ADDED_SECTION_DEFAULTS = (
     "inertia:\n  identify: true\n  prior_weight: 1.0e-12\n  start: 0.2\n"
     "  duration: 10.0\n  change_threshold: 0.05\n",)
@@ -92,9 +108,8 @@ class PlanarLayoutV1:
         at their defaults, and, where the simulator settings are those a
         top-level ``integration_scheme: X`` implied (move_integration_scheme), the
         form with that key."""
-        text = yaml_dump_typed(self)
-        for line in ADDED_SETTING_DEFAULTS:
-            text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
+        text = _without_lines(yaml_dump_typed(self),
+                              ADDED_SETTING_DEFAULTS + _added_lines())
         for section in ADDED_SECTION_DEFAULTS:
             text = re.sub(f"^{re.escape(section)}", "", text, flags=re.MULTILINE)
         config = self.simulator
@@ -124,7 +139,8 @@ class SpatialLayoutV1:
     uncertainty: Uncertainty = field(default_factory=lambda: six_dof_uncertainty(0.0))
     disturbance: Disturbance = field(default_factory=lambda: six_dof_disturbance(0.0))
     rhs: Rhs = field(default_factory=described_arm_rhs)
-    learner: Learner = field(default_factory=described_arm_learner)
+    learner: Learner = field(default_factory=lambda: replace(     # as it stood then
+        described_arm_learner(), prior_fallback=False))
     excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
     rhs_period: float = 5e-4
@@ -194,7 +210,7 @@ def load_older_layout(path) -> Optional[Scenario]:
         "%s: read in the layout before the robot: and task: sections (%s); save it "
         "again to update the file", path, note)
     return load_yaml_dataclass(path, layout,
-                               migrate=move_integration_scheme).ToScenario(path)
+                               migrate=_migrate_file).ToScenario(path)
 
 
 def load_scenario(path) -> Scenario:
@@ -220,7 +236,7 @@ def _load_current_layout(path) -> Scenario:
     (scenario.DescribedArm.SizedDefaults), so that a file naming only the robot
     and q0 runs."""
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
-                                   migrate=move_integration_scheme)
+                                   migrate=_migrate_file)
     raw = read_yaml(path)
     given = raw if isinstance(raw, dict) else {}
     defaults = scenario.robot.SizedDefaults(
@@ -228,8 +244,23 @@ def _load_current_layout(path) -> Scenario:
         scenario.task if "task" in given else None)
     if defaults is None:
         return scenario
-    return load_yaml_dataclass(path, Scenario, migrate=move_integration_scheme,
+    return load_yaml_dataclass(path, Scenario, migrate=_migrate_file,
                                defaults=defaults)
+
+
+def _migrate_file(raw, path):
+    """move_integration_scheme, then each setting of ADDED_TO_CURRENT_LAYOUT that
+    the file's section lacks set to its value before it existed (None: nothing
+    to change)."""
+    migrated = move_integration_scheme(raw, path)
+    source = migrated if migrated is not None else raw
+    if not isinstance(source, dict):
+        return migrated
+    for section, key, before in ADDED_TO_CURRENT_LAYOUT:
+        if isinstance(source.get(section), dict) and key not in source[section]:
+            source = dict(source)
+            source[section] = {**source[section], key: before}
+    return source if source is not raw else None
 
 
 def move_integration_scheme(raw, path):
@@ -262,10 +293,7 @@ def saved_forms(scenario: Scenario) -> List[str]:
     of the same settings in the layouts before (the robot section's
     OLDER_LAYOUTS: a planar arm's scenario before the robot: and task: sections,
     and before that the top-level integration_scheme:)."""
-    text = yaml_dump_typed(scenario)
-    for line in ADDED_TO_CURRENT_LAYOUT:
-        text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
-    return [text] + [
+    return [_without_lines(yaml_dump_typed(scenario), _added_lines())] + [
         form for layout in scenario.robot.OLDER_LAYOUTS
         for form in globals()[layout].From(scenario).SavedForms()]
 

@@ -113,6 +113,7 @@ BAD_SCENARIO_FILES = [
     ("learner: {start_hold: -1.0}\n", r"learner.start_hold = -1.0 .*>= 0"),
     ("learner: {min_window: 10.0}\n", r"learner.min_window = 10.0 .*in \[0, 4\]"),
     ("learner: {step_guard: 0.5}\n", r"learner.step_guard = 0.5 .*in \[1, 1e\+12\]"),
+    ("learner: {prior_fallback: sometimes}\n", r"s.yaml.*bool.*prior_fallback.*sometimes"),
     ("inertia: {prior_weight: 0.0}\n", r"inertia.prior_weight = 0.0 .*in \[1e-14, 1\]"),
     ("inertia: {start: -0.1}\n", r"inertia.start = -0.1 .*>= 0"),
     ("inertia: {change_threshold: 2.0}\n", r"inertia.change_threshold = 2.0 .*in \[0, 1\]"),
@@ -143,6 +144,23 @@ def test_files_of_the_older_layout_load(tmp_path, caplog):
     assert load_scenario(path) == scenario
     scenario.simulator.max_step_size = 1e-4     # not what the old key implied
     assert len(scenario_fingerprints(scenario)) == 2
+
+
+def test_files_written_before_a_setting_was_added_keep_their_meaning(tmp_path):
+    """A spatial scenario file as the release before learner.prior_fallback wrote
+    it (the shipped satellite_3dof without that line) is read with the fallback
+    off, as it ran, not with the sized default's on, and its fingerprinted text is
+    the file as written (scenario_files.ADDED_TO_CURRENT_LAYOUT); the shipped file
+    itself keeps it on."""
+    shipped = (SCENARIOS / "satellite_3dof.yaml").read_text()
+    assert "  prior_fallback: true\n" in shipped
+    before = shipped.replace("  prior_fallback: true\n", "")
+    path = tmp_path / "before.yaml"
+    path.write_text(before)
+    scenario = load_scenario(path)
+    assert not scenario.learner.prior_fallback
+    assert saved_forms(scenario)[0] == before
+    assert load_scenario(SCENARIOS / "satellite_3dof.yaml").learner.prior_fallback
 
 
 def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplog):
