@@ -83,9 +83,9 @@ class InertialIdentifier(LeafSystem):
         velocities = np.zeros(self._plant.num_velocities())
         velocities[c.base_v] = self._base_velocity.Eval(context)
         velocities[c.joint_v] = self._qdot.Eval(context)
+        q = self._q.Eval(context)
         self._plant.SetPositionsAndVelocities(self._context, np.concatenate([
-            c.Positions(self._q.Eval(context), self._base_pose.Eval(context)),
-            velocities]))
+            c.Positions(q, self._base_pose.Eval(context)), velocities]))
         Y = self.parameters.MomentumRegressor(self._context)
         information = (context.get_discrete_state(self._information).get_value()
                        + (Y.T @ Y).reshape(-1))
@@ -94,7 +94,6 @@ class InertialIdentifier(LeafSystem):
             return
         estimate = identify_parameters(information.reshape(size, size), self.prior,
                                        self._scales, self._settings.prior_weight)
-        q = self._q.Eval(context)
         M = self._ReducedMassMatrix(estimate, q)
         if not (np.all(estimate[MASS::PER_BODY] > 0) and M is not None
                 and np.linalg.eigvalsh(M)[0] > 0):

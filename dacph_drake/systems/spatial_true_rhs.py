@@ -47,21 +47,25 @@ class SpatialTrueRhs(LeafSystem):
         self.DeclareVectorOutputPort("saturated", n, self._CalcSaturated,
                                      prerequisites_of_calc={self._u.ticket()})
 
-    def _Matrices(self, context):
-        """(B~, diag D~, qdot) at the context's time and input state."""
+    def _StateAndMassMatrix(self, context):
+        """(x, H): the input plant state and the plant's mass matrix there."""
         x = self._state.Eval(context)
         self._plant.SetPositionsAndVelocities(self._context, x)
+        return x, self._plant.CalcMassMatrix(self._context)
+
+    def _Matrices(self, context):
+        """(B~, diag D~, qdot) at the context's time and input state."""
+        x, H = self._StateAndMassMatrix(context)
         v = x[self._nq:]
-        p = (self._plant.CalcMassMatrix(self._context) @ v)[self._v_index]
+        p = (H @ v)[self._v_index]
         B, D = true_matrices(context.get_time(), x[self._q_index], p, *self._uncertainty)
         return B, D, v[self._v_index]
 
     def _CalcTau(self, context, output):
-        x = self._state.Eval(context)
-        self._plant.SetPositionsAndVelocities(self._context, x)
+        x, H = self._StateAndMassMatrix(context)
         output.SetFromVector(spatial_true_torque(
-            context.get_time(), x, self._plant.CalcMassMatrix(self._context),
-            self._q_index, self._v_index, self._u.Eval(context), self._effort_limit,
+            context.get_time(), x, H, self._q_index, self._v_index,
+            self._u.Eval(context), self._effort_limit,
             self._disturbance_model.Eval(context), self._packed))
 
     def _CalcSaturated(self, context, output):
