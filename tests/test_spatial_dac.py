@@ -8,7 +8,8 @@ import pytest
 from dacph_drake.controllers import build_closed_loop
 from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.analysis.metrics import nominal_estimates, run_metrics
+from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import AttitudeGains, Phases
 from dacph_drake.scenario_files import load_scenario, save_scenario
@@ -223,3 +224,18 @@ def test_learning_beats_the_prior_on_the_3dof_arm_without_costing_tracking():
     for phase in ("phase2", "phase3"):
         assert (dac_metrics[f"{phase}.tracking_error_rms"]
                 < 1.5 * nominal_metrics[f"{phase}.tracking_error_rms"]), phase
+    # The prior fallback (learner.prior_fallback, on here): the prior is published
+    # while training holds and for part of the run besides, and what is published
+    # then is (B0, D0) to round-off (the network evaluated at its prior weights).
+    layout = LearnerLog()
+    learner_log = dac.logs["learner_log"]
+    published = learner_log[:, layout.network_published] > 0.5
+    holding = learner_log[:, layout.holding] > 0.5
+    assert scenario.learner.prior_fallback
+    assert holding.any() and not np.any(published & holding)
+    assert 0.2 < published.mean() < 0.9
+    prior = nominal_estimates(scenario)
+    np.testing.assert_allclose(dac.logs["estimates"][~published],
+                               np.tile(prior, (np.count_nonzero(~published), 1)),
+                               rtol=0, atol=1e-12)
+    assert not np.allclose(dac.logs["estimates"][published], prior)
