@@ -1,7 +1,7 @@
 """The spatial robots' ablation (README, "Spatial robots"): DAC, its learner-off
 ablation (dac-nominal) and the model-based baseline on the shipped spatial scenarios,
 DAC and dac-nominal with two seeds. Prints the Markdown table and writes every run's
-metrics to --out (JSON). About 6 minutes on one core.
+metrics to --out (JSON). About 1 minute on one core.
 
     .venv/bin/python scripts/spatial_ablation.py --out runs/spatial_ablation.json
 """

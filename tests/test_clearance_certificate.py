@@ -25,25 +25,29 @@ def robot(request):
 
 def test_a_certified_answer_is_the_query_s(robot):
     """Along random motions, every call of one potential (certifying) equals the
-    same call of a potential that always queries, bit for bit, and the
-    certificate answers a share of them."""
+    same call of a potential that always queries as far as asked, bit for bit; the
+    certificate answers a share of them, and a share of the queries look only as
+    far as the nearest distance's upper bound."""
     potential, n, margin = robot
     certified, queried = potential(), potential()
     rng = np.random.default_rng(3)
-    answered = 0
+    answered, bounded = 0, 0
     for _ in range(10):
         q, w = rng.uniform(-2.5, 2.5, n), rng.normal(0.0, 1.0, n)
         for _ in range(60):
             q = q + 0.002 * w
             for distance in (margin + 0.01, None):
                 known = certified._known_q
+                at_most = certified._NearestAtMost(q)
                 a = certified.Evaluate(q, None, query_distance=distance)
                 answered += certified._known_q is known
+                bounded += (certified._known_q is not known
+                            and at_most < (distance or 1.0))
                 queried._known_q = None
                 b = queried.Evaluate(q, None, query_distance=distance)
                 assert a.U == b.U and a.min_distance == b.min_distance
                 np.testing.assert_array_equal(a.gradient, b.gradient)
-    assert answered > 50
+    assert answered > 50 and bounded > 50
 
 
 def test_the_reach_bounds_every_distance_change(robot):

@@ -466,7 +466,8 @@ def test_the_homogeneous_region_of_attraction_is_the_full_programs(rng):
 def test_the_compiled_model_is_drakes(robot, rng):
     """FloatingBaseModel's compiled kernel (kernels/spatial.py) against Drake at
     random configurations and base poses: M the Schur complement of CalcMassMatrix
-    (relative 1e-13), dM/dq from Drake's AutoDiff of H (1e-12), the end effector's
+    (relative 1e-13), dM/dq and dA/dq (A = H_bb^-1 H_bm) from Drake's AutoDiff of
+    H (1e-12), the end effector's
     generalized Jacobian J_m - J_b H_bb^-1 H_bm from CalcJacobianSpatialVelocity
     (1e-12) and the zero-momentum base velocity (1e-12)."""
     from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
@@ -496,10 +497,14 @@ def test_the_compiled_model_is_drakes(robot, rng):
         M = H[np.ix_(m, m)] - H[np.ix_(m, b)] @ A
         dM = np.array([d[np.ix_(m, m)] - d[np.ix_(m, b)] @ A - A.T @ d[np.ix_(b, m)]
                        + A.T @ d[np.ix_(b, b)] @ A for d in dH])
-        M_k, dM_k = model.MassMatrixAndDerivatives(q)
+        dA = np.array([np.linalg.solve(H[np.ix_(b, b)], d[np.ix_(b, m)]
+                                       - d[np.ix_(b, b)] @ A) for d in dH])
+        M_k, dM_k, A_k, dA_k = model.Evaluate(q)[:4]
         scale = np.abs(M).max()
         np.testing.assert_allclose(M_k, M, rtol=0, atol=1e-13 * scale)
         np.testing.assert_allclose(dM_k, dM, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(A_k, A, rtol=0, atol=1e-12 * np.abs(A).max())
+        np.testing.assert_allclose(dA_k, dA, rtol=0, atol=1e-12 * np.abs(A).max())
         plant.SetPositions(context, model.FullPositions(q, base))
         H = plant.CalcMassMatrix(context)
         J = plant.CalcJacobianSpatialVelocity(
@@ -511,3 +516,39 @@ def test_the_compiled_model_is_drakes(robot, rng):
                                    J[:, m] - J[:, b] @ A, rtol=0, atol=1e-12)
         np.testing.assert_allclose(model.BaseVelocity(q, qdot, base), -A @ qdot,
                                    rtol=0, atol=1e-12 * np.abs(qdot).max())
+
+
+@pytest.mark.parametrize("robot", SPATIAL_ROBOTS)
+def test_the_attitude_task_rates_are_the_motion_s(robot, rng):
+    """nu_dot and e_dot of the compiled attitude task (kernels.attitude.task_rates:
+    from dA/dq, the joints' axes and the error quaternion) against central
+    differences (h = 1e-5 s) of nu along the motion: joints at qdot, the base
+    turning at a random omega_b, the reference at t, a secondary motion xi(q) with
+    its rate (relative 1e-7)."""
+    from dacph_drake.kernels.attitude import quaternion_rotation, task_rates, turned
+    plant = MakeRobotPlant(robot)
+    model = FloatingBaseModel(plant)
+    n, tree = model.num_joints, model.kernel_tree
+    node, X_CE = model.FrameNode(plant.GetFrameByName("end_effector"))
+    end_effector = (node, np.ascontiguousarray(X_CE[:3, :3]))
+    W = 0.1 * rng.normal(size=(n, n))
+    for _ in range(5):
+        q, qdot, omega_base = rng.uniform(-2, 2, n), rng.normal(size=n), rng.normal(size=3)
+        quaternion, t = rng.normal(size=4), rng.uniform(0, 10)
+        quaternion /= np.linalg.norm(quaternion)
+        axis = rng.normal(size=3)
+        reference = (quaternion_rotation(rng.normal(size=4)), axis / np.linalg.norm(axis),
+                     0.3, 2 * np.pi / 4)
+
+        def at(h):
+            q_h = q + h * qdot
+            nu, nu_dot, e, _ = task_rates(
+                tree[0], tree[1], tree[2], tree[7], model.Evaluate(q_h), qdot,
+                turned(quaternion, h * omega_base), omega_base, t + h, reference,
+                end_effector, W @ q_h, W @ qdot, 2.0, 0.05)
+            return nu, nu_dot, e
+        nu, nu_dot, e = at(0.0)
+        (nu_p, _, e_p), (nu_m, _, e_m) = at(1e-5), at(-1e-5)
+        np.testing.assert_allclose(nu_dot, (nu_p - nu_m) / 2e-5, rtol=0,
+                                   atol=1e-7 * np.abs(nu_dot).max())
+        assert np.max(np.abs(e_p - e_m)) > 1e-7          # the error does move

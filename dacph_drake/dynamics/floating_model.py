@@ -17,7 +17,7 @@ expressed in the world frame at the base pose given.
 
 H and dH/dq come from the plant's kinematic tree (kinematic_tree.KinematicTree) by a
 compiled kernel (kernels/spatial.py: composite inertias and their rotation about
-each joint's axis), about 60 us for 6 joints where Drake's AutoDiff of H took 320
+each joint's axis), about 16 us for 6 joints where Drake's AutoDiff of H took 320
 us; tests/test_spatial.py checks them against Drake's CalcMassMatrix and its
 AutoDiff derivatives. Planar arms keep their closed-form, compiled
 ReducedOrderModel (reduced_model.py) on the fast path; this model holds for every
@@ -84,8 +84,9 @@ class FloatingBaseModel:
         return (*self.tree.KernelArrays(), *self._inertias)
 
     def Evaluate(self, q, derivatives: bool = True):
-        """(M, dM, A = H_bb^-1 H_bm, X (body poses), S (joint motion subspaces)),
-        the base at the identity pose (dM zero unless ``derivatives``)."""
+        """(M, dM, A = H_bb^-1 H_bm, dA = dA/dq, X (body poses), S (joint motion
+        subspaces)), the base at the identity pose (dM, dA zero unless
+        ``derivatives``): kernels.spatial.reduced_model."""
         return spatial.reduced_model(*self.kernel_tree, np.asarray(q, float),
                                      derivatives)
 
@@ -96,7 +97,7 @@ class FloatingBaseModel:
     def MassMatrixAndDerivatives(self, q):
         """(M, dM) with dM[k] = dM/dq_k (n x n x n):
         dM = dH_mm - dH_mb A - A^T dH_bm + A^T dH_bb A, A = H_bb^-1 H_bm."""
-        M, dM, _, _, _ = self.Evaluate(q)
+        M, dM = self.Evaluate(q)[:2]
         return M, dM
 
     def Coriolis(self, q, qdot) -> np.ndarray:
@@ -107,7 +108,7 @@ class FloatingBaseModel:
 
     def MassAndCoriolis(self, q, qdot):
         """(M(q), C'(q, qdot)) from one evaluation."""
-        M, dM, _, _, _ = self.Evaluate(q)
+        M, dM = self.Evaluate(q)[:2]
         return M, spatial.christoffel(dM, np.asarray(qdot, float))
 
     def Momentum(self, q, qdot) -> np.ndarray:
@@ -138,7 +139,7 @@ class FloatingBaseModel:
         """R_WF (3 x 3) of a plant frame at an Evaluate result, the base at
         ``base_positions``."""
         node, X_CF = self.FrameNode(frame)
-        return self._BaseRotation(base_positions) @ evaluation[3][node, :3, :3] @ X_CF[:3, :3]
+        return self._BaseRotation(base_positions) @ evaluation[4][node, :3, :3] @ X_CF[:3, :3]
 
     def FrameNode(self, frame):
         """(node, X_CF) of a plant frame in the kinematic tree (cached)."""
@@ -152,8 +153,8 @@ class FloatingBaseModel:
         """J_bar (6 x n) of point P fixed in ``frame``: [omega; v] of P in the world
         (Drake's order) = J_bar qdot at zero momentum. ``evaluation``: this model's
         Evaluate(q), when the caller has it."""
-        _, _, A, X, S = (self.Evaluate(q, derivatives=False) if evaluation is None
-                         else evaluation)
+        _, _, A, _, X, S = (self.Evaluate(q, derivatives=False) if evaluation is None
+                            else evaluation)
         node, X_CF = self.FrameNode(frame)
         p_W = X[node, :3, :3] @ (X_CF[:3, :3] @ p_FoP_F + X_CF[:3, 3]) + X[node, :3, 3]
         J = spatial.point_jacobian(self.tree.base_subspace, self.tree.parent,

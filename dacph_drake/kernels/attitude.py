@@ -1,14 +1,15 @@
 """The AttitudeController's task, compiled (systems/attitude_controller.py states
 the law): the reference R_d(t) (scenario.AttitudeReference.At), the attitude error
-and the reference joint rates (tasks/attitude.py) at a configuration the compiled
-reduced model (kernels/spatial.py) was evaluated at, and the base's attitude turned
-along the motion for nu_dot's central difference. tests/test_kernels.py checks
-each against the Python and Drake computation it replaces."""
+and the reference joint rates (tasks/attitude.py) with their exact rate along the
+motion, at a configuration the compiled reduced model (kernels/spatial.py) was
+evaluated at; and the base's attitude turned along the motion (the secondary
+motion's central difference). tests/test_kernels.py checks the rates against the
+central difference of the rates themselves along the motion."""
 import numpy as np
 from numba import njit
 
 from dacph_drake.kernels.arm import inverse3, matmul, matvec
-from dacph_drake.kernels.spatial import (_rotation, christoffel, point_jacobian,
+from dacph_drake.kernels.spatial import (_cross, _rotation, _skew, christoffel,
                                          reduced_model)
 
 
@@ -60,83 +61,120 @@ def turned(quaternion, rotation_vector):
 
 
 @njit(cache=True)
-def attitude_error(R_WE, R_WD):
-    """e = 2 sgn(eta) epsilon of the error rotation R_WE R_WD^T
-    (tasks.attitude.attitude_error)."""
-    error = rotation_quaternion(matmul(R_WE, R_WD.T))       # w >= 0
-    return 2.0 * error[1:]
+def reference_rates(D, D_dot, r, r_dot, xi, xi_dot, damping):
+    """nu = D^+ r + (I - D^+ D) xi, D^+ = D^T G^-1, G = D D^T + mu^2 I
+    (tasks.attitude.reference_rates with r = omega_d - Lambda e), and its rate
 
-
-@njit(cache=True)
-def reference_rates(D, omega_d, e, Lambda, xi, damping):
-    """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi, D^+ = D^T (D D^T + mu^2 I)^-1
-    (tasks.attitude.reference_rates)."""
-    DDt = matmul(D, D.T)
+        nu_dot = dD^+ (r - D xi) + D^+ (r_dot - D_dot xi - D xi_dot) + xi_dot,
+        dD^+ = D_dot^T G^-1 - D^T G^-1 (D_dot D^T + D D_dot^T) G^-1."""
+    G = matmul(D, D.T)
     for i in range(3):
-        DDt[i, i] += damping * damping
-    D_plus = matmul(D.T, inverse3(DDt))
-    return matvec(D_plus, omega_d - Lambda * e) + xi - matvec(D_plus, matvec(D, xi))
+        G[i, i] += damping * damping
+    G_inverse = inverse3(G)
+    D_plus = matmul(D.T, G_inverse)
+    G_dot = matmul(D_dot, D.T)
+    G_dot = G_dot + G_dot.T
+    D_plus_dot = (matmul(D_dot.T, G_inverse)
+                  - matmul(D_plus, matmul(G_dot, G_inverse)))
+    task = r - matvec(D, xi)
+    nu = matvec(D_plus, task) + xi
+    nu_dot = (matvec(D_plus_dot, task)
+              + matvec(D_plus, r_dot - matvec(D_dot, xi) - matvec(D, xi_dot)) + xi_dot)
+    return nu, nu_dot
 
 
 @njit(cache=True)
 def desired_attitude(R_d0, axis, amplitude, omega, t):
-    """(R_d(t), omega_d(t)) of scenario.AttitudeReference.At (``axis`` unit,
-    ``omega`` = 2 pi / period)."""
-    phi, phi_dot = amplitude * np.sin(omega * t), amplitude * omega * np.cos(omega * t)
-    return matmul(R_d0, _rotation(axis, phi)), matvec(R_d0, axis) * phi_dot
+    """(R_d(t), omega_d(t), omega_d_dot(t)) of scenario.AttitudeReference.At
+    (``axis`` unit, ``omega`` = 2 pi / period)."""
+    phi = amplitude * np.sin(omega * t)
+    phi_dot = amplitude * omega * np.cos(omega * t)
+    phi_ddot = -omega * omega * phi
+    axis_W = matvec(R_d0, axis)
+    return matmul(R_d0, _rotation(axis, phi)), axis_W * phi_dot, axis_W * phi_ddot
 
 
 @njit(cache=True)
-def task_rates(base_subspace, parent, joint, evaluation, quaternion, t, reference,
-               end_effector, xi, Lambda, damping):
-    """(nu, e, R_d) at a configuration whose compiled model ``evaluation``
-    (FloatingBaseModel.Evaluate: M, dM, A, X, S) is given, the base's attitude
-    ``quaternion`` and time t. ``reference``: (R_d0, unit axis, amplitude, 2 pi /
-    period); ``end_effector``: (node, R_CE, its frame's rotation in the node's
-    body)."""
-    A, X, S = evaluation[2], evaluation[3], evaluation[4]
+def task_rates(base_subspace, parent, joint, joint_below, evaluation, qdot, quaternion,
+               omega_base, t, reference, end_effector, xi, xi_dot, Lambda, damping):
+    """(nu, nu_dot, e, R_d) at a configuration whose compiled model ``evaluation``
+    (FloatingBaseModel.Evaluate with derivatives: M, dM, A, dA, X, S) is given, the
+    base's attitude ``quaternion`` and time t; nu_dot is the exact rate along the
+    motion (joints at qdot, the base turning at ``omega_base``, the reference at t):
+
+        D = R_WB D_B,  D_B = sum over the end effector's joints of a_j e_j^T - S_b A
+        D_dot = [omega_b]x D + R_WB (sum_j (w_j x a_j) e_j^T - S_b A_dot),
+        A_dot = sum_k dA_k qdot_k, w_j = sum of a_k qdot_k over the joints k above j
+        e_dot = eta omega_err + omega_err x epsilon,  omega_err = omega_E - R_err omega_d
+
+    (a_j joint j's axis in the base frame, (eta, epsilon) the quaternion of
+    R_err = R_WE R_d^T, omega_E = omega_b + R_WB sum_j a_j qdot_j the end
+    effector's angular velocity). ``reference``: (R_d0, unit axis, amplitude,
+    2 pi / period); ``end_effector``: (node, R_CE, its frame's rotation in the
+    node's body); ``xi_dot`` the rate of the secondary motion xi."""
+    A, dA, X, S = evaluation[2], evaluation[3], evaluation[4], evaluation[5]
+    n, nb = qdot.shape[0], base_subspace.shape[1]
     node, R_CE = end_effector
     R_WB = quaternion_rotation(quaternion)
     R_WE = matmul(R_WB, matmul(X[node, :3, :3], R_CE))
-    R_d, omega_d = desired_attitude(reference[0], reference[1], reference[2],
-                                    reference[3], t)
-    e = attitude_error(R_WE, R_d)
-    D = matmul(R_WB, point_jacobian(base_subspace, parent, joint, X, S, A, node,
-                                    X[node, :3, 3])[:3])
-    return reference_rates(D, omega_d, e, Lambda, xi, damping), e, R_d
+    R_d, omega_d, omega_d_dot = desired_attitude(reference[0], reference[1],
+                                                 reference[2], reference[3], t)
+    R_err = matmul(R_WE, R_d.T)
+    error = rotation_quaternion(R_err)                  # eta >= 0
+    e = 2.0 * error[1:]
+    D_B, D_B_dot = np.zeros((3, n)), np.zeros((3, n))
+    for i in range(3):
+        for c in range(n):
+            value, rate = 0.0, 0.0
+            for m in range(nb):
+                value -= base_subspace[i, m] * A[m, c]
+                for k in range(n):
+                    rate -= base_subspace[i, m] * dA[k, m, c] * qdot[k]
+            D_B[i, c], D_B_dot[i, c] = value, rate
+    omega_joints, w_j = np.zeros(3), np.empty(3)
+    ancestor = node
+    while ancestor > 0:
+        j = joint[ancestor]
+        if j >= 0:
+            w_j[:] = 0.0
+            for k in range(n):
+                if joint_below[k, j]:
+                    for i in range(3):
+                        w_j[i] += qdot[k] * S[k, i]
+            for i in range(3):
+                D_B[i, j] += S[j, i]
+                omega_joints[i] += qdot[j] * S[j, i]
+            D_B_dot[0, j] += w_j[1] * S[j, 2] - w_j[2] * S[j, 1]
+            D_B_dot[1, j] += w_j[2] * S[j, 0] - w_j[0] * S[j, 2]
+            D_B_dot[2, j] += w_j[0] * S[j, 1] - w_j[1] * S[j, 0]
+        ancestor = parent[ancestor]
+    D = matmul(R_WB, D_B)
+    D_dot = matmul(_skew(omega_base), D) + matmul(R_WB, D_B_dot)
+    omega_error = omega_base + matvec(R_WB, omega_joints) - matvec(R_err, omega_d)
+    e_dot = error[0] * omega_error + _cross(omega_error, error[1:])
+    nu, nu_dot = reference_rates(D, D_dot, omega_d - Lambda * e,
+                                 omega_d_dot - Lambda * e_dot, xi, xi_dot, damping)
+    return nu, nu_dot, e, R_d
 
 
 @njit(cache=True)
-def attitude_update(tree, evaluation, q, qdot, quaternion, omega_base, t, h,
-                    reference, end_effector, xi, xi_plus, xi_minus, gains, chi,
-                    excitation):
+def attitude_update(tree, q, qdot, quaternion, omega_base, t, reference,
+                    end_effector, xi, xi_dot, gains, chi, excitation):
     """One AttitudeController update (its docstring states the law) from the
-    compiled model's ``evaluation`` at q (FloatingBaseModel.Evaluate with
-    derivatives; ``tree``: FloatingBaseModel.kernel_tree): nu and e there, nu_dot
-    by the central difference along the motion (q +- h qdot, the base turned by
-    +- h omega_base, t +- h; xi_plus, xi_minus the secondary motion there),
+    compiled model at q (kernels.spatial.reduced_model with derivatives; ``tree``:
+    FloatingBaseModel.kernel_tree): nu, nu_dot and e there (task_rates), xi the secondary motion and xi_dot its rate along the motion,
     ``gains`` = (Lambda, task_damping, damping_rate, epsilon, boundary_rate),
     ``excitation`` = (amplitude, 2 pi f_1, ..., 2 pi f_n). Returns (tau, M, C',
     [e, |e|, ||s||, V], the quaternion of R_d)."""
-    (base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_below, mass,
-     moment, inertia) = tree
+    base_subspace, parent, joint, joint_below = tree[0], tree[1], tree[2], tree[7]
+    evaluation = reduced_model(tree[0], tree[1], tree[2], tree[3], tree[4], tree[5],
+                               tree[6], tree[7], tree[8], tree[9], tree[10], q, True)
     Lambda, damping, damping_rate, epsilon, boundary_rate = (
         gains[0], gains[1], gains[2], gains[3], gains[4])
-    nu, e, R_d = task_rates(base_subspace, parent, joint, evaluation, quaternion, t,
-                            reference, end_effector, xi, Lambda, damping)
-    rates = np.empty((2, q.shape[0]))
-    for side in range(2):
-        sign = 1.0 - 2.0 * side
-        q_h = q + sign * h * qdot
-        quaternion_h = turned(quaternion, sign * h * omega_base)
-        evaluation_h = reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC,
-                                     below, joint_below, mass, moment, inertia, q_h,
-                                     False)
-        rates[side] = task_rates(base_subspace, parent, joint, evaluation_h,
-                                 quaternion_h, t + sign * h, reference, end_effector,
-                                 xi_plus if side == 0 else xi_minus, Lambda,
-                                 damping)[0]
-    nu_dot = (rates[0] - rates[1]) / (2 * h)
+    nu, nu_dot, e, R_d = task_rates(base_subspace, parent, joint, joint_below,
+                                    evaluation, qdot, quaternion, omega_base, t,
+                                    reference, end_effector, xi, xi_dot, Lambda,
+                                    damping)
     M, dM = evaluation[0], evaluation[1]
     C = christoffel(dM, qdot)
     s = qdot - nu

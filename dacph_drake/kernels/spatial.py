@@ -123,29 +123,17 @@ def _spatial_inertias(X, mass, moment, inertia):
 
 
 @njit(cache=True)
-def _motion_cross(a, b):
-    """a x b of spatial motions: (w_a x w_b; w_a x v_b + v_a x w_b)."""
-    out = np.empty(6)
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-    out[3] = a[1] * b[5] - a[2] * b[4] + a[4] * b[2] - a[5] * b[1]
-    out[4] = a[2] * b[3] - a[0] * b[5] + a[5] * b[0] - a[3] * b[2]
-    out[5] = a[0] * b[4] - a[1] * b[3] + a[3] * b[1] - a[4] * b[0]
-    return out
-
-
-@njit(cache=True)
-def _force_cross(a, f):
-    """a x* f of a motion a and a force f: (w_a x n + v_a x f; w_a x f)."""
-    out = np.empty(6)
-    out[0] = a[1] * f[2] - a[2] * f[1] + a[4] * f[5] - a[5] * f[4]
-    out[1] = a[2] * f[0] - a[0] * f[2] + a[5] * f[3] - a[3] * f[5]
-    out[2] = a[0] * f[1] - a[1] * f[0] + a[3] * f[4] - a[4] * f[3]
-    out[3] = a[1] * f[5] - a[2] * f[4]
-    out[4] = a[2] * f[3] - a[0] * f[5]
-    out[5] = a[0] * f[4] - a[1] * f[3]
-    return out
+def _motion_cross_matrix(a, out):
+    """out = crm(a), the 6 x 6 matrix of m -> a x m (_motion_cross)."""
+    out[:] = 0.0
+    for block in range(2):
+        o = 3 * block
+        out[o, o + 1], out[o, o + 2] = -a[2], a[1]
+        out[o + 1, o], out[o + 1, o + 2] = a[2], -a[0]
+        out[o + 2, o], out[o + 2, o + 1] = -a[1], a[0]
+    out[3, 1], out[3, 2] = -a[5], a[4]
+    out[4, 0], out[4, 2] = a[5], -a[3]
+    out[5, 0], out[5, 1] = -a[4], a[3]
 
 
 @njit(cache=True)
@@ -185,35 +173,52 @@ def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, 
                 H[nb + l, nb + j] = value
     if not derivatives:
         return H, dH, X, S
-    dS = np.zeros((n, 6))
-    dIcS = np.zeros((n, 6))               # d(Ic_l S_l)/dq_k
+    dS = np.zeros((n, 6))                 # dS_j/dq_k
+    dIcS = np.zeros((n, 6))               # d(Ic_j S_j)/dq_k
+    crm = np.empty((6, 6))                # S_k x (a motion)
     turned = np.empty((6, 6))             # crf(S_k) Ic_k - Ic_k crm(S_k)
-    unit = np.zeros(6)
+    turned_Sb = np.empty((6, nb))
     for k in range(n):
         # Joint k turns what it moves about S_k: a motion m by S_k x m, an
-        # inertia's action Ic S by S_k x* (Ic S) - Ic (S_k x S).
-        for c in range(6):
-            unit[c] = 1.0
-            turned[:, c] = (_force_cross(S[k], Ic[k][:, c].copy())
-                            - matvec(Ic[k], _motion_cross(S[k], unit)))
-            unit[c] = 0.0
+        # inertia's action Ic S by S_k x* (Ic S) - Ic (S_k x S); crf = -crm^T.
+        _motion_cross_matrix(S[k], crm)
+        for i in range(6):
+            for c in range(6):
+                value = 0.0
+                for m in range(6):
+                    value -= crm[m, i] * Ic[k, m, c] + Ic[k, i, m] * crm[m, c]
+                turned[i, c] = value
         for j in range(n):
-            if joint_below[k, j]:
-                dS[j] = _motion_cross(S[k], S[j])
-            else:
-                dS[j] = 0.0
-        for j in range(n):
-            if joint_below[k, j]:               # Ic_j and S_j turn as one
-                dIcS[j] = _force_cross(S[k], IcS[j])
-            elif j == k or joint_below[j, k]:   # the part of Ic_j below k moves
-                dIcS[j] = matvec(turned, S[j])
-            else:
-                dIcS[j] = 0.0                   # nothing of Ic_j moves, S_j neither
-        dH[k, :nb, :nb] = matmul(SbT, matmul(turned, Sb))
-        for j in range(n):
-            column = matvec(SbT, dIcS[j])
-            dH[k, :nb, nb + j] = column
-            dH[k, nb + j, :nb] = column
+            moved = joint_below[k, j]           # Ic_j and S_j turn as one
+            partly = j == k or joint_below[j, k]  # the part of Ic_j below k moves
+            for i in range(6):
+                motion, force = 0.0, 0.0
+                if moved:
+                    for m in range(6):
+                        motion += crm[i, m] * S[j, m]
+                        force -= crm[m, i] * IcS[j, m]
+                elif partly:
+                    for m in range(6):
+                        force += turned[i, m] * S[j, m]
+                dS[j, i], dIcS[j, i] = motion, force   # else nothing of either moves
+        for i in range(6):
+            for c in range(nb):
+                value = 0.0
+                for m in range(6):
+                    value += turned[i, m] * Sb[m, c]
+                turned_Sb[i, c] = value
+        for r in range(nb):
+            for c in range(nb):
+                value = 0.0
+                for m in range(6):
+                    value += Sb[m, r] * turned_Sb[m, c]
+                dH[k, r, c] = value
+            for j in range(n):
+                value = 0.0
+                for m in range(6):
+                    value += Sb[m, r] * dIcS[j, m]
+                dH[k, r, nb + j] = value
+                dH[k, nb + j, r] = value
         for j in range(n):
             for l in range(n):
                 if j == l or joint_below[j, l]:
@@ -249,8 +254,10 @@ def _cholesky_solve(A, B):
 @njit(cache=True)
 def reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_below,
                   mass, moment, inertia, q, derivatives=True):
-    """(M, dM (n, n, n), A = H_bb^-1 H_bm (nb, n), X, S): the reduced model and what
-    the Jacobians need (dM zero unless ``derivatives``)."""
+    """(M, dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S): the
+    reduced model and what the Jacobians and their rates need, with
+    dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A) (dM, dA zero unless
+    ``derivatives``)."""
     n, nb = q.shape[0], base_subspace.shape[1]
     H, dH, X, S = mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis,
                                               X_MC, below, joint_below, mass, moment,
@@ -259,11 +266,27 @@ def reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_b
     A = _cholesky_solve(Hbb, Hbm)
     M = Hmm - matmul(Hbm.T, A)
     dM = np.zeros((n, n, n))
-    for k in range(n if derivatives else 0):
-        dbb, dbm, dmm = dH[k, :nb, :nb], dH[k, :nb, nb:], dH[k, nb:, nb:]
-        dM[k] = (dmm - matmul(dbm.T, A) - matmul(A.T, dbm)
-                 + matmul(A.T, matmul(dbb, A)))
-    return M, dM, A, X, S
+    dA = np.zeros((n, nb, n))
+    if not derivatives:
+        return M, dM, A, dA, X, S
+    moved = np.empty((nb, n * n))     # T_k = dH_bm - dH_bb A, side by side
+    for k in range(n):
+        for r in range(nb):
+            for c in range(n):
+                value = dH[k, r, nb + c]
+                for m in range(nb):
+                    value -= dH[k, r, m] * A[m, c]
+                moved[r, k * n + c] = value
+        for i in range(n):            # dM_k = dH_mm - dH_bm^T A - A^T T_k
+            for j in range(n):
+                value = dH[k, nb + i, nb + j]
+                for m in range(nb):
+                    value -= dH[k, m, nb + i] * A[m, j] + A[m, i] * moved[m, k * n + j]
+                dM[k, i, j] = value
+    solved = _cholesky_solve(Hbb, moved)
+    for k in range(n):
+        dA[k] = solved[:, k * n:(k + 1) * n]
+    return M, dM, A, dA, X, S
 
 
 @njit(cache=True)

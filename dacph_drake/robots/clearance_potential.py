@@ -50,8 +50,9 @@ class BaseClearancePotential:
         self._base_geometries = set(self._plant.GetCollisionGeometriesForBody(base))
         self._reach = _JointReach(model.tree, [
             _BodyRadius(self._plant, self._inspector, body) for body in model.tree.bodies])
-        # The last query's q and a lower bound of every link-base distance there.
-        self._known_q, self._known_distance = None, -np.inf
+        # The last query's q and a lower bound of every link-base distance there,
+        # exactly the nearest one when the query found a link-base pair.
+        self._known_q, self._known_distance, self._known_exact = None, -np.inf, False
 
     def _Beyond(self, q, distance: float) -> bool:
         """Whether every link-base distance at q is certainly above ``distance``:
@@ -61,6 +62,13 @@ class BaseClearancePotential:
         return (self._known_q is not None and self._known_distance
                 - self._reach @ np.abs(q - self._known_q) > distance)
 
+    def _NearestAtMost(self, q) -> float:
+        """An upper bound of the nearest link-base distance at q: the last query's
+        nearest plus reach . |q - q_known| (inf when that query found no pair)."""
+        if self._known_q is None or not self._known_exact:
+            return np.inf
+        return self._known_distance + self._reach @ np.abs(q - self._known_q)
+
     def _BodyFrame(self, geometry):
         """The model plant's frame of the body owning ``geometry`` and the
         geometry's pose in that body."""
@@ -68,32 +76,34 @@ class BaseClearancePotential:
         return (self._model.plant.get_body(body.index()).body_frame(),
                 self._inspector.GetPoseInFrame(geometry))
 
-    def Evaluate(self, q, base_pose, evaluation=None, query_distance=None
-                 ) -> Clearance:
+    def Evaluate(self, q, base_pose, query_distance=None) -> Clearance:
         """U, its gradient and the nearest distance (inf beyond ``query_distance``,
         default the one it was made with; U needs the margin only) at joints q and
-        the base pose (``evaluation``: the model's Evaluate(q), when the caller has
-        it). Where every link is certainly beyond the query distance (_Beyond), the
-        query is not made: its answer would be U = 0, a zero gradient and inf.
-        A query made looks CERTIFY further than asked, so that the next calls can
-        be answered from it."""
+        the base pose (the model is evaluated at q only when a pair is within the
+        margin: the witness points' Jacobians). Where every link is certainly beyond the query distance (_Beyond), the
+        query is not made: its answer would be U = 0, a zero gradient and inf. The
+        query looks no further than the margin or the nearest distance's upper
+        bound (_NearestAtMost), whichever is larger: beyond it are neither pairs
+        within the margin nor the nearest one. A query made looks CERTIFY further
+        than that, so that the next calls can be answered from it."""
         query_distance = (self._query_distance if query_distance is None
                           else max(query_distance, self.margin))
         q = np.asarray(q, float)
         gradient = np.zeros(self._model.num_joints)
         if self._Beyond(q, query_distance):
             return Clearance(U=0.0, gradient=gradient, min_distance=np.inf)
+        query_distance = max(self.margin, min(query_distance, self._NearestAtMost(q)))
         self._plant.SetPositions(self._plant_context,
                                  self._model.FullPositions(q, base_pose))
         self._parsed.UpdatePoses(self._plant_context, self._scene_graph_context)
         query = self._query.Eval(self._scene_graph_context)
         looked = query_distance + CERTIFY
         pairs = query.ComputeSignedDistancePairwiseClosestPoints(looked)
-        U, nearest, known = 0.0, np.inf, looked
+        U, nearest, known, exact, evaluation = 0.0, np.inf, looked, False, None
         for pair in pairs:
             if (pair.id_A in self._base_geometries) == (pair.id_B in self._base_geometries):
                 continue                                   # not a link-base pair
-            known = min(known, pair.distance)
+            known, exact = min(known, pair.distance), True
             if pair.distance > query_distance:
                 continue                                   # beyond what was asked
             link, base = (pair.id_A, pair.id_B) if pair.id_B in self._base_geometries \
@@ -106,6 +116,8 @@ class BaseClearancePotential:
             depth = self.margin - pair.distance
             if depth <= 0:
                 continue
+            if evaluation is None:
+                evaluation = self._model.Evaluate(q, derivatives=False)
             J = []
             for geometry, p_G in ((link, p_link), (base, p_base)):
                 frame, X_BG = self._BodyFrame(geometry)
@@ -114,7 +126,7 @@ class BaseClearancePotential:
                     evaluation=evaluation)[3:])
             U += 0.5 * self._gain * depth**2
             gradient -= self._gain * depth * (J[0] - J[1]).T @ nhat
-        self._known_q, self._known_distance = q.copy(), known
+        self._known_q, self._known_distance, self._known_exact = q.copy(), known, exact
         return Clearance(U=U, gradient=gradient, min_distance=nearest)
 
 

@@ -12,9 +12,9 @@ from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 
-NU_DOT_STEP = 1e-5              # [s] of the central difference along the motion
+XI_DOT_STEP = 1e-5              # [s] of xi's central difference along the motion
 # [m] beyond the potential's margin, the nearest link keeps xi = -eta grad U zero at
-# q +- h qdot (it would move faster than FAR / NU_DOT_STEP = 1000 m/s to reach it).
+# q +- h qdot (it would move faster than FAR / XI_DOT_STEP = 1000 m/s to reach it).
 FAR = 0.01
 
 
@@ -32,12 +32,14 @@ class AttitudeController(LeafSystem):
     (e_tau + tau_pe) (Mdot - 2C' skew), with chi from input ``chi`` (the RHS loop's
     bound on ||e_tau|| in DAC, a constant in the baseline) and tau_pe the
     learner's excitation (``excitation``, scenario.Excitation). nu_dot
-    is the central difference of nu along the current motion (q +- h qdot, the base
-    turned by +- h omega_b, t +- h; h = NU_DOT_STEP), with xi evaluated there too
-    unless every link is FAR beyond the potential's margin (xi = 0 at all three).
-    M, C' and the Jacobians come from one compiled evaluation of the model per
-    configuration (floating_model.FloatingBaseModel.Evaluate). U is the link-base
-    clearance potential (``potential``: robots.clearance_potential.
+    is nu's exact rate along the current motion (joints at qdot, the base turning
+    at omega_b, the reference at t: kernels.attitude.task_rates), from dD = d(R_WB
+    D_B)/dt with dA/dq of the same evaluation; xi's rate is the central difference
+    along the motion (q +- h qdot, the base turned by +- h omega_b; h =
+    XI_DOT_STEP), zero unless a link is within FAR beyond the potential's margin
+    (xi = 0 at all three points then). M, dM, C' and the Jacobians come from one
+    compiled evaluation of the model inside the update's one compiled call
+    (kernels.attitude.attitude_update). U is the link-base clearance potential (``potential``: robots.clearance_potential.
     BaseClearancePotential, or None).
     Output ``tau_request`` is held between updates; ``attitude_log``
     (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, R_d(t) as a quaternion] of the
@@ -96,12 +98,12 @@ class AttitudeController(LeafSystem):
         """(R_d(t), omega_d(t))."""
         return self._reference.At(self._R_d0, t)
 
-    def _Secondary(self, q, base_pose, evaluation):
+    def _Secondary(self, q, base_pose):
         """(xi = -eta grad U, the nearest link-base distance if within the
         potential's margin + FAR, else inf) at q and the base pose."""
         if self._potential is None:
             return np.zeros(self._model.num_joints), np.inf
-        potential = self._potential.Evaluate(q, base_pose, evaluation,
+        potential = self._potential.Evaluate(q, base_pose,
                                              query_distance=self._potential.margin + FAR)
         return -self._eta * potential.gradient, potential.min_distance
 
@@ -121,22 +123,19 @@ class AttitudeController(LeafSystem):
         base_pose = self._base_pose.Eval(context)
         omega_base = self._base_velocity.Eval(context)[:3]
         q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        evaluation = self._model.Evaluate(q)
-        xi, clearance = self._Secondary(q, base_pose, evaluation)
-        h, secondary = NU_DOT_STEP, []
-        far = self._potential is None or clearance > self._potential.margin + FAR
-        for sign in (1.0, -1.0):        # xi along the motion, where it is not zero
-            if far:
-                secondary.append(xi)
-                continue
-            q_h = q + sign * h * qdot
-            pose_h = np.concatenate([turned(base_pose[:4], sign * h * omega_base),
-                                     base_pose[4:]])
-            secondary.append(self._Secondary(
-                q_h, pose_h, self._model.Evaluate(q_h, derivatives=False))[0])
+        xi, clearance = self._Secondary(q, base_pose)
+        xi_dot = np.zeros_like(xi)
+        if self._potential is not None and clearance <= self._potential.margin + FAR:
+            h, sides = XI_DOT_STEP, []
+            for sign in (1.0, -1.0):
+                q_h = q + sign * h * qdot
+                pose_h = np.concatenate([turned(base_pose[:4], sign * h * omega_base),
+                                         base_pose[4:]])
+                sides.append(self._Secondary(q_h, pose_h)[0])
+            xi_dot = (sides[0] - sides[1]) / (2 * h)
         tau, M, C, log, desired = attitude_update(
-            self._model.kernel_tree, evaluation, q, qdot, base_pose[:4], omega_base, t,
-            h, self._reference_arguments, self._end_effector_node, xi, *secondary,
+            self._model.kernel_tree, q, qdot, base_pose[:4], omega_base, t,
+            self._reference_arguments, self._end_effector_node, xi, xi_dot,
             self._gain_arguments, self._chi.Eval(context)[0], self._excitation)
         discrete_state.set_value(self._tau_index, tau)
         discrete_state.set_value(self._model_index,
