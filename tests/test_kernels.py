@@ -80,7 +80,8 @@ def test_true_torque_kernel_matches_the_reference_by_phase():
     scenario = Scenario()
     model = ReducedOrderModel(MakeArmPlant(scenario.robot.truth))
     reference = TrueRhsModel(scenario.uncertainty, scenario.phases)
-    source = DisturbanceSource(scenario.disturbance, scenario.disturbance_start)
+    source = DisturbanceSource(settings=[scenario.disturbance],
+                               starts=[scenario.disturbance_start])
     model_vector = source.GetOutputPort("disturbance_model").Eval(source.CreateDefaultContext())
     packed = pack_true_rhs(*model.trigonometric_representation, reference.kernel_arguments)
     rng = np.random.default_rng(4)

@@ -38,14 +38,15 @@ def test_a_fault_changes_B_at_its_time_and_only_on_its_joint():
     scenario.uncertainty.B_scale = [0.5, 3.0]
     scenario.uncertainty.faults = [ActuatorFault(time=70.0, joint=2, gain=0.4)]
     truth = TrueRhs(plant=MakeArmPlant(scenario.robot.truth),
-                    uncertainty=scenario.uncertainty, phases=scenario.phases)
+                    truths=[scenario.robot.truth], uncertainties=[scenario.uncertainty],
+                    phases=[scenario.phases])
     context = truth.CreateDefaultContext()
     model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
     q, qdot, u = np.array([0.5, -0.2]), np.array([0.1, 0.3]), np.array([0.2, -0.1])
     v_base = model.BaseVelocity(np.concatenate([[0, 0, 0], q]), qdot)
     FixStateInputs(truth, context, np.concatenate([[0, 0, 0], q, v_base, qdot]))
     truth.GetInputPort("u").FixValue(context, u)
-    quiet = DisturbanceSource(scenario.disturbance, start=1e9)
+    quiet = DisturbanceSource(settings=[scenario.disturbance], starts=[1e9])
     truth.GetInputPort("disturbance_model").FixValue(
         context, quiet.GetOutputPort("disturbance_model").Eval(quiet.CreateDefaultContext()))
     matrices = truth.GetOutputPort("true_matrices")

@@ -9,7 +9,7 @@ from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.tasks.reference import OrientationReference
 from dacph_drake.scenario import Disturbance, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
-from dacph_drake.systems.lhs_controller import LhsController
+from dacph_drake.systems.lhs_controller import LhsController, LhsTrial
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.true_rhs import TrueRhs
@@ -27,7 +27,7 @@ def _state(q, qdot, model):
 
 
 def test_disturbance_source_hand_values():
-    source = DisturbanceSource(Disturbance(), start=10.0)
+    source = DisturbanceSource(settings=[Disturbance()], starts=[10.0])
     context = source.CreateDefaultContext()
     context.SetTime(9.99)
     assert np.all(source.GetOutputPort("disturbance").Eval(context) == 0)
@@ -42,14 +42,15 @@ def test_disturbance_source_hand_values():
 def test_true_rhs_by_phase(model):
     scenario = Scenario()
     truth = TrueRhs(plant=MakeArmPlant(scenario.robot.truth),
-                    uncertainty=scenario.uncertainty, phases=scenario.phases)
+                    truths=[scenario.robot.truth], uncertainties=[scenario.uncertainty],
+                    phases=[scenario.phases])
     context = truth.CreateDefaultContext()
     q, qdot = np.array([0.5, -0.2]), np.array([0.1, 0.3])
     u, d = np.array([0.2, -0.1]), np.array([0.01, 0.02])
     FixStateInputs(truth, context, _state(q, qdot, model))
     truth.GetInputPort("u").FixValue(context, u)
-    constant = DisturbanceSource(Disturbance(lf_offset=list(d), lf_amplitude=[0.0, 0.0],
-                                             hf_amplitude=0.0), start=0.0)
+    constant = DisturbanceSource(settings=[Disturbance(
+        lf_offset=list(d), lf_amplitude=[0.0, 0.0], hf_amplitude=0.0)], starts=[0.0])
     truth.GetInputPort("disturbance_model").FixValue(
         context, constant.GetOutputPort("disturbance_model").Eval(
             constant.CreateDefaultContext()))
@@ -70,7 +71,7 @@ def test_true_rhs_by_phase(model):
 
 
 def test_model_based_inverter():
-    inverter = ModelBasedInverter(Scenario())
+    inverter = ModelBasedInverter(uncertainties=[Scenario().uncertainty])
     context = inverter.CreateDefaultContext()
     x = np.arange(10) / 10.0
     FixStateInputs(inverter, context, x)
@@ -111,7 +112,8 @@ def test_lhs_controller_equation(model):
     scenario = Scenario()
     potential = BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential)
     reference = OrientationReference(scenario.task.reference, 1.3)
-    lhs = LhsController(model=model, potential=potential, reference=reference,
+    lhs = LhsController(trials=[LhsTrial(model=model, potential=potential,
+                                         reference=reference)],
                         gains=scenario.task.gains, period=1e-3)
     q, qdot = np.array([1.3, 2.2]), np.array([0.3, -0.2])     # potential active here
     x = _state(q, qdot, model)
@@ -191,10 +193,10 @@ def test_lhs_controller_adds_the_excitation(model):
     potential = BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential)
     reference = OrientationReference(scenario.task.reference, 1.3)
     excitation = Excitation(amplitude=2e-3, frequencies=[3.0, 5.0])
-    plain = LhsController(model=model, potential=potential, reference=reference,
-                          gains=scenario.task.gains, period=1e-3)
-    excited = LhsController(model=model, potential=potential, reference=reference,
-                            gains=scenario.task.gains, period=1e-3, excitation=excitation)
+    trial = LhsTrial(model=model, potential=potential, reference=reference)
+    plain = LhsController(trials=[trial], gains=scenario.task.gains, period=1e-3)
+    excited = LhsController(trials=[trial], gains=scenario.task.gains, period=1e-3,
+                            excitation=excitation)
     x = _state(np.array([0.3, 1.0]), np.array([0.1, -0.1]), model)
     t = 0.37
     q, qdot = x[3:5], x[8:]
@@ -222,15 +224,17 @@ def test_port_observer_on_a_known_trajectory():
     builder = DiagramBuilder()
     plant, _ = AddFreeFloatingArm(builder, scenario.robot.truth)
     model = ReducedOrderModel(MakeArmPlant(scenario.robot.nominal))
-    truth = builder.AddSystem(TrueRhs(plant=plant, uncertainty=scenario.uncertainty,
-                                       phases=scenario.phases))
-    source = builder.AddSystem(DisturbanceSource(scenario.disturbance, 0.0))
+    truth = builder.AddSystem(TrueRhs(plant=plant, truths=[scenario.robot.truth],
+                                       uncertainties=[scenario.uncertainty],
+                                       phases=[scenario.phases]))
+    source = builder.AddSystem(DisturbanceSource(settings=[scenario.disturbance],
+                                                 starts=[0.0]))
     u = builder.AddSystem(Sine([0.02, 0.015], [9.0, 13.0], [0.0, 1.0], 2))
     lhs = builder.AddSystem(LhsController(
-        model=model,
-        potential=BaseRepulsionPotential(scenario.robot.nominal, scenario.robot.potential),
-        reference=OrientationReference(scenario.task.reference, 1.3), gains=scenario.task.gains,
-        period=scenario.periods.lhs))
+        trials=[LhsTrial(model=model, potential=BaseRepulsionPotential(
+            scenario.robot.nominal, scenario.robot.potential),
+            reference=OrientationReference(scenario.task.reference, 1.3))],
+        gains=scenario.task.gains, period=scenario.periods.lhs))
     chi = builder.AddSystem(ConstantVectorSource([0.05]))
     builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
     observer = builder.AddSystem(PortObserver(num_joints=2, sample_period=h,

@@ -1,8 +1,9 @@
 """The controllers every command knows, registered once, for every robot.
 
-A controller is one module of this package with a function ``build(scenario) ->
-closed_loop.ClosedLoop`` that calls ``closed_loop.assemble_closed_loop(scenario,
-name, add)``, where ``add(loop, controller)`` adds the controller's systems to
+A controller is one module of this package with a function ``build(*scenarios) ->
+closed_loop.ClosedLoop`` (one scenario: a single run; several: a batch of trials)
+that calls ``closed_loop.assemble_closed_loop(scenarios[0], name, add,
+scenarios[1:])``, where ``add(loop, controller)`` adds the controller's systems to
 ``controller.builder`` (the robot's LHS controller through
 ``closed_loop.AddLhsSide``) and returns them by name (model_based.py is the
 shortest). REGISTRY maps its name to that function, as "module:function" so that
@@ -51,7 +52,8 @@ def require_controller(name: str) -> Controller:
     return REGISTRY[name]
 
 
-def build_closed_loop(name: str, scenario):
-    """The loop (closed_loop.ClosedLoop) of controller ``name`` for ``scenario``."""
+def build_closed_loop(name: str, *scenarios):
+    """The loop (closed_loop.ClosedLoop) of controller ``name`` for ``scenarios``
+    (one: a single run; several: a batch of trials in one diagram)."""
     module, function = require_controller(name).builder.split(":")
-    return getattr(importlib.import_module(module), function)(scenario)
+    return getattr(importlib.import_module(module), function)(*scenarios)

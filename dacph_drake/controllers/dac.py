@@ -5,6 +5,7 @@ from typing import Dict
 
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
+from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.scenario import Scenario
@@ -14,7 +15,7 @@ from dacph_drake.systems.regression_filter import RegressionFilter
 from dacph_drake.systems.rhs_integrator import RhsIntegrator
 
 
-def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
+def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
     """Plant + true RHS + disturbance, closed by the DAC-pH controller: the robot's
     LHS controller (chi from the RHS loop, plus scenario.excitation; an inertial
     identifier with inertia.identify), the port observer, the RHS integrator and
@@ -22,18 +23,19 @@ def build_dac_diagram(scenario: Scenario, learning: bool = True) -> ClosedLoop:
     False the learner keeps its initial weights, so the integrator runs on the
     nominal RHS (B0, D0): the dac-nominal ablation, otherwise the same diagram."""
     def add(loop: ClosedLoop, controller: ControllerBuilder):
-        lhs, systems = AddLhsSide(loop, controller, scenario.excitation,
-                                  identify=scenario.inertia.identify)
+        lhs, systems = AddLhsSide(loop, controller, loop.scenario.excitation,
+                                  identify=loop.scenario.inertia.identify)
         return {**systems, **AddRhsChain(loop, controller, lhs, learning,
                                          systems.get("inertial_identifier"))}
-    return assemble_closed_loop(scenario, "dac" if learning else "dac_nominal", add)
+    return assemble_closed_loop(scenarios[0], "dac" if learning else "dac_nominal", add,
+                                scenarios[1:])
 
 
-def build_dac_nominal_diagram(scenario: Scenario) -> ClosedLoop:
+def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
     """The learning ablation: build_dac_diagram with the learner switched off (the
     integrator on the nominal RHS B0, D0; the excitation stays, so that learning is
     the only difference)."""
-    return build_dac_diagram(scenario, learning=False)
+    return build_dac_diagram(*scenarios, learning=False)
 
 
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: bool,
@@ -47,6 +49,9 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: 
     period is checked for the largest c it allows (gain_rule.check_rhs_period).
     With the LHS's InertialIdentifier ``identifier``, the learner also watches the
     model the observer uses (Learner.model_change). Returns the named systems."""
+    if loop.trials > 1:
+        raise ConfigError(f"DAC on a batch of {loop.trials} trials; allowed: batch_size 1 "
+                          "(the RHS loop's systems are not batched yet)")
     scenario, model = loop.scenario, loop.model
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
     Kd_max, lambda_min_M = loop.robot.GainRuleRates()

@@ -9,21 +9,22 @@ from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 
 
-def build_model_based_diagram(scenario: Scenario) -> ClosedLoop:
-    """The baseline loop of ``scenario``'s robot. On a nominal ground truth the
-    inversion is exact: the plant receives the LHS's request."""
+def build_model_based_diagram(*scenarios: Scenario) -> ClosedLoop:
+    """The baseline loop of the scenarios' robot (several: a batch of trials, one
+    diagram). On a nominal ground truth the inversion is exact: the plant receives
+    the LHS's request."""
     def add(loop: ClosedLoop, controller: ControllerBuilder):
         lhs, systems = AddLhsSide(loop, controller, Excitation(amplitude=0.0),
                                   identify=False)
         builder = controller.builder
         fixed_chi = builder.AddNamedSystem("fixed_chi", ConstantVectorSource(
-            [scenario.task.gains.chi_model_based]))
+            [s.task.gains.chi_model_based for s in loop.scenarios]))
         builder.Connect(fixed_chi.get_output_port(), lhs.GetInputPort("chi"))
-        inverter = builder.AddNamedSystem("model_based_inverter",
-                                          ModelBasedInverter(scenario))
+        inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(
+            uncertainties=[s.uncertainty for s in loop.scenarios]))
         builder.Connect(lhs.GetOutputPort("tau_request"),
                         inverter.GetInputPort("tau_request"))
         controller.Input(inverter.GetInputPort("qdot"), "qdot")
         builder.ExportOutput(inverter.GetOutputPort("u"), "u")
         return {**systems, "model_based_inverter": inverter}
-    return assemble_closed_loop(scenario, "model_based", add)
+    return assemble_closed_loop(scenarios[0], "model_based", add, scenarios[1:])

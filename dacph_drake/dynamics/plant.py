@@ -12,13 +12,13 @@ drifts to ~1e-5. The discrete controllers already stop the integrator at every R
 sample, so the continuous plant costs no more steps than a discrete one would.
 """
 from dataclasses import dataclass
-from typing import List
+from typing import List, Sequence
 
 import numpy as np
 from pydrake.geometry import Box, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
-from pydrake.multibody.tree import (FixedOffsetFrame, PlanarJoint,
+from pydrake.multibody.tree import (FixedOffsetFrame, PlanarJoint, default_model_instance,
                                     RevoluteJoint, RotationalInertia,
                                     SpatialInertia)
 from pydrake.systems.framework import DiagramBuilder
@@ -28,6 +28,7 @@ from dacph_drake.arm_parameters import RobotParams
 
 BASE_JOINT = "base_joint"
 END_EFFECTOR = "end_effector"
+TRIAL_INSTANCE = "trial{}"      # a batch's plant: each trial's arm (AddFreeFloatingArms)
 GEOMETRY_DEPTH = 0.05  # extent of the boxes along z [m]; does not enter the dynamics
 
 
@@ -54,22 +55,28 @@ class ArmCoordinates:
     joint_q: np.ndarray
     joint_v: np.ndarray
     base_origin: np.ndarray
+    plant_positions: int        # the whole plant's (a batch's: every trial's)
 
     @staticmethod
-    def FromPlant(plant: MultibodyPlant) -> "ArmCoordinates":
-        """The layout of a finalized free-floating plant: the base joint is the one
-        joint on the world (the planar arms' PlanarJoint: x, y, theta0; a robot from
-        a file's quaternion floating joint: qw, qx, qy, qz, x, y, z and omega_W,
-        v_W), the arm's joints are the actuated ones, in actuator order."""
+    def FromPlant(plant: MultibodyPlant, instance=None) -> "ArmCoordinates":
+        """The layout of a finalized free-floating plant (of its model ``instance``,
+        one trial's arm in a batch's plant; default: the whole plant): the base
+        joint is the one joint on the world (the planar arms' PlanarJoint: x, y,
+        theta0; a robot from a file's quaternion floating joint: qw, qx, qy, qz, x,
+        y, z and omega_W, v_W), the arm's joints are the actuated ones, in actuator
+        order. Indices are into the whole plant's q and v."""
+        def mine(element):
+            return instance is None or element.model_instance() == instance
         on_world = [plant.get_joint(i) for i in plant.GetJointIndices()
                     if plant.get_joint(i).parent_body().index()
-                    == plant.world_body().index()]
+                    == plant.world_body().index() and mine(plant.get_joint(i))]
         if len(on_world) != 1:
             raise ValueError(f"a free-floating plant has one joint on the world (its "
                              f"base's); this one has {len(on_world)}")
         base = on_world[0]
         joints = [plant.get_joint_actuator(i).joint()
-                  for i in plant.GetJointActuatorIndices()]
+                  for i in plant.GetJointActuatorIndices()
+                  if mine(plant.get_joint_actuator(i))]
         return ArmCoordinates(
             base_q=np.arange(base.position_start(),
                              base.position_start() + base.num_positions()),
@@ -77,7 +84,8 @@ class ArmCoordinates:
                              base.velocity_start() + base.num_velocities()),
             joint_q=np.array([j.position_start() for j in joints]),
             joint_v=np.array([j.velocity_start() for j in joints]),
-            base_origin=np.array(base.default_positions()))
+            base_origin=np.array(base.default_positions()),
+            plant_positions=plant.num_positions())
 
     @staticmethod
     def ForPlanarArm(num_joints: int) -> "ArmCoordinates":
@@ -86,7 +94,8 @@ class ArmCoordinates:
         plant states without a plant."""
         joints = np.arange(3, 3 + num_joints)
         return ArmCoordinates(base_q=np.arange(3), base_v=np.arange(3), joint_q=joints,
-                              joint_v=joints, base_origin=np.zeros(3))
+                              joint_v=joints, base_origin=np.zeros(3),
+                              plant_positions=3 + num_joints)
 
     @property
     def num_joints(self) -> int:
@@ -108,22 +117,37 @@ class ArmCoordinates:
         """Indices into the plant state x = [positions, velocities] of
         [theta0, base velocity (3), q (n), qdot (n)], for compiled kernels that read
         the state whole (kernels.loop.true_torque)."""
-        nq = self.num_positions
+        nq = self.plant_positions
         return np.concatenate([self.base_q[2:3], nq + self.base_v, self.joint_q,
                                nq + self.joint_v]).astype(np.int64)
 
     def Split(self, x: np.ndarray):
         """(base_pose, q, base_velocity, qdot) of plant state(s) x = [positions,
         velocities] (the last axis)."""
-        v = x[..., self.num_positions:]
+        v = x[..., self.plant_positions:]
         return (x[..., self.base_q], x[..., self.joint_q], v[..., self.base_v],
                 v[..., self.joint_v])
 
 
-def SetArmAtRest(plant: MultibodyPlant, plant_context, q0) -> None:
-    """The base at the origin, the joints at q0, everything at rest (zero
-    momentum): the initial state of every run."""
-    plant.SetPositions(plant_context, ArmCoordinates.FromPlant(plant).Positions(q0))
+def trial_coordinates(plant: MultibodyPlant) -> List[ArmCoordinates]:
+    """Each trial's ArmCoordinates in a batch's plant (AddFreeFloatingArms: one
+    model instance per trial, in trial order); a plant of one arm is one trial."""
+    instances = [plant.GetModelInstanceByName(TRIAL_INSTANCE.format(i))
+                 for i in range(plant.num_model_instances())
+                 if plant.HasModelInstanceNamed(TRIAL_INSTANCE.format(i))]
+    if not instances:
+        return [ArmCoordinates.FromPlant(plant)]
+    return [ArmCoordinates.FromPlant(plant, instance) for instance in instances]
+
+
+def SetArmAtRest(plant: MultibodyPlant, plant_context, q0s) -> None:
+    """Every trial's base at the origin, its joints at its q0 (``q0s``, one per
+    trial), everything at rest (zero momentum): the initial state of every run."""
+    positions = np.zeros(plant.num_positions())
+    for coordinates, q0 in zip(trial_coordinates(plant), q0s, strict=True):
+        positions[coordinates.base_q] = coordinates.base_origin
+        positions[coordinates.joint_q] = q0
+    plant.SetPositions(plant_context, positions)
     plant.SetVelocities(plant_context, np.zeros(plant.num_velocities()))
 
 
@@ -148,10 +172,14 @@ def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector
     plant's state, with outputs ``base_pose`` (the base joint's coordinates: x, y,
     theta0 for the planar arms; qw, qx, qy, qz, x, y, z for a free base from a
     description file), ``q`` (joint angles), ``base_velocity`` (vx, vy, omega0, or
-    omega_W, v_W, in the world frame) and ``qdot`` (joint rates), built from
-    ArmCoordinates: the one place that knows the state's layout."""
-    coordinates = ArmCoordinates.FromPlant(plant)
+    omega_W, v_W, in the world frame) and ``qdot`` (joint rates), each the trials'
+    signals stacked in trial order (trial_coordinates), built from ArmCoordinates:
+    the one place that knows the state's layout."""
+    trials = trial_coordinates(plant)
     nq = plant.num_positions()
+
+    def stacked(field: str) -> np.ndarray:
+        return np.concatenate([getattr(c, field) for c in trials])
 
     def output(name, indices):
         return SelectorParams.OutputPortParams(name=name, selections=[
@@ -160,27 +188,39 @@ def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector
     splitter = builder.AddNamedSystem("state_splitter", Selector(SelectorParams(
         inputs=[SelectorParams.InputPortParams(name="state",
                                                size=nq + plant.num_velocities())],
-        outputs=[output("base_pose", coordinates.base_q),
-                 output("q", coordinates.joint_q),
-                 output("base_velocity", nq + coordinates.base_v),
-                 output("qdot", nq + coordinates.joint_v)])))
+        outputs=[output("base_pose", stacked("base_q")),
+                 output("q", stacked("joint_q")),
+                 output("base_velocity", nq + stacked("base_v")),
+                 output("qdot", nq + stacked("joint_v"))])))
     builder.Connect(plant.get_state_output_port(), splitter.get_input_port())
     return splitter
 
 
 def AddFreeFloatingArm(builder: DiagramBuilder, robot: RobotParams,
                        time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized arm plant, with visual geometry registered with a
+    """AddFreeFloatingArms of one arm."""
+    return AddFreeFloatingArms(builder, [robot], time_step)
+
+
+def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
+                        time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
+    """Adds the finalized plant of a batch of trials, one arm per trial (``robots``,
+    each the model instance TRIAL_INSTANCE.format(i), side by side at the origin:
+    without contact they do not interact), with visual geometry registered with a
     SceneGraph (for Meshcat), to ``builder``; continuous unless ``time_step`` > 0.
+    Each arm's state evolves exactly as in a plant of its own (bit for bit,
+    tests/test_batch.py), at a fraction of the cost per arm (scripts/bench_sweep.py).
 
     No collision geometry: the arm in free flight never touches its base in a
     runnable scenario (the potential field keeps it off), and contact queries cost
     30 % of the plant's derivative evaluation. A run is stopped with a named reason
     when the links' kinematic clearance from the base reaches zero
     (run._Simulate), and the start is checked (diagrams._RequireRunnableStart)."""
-    robot.Validate()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=time_step)
-    _PopulateArm(plant, robot)
+    for i, robot in enumerate(robots):
+        robot.Validate()
+        _PopulateArm(plant, robot, plant.AddModelInstance(TRIAL_INSTANCE.format(i)))
+    plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     plant.Finalize()
     return plant, scene_graph
 
@@ -189,14 +229,15 @@ def MakeArmPlant(robot: RobotParams) -> MultibodyPlant:
     """A finalized arm plant without geometry, for a controller's internal model."""
     robot.Validate()
     plant = MultibodyPlant(time_step=0.0)
-    _PopulateArm(plant, robot)
+    _PopulateArm(plant, robot, default_model_instance())
+    plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     plant.Finalize()
     return plant
 
 
-def _PopulateArm(plant: MultibodyPlant, robot: RobotParams) -> None:
+def _PopulateArm(plant: MultibodyPlant, robot: RobotParams, instance) -> None:
     base = robot.base
-    base_body = plant.AddRigidBody("base", SpatialInertia.MakeFromCentralInertia(
+    base_body = plant.AddRigidBody("base", instance, SpatialInertia.MakeFromCentralInertia(
         base.mass, np.zeros(3),
         RotationalInertia(base.inertia / 2, base.inertia / 2, base.inertia)))
     plant.AddJoint(PlanarJoint(BASE_JOINT, plant.world_frame(), base_body.body_frame()))
@@ -208,7 +249,8 @@ def _PopulateArm(plant: MultibodyPlant, robot: RobotParams) -> None:
         # A lamina in the link's x-y plane: the along-link spread (<= m c (l - c))
         # gives Iyy, the across-link spread the rest; Izz = Ixx + Iyy = inertia.
         along = min(link.inertia, link.mass * link.com * (link.length - link.com))
-        body = plant.AddRigidBody(link_name(k), SpatialInertia.MakeFromCentralInertia(
+        body = plant.AddRigidBody(link_name(k), instance,
+                                  SpatialInertia.MakeFromCentralInertia(
             link.mass, [link.com, 0.0, 0.0],
             RotationalInertia(link.inertia - along, along, link.inertia)))
         joint = plant.AddJoint(RevoluteJoint(
@@ -218,7 +260,6 @@ def _PopulateArm(plant: MultibodyPlant, robot: RobotParams) -> None:
             END_EFFECTOR if k == robot.num_links - 1 else f"elbow{k + 1}",
             body.body_frame(), RigidTransform([link.length, 0.0, 0.0])))
         bodies.append(body)
-    plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     if plant.geometry_source_is_registered():
         _RegisterGeometry(plant, robot, bodies)
 

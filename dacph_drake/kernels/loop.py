@@ -92,6 +92,62 @@ def true_torque(t, x, indices, u, disturbance_model, packed):
     return _packed_torque(t, q, p, qdot, u, disturbance_model, packed[o:])
 
 
+def stack_packs(packs) -> "tuple[np.ndarray, np.ndarray]":
+    """A batch's per-trial packed arguments (pack_true_rhs, pack_lhs: their lengths
+    may differ, e.g. with the actuator faults a trial samples) as one array and
+    the offsets of each trial's part in it (N + 1)."""
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in packs])]).astype(np.int64)
+    return np.concatenate(packs).astype(float), offsets
+
+
+# true_torques' and spatial_true_torque's verdict on each trial (TrueRhsSystem).
+RUNNING, STOPPED, NON_FINITE, RUNAWAY = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _verdict(running, state, rates, tau, bound):
+    """A trial's verdict from its running flag, state, rates and torque: STOPPED,
+    NON_FINITE (state or torque), RUNAWAY (a rate beyond ``bound``) or RUNNING."""
+    if running <= 0:
+        return STOPPED
+    for value in state:
+        if not np.isfinite(value):
+            return NON_FINITE
+    for value in tau:
+        if not np.isfinite(value):
+            return NON_FINITE
+    for value in rates:
+        if abs(value) > bound:
+            return RUNAWAY
+    return RUNNING
+
+
+@njit(cache=True)
+def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, bound):
+    """true_torque of every trial of a batch in one call: trial i's state indices
+    indices[i] (its plant.ArmCoordinates.StateIndices in the batch's plant state
+    x), command u[i n:(i + 1) n], disturbance model disturbance_models's i-th part
+    and packed arguments packs[offsets[i]:offsets[i + 1]] (stack_packs). Returns
+    (tau, verdicts): a trial's torque is zero unless its verdict (_verdict, with
+    its running flag, state, rates and the rate ``bound``) is RUNNING."""
+    trials = indices.shape[0]
+    n = u.shape[0] // trials
+    m = disturbance_models.shape[0] // trials
+    out = np.zeros(trials * n)
+    verdicts = np.empty(trials, np.int64)
+    for i in range(trials):
+        arm = x[indices[i]]
+        tau = true_torque(t, x, indices[i], u[i * n:(i + 1) * n],
+                          disturbance_models[i * m:(i + 1) * m],
+                          packs[offsets[i]:offsets[i + 1]]) if running[i] > 0 \
+            else np.zeros(n)
+        verdicts[i] = _verdict(running[i], arm, np.concatenate((arm[1:4], arm[4 + n:])),
+                               tau, bound)
+        if verdicts[i] == RUNNING:
+            out[i * n:(i + 1) * n] = tau
+    return out, verdicts, np.max(verdicts)
+
+
 @njit(cache=True)
 def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
     """B~ u - D~ qdot + d(t) with the uncertainty's arguments packed as
@@ -113,10 +169,22 @@ def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
 
 
 @njit(cache=True)
-def spatial_true_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed):
-    """tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial arm (SpatialTrueRhs): u_c
-    the command clipped to +-``limit``, p the joint rows of H v (H the plant's mass
+def spatial_true_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed,
+                        running, bound):
+    """(tau, [verdict], verdict): tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial
+    arm (SpatialTrueRhs; zero unless the verdict, _verdict, is RUNNING): u_c the
+    command clipped to +-``limit``, p the joint rows of H v (H the plant's mass
     matrix at x), ``packed`` = pack_true_rhs((), (), uncertainty)."""
+    tau = _spatial_torque(t, x, H, q_index, v_index, u, limit, disturbance_model,
+                          packed)
+    verdicts = np.array([_verdict(running[0], x, x[x.shape[0] - H.shape[0]:], tau,
+                                  bound)])
+    return ((tau if verdicts[0] == RUNNING else np.zeros_like(tau)), verdicts,
+            verdicts[0])
+
+
+@njit(cache=True)
+def _spatial_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed):
     n = u.shape[0]
     nq = x.shape[0] - H.shape[0]
     v = x[nq:]
@@ -174,6 +242,24 @@ def lhs_sample(t, theta0, q, qdot, chi, coefficients, packed):
     out[n:2 * n + 4] = log
     out[2 * n + 4:2 * n + 4 + n * n] = M.ravel()
     out[2 * n + 4 + n * n:] = C.ravel()
+    return out
+
+
+@njit(cache=True)
+def lhs_samples(t, theta0s, q, qdot, chi, coefficients, packs, offsets):
+    """lhs_sample of every trial of a batch in one call: trial i's base angle
+    theta0s[i], joints q[i n:(i + 1) n], qdot likewise, chi[i], mass-matrix
+    coefficients coefficients[i] and packed arguments packs[offsets[i]:offsets[i +
+    1]] (stack_packs); the trials' results stacked, each [tau_c^r (n), log (n + 4),
+    vec(M), vec(C')]."""
+    trials = theta0s.shape[0]
+    n = q.shape[0] // trials
+    width = 2 * n + 4 + 2 * n * n
+    out = np.empty(trials * width)
+    for i in range(trials):
+        out[i * width:(i + 1) * width] = lhs_sample(
+            t, theta0s[i], q[i * n:(i + 1) * n], qdot[i * n:(i + 1) * n], chi[i],
+            coefficients[i], packs[offsets[i]:offsets[i + 1]])
     return out
 
 

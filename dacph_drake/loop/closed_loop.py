@@ -8,16 +8,18 @@ controller's module (controllers/) builds it with assemble_closed_loop and a
 function adding its systems to a ControllerBuilder; the robot
 (robots.robot_of(scenario)) supplies the ground truth, the controller's model and
 the LHS controller."""
-from dataclasses import dataclass, field
-from typing import Dict
+from dataclasses import dataclass, field, fields
+from typing import Dict, List, Sequence
 
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
+from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
 from dacph_drake.dynamics.plant import AddStateSplitter, SetArmAtRest
-from dacph_drake.robots import Robot, robot_of
+from dacph_drake.robots import Robot, robots_of
 from dacph_drake.scenario import Scenario
 from dacph_drake.loop.simulator import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
@@ -25,19 +27,36 @@ from dacph_drake.systems.disturbance import DisturbanceSource
 
 @dataclass
 class ClosedLoop:
-    """A built closed loop: its diagram, the parts a user reads, and
-    CreateSimulator() to run it with the scenario's settings."""
+    """A built closed loop of a batch of trials (one: a single run): its diagram,
+    the parts a user reads, and CreateSimulator() to run it with the scenarios'
+    settings. Every signal is the trials' signals stacked in trial order."""
     diagram: Diagram
-    scenario: Scenario              # the scenario it was built from
-    robot: Robot                    # robots.robot_of(scenario)
+    scenarios: List[Scenario]       # each trial's scenario, as built
+    robots: List[Robot]             # robots.robots_of(scenarios)
     plant: object                   # the ground-truth MultibodyPlant
     scene_graph: object
     loggers: Dict[str, VectorLogSink] = field(default_factory=dict)
     systems: Dict[str, object] = field(default_factory=dict)
 
     @property
+    def scenario(self) -> Scenario:
+        """The first trial's scenario: the settings every trial shares (periods,
+        simulator, gains)."""
+        return self.scenarios[0]
+
+    @property
+    def robot(self) -> Robot:
+        """The first trial's Robot."""
+        return self.robots[0]
+
+    @property
+    def trials(self) -> int:
+        return len(self.scenarios)
+
+    @property
     def model(self):
-        """The controller's (nominal) reduced model (robots.ReducedModel)."""
+        """The controller's (nominal) reduced model (robots.ReducedModel) of the
+        first trial."""
         return self.robot.model
 
     @property
@@ -52,7 +71,7 @@ class ClosedLoop:
         the origin, the joints at q0, everything at rest (zero momentum)."""
         simulator = MakeSimulator(self.diagram, self.scenario.simulator)
         SetArmAtRest(self.plant, self.plant.GetMyContextFromRoot(
-            simulator.get_mutable_context()), self.scenario.q0)
+            simulator.get_mutable_context()), [s.q0 for s in self.scenarios])
         return simulator
 
 
@@ -72,26 +91,35 @@ class ControllerBuilder:
             self._inputs.add(signal)
 
 
-def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> ClosedLoop:
-    """The ground truth of ``scenario``'s robot (plant, state splitter, true RHS,
-    disturbance) closed by the controller that ``add_controller(loop,
+def assemble_closed_loop(scenario: Scenario, name: str, add_controller,
+                         more_trials: Sequence[Scenario] = ()) -> ClosedLoop:
+    """The ground truth of ``scenario`` (and of ``more_trials``: a batch of trials
+    in one diagram, ``scenario`` its first): plant, state splitter, true RHS,
+    disturbance, closed by the controller that ``add_controller(loop,
     controller_builder)`` builds into its ControllerBuilder (returning its named
-    systems); every signal of the ground truth and every output of the controller
-    is logged at periods.log. The diagram is named ``{name}_closed_loop``."""
-    robot = robot_of(scenario)
-    robot.RequireRunnableStart()
+    systems; loop.scenarios and loop.robots hold every trial's); every signal of
+    the ground truth and every output of the controller is logged at
+    periods.log. The diagram is named ``{name}_closed_loop``. The trials share
+    the settings that shape the diagram (RequireOneDiagram)."""
+    scenarios = [scenario, *more_trials]
+    RequireOneDiagram(scenarios)
+    robots = robots_of(scenarios)
+    for robot in robots:
+        robot.RequireRunnableStart()
+    family = type(robots[0])
     builder = DiagramBuilder()
-    plant, scene_graph = robot.AddGroundTruth(builder)
+    plant, scene_graph = family.AddGroundTruth(builder, robots)
     plant.set_name("plant")
     splitter = AddStateSplitter(builder, plant)
-    truth = builder.AddNamedSystem("true_rhs", robot.MakeTrueRhs(plant))
-    disturbance = builder.AddNamedSystem(
-        "disturbance", DisturbanceSource(scenario.disturbance, scenario.disturbance_start))
+    truth = builder.AddNamedSystem("true_rhs", family.MakeTrueRhs(plant, robots))
+    disturbance = builder.AddNamedSystem("disturbance", DisturbanceSource(
+        settings=[s.disturbance for s in scenarios],
+        starts=[s.disturbance_start for s in scenarios]))
     builder.Connect(plant.get_state_output_port(), truth.GetInputPort("state"))
     builder.Connect(disturbance.GetOutputPort("disturbance_model"),
                     truth.GetInputPort("disturbance_model"))
     builder.Connect(truth.GetOutputPort("tau"), plant.get_actuation_input_port())
-    loop = ClosedLoop(diagram=None, scenario=scenario, robot=robot, plant=plant,
+    loop = ClosedLoop(diagram=None, scenarios=scenarios, robots=robots, plant=plant,
                       scene_graph=scene_graph,
                       systems={"state_splitter": splitter, "true_rhs": truth,
                                "disturbance": disturbance})
@@ -111,11 +139,31 @@ def assemble_closed_loop(scenario: Scenario, name: str, add_controller) -> Close
     logged += [(controller.get_output_port(i).get_name(), controller.get_output_port(i))
                for i in range(controller.num_output_ports())]
     for signal, port in logged:
-        loop.loggers[signal] = LogVectorOutput(port, builder, scenario.periods.log)
+        loop.loggers[signal] = LogVectorOutput(port, builder, loop.scenario.periods.log)
         loop.loggers[signal].set_name(f"log_{signal}")
     loop.diagram = builder.Build()
     loop.diagram.set_name(f"{name}_closed_loop")
     return loop
+
+
+# What the trials of one batch may each have of their own; every other setting
+# shapes the diagram (periods, gains, the simulator) and is shared.
+PER_TRIAL_SETTINGS = ("robot", "q0", "uncertainty", "disturbance", "seed")
+
+
+def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
+    """ConfigError naming the first setting in which a trial differs from trial 0
+    beyond PER_TRIAL_SETTINGS (compared in their YAML form: Drake's
+    SimulatorConfig has no equality of its own)."""
+    first = scenarios[0]
+    for i, scenario in enumerate(scenarios[1:], start=1):
+        for setting in fields(first):
+            if (setting.name not in PER_TRIAL_SETTINGS
+                    and yaml_dump_typed(getattr(scenario, setting.name))
+                    != yaml_dump_typed(getattr(first, setting.name))):
+                raise ConfigError(
+                    f"trial {i}'s {setting.name} differs from trial 0's; allowed: the "
+                    f"trials of one batch differ only in {', '.join(PER_TRIAL_SETTINGS)}")
 
 
 def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation,
@@ -126,7 +174,7 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation,
     inputs, feeding the LHS, its estimate the output ``inertial_parameters``.
     Returns (the LHS controller, the named systems)."""
     robot, builder = loop.robot, controller.builder
-    systems = robot.AddLhsController(controller, excitation, identify)
+    systems = type(robot).AddLhsController(controller, loop.robots, excitation, identify)
     lhs = systems[robot.lhs_name]
     builder.ExportOutput(lhs.GetOutputPort("tau_request"), "tau_request")
     builder.ExportOutput(lhs.GetOutputPort(robot.lhs_log), robot.lhs_log)

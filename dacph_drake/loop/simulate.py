@@ -6,7 +6,7 @@ import signal
 import threading
 import time
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -15,11 +15,8 @@ from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
 from dacph_drake.loop.run_store import (LockRun, RunResult, prepare_out_dir,
                                         require_one_scenario, save_run)
-from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.scenario import Scenario
-
-
-MAX_JOINT_RATE = 50.0      # [rad/s]: beyond this the run is declared diverged
 
 
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state
@@ -41,7 +38,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
     before the simulation starts and locked against a second writer of the same
     controller; run.json records the duration and scenario_fingerprint). A run
-    whose state turns non-finite or whose joint rates exceed MAX_JOINT_RATE stops
+    whose state turns non-finite or whose rates exceed RUNAWAY_RATE (true_rhs) stops
     with a reason and still saves what it has. With ``interruptible`` (the CLI's
     single runs), SIGINT and SIGTERM stop the run the same way, with status
     "interrupted"; sweeps and pools leave it off so that an interrupted trial is
@@ -71,8 +68,8 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         checkpoint = (checkpoint_seconds,
                       lambda partial: save_run(partial, scenario, out_dir, compress=False))
     try:
-        result = _Simulate(scenario, controller, duration, progress, interruptible,
-                           checkpoint, meshcat)
+        result = _Simulate([scenario], controller, duration, progress, interruptible,
+                           checkpoint, meshcat)[0]
         if out_dir is not None:
             save_run(result, scenario, out_dir)
     finally:
@@ -81,37 +78,91 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     return result
 
 
-def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bool,
-              interruptible: bool, checkpoint=None, meshcat=None) -> RunResult:
-    """The run itself; ``checkpoint`` = (wall seconds, save) calls save with the
-    partial result that often; ``meshcat`` gets a LiveView."""
-    loop = build_closed_loop(controller, scenario)
+def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
+                   duration: Optional[float] = None,
+                   out_dirs: Optional[Sequence] = None) -> List[RunResult]:
+    """A batch of trials (``scenarios``, RequireOneDiagram) simulated in one diagram
+    (controllers.build_closed_loop(controller, *scenarios)): each trial's RunResult
+    is its solo simulate's (logs bit for bit, tests/test_batch.py). A trial that
+    diverges, collides or leaves its limits stops alone with its reason and final
+    time (its torque zeroed, its state frozen at rest before a NaN reaches Drake)
+    while the others run on. ``out_dirs``: each trial's run directory (as
+    simulate's out_dir; None entries or None: not saved)."""
+    require_controller(controller)
+    scenarios = list(scenarios)
+    duration = scenarios[0].duration if duration is None else duration
+    require_positive("duration", duration, "s")
+    out_dirs = list(out_dirs) if out_dirs is not None else [None] * len(scenarios)
+    locks = []
+    try:
+        for scenario, out_dir in zip(scenarios, out_dirs, strict=True):
+            if out_dir is not None:
+                locks.append(LockRun(prepare_out_dir(out_dir), controller))
+                require_one_scenario(Path(out_dir), scenario, controller)
+        results = _Simulate(scenarios, controller, duration, progress=False,
+                            interruptible=False)
+        for result, scenario, out_dir in zip(results, scenarios, out_dirs):
+            if out_dir is not None:
+                save_run(result, scenario, out_dir)
+    finally:
+        for lock in locks:
+            lock.close()
+    return results
+
+
+def _TrialStop(x, coordinates: ArmCoordinates, clearance, limits, t: float):
+    """The reason for a trial to stop at time t, or None: a joint beyond its limits,
+    or a link touching the base where the robot measures it (robots.Robot.Clearance:
+    the ground truth has no collision geometry); ``x`` the batch's plant state."""
+    _, q, _, _ = coordinates.Split(x)
+    beyond = limits(q) if limits is not None else None
+    if beyond:
+        return f"joint limit: {beyond} at t = {t:.4f} s"
+    rho = clearance(q) if clearance is not None else np.inf
+    if rho <= 0:
+        return (f"collision: a link touched the base at t = {t:.4f} s (clearance "
+                f"{rho:.4f} m)")
+    return None
+
+
+def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
+              progress: bool, interruptible: bool, checkpoint=None,
+              meshcat=None) -> List[RunResult]:
+    """The run of a batch (one trial: a single run), each trial's result;
+    ``checkpoint`` = (wall seconds, save) calls save with the partial result of a
+    single run that often; ``meshcat`` gets a LiveView."""
+    loop = build_closed_loop(controller, *scenarios)
     live_view = loop.robot.LiveView(loop, meshcat) if meshcat is not None else None
     simulator = loop.CreateSimulator()
     context = simulator.get_mutable_context()
     plant = loop.plant
     plant_context = plant.GetMyContextFromRoot(context)
-    coordinates = ArmCoordinates.FromPlant(plant)
-    clearance = loop.robot.Clearance()
-    limits = loop.robot.LimitViolation()
+    truth = loop.systems["true_rhs"]
+    watched = [(coordinates, robot.Clearance(), robot.LimitViolation())
+               for coordinates, robot in zip(trial_coordinates(plant), loop.robots)]
+    stops = [None] * len(watched)        # (reason, time) of each stopped trial
 
     def check(t: float):
-        """The reason to stop at time t, or None: a non-finite state, a joint rate
-        beyond MAX_JOINT_RATE, or a link touching the base where the robot measures
-        it (robots.Robot.Clearance: the ground truth has no collision geometry)."""
+        """Stops the trials that must stop at time t (_TrialStop) or went unsound
+        at an integrator stage before it (a non-finite value or a runaway rate:
+        TrueRhsSystem.Unsound; their torque is zero since, a NaN never reached
+        the plant); the reason to stop the run, once no trial runs."""
         x = plant_context.get_continuous_state_vector().CopyToVector()
-        if not np.all(np.isfinite(x)):
-            return f"non-finite plant state at t = {t:.4f} s"
-        _, q, base_velocity, qdot = coordinates.Split(x)
-        if max(np.max(np.abs(base_velocity)), np.max(np.abs(qdot))) > MAX_JOINT_RATE:
-            return f"runaway: a rate exceeded {MAX_JOINT_RATE} rad/s at t = {t:.4f} s"
-        beyond = limits(q) if limits is not None else None
-        if beyond:
-            return f"joint limit: {beyond} at t = {t:.4f} s"
-        rho = clearance(q) if clearance is not None else np.inf
-        if rho <= 0:
-            return (f"collision: a link touched the base at t = {t:.4f} s (clearance "
-                    f"{rho:.4f} m)")
+        unsound = truth.Unsound()
+        for i, (coordinates, clearance, limits) in enumerate(watched):
+            if stops[i] is not None:
+                continue
+            if i in unsound:
+                stops[i] = unsound[i]
+            else:
+                reason = _TrialStop(x, coordinates, clearance, limits, t)
+                stops[i] = (reason, t) if reason else None
+            if stops[i] is not None:
+                if any(stop is None for stop in stops):
+                    _Freeze(plant, plant_context, coordinates, scenarios[i].q0)
+                    truth.Stop(truth.GetMyMutableContextFromRoot(context), i)
+        if all(stop is not None for stop in stops):
+            return stops[0][0] if len(stops) == 1 else "every trial stopped"
         return None
 
     simulator.Initialize()
@@ -121,14 +172,24 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     previous_term = signal.signal(signal.SIGTERM, _RaiseTerminated) if handle_term else None
     interrupted = False
 
+    def results(status: str, reason: str) -> List[RunResult]:
+        """Each trial's result: a stopped trial's own reason and time, the run's
+        status and reason for the others."""
+        logs, wall = collect_logs(loop, context), time.perf_counter() - start
+        memory = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        out = []
+        for i, stop in enumerate(stops):
+            final = context.get_time() if stop is None else stop[1]
+            out.append(RunResult(
+                controller=controller,
+                status=status if stop is None else "diverged",
+                reason=reason if stop is None else stop[0], final_time=final,
+                wall_time=wall, logs=trial_logs(loop, logs, i, final),
+                peak_memory_mib=memory, duration=duration))
+        return out
+
     def result(status: str, reason: str) -> RunResult:
-        return RunResult(controller=controller, status=status, reason=reason,
-                         final_time=context.get_time(),
-                         wall_time=time.perf_counter() - start,
-                         logs=collect_logs(loop, context),
-                         peak_memory_mib=resource.getrusage(
-                             resource.RUSAGE_SELF).ru_maxrss / 1024,
-                         duration=duration)
+        return results(status, reason)[0]
 
     last_checkpoint = start
 
@@ -147,6 +208,8 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
     reason = ""
     try:
         reason = advance_in_chunks(simulator, duration, check, after_chunk)
+        if reason and not all(stops):     # the simulation failed: every trial stops
+            stops = [stop or (reason, context.get_time()) for stop in stops]
     except KeyboardInterrupt as e:
         if not interruptible:
             raise
@@ -157,8 +220,23 @@ def _Simulate(scenario: Scenario, controller: str, duration: float, progress: bo
         bar.close()
         if handle_term:
             signal.signal(signal.SIGTERM, previous_term)
-    return result("interrupted" if interrupted else "diverged" if reason else "ok",
-                  reason)
+    return results("interrupted" if interrupted else "diverged" if reason else "ok",
+                   reason)
+
+
+def _Freeze(plant, plant_context, coordinates: ArmCoordinates, q0) -> None:
+    """A stopped trial of a batch at rest: its velocities zero, its positions at
+    q0 if they are not finite (with its torque zero it then stays there)."""
+    x = plant_context.get_continuous_state_vector().CopyToVector()
+    nq = plant.num_positions()
+    positions, velocities = x[:nq], x[nq:]
+    velocities[np.concatenate([coordinates.base_v, coordinates.joint_v])] = 0.0
+    if not np.all(np.isfinite(positions[np.concatenate([coordinates.base_q,
+                                                        coordinates.joint_q])])):
+        positions[coordinates.base_q] = coordinates.base_origin
+        positions[coordinates.joint_q] = q0
+    plant.SetPositionsAndVelocities(plant_context, np.concatenate([positions,
+                                                                   velocities]))
 
 
 def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
@@ -194,3 +272,25 @@ def collect_logs(loop, context) -> Dict[str, np.ndarray]:
     logs = {name: data[:count].copy() for name, data in logs.items()}
     logs["time"] = times[:count].copy()
     return logs
+
+
+def trial_logs(loop, logs: Dict[str, np.ndarray], trial: int,
+               final_time: float) -> Dict[str, np.ndarray]:
+    """One trial's part of a batch's logs (collect_logs), up to ``final_time``:
+    its plant state in the layout of a plant of its own ([positions, velocities],
+    plant.trial_coordinates) and its share of every stacked signal."""
+    coordinates = trial_coordinates(loop.plant)[trial]
+    nq, count = loop.plant.num_positions(), loop.trials
+    kept = logs["time"] <= final_time
+    state = np.concatenate([coordinates.base_q, coordinates.joint_q,
+                            nq + coordinates.base_v, nq + coordinates.joint_v])
+    out = {}
+    for name, data in logs.items():
+        data = data[kept]
+        if name == "time":
+            out[name] = data
+        elif name == "state":
+            out[name] = data[:, state]
+        else:
+            out[name] = data.reshape(len(data), count, -1)[:, trial].copy()
+    return out

@@ -8,7 +8,7 @@ dispatches on them, returning an object with the Robot protocol below
 (loop.closed_loop), ``loop.simulate``, the metrics, the figures, ``dacph verify``
 and the animations use that protocol only."""
 import importlib
-from typing import Callable, Dict, Optional, Protocol, Tuple
+from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
@@ -25,12 +25,15 @@ class Robot(Protocol):
     lhs_log: str                    # the name of its log output
     task_panels: Tuple[str, ...]    # figures.make_panels' panels of this task
 
-    def AddGroundTruth(self, builder) -> Tuple[object, object]:
-        """Adds the ground-truth MultibodyPlant ("plant") and its SceneGraph."""
+    @classmethod
+    def AddGroundTruth(cls, builder, trials: Sequence["Robot"]) -> Tuple[object, object]:
+        """Adds the ground-truth MultibodyPlant ("plant") of a batch of ``trials``
+        (each trial's Robot; one: a single run) and its SceneGraph."""
 
-    def MakeTrueRhs(self, plant):
-        """The port's true RHS system for ``plant`` (inputs u, state,
-        disturbance_model; outputs tau, true_matrices)."""
+    @classmethod
+    def MakeTrueRhs(cls, plant, trials: Sequence["Robot"]):
+        """The port's true RHS system of the ``trials`` for their ``plant`` (inputs
+        u, state, disturbance_model; outputs tau, true_matrices; stacked)."""
 
     def RequireRunnableStart(self) -> None:
         """ConfigError unless a run can start at the scenario's q0."""
@@ -38,10 +41,13 @@ class Robot(Protocol):
     def GainRuleRates(self) -> Tuple[float, float]:
         """(lambda_max(K_d), inf_q lambda_min(M)) of the LHS for eq. (48)."""
 
-    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
-        """Adds the LHS controller (outputs tau_request, reduced_model and its log;
-        input chi) and, with ``identify``, an InertialIdentifier feeding it, into
-        the controller's builder; returns the named systems."""
+    @classmethod
+    def AddLhsController(cls, controller, trials: Sequence["Robot"], excitation,
+                         identify: bool) -> Dict:
+        """Adds the LHS controller of the ``trials`` (outputs tau_request,
+        reduced_model and its log; input chi; stacked) and, with ``identify``, an
+        InertialIdentifier feeding it, into the controller's builder; returns the
+        named systems."""
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
         """q -> why the joints are beyond the robot's position limits (or None),
@@ -96,3 +102,14 @@ def robot_of(scenario) -> Robot:
     """The Robot of ``scenario`` (a scenario.Scenario; validating the scenario
     against it: ConfigError naming the first invalid setting)."""
     return robot_type(scenario)(scenario)
+
+
+def robots_of(scenarios: Sequence) -> List[Robot]:
+    """The Robot of each trial of a batch (robot_of), all of one type with one
+    number of joints: the trials share one diagram (ConfigError otherwise)."""
+    robots = [robot_of(scenario) for scenario in scenarios]
+    kinds = {(type(robot).__name__, robot.num_joints) for robot in robots}
+    if len(kinds) > 1:
+        raise ConfigError(f"a batch's trials have robots {sorted(kinds)}; allowed: one "
+                          "robot type with one number of joints per batch")
+    return robots

@@ -52,14 +52,17 @@ class DescribedRobot:
         inertias; the controller's model evaluates it with its own)."""
         return self.parsed.plant
 
-    def AddGroundTruth(self, builder):
+    @classmethod
+    def AddGroundTruth(cls, builder, trials):
         """The parsed plant and its SceneGraph (ParsedDescription.AddTo): the
-        description is parsed once per diagram."""
-        return self.parsed.AddTo(builder)
+        description is parsed once per diagram (one trial: _OneTrial)."""
+        return _OneTrial(trials).parsed.AddTo(builder)
 
-    def MakeTrueRhs(self, plant) -> SpatialTrueRhs:
-        return SpatialTrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
-                              phases=self.scenario.phases)
+    @classmethod
+    def MakeTrueRhs(cls, plant, trials) -> SpatialTrueRhs:
+        trial = _OneTrial(trials)
+        return SpatialTrueRhs(plant=plant, uncertainty=trial.scenario.uncertainty,
+                              phases=trial.scenario.phases)
 
     def RequireRunnableStart(self) -> None:
         """q0 within the description's joint limits (robot.joint_limits "stop");
@@ -102,9 +105,12 @@ class DescribedRobot:
         (gain_rule.inertia_scaled_c_lower_bound)."""
         return self.scenario.task.gains.damping_rate, 1.0
 
-    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
+    @classmethod
+    def AddLhsController(cls, controller, trials, excitation, identify: bool) -> Dict:
         """The AttitudeController (with the clearance potential unless its gain is
-        0), fed by an InertialIdentifier (scenario.inertia) with ``identify``."""
+        0), fed by an InertialIdentifier (scenario.inertia) with ``identify`` (one
+        trial: _OneTrial)."""
+        self = _OneTrial(trials)
         scenario, builder, arm = self.scenario, controller.builder, self.scenario.robot
         potential = (BaseClearancePotential(
             parsed=self.parsed, model=self.model, gain=arm.potential.gain,
@@ -216,3 +222,12 @@ class DescribedRobot:
                                                  gains.damping_rate),
             settings={"inf_lambda_min_M": lambda_min_M,
                       "sup_max_diagonal_M": max_diagonal_M})
+
+
+def _OneTrial(trials) -> DescribedRobot:
+    """The one trial of a described arm's diagram: its systems are not batched yet
+    (ConfigError for more)."""
+    if len(trials) != 1:
+        raise ConfigError(f"a batch of {len(trials)} trials of a described arm; "
+                          "allowed: batch_size 1 (the spatial systems are not batched yet)")
+    return trials[0]

@@ -10,13 +10,14 @@ import numpy as np
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.dynamics.plant import AddFreeFloatingArm, ArmCoordinates, MakeArmPlant
+from dacph_drake.dynamics.plant import AddFreeFloatingArms, ArmCoordinates, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.tasks.reference import OrientationReference
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
-from dacph_drake.systems.lhs_controller import LhsController, boundary_layer_per_chi
+from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
+                                                boundary_layer_per_chi)
 from dacph_drake.systems.true_rhs import TrueRhs
 
 
@@ -44,12 +45,16 @@ class PlanarRobot:
             self._bounds = mass_matrix_bounds(self.model)
         return self._bounds
 
-    def AddGroundTruth(self, builder):
-        return AddFreeFloatingArm(builder, self.scenario.robot.truth)
+    @classmethod
+    def AddGroundTruth(cls, builder, trials):
+        """One plant of every trial's true arm (AddFreeFloatingArms)."""
+        return AddFreeFloatingArms(builder, [t.scenario.robot.truth for t in trials])
 
-    def MakeTrueRhs(self, plant) -> TrueRhs:
-        return TrueRhs(plant=plant, uncertainty=self.scenario.uncertainty,
-                       phases=self.scenario.phases)
+    @classmethod
+    def MakeTrueRhs(cls, plant, trials) -> TrueRhs:
+        return TrueRhs(plant=plant, truths=[t.scenario.robot.truth for t in trials],
+                       uncertainties=[t.scenario.uncertainty for t in trials],
+                       phases=[t.scenario.phases for t in trials])
 
     def RequireRunnableStart(self) -> None:
         """Every link of the ground-truth arm lies outside the base at q0 (clearance
@@ -76,25 +81,32 @@ class PlanarRobot:
         """K_d = Kd I over the nominal robot's inf_q lambda_min(M)."""
         return self.scenario.task.gains.Kd, self.mass_matrix_bounds[0]
 
-    def AddLhsController(self, controller, excitation, identify: bool) -> Dict:
-        """The LhsController (the nominal robot's potential, theta0(0) = 0), fed by
-        an InertialIdentifier (scenario.inertia) with ``identify``."""
-        scenario, builder = self.scenario, controller.builder
+    @classmethod
+    def AddLhsController(cls, controller, trials, excitation, identify: bool) -> Dict:
+        """The LhsController of the trials (each its nominal robot's potential,
+        theta0(0) = 0), fed by an InertialIdentifier (scenario.inertia) with
+        ``identify``."""
+        scenario, builder = trials[0].scenario, controller.builder
+        if identify and len(trials) > 1:
+            raise ConfigError("inertia.identify in a batch of more than one trial; "
+                              "allowed: batch_size 1 (the identifier is not batched yet)")
         identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
-            plant=self.model.plant, settings=scenario.inertia,
+            plant=trials[0].model.plant, settings=scenario.inertia,
             period=scenario.periods.learner_sample)) if identify else None)
-        lhs = builder.AddNamedSystem(self.lhs_name, LhsController(
-            model=self.model, potential=BaseRepulsionPotential(
-                scenario.robot.nominal, scenario.robot.potential),
-            reference=OrientationReference(scenario.task.reference,
-                                           float(np.sum(scenario.q0))),
+        lhs = builder.AddNamedSystem(cls.lhs_name, LhsController(
+            trials=[LhsTrial(
+                model=t.model, potential=BaseRepulsionPotential(
+                    t.scenario.robot.nominal, t.scenario.robot.potential),
+                reference=OrientationReference(t.scenario.task.reference,
+                                               float(np.sum(t.scenario.q0))),
+                lambda_min_M=t.GainRuleRates()[1]) for t in trials],
             gains=scenario.task.gains, period=scenario.periods.lhs,
-            excitation=excitation, lambda_min_M=self.GainRuleRates()[1],
+            excitation=excitation,
             inertial_parameters=identifier.parameters if identify else None))
         for signal in ("base_pose", "q", "qdot"):
             controller.Input(lhs.GetInputPort(signal), signal)
-        return {self.lhs_name: lhs, **({"inertial_identifier": identifier}
-                                       if identify else {})}
+        return {cls.lhs_name: lhs, **({"inertial_identifier": identifier}
+                                      if identify else {})}
 
     def LimitViolation(self):
         return None                 # the planar arm's joints turn freely

@@ -1,4 +1,6 @@
 """External disturbance source d(t) (the paper leaves d(t) open; a SPEC setting, docs/equations.md)."""
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
@@ -9,25 +11,24 @@ from dacph_drake.scenario import Disturbance
 class DisturbanceSource(LeafSystem):
     """d(t) = scale (d_LF + d_HF) for t >= start, else 0,
         d_LF = offset + amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), sin, cos, ...]
-        d_HF = a_HF sin(2 pi f_HF t) direction.
+        d_HF = a_HF sin(2 pi f_HF t) direction,
 
-    Output ``disturbance_model``: the constant parameter vector of d(t)
-    (kernels.loop.disturbance: [start, scale, 2 pi f_HF, offset, amplitude,
-    2 pi f, quadrature, a_HF direction]); the true RHS evaluates d(t) from it at
-    every integrator stage inside its compiled kernel, so d(t) costs no Python
-    call per stage. Output ``disturbance``: d(t) itself (time only), for loggers
-    and users."""
+    for every trial of a batch (``settings`` and ``starts``: each trial's; one
+    trial: a single run). Output ``disturbance_model``: the trials' constant
+    parameter vectors of d(t), stacked (kernels.loop.disturbance: [start, scale,
+    2 pi f_HF, offset, amplitude, 2 pi f, quadrature, a_HF direction]); the true
+    RHS evaluates d(t) from it at every integrator stage inside its compiled
+    kernel, so d(t) costs no Python call per stage. Output ``disturbance``: the
+    trials' d(t) (time only), for loggers and users."""
 
-    def __init__(self, settings: Disturbance, start: float):
+    def __init__(self, *, settings: Sequence[Disturbance], starts: Sequence[float]):
         super().__init__()
-        n = len(settings.lf_offset)
-        self._model = np.concatenate([
-            [start, settings.scale, 2 * np.pi * settings.hf_frequency],
-            settings.lf_offset, settings.lf_amplitude,
-            2 * np.pi * np.asarray(settings.lf_frequency, float),
-            (np.arange(n) % 2) * np.pi / 2,                    # sin, cos, sin, ...
-            settings.hf_amplitude * np.asarray(settings.hf_direction, float)])
-        self.DeclareVectorOutputPort("disturbance", n, self._CalcDisturbance,
+        self._models = [_Parameters(disturbance, start)
+                        for disturbance, start in zip(settings, starts, strict=True)]
+        n = len(settings[0].lf_offset)
+        self._model = np.concatenate(self._models)
+        self.DeclareVectorOutputPort("disturbance", n * len(self._models),
+                                     self._CalcDisturbance,
                                      prerequisites_of_calc={self.time_ticket()})
         self.DeclareVectorOutputPort(
             "disturbance_model", len(self._model),
@@ -35,7 +36,19 @@ class DisturbanceSource(LeafSystem):
             prerequisites_of_calc={self.nothing_ticket()})
 
     def Evaluate(self, t: float) -> np.ndarray:
-        return disturbance(t, self._model)
+        """The trials' d(t), stacked."""
+        return np.concatenate([disturbance(t, model) for model in self._models])
 
     def _CalcDisturbance(self, context, output):
         output.SetFromVector(self.Evaluate(context.get_time()))
+
+
+def _Parameters(settings: Disturbance, start: float) -> np.ndarray:
+    """d(t)'s parameter vector (kernels.loop.disturbance) of one trial."""
+    n = len(settings.lf_offset)
+    return np.concatenate([
+        [start, settings.scale, 2 * np.pi * settings.hf_frequency],
+        settings.lf_offset, settings.lf_amplitude,
+        2 * np.pi * np.asarray(settings.lf_frequency, float),
+        (np.arange(n) % 2) * np.pi / 2,                    # sin, cos, sin, ...
+        settings.hf_amplitude * np.asarray(settings.hf_direction, float)])

@@ -1,10 +1,13 @@
 """LHS model-based controller: Slotine-Li sliding mode with a null-space potential
 field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41)."""
+from dataclasses import dataclass
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
-from dacph_drake.kernels.loop import lhs_sample, pack_lhs
+from dacph_drake.kernels.loop import lhs_samples, pack_lhs, stack_packs
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
@@ -18,9 +21,21 @@ def boundary_layer_per_chi(gains: LhsGains, lambda_min_M: float) -> float:
     return 1.0 / (gains.boundary_rate * lambda_min_M) if gains.boundary_rate > 0 else 0.0
 
 
+@dataclass
+class LhsTrial:
+    """One trial's part of an LhsController: the controller's model of its robot,
+    the base-repulsion potential of that robot, its reference (theta0(0) from its
+    q0) and inf_q lambda_min(M) of its model (the boundary layer's scale)."""
+    model: ReducedOrderModel
+    potential: BaseRepulsionPotential
+    reference: OrientationReference
+    lambda_min_M: float = 1.0
+
+
 class LhsController(LeafSystem):
-    """Every ``period`` seconds, from the measured state (inputs ``base_pose`` =
-    (x, y, theta0), ``q``, ``qdot``; alpha = theta0 + q_1 + ... + q_n):
+    """Every ``period`` seconds, for every trial of a batch (``trials``; one: a
+    single run), from the measured state (inputs ``base_pose`` = (x, y, theta0),
+    ``q``, ``qdot``; alpha = theta0 + q_1 + ... + q_n):
 
         alpha~ = alpha - alpha_d,   D+ = D^T / (D D^T),   P = I - D+ D
         nu     = D+ (alpha_d_dot - Lambda alpha~) + P xi,  xi = -eta grad U(q)
@@ -44,42 +59,45 @@ class LhsController(LeafSystem):
     bodies), input ``inertial_parameters`` replaces the model's inertias (an
     InertialIdentifier's estimate): M, C', D and their derivatives are those of the
     identified bodies (ReducedOrderModel.CoefficientBasis: the mass matrix is linear
-    in them). The update is one compiled kernel (kernels.loop.lhs_sample);
+    in them). Every port carries the trials' signals stacked in trial order. The
+    update is one compiled kernel for all trials (kernels.loop.lhs_samples);
     lambda_min(M) of the log is computed when the log is read."""
 
-
-    def __init__(self, *, model: ReducedOrderModel, potential: BaseRepulsionPotential,
-                 reference: OrientationReference, gains: LhsGains, period: float,
+    def __init__(self, *, trials: Sequence[LhsTrial], gains: LhsGains, period: float,
                  excitation: Excitation = Excitation(amplitude=0.0),
-                 lambda_min_M: float = 1.0,
                  inertial_parameters: InertialParameters = None):
         super().__init__()
-        n = model.num_joints
-        self._n = n
-        # The kernel's constant arguments (kernels.loop.lhs_sample).
-        self._coefficients, ranges = model.trigonometric_representation
-        self._packed = pack_lhs(
-            ranges, *potential.kernel_arguments,
-            reference.kernel_arguments,
+        n = trials[0].model.num_joints
+        self._n, self._trials = n, len(trials)
+        excitation_arguments = np.concatenate([[excitation.amplitude],
+                                               2 * np.pi * excitation.Frequencies(n)])
+        # The kernel's constant arguments (kernels.loop.lhs_sample), per trial.
+        self._coefficients = np.array([trial.model.trigonometric_representation[0]
+                                       for trial in trials])
+        self._packs, self._offsets = stack_packs([pack_lhs(
+            trial.model.trigonometric_representation[1],
+            *trial.potential.kernel_arguments, trial.reference.kernel_arguments,
             np.array([gains.Kd, gains.Lambda, gains.epsilon, gains.eta,
-                      boundary_layer_per_chi(gains, lambda_min_M)]),
-            np.concatenate([[excitation.amplitude], 2 * np.pi * excitation.Frequencies(n)]))
-        self._base_pose = self.DeclareVectorInputPort("base_pose", 3)
-        self._q = self.DeclareVectorInputPort("q", n)
-        self._qdot = self.DeclareVectorInputPort("qdot", n)
-        self._chi = self.DeclareVectorInputPort("chi", 1)
+                      boundary_layer_per_chi(gains, trial.lambda_min_M)]),
+            excitation_arguments) for trial in trials])
+        N = self._trials
+        self._base_pose = self.DeclareVectorInputPort("base_pose", 3 * N)
+        self._q = self.DeclareVectorInputPort("q", n * N)
+        self._qdot = self.DeclareVectorInputPort("qdot", n * N)
+        self._chi = self.DeclareVectorInputPort("chi", N)
         self._parameters = None
         if inertial_parameters is not None:
-            self._parameters = self.DeclareVectorInputPort("inertial_parameters",
-                                                           inertial_parameters.size)
-            self._coefficient_basis = model.CoefficientBasis(inertial_parameters)
+            self._parameters = self.DeclareVectorInputPort(
+                "inertial_parameters", inertial_parameters.size * N)
+            self._coefficient_bases = [trial.model.CoefficientBasis(inertial_parameters)
+                                       for trial in trials]
             self._identified_key, self._identified = None, None
-        self._tau_index = self.DeclareDiscreteState(n)
-        self._log_index = self.DeclareDiscreteState(n + 4)      # lhs_log but lambda_min
-        self._model_index = self.DeclareDiscreteState(2 * n * n)
+        self._tau_index = self.DeclareDiscreteState(n * N)
+        self._log_index = self.DeclareDiscreteState((n + 4) * N)   # lhs_log but lambda_min
+        self._model_index = self.DeclareDiscreteState(2 * n * n * N)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareVectorOutputPort(
-            "lhs_log", LhsLog(n).size, self._CalcLog,
+            "lhs_log", LhsLog(n).size * N, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._log_index),
                                    self.discrete_state_ticket(self._model_index)})
         self.DeclareStateOutputPort("reduced_model", self._model_index)
@@ -87,41 +105,51 @@ class LhsController(LeafSystem):
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
     def Control(self, t: float, theta0: float, q: np.ndarray, qdot: np.ndarray,
-                chi: float):
-        """(tau_c^r, lhs_log) at time t, base angle theta0 and joint state (q, qdot)."""
+                chi: float, trial: int = 0):
+        """(tau_c^r, lhs_log) of one trial at time t, base angle theta0 and joint
+        state (q, qdot)."""
         n = self._n
-        sample = lhs_sample(t, theta0, q, qdot, chi, self._coefficients, self._packed)
+        sample = lhs_samples(t, np.array([theta0]), q, qdot, np.array([chi]),
+                             self._coefficients[trial:trial + 1],
+                             self._packs[self._offsets[trial]:self._offsets[trial + 1]],
+                             np.array([0, self._offsets[trial + 1]
+                                       - self._offsets[trial]]))
         return sample[:n], self._Log(sample[n:2 * n + 4], sample[2 * n + 4:])
 
-    def _Log(self, log, model):
+    def _Log(self, logs, models):
+        """The trials' lhs_log from their kernel logs and [vec(M), vec(C')]."""
         n = self._n
-        M = model[:n * n].reshape(n, n)
-        return np.append(log, np.linalg.eigvalsh(M)[0])
+        M = models.reshape(-1, 2, n, n)[:, 0]
+        return np.concatenate([logs.reshape(-1, n + 4),
+                               np.linalg.eigvalsh(M)[:, :1]], axis=1).reshape(-1)
 
     def _UpdateControl(self, context, discrete_state):
-        n = self._n
-        chi = self._chi.Eval(context)[0]
-        sample = lhs_sample(context.get_time(), self._base_pose.Eval(context)[2],
-                            self._q.Eval(context), self._qdot.Eval(context), chi,
-                            self._Coefficients(context), self._packed)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
+        n, N = self._n, self._trials
+        samples = lhs_samples(context.get_time(),
+                              self._base_pose.Eval(context)[2::3],
+                              self._q.Eval(context), self._qdot.Eval(context),
+                              self._chi.Eval(context), self._Coefficients(context),
+                              self._packs, self._offsets).reshape(N, -1)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(
+            samples[:, :n].reshape(-1))
         discrete_state.get_mutable_vector(self._log_index).SetFromVector(
-            sample[n:2 * n + 4])
+            samples[:, n:2 * n + 4].reshape(-1))
         discrete_state.get_mutable_vector(self._model_index).SetFromVector(
-            sample[2 * n + 4:])
+            samples[:, 2 * n + 4:].reshape(-1))
 
     def _Coefficients(self, context) -> np.ndarray:
-        """The model's trigonometric coefficients: of the input
+        """The models' trigonometric coefficients (trials x ...): of the input
         ``inertial_parameters`` when it is declared and connected (recomputed when
-        they change), else of the controller's model."""
+        they change), else of the controller's models."""
         if self._parameters is None or not self._parameters.HasValue(context):
             return self._coefficients
         pi = self._parameters.Eval(context)
         key = pi.tobytes()
         if key != self._identified_key:
             self._identified_key = key
-            self._identified = np.ascontiguousarray(
-                np.tensordot(pi, self._coefficient_basis, 1))
+            self._identified = np.ascontiguousarray([
+                np.tensordot(trial_pi, basis, 1) for trial_pi, basis
+                in zip(pi.reshape(self._trials, -1), self._coefficient_bases)])
         return self._identified
 
     def _CalcLog(self, context, output):

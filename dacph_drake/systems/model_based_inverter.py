@@ -1,27 +1,35 @@
 """The model-based baseline's RHS (docs/equations.md, SPEC settings): static inversion of the nominal RHS."""
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import Uncertainty
 
 
 class ModelBasedInverter(Diagram):
-    """u = B0^-1 (tau_c^r + D0 qdot); stateless (output ``u`` depends on the inputs
-    ``tau_request`` and ``qdot`` only).
+    """u = B0^-1 (tau_c^r + D0 qdot) for every trial of a batch (``uncertainties``:
+    each trial's B0 and D0; one: a single run); stateless (output ``u`` depends on
+    the inputs ``tau_request`` and ``qdot`` only, the trials' signals stacked).
 
     It feeds the true RHS, which the integrator evaluates at every stage, so it is
     built from Drake's C++ primitives (no Python call per stage): a Multiplexer
-    stacks [tau_c^r; qdot] and a MatrixGain applies [B0^-1 | B0^-1 diag(D0)].
-    ``scenario``: B0 and D0 from its ``uncertainty`` section."""
+    stacks [tau_c^r; qdot] and a MatrixGain applies [blockdiag(B0^-1) |
+    blockdiag(B0^-1 diag(D0))] over the trials."""
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, *, uncertainties: Sequence[Uncertainty]):
         super().__init__()
-        n = len(scenario.uncertainty.B0)
-        B0_inv = np.linalg.inv(np.diag(scenario.uncertainty.B0))
-        gain = np.hstack([B0_inv, B0_inv @ np.diag(scenario.uncertainty.D0)])
+        inverses = [np.linalg.inv(np.diag(u.B0)) for u in uncertainties]
+        n, trials = len(inverses[0]), len(inverses)
+        size = n * trials
+        gain = np.zeros((size, 2 * size))
+        for i, (B0_inv, u) in enumerate(zip(inverses, uncertainties)):
+            rows = slice(i * n, (i + 1) * n)
+            gain[rows, rows] = B0_inv
+            gain[rows, size + i * n:size + (i + 1) * n] = B0_inv @ np.diag(u.D0)
         builder = DiagramBuilder()
-        stack = builder.AddNamedSystem("stack", Multiplexer([n, n]))
+        stack = builder.AddNamedSystem("stack", Multiplexer([size, size]))
         inversion = builder.AddNamedSystem("inversion", MatrixGain(gain))
         builder.Connect(stack.get_output_port(), inversion.get_input_port())
         builder.ExportInput(stack.get_input_port(0), "tau_request")

@@ -2,16 +2,15 @@
 port (docs/equations.md E19), as TrueRhs is for the planar arms."""
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.loop import pack_true_rhs, spatial_true_torque, true_matrices
 from dacph_drake.dynamics.plant import ArmCoordinates, effort_limits, joint_damping
 from dacph_drake.scenario import Phases, Uncertainty
-from dacph_drake.systems.true_rhs import DeclareTrueRhsPorts
+from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
 
 
-class SpatialTrueRhs(LeafSystem):
+class SpatialTrueRhs(TrueRhsSystem):
     """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p) and p the joint rows of
     H(q_full) v, which at zero momentum is M(q) qdot exactly (the base rows of H v
     are the conserved momentum). B~, D~ (uncertainty.TrueRhsModel) and d(t)
@@ -42,8 +41,8 @@ class SpatialTrueRhs(LeafSystem):
         self._effort_limit = effort_limits(plant, self._v_index)
         self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
         self._packed = pack_true_rhs((), (), self._uncertainty)
-        self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
-            self, n, plant.num_positions() + plant.num_velocities())
+        self._u, self._state, self._disturbance_model = self.DeclareTrueRhsPorts(
+            n, plant.num_positions() + plant.num_velocities())
         self.DeclareVectorOutputPort("saturated", n, self._CalcSaturated,
                                      prerequisites_of_calc={self._u.ticket()})
 
@@ -63,10 +62,11 @@ class SpatialTrueRhs(LeafSystem):
 
     def _CalcTau(self, context, output):
         x, H = self._StateAndMassMatrix(context)
-        output.SetFromVector(spatial_true_torque(
+        output.SetFromVector(self._Torque(context, spatial_true_torque(
             context.get_time(), x, H, self._q_index, self._v_index,
             self._u.Eval(context), self._effort_limit,
-            self._disturbance_model.Eval(context), self._packed))
+            self._disturbance_model.Eval(context), self._packed,
+            self._Running(context), RUNAWAY_RATE)))
 
     def _CalcSaturated(self, context, output):
         output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)

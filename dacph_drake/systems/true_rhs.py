@@ -1,71 +1,140 @@
 """The ground truth's actuator: the RHS of the port (docs/equations.md E19)."""
+from typing import Dict, Sequence, Tuple
+
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import BasicVector, LeafSystem
 
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
 from dacph_drake.kernels.arm import joint_momentum
-from dacph_drake.kernels.loop import pack_true_rhs, true_matrices, true_torque
-from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.kernels.loop import (NON_FINITE, STOPPED, pack_true_rhs, stack_packs,
+                                      true_matrices, true_torques)
+from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.dynamics.plant import MakeArmPlant, trial_coordinates
 from dacph_drake.scenario import Phases, Uncertainty
 
 
-class TrueRhs(LeafSystem):
+RUNAWAY_RATE = 50.0     # [rad/s]: a trial whose joint or base rate exceeds it stops
+
+
+class TrueRhsSystem(LeafSystem):
+    """What every true RHS (TrueRhs, SpatialTrueRhs) does for the trials of its
+    batch beside its torque, at every evaluation (every integrator stage), inside
+    its kernel: a trial stopped by the run (Stop) gets zero torque, and so does a
+    trial whose state or torque goes unsound, which is reported (Unsound), so that
+    a NaN of one trial never reaches the plant that the others share."""
+
+    def DeclareTrueRhsPorts(self, n: int, state_size: int, trials: int = 1):
+        """DeclareTrueRhsPorts, and the trials' running flags."""
+        self._n, self._trials = n, trials
+        # 1 for a trial that runs, 0 for one stopped (Stop): its torque is zero.
+        self._running = self.DeclareNumericParameter(BasicVector(np.ones(trials)))
+        self._unsound = {}                      # trial -> (reason, first time)
+        return DeclareTrueRhsPorts(self, n, state_size, trials)
+
+    def Stop(self, context, trial: int) -> None:
+        """From now on in ``context`` (this system's), trial ``trial``'s torque is
+        zero, whatever its inputs hold: a trial of a batch that stopped
+        (loop.simulate) stays where it is while the others run on."""
+        context.get_mutable_numeric_parameter(self._running).SetAtIndex(trial, 0.0)
+
+    def Unsound(self) -> Dict[int, Tuple[str, float]]:
+        """The trials whose state or torque went unsound (a non-finite value, or a
+        rate beyond RUNAWAY_RATE), with the reason and the first time it was;
+        their torque has been zero since. The monitor of a run reads it; it is a
+        record of this diagram's simulation, not part of its state."""
+        return dict(self._unsound)
+
+    def _Running(self, context) -> np.ndarray:
+        """The trials' running flags (Stop), for the kernel."""
+        return context.get_numeric_parameter(self._running).get_value()
+
+    def _Torque(self, context, result) -> np.ndarray:
+        """tau of a kernel's (tau, verdicts, worst verdict) (kernels.loop.RUNNING
+        ...), recording the trials that went unsound."""
+        tau, verdicts, worst = result
+        if worst > STOPPED:
+            t = context.get_time()
+            for trial in np.flatnonzero(verdicts > STOPPED):
+                self._unsound.setdefault(int(trial), (
+                    f"non-finite plant state or torque at t = {t:.4f} s"
+                    if verdicts[trial] == NON_FINITE else
+                    f"runaway: a rate exceeded {RUNAWAY_RATE} rad/s at t = {t:.4f} s", t))
+        return tau
+
+
+class TrueRhs(TrueRhsSystem):
     """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p), p = M(q) qdot of the true
-    robot. Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
-    plant's, read through plant.ArmCoordinates) and time (the phases and d(t)), so it adds no delay. It feeds the
-    plant's actuation input and runs at every integrator stage, as one compiled
-    kernel (kernels.loop.true_torque) that evaluates d(t) from input
+    robot, for every trial of a batch (one trial: a single run). Stateless: output
+    ``tau`` depends only on the inputs ``u``, ``state`` (the batch's plant's, each
+    trial's part read through plant.trial_coordinates) and time (the phases and
+    d(t)), so it adds no delay. It feeds the plant's actuation input and runs at
+    every integrator stage, as one compiled kernel for all trials
+    (kernels.loop.true_torques) that evaluates d(t) from input
     ``disturbance_model`` (DisturbanceSource's constant parameters).
 
     p is the joint rows of H(q_full) v (kernels.arm.joint_momentum): at zero momentum
     this equals M(q) qdot exactly (the base rows of H v are the conserved momentum).
-    Output ``true_matrices``: [vec(B~) (row-major), diag(D~)] for the metrics.
-    ``plant`` is the planar ground truth (finalized): its mass matrix's closed form
-    (ReducedOrderModel) is fitted once here."""
+    Output ``true_matrices``: [vec(B~) (row-major), diag(D~)] per trial, for the
+    metrics. ``plant`` is the batch's ground truth (finalized); ``truths`` each
+    trial's arm (RobotParams), whose mass matrix's closed form (ReducedOrderModel)
+    is fitted once here; ``uncertainties`` and ``phases`` each trial's. Port sizes
+    are the trials' signals stacked in trial order."""
 
-    def __init__(self, *, plant: MultibodyPlant, uncertainty: Uncertainty,
-                 phases: Phases):
+    def __init__(self, *, plant: MultibodyPlant, truths: Sequence[RobotParams],
+                 uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):
         super().__init__()
-        model = ReducedOrderModel(plant)
-        n = model.num_joints
-        self._coordinates = ArmCoordinates.FromPlant(model.plant)
-        self._indices = self._coordinates.StateIndices()
-        self._representation = model.trigonometric_representation
-        self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
-        self._packed = pack_true_rhs(*self._representation, self._uncertainty)
-        self._u, self._state, self._disturbance_model = DeclareTrueRhsPorts(
-            self, n, model.plant.num_positions() + model.plant.num_velocities())
+        models = [ReducedOrderModel(MakeArmPlant(truth)) for truth in truths]
+        n = models[0].num_joints
+        self._indices = np.array([coordinates.StateIndices()
+                                  for coordinates in trial_coordinates(plant)])
+        self._representations = [model.trigonometric_representation for model in models]
+        self._uncertainties = [TrueRhsModel(uncertainty, phase).kernel_arguments
+                               for uncertainty, phase in zip(uncertainties, phases,
+                                                             strict=True)]
+        self._packs, self._offsets = stack_packs([
+            pack_true_rhs(*representation, uncertainty) for representation, uncertainty
+            in zip(self._representations, self._uncertainties, strict=True)])
+        self._u, self._state, self._disturbance_model = self.DeclareTrueRhsPorts(
+            n, plant.num_positions() + plant.num_velocities(), len(models))
 
     def _CalcTau(self, context, output):
-        output.SetFromVector(true_torque(context.get_time(), self._state.Eval(context),
-                                         self._indices, self._u.Eval(context),
-                                         self._disturbance_model.Eval(context),
-                                         self._packed))
+        output.SetFromVector(self._Torque(context, true_torques(
+            context.get_time(), self._state.Eval(context), self._indices,
+            self._u.Eval(context), self._disturbance_model.Eval(context),
+            self._packs, self._offsets, self._Running(context), RUNAWAY_RATE)))
 
     def _CalcMatrices(self, context, output):
-        base_pose, q, base_velocity, qdot = self._coordinates.Split(
-            self._state.Eval(context))
-        B, D = true_matrices(context.get_time(), q,
-                             joint_momentum(base_pose[2], base_velocity, q, qdot,
-                                            *self._representation),
-                             *self._uncertainty)
-        output.SetFromVector(np.concatenate([B.reshape(-1), D]))
+        x, t = self._state.Eval(context), context.get_time()
+        matrices = []
+        for indices, representation, uncertainty in zip(
+                self._indices, self._representations, self._uncertainties):
+            arm = x[indices]
+            n = (len(arm) - 4) // 2
+            theta0, base_velocity, q, qdot = arm[0], arm[1:4], arm[4:4 + n], arm[4 + n:]
+            B, D = true_matrices(t, q, joint_momentum(theta0, base_velocity, q, qdot,
+                                                      *representation), *uncertainty)
+            matrices += [B.reshape(-1), D]
+        output.SetFromVector(np.concatenate(matrices))
 
 
-def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int):
-    """The ports every true RHS has (TrueRhs, SpatialTrueRhs): inputs ``u`` (n),
-    ``state`` (the plant's, ``state_size``) and ``disturbance_model``
-    (DisturbanceSource's parameters); outputs ``tau`` (n, system._CalcTau) and
-    ``true_matrices`` (n * n + n, system._CalcMatrices), each depending only on
-    time and the inputs it reads. Returns the three input ports."""
-    u = system.DeclareVectorInputPort("u", n)
+def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int, trials: int = 1):
+    """The ports every true RHS has (TrueRhsSystem), for ``trials`` trials of n
+    joints: inputs ``u`` (n per trial), ``state`` (the plant's, ``state_size``) and
+    ``disturbance_model`` (DisturbanceSource's parameters); outputs ``tau`` (n per
+    trial, system._CalcTau) and ``true_matrices`` (n * n + n per trial,
+    system._CalcMatrices), each depending only on time, the inputs it reads and
+    (tau) the parameters. Returns the three input ports."""
+    u = system.DeclareVectorInputPort("u", trials * n)
     state = system.DeclareVectorInputPort("state", state_size)
-    disturbance_model = system.DeclareVectorInputPort("disturbance_model", 3 + 5 * n)
-    system.DeclareVectorOutputPort("tau", n, system._CalcTau, prerequisites_of_calc={
-        system.time_ticket(), u.ticket(), state.ticket(), disturbance_model.ticket()})
+    disturbance_model = system.DeclareVectorInputPort("disturbance_model",
+                                                      trials * (3 + 5 * n))
+    system.DeclareVectorOutputPort("tau", trials * n, system._CalcTau,
+                                   prerequisites_of_calc={
+        system.time_ticket(), u.ticket(), state.ticket(), disturbance_model.ticket(),
+        system.all_parameters_ticket()})
     system.DeclareVectorOutputPort(
-        "true_matrices", n * n + n, system._CalcMatrices,
+        "true_matrices", trials * (n * n + n), system._CalcMatrices,
         prerequisites_of_calc={system.time_ticket(), state.ticket()})
     return u, state, disturbance_model
