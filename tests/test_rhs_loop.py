@@ -9,7 +9,7 @@ from dacph_drake.network import ExportedNetwork, RhsNetwork
 from dacph_drake.dynamics.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Scenario
-from dacph_drake.systems.rhs_integrator import RhsIntegrator
+from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
 
 
 def test_c_lower_bound_matches_spec():
@@ -38,9 +38,10 @@ def _Integrator(B_hat_scale):
     network = ExportedNetwork(2, [16, 8], 0.01)
     weights = RhsNetwork(2, [16, 8], B_hat_scale * np.eye(2), [0.1, 0.1], 0.01,
                          0).export()
-    rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
-                        lambda_min_M=0.005093, B0=[1.0, 1.0], D0=[0.1, 0.1],
-                        period=2.5e-4, model_period=1e-2)
+    rhs = RhsIntegrator(trials=[RhsTrial(model=model, network=network, Kd_max=0.5,
+                                         lambda_min_M=0.005093, B0=[1.0, 1.0],
+                                         D0=[0.1, 0.1])],
+                        settings=Rhs(), period=2.5e-4, model_period=1e-2)
     context = rhs.CreateDefaultContext()
     FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)
@@ -78,9 +79,10 @@ def test_e_tau_decays_at_the_rate_the_gain_rule_asks(B_true):
     weights = RhsNetwork(2, [16, 8], np.eye(2), [0.1, 0.1], 0.01, 0).export()
     h = scenario.periods.rhs
     lambda_min = 0.005093
-    rhs = RhsIntegrator(model=model, network=network, settings=Rhs(), Kd_max=0.5,
-                        lambda_min_M=lambda_min, B0=[1.0, 1.0], D0=[0.1, 0.1], period=h,
-                        model_period=1e-2)
+    rhs = RhsIntegrator(trials=[RhsTrial(model=model, network=network, Kd_max=0.5,
+                                         lambda_min_M=lambda_min, B0=[1.0, 1.0],
+                                         D0=[0.1, 0.1])],
+                        settings=Rhs(), period=h, model_period=1e-2)
     context = rhs.CreateDefaultContext()
     FixStateInputs(rhs, context, np.zeros(10))
     rhs.GetInputPort("weights").FixValue(context, weights)

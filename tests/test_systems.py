@@ -86,7 +86,7 @@ def _observe(model, q, qdot, qddot, u=None, h=2.5e-4, cutoff=0.0):
     interval's midpoint rate and qddot its backward difference; the reduced model
     [M, C'] at (q, qdot)."""
     observer = PortObserver(num_joints=2, sample_period=h,
-                            noise_std=0.0, seed=0, anti_alias_cutoff=cutoff)
+                            noise_std=0.0, seeds=[0], anti_alias_cutoff=cutoff)
     context = observer.CreateDefaultContext()
     r = model.Evaluate(q, qdot)
     observer.GetInputPort("reduced_model").FixValue(
@@ -238,7 +238,7 @@ def test_port_observer_on_a_known_trajectory():
     chi = builder.AddSystem(ConstantVectorSource([0.05]))
     builder.Connect(chi.get_output_port(), lhs.GetInputPort("chi"))
     observer = builder.AddSystem(PortObserver(num_joints=2, sample_period=h,
-                                              noise_std=0.0, seed=0))
+                                              noise_std=0.0, seeds=[0]))
     splitter = AddStateSplitter(builder, plant)
     builder.Connect(u.get_output_port(0), truth.GetInputPort("u"))
     builder.Connect(source.GetOutputPort("disturbance_model"),

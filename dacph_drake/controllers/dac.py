@@ -5,14 +5,13 @@ from typing import Dict
 
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
-from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.scenario import Scenario
-from dacph_drake.systems.learner import RhsLearner
+from dacph_drake.systems.learner import LearnerTrial, RhsLearner
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.regression_filter import RegressionFilter
-from dacph_drake.systems.rhs_integrator import RhsIntegrator
+from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
 
 
 def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
@@ -45,43 +44,46 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: 
     controller ``lhs`` (its outputs ``reduced_model`` and ``tau_request``, its input
     ``chi``) and to the controller's inputs q, qdot; exports ``u``,
     ``tau_observed``, ``rhs_log``, ``learner_log``, ``estimates``. The gain rule
-    (eq. 48) uses the robot's LHS rates (robots.Robot.GainRuleRates); the RHS
-    period is checked for the largest c it allows (gain_rule.check_rhs_period).
+    (eq. 48) uses each trial's robot's LHS rates (robots.Robot.GainRuleRates); the
+    RHS period is checked for the largest c they allow (gain_rule.check_rhs_period).
     With the LHS's InertialIdentifier ``identifier``, the learner also watches the
-    model the observer uses (Learner.model_change). Returns the named systems."""
-    if loop.trials > 1:
-        raise ConfigError(f"DAC on a batch of {loop.trials} trials; allowed: batch_size 1 "
-                          "(the RHS loop's systems are not batched yet)")
+    model the observer uses (Learner.model_change). Each system serves every
+    trial of the loop. Returns the named systems."""
     scenario, model = loop.scenario, loop.model
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
-    Kd_max, lambda_min_M = loop.robot.GainRuleRates()
-    check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
-                         rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
-                     (1 + rhs_settings.c_margin) * c_lower_bound(
-                         rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
-                     rhs_settings.beta_max)
+    rates = [robot.GainRuleRates() for robot in loop.robots]
+    for Kd_max, lambda_min_M in rates:
+        check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
+                             rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
+                         (1 + rhs_settings.c_margin) * c_lower_bound(
+                             rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
+                         rhs_settings.beta_max)
     builder = controller.builder
     regularized = settings.mode == "regularized"
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         num_joints=model.num_joints, sample_period=periods.rhs,
-        noise_std=rhs_settings.observer_noise, seed=scenario.seed,
+        noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],
         anti_alias_cutoff=settings.band[1] if regularized else 0.0))
     prefilter = (builder.AddNamedSystem("regression_filter", RegressionFilter(
         settings=settings, num_joints=model.num_joints,
-        period=periods.learner_sample)) if regularized else None)
+        period=periods.learner_sample, trials=loop.trials)) if regularized else None)
     learner = builder.AddNamedSystem("learner", RhsLearner(
-        model=model, settings=settings, period=periods.learner,
-        sample_period=periods.learner_sample, B0=scenario.uncertainty.B0,
-        D0=scenario.uncertainty.D0, seed=scenario.seed, q0=scenario.q0,
+        trials=[LearnerTrial(model=robot.model, B0=s.uncertainty.B0, D0=s.uncertainty.D0,
+                             seed=s.seed, q0=s.q0)
+                for robot, s in zip(loop.robots, loop.scenarios)],
+        settings=settings, period=periods.learner, sample_period=periods.learner_sample,
         learning=learning, watch_model=identifier is not None))
     if identifier is not None:
         builder.Connect(identifier.GetOutputPort("model_epoch"),
                         learner.GetInputPort("model_epoch"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        model=model, network=ExportedNetwork.ForLearner(settings, model, scenario.q0),
-        settings=rhs_settings,
-        Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=scenario.uncertainty.B0,
-        D0=scenario.uncertainty.D0, period=periods.rhs,
+        trials=[RhsTrial(model=robot.model,
+                         network=ExportedNetwork.ForLearner(settings, robot.model, s.q0),
+                         Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=s.uncertainty.B0,
+                         D0=s.uncertainty.D0)
+                for robot, s, (Kd_max, lambda_min_M)
+                in zip(loop.robots, loop.scenarios, rates)],
+        settings=rhs_settings, period=periods.rhs,
         model_period=periods.learner_sample, stress=scenario.stress))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.

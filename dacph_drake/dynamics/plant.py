@@ -140,7 +140,12 @@ def trial_coordinates(plant: MultibodyPlant) -> List[ArmCoordinates]:
     return [ArmCoordinates.FromPlant(plant, instance) for instance in instances]
 
 
-def SetArmAtRest(plant: MultibodyPlant, plant_context, q0s) -> None:
+def SetArmAtRest(plant: MultibodyPlant, plant_context, q0) -> None:
+    """SetArmsAtRest of a plant of one arm."""
+    SetArmsAtRest(plant, plant_context, [q0])
+
+
+def SetArmsAtRest(plant: MultibodyPlant, plant_context, q0s) -> None:
     """Every trial's base at the origin, its joints at its q0 (``q0s``, one per
     trial), everything at rest (zero momentum): the initial state of every run."""
     positions = np.zeros(plant.num_positions())
@@ -206,7 +211,8 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
                         time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
     """Adds the finalized plant of a batch of trials, one arm per trial (``robots``,
     each the model instance TRIAL_INSTANCE.format(i), side by side at the origin:
-    without contact they do not interact), with visual geometry registered with a
+    without contact they do not interact; one arm: the default model instance, as
+    a plant of one arm has it), with visual geometry registered with a
     SceneGraph (for Meshcat), to ``builder``; continuous unless ``time_step`` > 0.
     Each arm's state evolves exactly as in a plant of its own (bit for bit,
     tests/test_batch.py), at a fraction of the cost per arm (scripts/bench_sweep.py).
@@ -219,7 +225,8 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=time_step)
     for i, robot in enumerate(robots):
         robot.Validate()
-        _PopulateArm(plant, robot, plant.AddModelInstance(TRIAL_INSTANCE.format(i)))
+        _PopulateArm(plant, robot, default_model_instance() if len(robots) == 1
+                     else plant.AddModelInstance(TRIAL_INSTANCE.format(i)))
     plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     plant.Finalize()
     return plant, scene_graph

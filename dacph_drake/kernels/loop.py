@@ -356,6 +356,39 @@ def observer_sample(q, qdot, memory, model, u, noise, constants):
 
 
 @njit(cache=True)
+def observer_samples(trials, q, qdot, memory, model, u, noise, constants):
+    """observer_sample of each of ``trials`` trials in one call (every other
+    argument but ``constants`` the trials' parts stacked); the trials' results
+    stacked."""
+    n = u.shape[0] // trials
+    out = np.empty(7 * n * trials)
+    for i in range(trials):
+        out[7 * n * i:7 * n * (i + 1)] = observer_sample(
+            q[i * n:(i + 1) * n], qdot[i * n:(i + 1) * n],
+            memory[6 * n * i:6 * n * (i + 1)],
+            model[2 * n * n * i:2 * n * n * (i + 1)], u[i * n:(i + 1) * n],
+            noise[i * n:(i + 1) * n], constants)
+    return out
+
+
+@njit(cache=True)
+def integrator_samples(trials, fast, gains, tau_request, tau_observed, qdot, constants):
+    """integrator_sample of each of ``trials`` trials in one call (``fast``,
+    ``gains``, ``tau_request``, ``tau_observed``, ``qdot`` the trials' parts
+    stacked); the trials' results stacked."""
+    n = qdot.shape[0] // trials
+    fast_size, gains_size = fast.shape[0] // trials, gains.shape[0] // trials
+    out = np.empty(trials * (4 * n + 2))
+    for i in range(trials):
+        out[(4 * n + 2) * i:(4 * n + 2) * (i + 1)] = integrator_sample(
+            fast[fast_size * i:fast_size * (i + 1)],
+            gains[gains_size * i:gains_size * (i + 1)],
+            tau_request[i * n:(i + 1) * n], tau_observed[i * n:(i + 1) * n],
+            qdot[i * n:(i + 1) * n], constants)
+    return out
+
+
+@njit(cache=True)
 def integrator_sample(fast, gains, tau_request, tau_observed, qdot, constants):
     """One RHS integrator sample (RhsIntegrator) at joint rates qdot, with
     ``fast`` = [u_I, e_tau, ||e_tau||, chi, tau_c^r(k-1)], ``gains`` =

@@ -18,7 +18,7 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
-from dacph_drake.dynamics.plant import AddStateSplitter, SetArmAtRest
+from dacph_drake.dynamics.plant import AddStateSplitter, SetArmsAtRest
 from dacph_drake.robots import Robot, robots_of
 from dacph_drake.scenario import Scenario
 from dacph_drake.loop.simulator import MakeSimulator
@@ -70,7 +70,7 @@ class ClosedLoop:
         (scenario.simulator, Drake's SimulatorConfig) and initial state: the base at
         the origin, the joints at q0, everything at rest (zero momentum)."""
         simulator = MakeSimulator(self.diagram, self.scenario.simulator)
-        SetArmAtRest(self.plant, self.plant.GetMyContextFromRoot(
+        SetArmsAtRest(self.plant, self.plant.GetMyContextFromRoot(
             simulator.get_mutable_context()), [s.q0 for s in self.scenarios])
         return simulator
 

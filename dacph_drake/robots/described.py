@@ -125,7 +125,7 @@ class DescribedRobot:
         if not identify:
             return {self.lhs_name: lhs}
         identifier = builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
-            plant=self.model.plant, prior=self.model.inertial_parameters,
+            plants=[self.model.plant], priors=[self.model.inertial_parameters],
             settings=scenario.inertia, period=scenario.periods.learner_sample))
         return {self.lhs_name: lhs, "inertial_identifier": identifier}
 

@@ -87,11 +87,8 @@ class PlanarRobot:
         theta0(0) = 0), fed by an InertialIdentifier (scenario.inertia) with
         ``identify``."""
         scenario, builder = trials[0].scenario, controller.builder
-        if identify and len(trials) > 1:
-            raise ConfigError("inertia.identify in a batch of more than one trial; "
-                              "allowed: batch_size 1 (the identifier is not batched yet)")
         identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
-            plant=trials[0].model.plant, settings=scenario.inertia,
+            plants=[t.model.plant for t in trials], settings=scenario.inertia,
             period=scenario.periods.learner_sample)) if identify else None)
         lhs = builder.AddNamedSystem(cls.lhs_name, LhsController(
             trials=[LhsTrial(
@@ -102,7 +99,7 @@ class PlanarRobot:
                 lambda_min_M=t.GainRuleRates()[1]) for t in trials],
             gains=scenario.task.gains, period=scenario.periods.lhs,
             excitation=excitation,
-            inertial_parameters=identifier.parameters if identify else None))
+            identify=identify))
         for signal in ("base_pose", "q", "qdot"):
             controller.Input(lhs.GetInputPort(signal), signal)
         return {cls.lhs_name: lhs, **({"inertial_identifier": identifier}

@@ -1,4 +1,7 @@
 """Online learner of the RHS (paper's physics-informed network, docs/equations.md E33-E35)."""
+from dataclasses import dataclass
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
@@ -9,6 +12,18 @@ from dacph_drake.network import ExportedNetwork
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Learner
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
+
+
+@dataclass
+class LearnerTrial:
+    """One trial's part of an RhsLearner: the controller's model (its network's
+    coupling scale reads diag M(q0); p = M qdot where input ``reduced_model`` is
+    not connected), the prior (B0, D0), the network's seed and q0."""
+    model: ReducedModel
+    B0: Sequence[float]
+    D0: Sequence[float]
+    seed: int
+    q0: Sequence[float]
 
 
 class RhsLearner(LeafSystem):
@@ -40,60 +55,70 @@ class RhsLearner(LeafSystem):
     scale (settings.coupling, network.coupling_factors) reads the joints' inertias
     diag M(q0) of ``model`` at the start configuration ``q0``.
 
-    The torch module and Adam's moments live in this object, not in the Context:
+    For a batch (``trials``: each trial's LearnerTrial; one: a single run) every
+    port carries the trials' signals stacked, and each trial has a network,
+    optimizer, window and change detector of its own: its updates are its solo
+    run's, whatever the other trials do.
+
+    The torch modules and Adam's moments live in this object, not in the Context:
     a diagram with a learner simulates one trajectory at a time (build one diagram
     per run, as the package's builders do)."""
 
-    def __init__(self, *, model: ReducedModel, settings: Learner, period: float,
-                 sample_period: float, B0, D0, seed: int, q0,
-                 learning: bool = True, watch_model: bool = False):
+    def __init__(self, *, trials: Sequence[LearnerTrial], settings: Learner,
+                 period: float, sample_period: float, learning: bool = True,
+                 watch_model: bool = False):
         super().__init__()
-        n = model.num_joints
-        self._n, self._model = n, model
+        n = trials[0].model.num_joints
+        count = len(trials)
+        self._n, self._trials = n, count
         self._period = period
         self._settings = settings
         self._learning = learning and settings.steps_per_update > 0
         self._regularized = settings.mode == "regularized"
         # Samples the window must hold before a fit (settings.min_window), at least 2.
         self._min_samples = max(2, int(round(settings.min_window / sample_period)))
-        self._network = ExportedNetwork.ForLearner(settings, model, q0)
-        self._identifier = RhsIdentifier(n, settings, np.diag(B0), D0, seed,
-                                         self._network.coupling)
+        self._networks = [ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
+                          for trial in trials]
+        self._identifiers = [RhsIdentifier(n, settings, np.diag(trial.B0), trial.D0,
+                                           trial.seed, network.coupling)
+                             for trial, network in zip(trials, self._networks)]
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
-        initial_weights = self._prior_weights = self._identifier.Export()
+        self._prior_weights = [identifier.Export() for identifier in self._identifiers]
         width = 1 + PortSample(n).size
         self._row_width = width
-        self._q = self.DeclareVectorInputPort("q", n)
-        self._qdot = self.DeclareVectorInputPort("qdot", n)
-        self._port_sample = self.DeclareVectorInputPort("port_sample", width - 1)
-        self._reduced_model = ReducedModelInput(self, n, model)
-        self._buffer = self.DeclareDiscreteState(settings.window * width)
+        self._q = self.DeclareVectorInputPort("q", n * count)
+        self._qdot = self.DeclareVectorInputPort("qdot", n * count)
+        self._port_sample = self.DeclareVectorInputPort("port_sample", (width - 1) * count)
+        self._reduced_model = ReducedModelInput(self, n, [t.model for t in trials])
+        self._buffer = self.DeclareDiscreteState(settings.window * width * count)
         self._count = self.DeclareDiscreteState(1)
-        self._detector_state = self.DeclareDiscreteState(ChangeDetector.InitialState(
-            settings.start_hold if self._regularized and settings.start_hold > 0
-            else -np.inf))
-        self._weights = self.DeclareDiscreteState(initial_weights)
+        self._detector_state = self.DeclareDiscreteState(np.tile(
+            ChangeDetector.InitialState(settings.start_hold if self._regularized
+                                        and settings.start_hold > 0 else -np.inf),
+            count))
+        self._weights = self.DeclareDiscreteState(np.concatenate(self._prior_weights))
         # The window start of the warm start (settings.warm_start), -inf before it.
-        self._warm_started = self.DeclareDiscreteState([-np.inf])
+        self._warm_started = self.DeclareDiscreteState(np.full(count, -np.inf))
         # The LHS model's epoch at the last check (settings.model_change).
         self._model_epoch = self._last_epoch = None
         if watch_model:
-            self._model_epoch = self.DeclareVectorInputPort("model_epoch", 1)
-            self._last_epoch = self.DeclareDiscreteState(1)
+            self._model_epoch = self.DeclareVectorInputPort("model_epoch", count)
+            self._last_epoch = self.DeclareDiscreteState(count)
         log = LearnerLog()
         initial_log = np.zeros(log.size)
         initial_log[[log.loss, log.nominal_loss]] = np.nan
         initial_log[log.beta_hat] = 1.0
-        self._log = self.DeclareDiscreteState(initial_log)
+        self._log = self.DeclareDiscreteState(np.tile(initial_log, count))
+        beta_hat = np.arange(count) * log.size + log.beta_hat
         self.DeclareStateOutputPort("weights", self._weights)
         self.DeclareVectorOutputPort(
-            "beta_hat", 1, lambda c, o: o.SetFromVector(
-                c.get_discrete_state(self._log).get_value()[log.beta_hat:log.beta_hat + 1]),
+            "beta_hat", count, lambda c, o: o.SetFromVector(
+                c.get_discrete_state(self._log).get_value()[beta_hat]),
             prerequisites_of_calc={self.discrete_state_ticket(self._log)})
         self.DeclareStateOutputPort("learner_log", self._log)
         self.DeclareVectorOutputPort(
-            "estimates", n * n + n, self._CalcEstimates,
+            "estimates", (n * n + n) * count, self._CalcEstimates,
             prerequisites_of_calc={self.discrete_state_ticket(self._weights),
                                    self._q.ticket(), self._qdot.ticket(),
                                    self._reduced_model.port.ticket()})
@@ -101,57 +126,80 @@ class RhsLearner(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._UpdateTraining)
 
     def _UpdateSample(self, context, discrete_state):
-        width, window = self._row_width, self._settings.window
-        count = int(context.get_discrete_state(self._count).get_value()[0])
-        buffer = context.get_discrete_state(self._buffer).get_value().copy()
-        row = count % window
-        buffer[row * width:(row + 1) * width] = np.concatenate(
-            [[context.get_time()], self._port_sample.Eval(context)])
-        discrete_state.get_mutable_vector(self._buffer).SetFromVector(buffer)
-        discrete_state.get_mutable_vector(self._count).SetFromVector([count + 1])
+        width, window, count = self._row_width, self._settings.window, self._trials
+        samples = int(context.get_discrete_state(self._count).get_value()[0])
+        buffer = context.get_discrete_state(self._buffer).get_value().copy().reshape(
+            count, window, width)
+        buffer[:, samples % window, 0] = context.get_time()
+        buffer[:, samples % window, 1:] = self._port_sample.Eval(context).reshape(count, -1)
+        discrete_state.get_mutable_vector(self._buffer).SetFromVector(buffer.reshape(-1))
+        discrete_state.get_mutable_vector(self._count).SetFromVector([samples + 1])
 
     def _UpdateTraining(self, context, discrete_state):
-        count = int(context.get_discrete_state(self._count).get_value()[0])
-        if count < 2:
+        samples = int(context.get_discrete_state(self._count).get_value()[0])
+        if samples < 2:
             return
-        t = context.get_time()
-        rows = context.get_discrete_state(self._buffer).get_value().reshape(
-            -1, self._row_width)[:min(count, self._settings.window)]
-        detector = context.get_discrete_state(self._detector_state).get_value()
-        detector = self._ModelChange(context, discrete_state, detector, t)
+        t, count = context.get_time(), self._trials
+        buffers = context.get_discrete_state(self._buffer).get_value().reshape(
+            count, self._settings.window, self._row_width)[:, :min(samples,
+                                                                   self._settings.window)]
+        detectors = context.get_discrete_state(self._detector_state).get_value(
+            ).reshape(count, -1).copy()
+        epochs_changed = self._ModelChanges(context, discrete_state)
+        warm_started = context.get_discrete_state(self._warm_started).get_value().copy()
+        weights = context.get_discrete_state(self._weights).get_value().reshape(
+            count, -1).copy()
+        logs = context.get_discrete_state(self._log).get_value().reshape(count, -1).copy()
+        for i in range(count):
+            if epochs_changed[i]:
+                detectors[i] = self._detector.Changed(detectors[i], t)
+            detectors[i], warm_started[i], published_weights, logs[i] = self._Train(
+                i, buffers[i], t, detectors[i], warm_started[i])
+            if published_weights is not None:
+                weights[i] = published_weights
+        discrete_state.get_mutable_vector(self._detector_state).SetFromVector(
+            detectors.reshape(-1))
+        discrete_state.get_mutable_vector(self._warm_started).SetFromVector(warm_started)
+        if self._learning:
+            discrete_state.get_mutable_vector(self._weights).SetFromVector(
+                weights.reshape(-1))
+        discrete_state.get_mutable_vector(self._log).SetFromVector(logs.reshape(-1))
+
+    def _Train(self, trial: int, rows, t, detector, warm_started):
+        """One training update of one trial on its window ``rows``: (its detector
+        state, its warm start's window start, the weights it publishes (None in
+        the learner-off ablation), its learner_log)."""
+        identifier = self._identifiers[trial]
         if self._regularized and self._learning:
             newest = NewestRows(rows, t, self._period)
             if newest is not None:
-                detector = self._detector.Update(
-                    detector, t, self._identifier.RelativeResidual(newest))
-            discrete_state.get_mutable_vector(self._detector_state).SetFromVector(detector)
+                detector = self._detector.Update(detector, t,
+                                                 identifier.RelativeResidual(newest))
         holding = ChangeDetector.Holding(detector, t)
         window_start = ChangeDetector.WindowStart(detector)
         fitted = (self._learning and not holding
                   and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples)
         if fitted:
-            warm_started = context.get_discrete_state(self._warm_started).get_value()[0]
             if (self._regularized and self._settings.warm_start
                     and warm_started == -np.inf):
-                self._identifier.WarmStart(rows, t, window_start)
-                discrete_state.get_mutable_vector(self._warm_started).SetFromVector(
-                    [window_start])
-            self._identifier.Fit(rows, t, window_start)
-        stats = self._identifier.Statistics(rows, t)
-        published = self._learning and self._NetworkPublished(rows, t, window_start,
-                                                               fitted)
+                identifier.WarmStart(rows, t, window_start)
+                warm_started = window_start
+            identifier.Fit(rows, t, window_start)
+        stats = identifier.Statistics(rows, t)
+        published = self._learning and self._NetworkPublished(identifier, rows, t,
+                                                              window_start, fitted)
+        weights = None
         if self._learning:
-            discrete_state.get_mutable_vector(self._weights).SetFromVector(
-                self._identifier.Export() if published else self._prior_weights)
+            weights = identifier.Export() if published else self._prior_weights[trial]
         log = LearnerLog()
         values = np.zeros(log.size)
         values[[log.loss, log.beta_hat, log.nominal_loss, log.holding,
                 log.network_published]] = [stats.loss, stats.beta_hat,
                                            stats.nominal_loss, float(holding),
                                            float(published)]
-        discrete_state.get_mutable_vector(self._log).SetFromVector(values)
+        return detector, warm_started, weights, values
 
-    def _NetworkPublished(self, rows, t, window_start, fitted) -> bool:
+    def _NetworkPublished(self, identifier, rows, t, window_start, fitted) -> bool:
         """Whether the network's weights, not the prior's, are published this update.
         Always, unless settings.prior_fallback: then only when this update fitted
         (not holding after a change, min_window seconds of samples since it) and the
@@ -163,27 +211,31 @@ class RhsLearner(LeafSystem):
             return True
         if not fitted:
             return False
-        current = self._identifier.Statistics(rows, t, window_start)
+        current = identifier.Statistics(rows, t, window_start)
         return current.loss <= current.nominal_loss
 
-    def _ModelChange(self, context, discrete_state, detector, t):
-        """The detector state after checking whether the LHS model changed since the
-        last check (input ``model_epoch``, InertialIdentifier's); if so, a change at
-        t (ChangeDetector.Changed)."""
+    def _ModelChanges(self, context, discrete_state) -> np.ndarray:
+        """Whether each trial's LHS model changed since the last check (input
+        ``model_epoch``, InertialIdentifier's; False where not watched), the
+        epochs seen recorded."""
         if (self._model_epoch is None or not self._model_epoch.HasValue(context)
                 or not (self._regularized and self._settings.model_change)):
-            return detector
+            return np.zeros(self._trials, bool)
         epoch = self._model_epoch.Eval(context)
-        if not np.array_equal(epoch, context.get_discrete_state(
-                self._last_epoch).get_value()):
+        changed = epoch != context.get_discrete_state(self._last_epoch).get_value()
+        if np.any(changed):
             discrete_state.get_mutable_vector(self._last_epoch).SetFromVector(epoch)
-            detector = self._detector.Changed(detector, t)
-            discrete_state.get_mutable_vector(self._detector_state).SetFromVector(detector)
-        return detector
+        return changed
 
     def _CalcEstimates(self, context, output):
-        q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        B, D = self._network.Evaluate(
-            context.get_discrete_state(self._weights).get_value(), q,
-            self._reduced_model.Momentum(context, q, qdot))
-        output.SetFromVector(np.concatenate([B.reshape(-1), D]))
+        n, count = self._n, self._trials
+        q_all = self._q.Eval(context).reshape(count, n)
+        qdot_all = self._qdot.Eval(context).reshape(count, n)
+        weights = context.get_discrete_state(self._weights).get_value().reshape(count, -1)
+        estimates = []
+        for i, network in enumerate(self._networks):
+            B, D = network.Evaluate(weights[i], q_all[i], self._reduced_model.Momentum(
+                context, i, q_all[i], qdot_all[i]))
+            estimates += [B.reshape(-1), D]
+        output.SetFromVector(np.concatenate(estimates))
+

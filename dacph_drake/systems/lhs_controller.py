@@ -55,8 +55,9 @@ class LhsController(LeafSystem):
     diverges within 10 ms. Output ``tau_request`` is held between updates; output
     ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)];
     output ``reduced_model`` = [vec(M), vec(C')] at the same sample (row-major), for
-    the port observer. With ``inertial_parameters`` (the layout of the model's
-    bodies), input ``inertial_parameters`` replaces the model's inertias (an
+    the port observer. With ``identify``, input ``inertial_parameters`` (each
+    trial's in the layout of its model's bodies, InertialParameters) replaces the
+    model's inertias (an
     InertialIdentifier's estimate): M, C', D and their derivatives are those of the
     identified bodies (ReducedOrderModel.CoefficientBasis: the mass matrix is linear
     in them). Every port carries the trials' signals stacked in trial order. The
@@ -65,7 +66,7 @@ class LhsController(LeafSystem):
 
     def __init__(self, *, trials: Sequence[LhsTrial], gains: LhsGains, period: float,
                  excitation: Excitation = Excitation(amplitude=0.0),
-                 inertial_parameters: InertialParameters = None):
+                 identify: bool = False):
         super().__init__()
         n = trials[0].model.num_joints
         self._n, self._trials = n, len(trials)
@@ -86,11 +87,12 @@ class LhsController(LeafSystem):
         self._qdot = self.DeclareVectorInputPort("qdot", n * N)
         self._chi = self.DeclareVectorInputPort("chi", N)
         self._parameters = None
-        if inertial_parameters is not None:
+        if identify:
+            layouts = [InertialParameters(trial.model.plant) for trial in trials]
             self._parameters = self.DeclareVectorInputPort(
-                "inertial_parameters", inertial_parameters.size * N)
-            self._coefficient_bases = [trial.model.CoefficientBasis(inertial_parameters)
-                                       for trial in trials]
+                "inertial_parameters", sum(layout.size for layout in layouts))
+            self._coefficient_bases = [trial.model.CoefficientBasis(layout)
+                                       for trial, layout in zip(trials, layouts)]
             self._identified_key, self._identified = None, None
         self._tau_index = self.DeclareDiscreteState(n * N)
         self._log_index = self.DeclareDiscreteState((n + 4) * N)   # lhs_log but lambda_min

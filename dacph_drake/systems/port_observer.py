@@ -1,9 +1,11 @@
 """Port observer (docs/equations.md E32)."""
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.identification import PortSample
-from dacph_drake.kernels.loop import observer_sample
+from dacph_drake.kernels.loop import observer_samples
 
 
 class PortObserver(LeafSystem):
@@ -30,50 +32,61 @@ class PortObserver(LeafSystem):
     f > 0, [qdot, u, tau_obs] pass a first-order low-pass at f Hz at the sample rate
     (before the learner samples them at a lower rate).
 
-    Inputs ``q``, ``qdot`` (the plant's joint state), ``reduced_model`` and ``u``. The sample is one
-    compiled kernel (kernels.loop.observer_sample)."""
+    Inputs ``q``, ``qdot`` (the plant's joint state), ``reduced_model`` and ``u``.
+    For a batch of trials (``seeds``: each trial's noise seed; one: a single run)
+    every port carries the trials' signals stacked, and the sample of all trials
+    is one compiled kernel (kernels.loop.observer_samples)."""
 
     def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,
-                 seed: int, anti_alias_cutoff: float = 0.0):
+                 seeds: Sequence[int], anti_alias_cutoff: float = 0.0):
         super().__init__()
-        n = num_joints
-        self._n = n
-        self._rng = np.random.default_rng(seed)
+        n, trials = num_joints, len(seeds)
+        self._n, self._trials = n, trials
+        self._rngs = [np.random.default_rng(seed) for seed in seeds]
         self._noise_std = noise_std
         self._layout = PortSample(n)
         self._anti_alias = (1.0 - np.exp(-2 * np.pi * anti_alias_cutoff * sample_period)
                             if anti_alias_cutoff > 0 else 1.0)
-        self._q = self.DeclareVectorInputPort("q", n)
-        self._qdot = self.DeclareVectorInputPort("qdot", n)
-        self._reduced_model = self.DeclareVectorInputPort("reduced_model", 2 * n * n)
-        self._u = self.DeclareVectorInputPort("u", n)
+        self._q = self.DeclareVectorInputPort("q", n * trials)
+        self._qdot = self.DeclareVectorInputPort("qdot", n * trials)
+        self._reduced_model = self.DeclareVectorInputPort("reduced_model",
+                                                          2 * n * n * trials)
+        self._u = self.DeclareVectorInputPort("u", n * trials)
         self._constants = np.array([sample_period, self._anti_alias])
-        self._no_noise, self._no_u = np.zeros(n), np.zeros(n)
-        self._tau_index = self.DeclareDiscreteState(n)
-        # Memory: [qdot(k-1) (n), port_sample (5 n)].
-        self._memory_index = self.DeclareDiscreteState(n + self._layout.size)
+        self._no_noise, self._no_u = np.zeros(n * trials), np.zeros(n * trials)
+        self._tau_index = self.DeclareDiscreteState(n * trials)
+        # Memory: per trial [qdot(k-1) (n), port_sample (5 n)].
+        width = n + self._layout.size
+        self._memory_index = self.DeclareDiscreteState(width * trials)
+        self._rates = np.concatenate([np.arange(n) + width * i for i in range(trials)])
+        self._samples = np.concatenate([np.arange(n, width) + width * i
+                                        for i in range(trials)])
         self.DeclareStateOutputPort("tau_observed", self._tau_index)
         self.DeclareVectorOutputPort(
-            "port_sample", self._layout.size,
+            "port_sample", self._layout.size * trials,
             lambda context, output: output.SetFromVector(
-                context.get_discrete_state(self._memory_index).get_value()[n:]),
+                context.get_discrete_state(self._memory_index).get_value()[
+                    self._samples]),
             prerequisites_of_calc={self.discrete_state_ticket(self._memory_index)})
         self.DeclarePeriodicDiscreteUpdateEvent(sample_period, 0.0, self._UpdateSample)
         self.DeclareInitializationDiscreteUpdateEvent(self._InitializeRates)
 
     def _InitializeRates(self, context, discrete_state):
         discrete_state.get_mutable_vector(self._memory_index).get_mutable_value()[
-            :self._n] = self._qdot.Eval(context)
+            self._rates] = self._qdot.Eval(context)
 
     def _UpdateSample(self, context, discrete_state):
-        n = self._n
-        noise = (self._noise_std * self._rng.standard_normal(n) if self._noise_std > 0
-                 else self._no_noise)
-        sample = observer_sample(
-            self._q.Eval(context), self._qdot.Eval(context),
+        n, trials = self._n, self._trials
+        noise = (self._noise_std * np.concatenate([rng.standard_normal(n)
+                                                   for rng in self._rngs])
+                 if self._noise_std > 0 else self._no_noise)
+        samples = observer_samples(
+            trials, self._q.Eval(context), self._qdot.Eval(context),
             context.get_discrete_state(self._memory_index).get_value(),
             self._reduced_model.Eval(context),
             self._u.Eval(context) if self._u.HasValue(context) else self._no_u,
-            noise, self._constants)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(sample[:n])
-        discrete_state.get_mutable_vector(self._memory_index).SetFromVector(sample[n:])
+            noise, self._constants).reshape(trials, 7 * n)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(
+            samples[:, :n].reshape(-1))
+        discrete_state.get_mutable_vector(self._memory_index).SetFromVector(
+            samples[:, n:].reshape(-1))

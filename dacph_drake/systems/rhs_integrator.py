@@ -1,17 +1,34 @@
 """RHS controller: decentralized integral control around the learned inverse
 feed-forward (paper section "RHS Control and Learning", docs/equations.md E36-E38, E48)."""
+from dataclasses import dataclass
+from typing import Sequence
+
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
                                    integral_gains, stays_stable_if_wrong, within_trust)
 from dacph_drake.identification import PortEvidence, PortSample
-from dacph_drake.kernels.loop import integrator_sample
+from dacph_drake.kernels.loop import integrator_samples
 from dacph_drake.log_layout import RhsLog, RhsState
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Rhs, Stress
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
+
+
+@dataclass
+class RhsTrial:
+    """One trial's part of an RhsIntegrator: the controller's model (p = M qdot
+    where input ``reduced_model`` is not connected), the learner's exported
+    network (ExportedNetwork), the LHS rates of the gain rule (eq. 48: Kd_max,
+    lambda_min_M) and the nominal RHS (B0, D0)."""
+    model: ReducedModel
+    network: ExportedNetwork
+    Kd_max: float
+    lambda_min_M: float
+    B0: Sequence[float]
+    D0: Sequence[float]
 
 
 class RhsIntegrator(LeafSystem):
@@ -68,91 +85,105 @@ class RhsIntegrator(LeafSystem):
     ``port_sample`` (optional: without it, the band alone decides), ``reduced_model``
     (optional: the LHS's M for p = M qdot; without it the model's).
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
-    c_min, dic_ok, trusted]."""
+    c_min, dic_ok, trusted]. For a batch (``trials``: each trial's RhsTrial; one: a
+    single run) every port carries the trials' signals stacked; the fast sample of
+    all trials is one compiled kernel (kernels.loop.integrator_samples), the
+    model refresh a loop over the trials at the model period."""
 
-    def __init__(self, *, model: ReducedModel, network: ExportedNetwork,
-                 settings: Rhs, Kd_max: float, lambda_min_M: float,
-                 B0: np.ndarray, D0: np.ndarray, period: float, model_period: float,
-                 stress: Stress = Stress()):
+    def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
+                 model_period: float, stress: Stress = Stress()):
         super().__init__()
-        n = model.num_joints
-        self._model, self._network = model, network
+        n = trials[0].model.num_joints
+        count = len(trials)
+        self._n, self._trials = n, list(trials)
         self._settings = settings
-        self._B0_eigenvalues = np.asarray(B0, float)
         self._stress = stress
-        self._c_bound = lambda beta: c_lower_bound(settings.Td, Kd_max, lambda_min_M, beta)
         self._constants = np.array([period, np.exp(-period / settings.chi_window),
                                     settings.chi_floor])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._period = period
         # c's target at beta: the paper's (1 + c_margin) c_min(beta), or at least the
         # fastest well-damped rate (Rhs.gain_rule).
-        c_floor = WELL_DAMPED_LOOP_GAIN / period if settings.gain_rule == "well_damped" \
-            else 0.0
-        self._c_target = lambda beta: max((1 + settings.c_margin) * self._c_bound(beta),
-                                          c_floor)
-        self._tau_request = self.DeclareVectorInputPort("tau_request", n)
-        self._tau_observed = self.DeclareVectorInputPort("tau_observed", n)
-        self._q = self.DeclareVectorInputPort("q", n)
-        self._qdot = self.DeclareVectorInputPort("qdot", n)
-        self._weights = self.DeclareVectorInputPort("weights", network.size)
-        self._beta_hat = self.DeclareVectorInputPort("beta_hat", 1)
-        self._port_sample = self.DeclareVectorInputPort("port_sample", PortSample(n).size)
-        self._reduced_model = ReducedModelInput(self, n, model)
+        self._c_floor = WELL_DAMPED_LOOP_GAIN / period \
+            if settings.gain_rule == "well_damped" else 0.0
+        network_size = trials[0].network.size
+        self._tau_request = self.DeclareVectorInputPort("tau_request", n * count)
+        self._tau_observed = self.DeclareVectorInputPort("tau_observed", n * count)
+        self._q = self.DeclareVectorInputPort("q", n * count)
+        self._qdot = self.DeclareVectorInputPort("qdot", n * count)
+        self._weights = self.DeclareVectorInputPort("weights", network_size * count)
+        self._beta_hat = self.DeclareVectorInputPort("beta_hat", count)
+        self._port_sample = self.DeclareVectorInputPort("port_sample",
+                                                        PortSample(n).size * count)
+        self._reduced_model = ReducedModelInput(self, n, [t.model for t in trials])
         self._evidence = PortEvidence(n, model_period, settings.evidence_window)
         self._evidence_minimum = 0.5 * settings.evidence_window / model_period
-        self._evidence_index = self.DeclareDiscreteState(self._evidence.size)
-        # The fast and model groups (log_layout.RhsState); u is a group of its own, so
-        # that its output port (read at every integrator stage by the true RHS)
-        # reads the state without a Python call.
+        self._evidence_index = self.DeclareDiscreteState(self._evidence.size * count)
+        # The fast and model groups (log_layout.RhsState), per trial; u is a group of
+        # its own, so that its output port (read at every integrator stage by the
+        # true RHS) reads the state without a Python call.
         self._layout = layout = RhsState(n)
         fast = np.zeros(layout.fast_size)
         fast[layout.chi] = settings.chi_initial
-        self._fast = self.DeclareDiscreteState(fast)
-        self._u_index = self.DeclareDiscreteState(n)
+        self._fast = self.DeclareDiscreteState(np.tile(fast, count))
+        self._u_index = self.DeclareDiscreteState(n * count)
         # The model group starts at the nominal RHS (B0, D0) with c = (1 + c_margin)
         # c_min(beta_hat = 1); an initialization event then refreshes it from the
         # input ports (the learner's weights at the initial state).
-        c0 = self._c_target(1.0)
-        model = np.zeros(layout.model_size)
-        model[layout.B_inverse] = np.diag(1.0 / self._B0_eigenvalues).reshape(-1)
-        model[layout.D_hat] = D0
-        model[layout.K] = integral_gains(np.diag(self._B0_eigenvalues), c0)[0]
-        model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [
-            c0, self._c_bound(1.0), 1.0, 1.0]
-        self._gains = self.DeclareDiscreteState(model)
+        models = []
+        for trial in trials:
+            c0 = self._CTarget(trial, 1.0)
+            model = np.zeros(layout.model_size)
+            model[layout.B_inverse] = np.diag(1.0 / np.asarray(trial.B0, float)).reshape(-1)
+            model[layout.D_hat] = trial.D0
+            model[layout.K] = integral_gains(np.diag(np.asarray(trial.B0, float)), c0)[0]
+            model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [
+                c0, self._CBound(trial, 1.0), 1.0, 1.0]
+            models.append(model)
+        self._gains = self.DeclareDiscreteState(np.concatenate(models))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
+        chi = np.arange(count) * layout.fast_size + layout.chi
         self.DeclareStateOutputPort("u", self._u_index)
-        self.DeclareVectorOutputPort("chi", 1, lambda c, o: o.SetAtIndex(
-            0, c.get_discrete_state(self._fast).GetAtIndex(layout.chi)),
+        self.DeclareVectorOutputPort("chi", count, lambda c, o: o.SetFromVector(
+            c.get_discrete_state(self._fast).get_value()[chi]),
             prerequisites_of_calc=fast_ticket)
         self.DeclareVectorOutputPort(
-            "rhs_log", RhsLog(n).size, self._CalcLog,
+            "rhs_log", RhsLog(n).size * count, self._CalcLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._fast),
                                    self.discrete_state_ticket(self._gains)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateIntegrator)
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateModel)
 
+    def _CBound(self, trial: RhsTrial, beta: float) -> float:
+        """c_min(beta) of eq. (48) with the trial's LHS rates."""
+        return c_lower_bound(self._settings.Td, trial.Kd_max, trial.lambda_min_M, beta)
+
+    def _CTarget(self, trial: RhsTrial, beta: float) -> float:
+        return max((1 + self._settings.c_margin) * self._CBound(trial, beta),
+                   self._c_floor)
+
     def GetModelGroup(self, context) -> np.ndarray:
-        """The model group (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
-        dic_ok, trusted) in ``context``, for inspection."""
+        """The model groups (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
+        dic_ok, trusted; per trial, stacked) in ``context``, for inspection."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
-    def _Refresh(self, gains, weights, q, p, beta, B_hat_scale, evidence=None):
-        """The model group after one refresh from ``gains`` at x = (q, p) (see class
-        docstring); ``evidence``: the PortEvidence state of the learner's samples,
-        or None."""
+    def _Refresh(self, trial: RhsTrial, gains, weights, q, p, beta, B_hat_scale,
+                 evidence=None):
+        """A trial's model group after one refresh from ``gains`` at x = (q, p) (see
+        class docstring); ``evidence``: the PortEvidence state of the learner's
+        samples, or None."""
         L = self._layout
         gains = gains.copy()
-        B_hat, D_hat = self._network.Evaluate(weights, q, p)
+        B_hat, D_hat = trial.network.Evaluate(weights, q, p)
         B_hat = B_hat_scale * B_hat
         beta = min(beta, self._settings.beta_max)
-        c_min = self._c_bound(beta)
+        c_min = self._CBound(trial, beta)
         c = gains[L.c]
-        c = max(c + self._c_step * (self._c_target(beta) - c), c_min)
+        c = max(c + self._c_step * (self._CTarget(trial, beta) - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
-        trusted = dic_ok and self._Accepts(gains, B_hat, D_hat, paired, k, evidence)
+        trusted = dic_ok and self._Accepts(trial, gains, B_hat, D_hat, paired, k,
+                                           evidence)
         if trusted:
             gains[L.B_inverse] = np.linalg.inv(B_hat).reshape(-1)
             gains[L.D_hat] = D_hat
@@ -163,16 +194,18 @@ class RhsIntegrator(LeafSystem):
                                                       float(trusted)]
         return gains
 
-    def _Accepts(self, gains, B_hat, D_hat, paired, k, evidence) -> bool:
+    def _Accepts(self, trial: RhsTrial, gains, B_hat, D_hat, paired, k,
+                 evidence) -> bool:
         """Whether an estimate that passed DIC is adopted (class docstring): within
         trust_ratio^2 of B0 and within trust_ratio of the anchor (B0 or the estimate
         in use), or outside the latter on evidence."""
         L, settings = self._layout, self._settings
+        B0 = np.asarray(trial.B0, float)
         # Anchored at the estimate in use, the band could follow a learner that
         # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.
-        if not within_trust(paired, self._B0_eigenvalues, settings.trust_ratio**2):
+        if not within_trust(paired, B0, settings.trust_ratio**2):
             return False
-        anchor = (self._B0_eigenvalues if settings.trust_anchor == "prior"
+        anchor = (B0 if settings.trust_anchor == "prior"
                   else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
         if within_trust(paired, anchor, settings.trust_ratio):
             return True
@@ -186,36 +219,48 @@ class RhsIntegrator(LeafSystem):
                 and stays_stable_if_wrong(in_use, k, self._period, 1.0 - STABILITY_MARGIN))
 
     def _UpdateModel(self, context, discrete_state):
-        beta = self._beta_hat.Eval(context)[0] if self._beta_hat.HasValue(context) else 1.0
-        evidence = None
-        if self._port_sample.HasValue(context):
-            evidence = self._evidence.Update(
-                context.get_discrete_state(self._evidence_index).get_value(),
-                self._port_sample.Eval(context))
-            discrete_state.get_mutable_vector(self._evidence_index).SetFromVector(evidence)
-        q = self._q.Eval(context)
-        gains = self._Refresh(context.get_discrete_state(self._gains).get_value(),
-                              self._weights.Eval(context), q,
-                              self._reduced_model.Momentum(context, q,
-                                                           self._qdot.Eval(context)),
-                              beta,
-                              self._stress.B_hat_scale
-                              if context.get_time() >= self._stress.start else 1.0,
-                              evidence)
-        discrete_state.get_mutable_vector(self._gains).SetFromVector(gains)
+        n, count = self._n, len(self._trials)
+        betas = (self._beta_hat.Eval(context) if self._beta_hat.HasValue(context)
+                 else np.ones(count))
+        samples = (self._port_sample.Eval(context).reshape(count, -1)
+                   if self._port_sample.HasValue(context) else None)
+        evidence_all = context.get_discrete_state(self._evidence_index).get_value(
+            ).reshape(count, -1)
+        if samples is not None:
+            evidence_all = np.array([self._evidence.Update(state, sample) for state, sample
+                                     in zip(evidence_all, samples)])
+            discrete_state.get_mutable_vector(self._evidence_index).SetFromVector(
+                evidence_all.reshape(-1))
+        q_all = self._q.Eval(context).reshape(count, n)
+        qdot_all = self._qdot.Eval(context).reshape(count, n)
+        weights_all = self._weights.Eval(context).reshape(count, -1)
+        gains_all = context.get_discrete_state(self._gains).get_value().reshape(count, -1)
+        B_hat_scale = (self._stress.B_hat_scale
+                       if context.get_time() >= self._stress.start else 1.0)
+        gains = [self._Refresh(trial, gains_all[i], weights_all[i], q_all[i],
+                               self._reduced_model.Momentum(context, i, q_all[i],
+                                                            qdot_all[i]),
+                               betas[i], B_hat_scale,
+                               evidence_all[i] if samples is not None else None)
+                 for i, trial in enumerate(self._trials)]
+        discrete_state.get_mutable_vector(self._gains).SetFromVector(np.concatenate(gains))
 
     def _UpdateIntegrator(self, context, discrete_state):
-        fast_size = self._layout.fast_size
-        sample = integrator_sample(
-            context.get_discrete_state(self._fast).get_value(),
+        count, fast_size = len(self._trials), self._layout.fast_size
+        samples = integrator_samples(
+            count, context.get_discrete_state(self._fast).get_value(),
             context.get_discrete_state(self._gains).get_value(),
             self._tau_request.Eval(context), self._tau_observed.Eval(context),
-            self._qdot.Eval(context), self._constants)
-        discrete_state.get_mutable_vector(self._fast).SetFromVector(sample[:fast_size])
-        discrete_state.get_mutable_vector(self._u_index).SetFromVector(sample[fast_size:])
+            self._qdot.Eval(context), self._constants).reshape(count, -1)
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(
+            samples[:, :fast_size].reshape(-1))
+        discrete_state.get_mutable_vector(self._u_index).SetFromVector(
+            samples[:, fast_size:].reshape(-1))
 
     def _CalcLog(self, context, output):
-        L = self._layout
-        fast = context.get_discrete_state(self._fast).get_value()
-        gains = context.get_discrete_state(self._gains).get_value()
-        output.SetFromVector(np.concatenate([fast[L.fast_logged], gains[L.model_logged]]))
+        L, count = self._layout, len(self._trials)
+        fast = context.get_discrete_state(self._fast).get_value().reshape(count, -1)
+        gains = context.get_discrete_state(self._gains).get_value().reshape(count, -1)
+        output.SetFromVector(np.concatenate([fast[:, L.fast_logged],
+                                             gains[:, L.model_logged]], axis=1).reshape(-1))
+
