@@ -1,7 +1,13 @@
 """Sweep throughput (run: .venv/bin/python scripts/bench_sweep.py).
 
-On the same trials, in one run (the machines are shared, so only ratios measured
-together mean something):
+First, batches (--batch-sizes, default 1 4 16 64): the per-trial wall time per
+simulated second of the planar DAC and model-based loops when that many trials
+share one diagram (loop.simulate.simulate_batch; each batch size in a fresh
+process, with its peak memory), beside the ground-truth plant of one arm alone
+(same step), and the trials per hour of one worker.
+
+Then, on the same trials, in one run (the machines are shared, so only ratios
+measured together mean something), with one trial per diagram:
   bare       each trial's simulate() calls, one after the other, in this process
   1 worker   dacph's sweep on a local process pool of 1 worker
   2 workers  the same on 2 workers                 -> speed-up (target >= 1.8x)
@@ -43,6 +49,73 @@ distributions:
 SPIN = "x = 0\nfor i in range(40_000_000):\n    x += i * i\n"
 
 
+BATCH = """\
+import copy, resource, sys, time
+import numpy as np
+from dacph_drake.controllers import build_closed_loop
+from dacph_drake.scenario import Phases, short_scenario
+controller, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+rng = np.random.default_rng(1)
+trials = []
+for i in range(size):
+    s = short_scenario()
+    s.phases = Phases(duration / 8, duration / 4, duration / 4, 3 * duration / 8)
+    for link in s.robot.truth.links:
+        link.mass *= rng.uniform(0.9, 1.1)
+    s.q0 = [rng.uniform(0.2, 0.4), rng.uniform(0.8, 1.2)]
+    s.seed = i
+    trials.append(s)
+loop = build_closed_loop(controller, *trials)
+simulator = loop.CreateSimulator()
+simulator.Initialize()
+start = time.perf_counter()
+simulator.AdvanceTo(duration)
+print((time.perf_counter() - start) / duration / size,
+      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+"""
+
+PLANT = """\
+import sys, time
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
+from dacph_drake.dynamics.plant import AddFreeFloatingArm, SetArmAtRest
+from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario import short_scenario
+duration = float(sys.argv[1])
+scenario = short_scenario()
+builder = DiagramBuilder()
+plant, _ = AddFreeFloatingArm(builder, scenario.robot.truth)
+torque = builder.AddSystem(ConstantVectorSource([0.01, -0.01]))
+builder.Connect(torque.get_output_port(), plant.get_actuation_input_port())
+simulator = MakeSimulator(builder.Build(), scenario.simulator)
+SetArmAtRest(plant, plant.GetMyContextFromRoot(simulator.get_mutable_context()),
+             scenario.q0)
+simulator.Initialize()
+start = time.perf_counter()
+simulator.AdvanceTo(duration)
+print((time.perf_counter() - start) / duration)
+"""
+
+
+def batch_scaling(sizes, duration: float) -> None:
+    """Per-trial wall per simulated second and peak memory of batches of each size
+    (a fresh process each), beside the plant alone."""
+    def run(script, *arguments):
+        return [float(x) for x in subprocess.run(
+            [sys.executable, "-c", script, *map(str, arguments)], check=True,
+            capture_output=True, text=True).stdout.split()]
+    plant = run(PLANT, duration)[0]
+    print(f"batches ({duration:g} s simulated, every phase; the planar plant alone: "
+          f"{plant:.4f} s wall per simulated s)")
+    for controller in ("dac", "model-based"):
+        for size in sizes:
+            per_trial, memory = run(BATCH, controller, size, duration)
+            print(f"  {controller:11s} batch {size:3d}: {per_trial:.4f} s per trial per "
+                  f"simulated s = {per_trial / plant:5.2f}x the plant alone; "
+                  f"{3600 / (per_trial * 26.0):7.0f} trials of 26 s per hour per worker; "
+                  f"peak memory {memory / 1024:.2f} GiB")
+
+
 def machine_ceiling() -> float:
     """Throughput of 2 concurrent CPU-bound processes / that of 1."""
     def run(copies: int) -> float:
@@ -69,7 +142,7 @@ def bare(definition):
 def swept(definition, out: Path, workers: int):
     """(wall of the sweep, its rows)."""
     start = time.perf_counter()
-    rows = run_sweep(definition, out, slots=workers)
+    rows = run_sweep(definition, out, slots=workers, batch_size=1)
     _check(rows)
     return time.perf_counter() - start, rows
 
@@ -79,7 +152,7 @@ def on_dask(definition, out: Path, workers: int):
     start = time.perf_counter()
     with dask_executor("local", workers) as (executor, slots):
         ready = time.perf_counter()
-        _check(run_sweep(definition, out, executor, slots))
+        _check(run_sweep(definition, out, executor, slots, batch_size=1))
         done = time.perf_counter()
     return done - start, done - ready
 
@@ -94,10 +167,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--trials", type=int, default=6)
+    parser.add_argument("--batch-sizes", type=int, nargs="*", default=[1, 4, 16, 64])
+    parser.add_argument("--batch-duration", type=float, default=4.0,
+                        help="[s] simulated by each batch")
     parser.add_argument("--phases", type=float, nargs=4, default=[0.5, 2.0, 2.0, 2.0],
                         metavar=("WARMUP", "LINEAR", "NONLINEAR", "DISTURBANCE"),
                         help="[s] of the benchmark's scenario")
     args = parser.parse_args()
+    if args.batch_sizes:
+        batch_scaling(args.batch_sizes, args.batch_duration)
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         scenario = short_scenario()

@@ -86,6 +86,20 @@ def test_process_pool_gives_identical_rows(serial, tmp_path):
     assert comparable(pooled) == comparable(rows)
 
 
+def test_a_trials_row_is_the_same_whatever_batch_it_lands_in(serial, tmp_path):
+    """The serial sweep ran its 4 trials as one batch (one diagram per controller);
+    one trial per diagram gives the same rows, and so does a batch_size in the
+    sweep file, which leaves the sweep's fingerprint as it was."""
+    path, _, rows = serial
+    alone = run_sweep(load_sweep(path), tmp_path / "alone", InProcessExecutor(), 1,
+                      batch_size=1)
+    assert comparable(alone) == comparable(rows)
+    sized = write_sweep(tmp_path / "sized", SWEEP + "batch_size: 3\n")
+    assert load_sweep(sized).fingerprint() == load_sweep(path).fingerprint()
+    assert comparable(run_sweep(load_sweep(sized), tmp_path / "sized" / "out",
+                                InProcessExecutor(), 1)) == comparable(rows)
+
+
 def test_dask_local_cluster_gives_identical_rows(serial, tmp_path):
     path, _, rows = serial
     with dask_executor("local", 2) as (executor, slots):
@@ -306,6 +320,7 @@ def test_shipped_sweep_loads():
     ("distributions: {learner_seed: !UniformDiscrete {values: [1, 2.5]}}\n",
      r"distributions.learner_seed = 2.5; allowed: integers >= 0"),
     ("trials: 0\n", r"trials = 0 is out of range; allowed: in \[1, 1e\+06\]"),
+    ("batch_size: -1\n", r"batch_size = -1 is out of range; allowed: in \[0, 4096\]"),
     ("controllers: [dac, pid]\n", r"controllers: 'pid' is unknown; allowed: dac, dac-nominal, model-based"),
     ("scenario: missing.yaml\n", r"scenario = 'missing.yaml' is neither a built-in scenario"),
 ])

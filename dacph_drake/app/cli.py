@@ -174,15 +174,21 @@ def _sweep(args) -> int:
     definition = load_sweep(args.sweep)
     if args.workers is not None and args.workers < 0:
         raise ConfigError(f"--workers = {args.workers}; allowed: >= 0 (0: in this process)")
+    if args.batch_size is not None and not 1 <= args.batch_size <= 4096:
+        raise ConfigError(f"--batch-size = {args.batch_size}; allowed: 1 to 4096 trials "
+                          "per diagram")
     if not args.report:
         try:
             if args.dask:
                 with dask_executor(args.dask, args.workers) as (executor, slots):
-                    run_sweep(definition, args.out, executor, slots, progress=True)
+                    run_sweep(definition, args.out, executor, slots, progress=True,
+                              batch_size=args.batch_size)
             elif args.workers == 0:
-                run_sweep(definition, args.out, InProcessExecutor(), 1, progress=True)
+                run_sweep(definition, args.out, InProcessExecutor(), 1, progress=True,
+                          batch_size=args.batch_size)
             else:
-                run_sweep(definition, args.out, slots=args.workers, progress=True)
+                run_sweep(definition, args.out, slots=args.workers, progress=True,
+                          batch_size=args.batch_size)
         except KeyboardInterrupt:
             print(f"\ninterrupted: {len(read_rows(args.out))} trials saved in {args.out}; "
                   "run the same command to resume", file=sys.stderr)
@@ -313,6 +319,10 @@ def main(argv=None) -> int:
     swp.add_argument("--workers", type=int, default=None,
                      help="local worker processes (default: one per core; 0: run in "
                           "this process); with --dask local, the cluster's workers")
+    swp.add_argument("--batch-size", type=int, default=None,
+                     help="trials simulated together in one diagram (default: the "
+                          "sweep's batch_size, else 16 for a planar arm, 1 for a "
+                          "described arm); no trial's row depends on it")
     swp.add_argument("--dask", metavar="ADDRESS", default=None,
                      help="run on the Dask cluster at ADDRESS (e.g. tcp://host:8786), "
                           "or 'local' for a new LocalCluster")

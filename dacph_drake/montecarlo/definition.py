@@ -99,6 +99,8 @@ class Sweep:
     controllers: List[str] = field(default_factory=lambda: list(CONTROLLERS))
     distributions: Distributions = field(default_factory=Distributions)
     save_logs: bool = False     # also write each run's logs under OUT/logs/
+    batch_size: int = 0         # trials per diagram (runner.batch_size_for; 0: chosen
+    #                             by measurement); no trial's row depends on it
 
 
 @dataclass
@@ -116,8 +118,10 @@ class SweepDefinition:
 
     def fingerprints(self) -> List[str]:
         """fingerprint() and the fingerprints of the same settings in the older
-        scenario layouts a saved sweep may come from (scenario.saved_forms)."""
-        sweep = yaml_dump_typed(self.sweep)
+        scenario layouts a saved sweep may come from (scenario.saved_forms);
+        batch_size is not part of them: it changes no trial's row."""
+        sweep = "".join(line for line in yaml_dump_typed(self.sweep).splitlines(True)
+                        if not line.startswith("batch_size:"))
         return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
                 for form in saved_forms(self.scenario)]
 
@@ -143,6 +147,7 @@ def load_sweep(path) -> SweepDefinition:
     sweep = load_yaml_dataclass(path, Sweep)
     require_in_range("trials", sweep.trials, 1, 10**6)
     require_in_range("seed", sweep.seed, 0, 2**32 - 1)
+    require_in_range("batch_size", sweep.batch_size, 0, 4096)
     if not sweep.controllers:
         raise ConfigError(f"controllers is empty; allowed: one or more of "
                           f"{', '.join(CONTROLLERS)}")

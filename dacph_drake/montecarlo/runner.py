@@ -10,35 +10,45 @@ from dacph_drake.montecarlo.definition import SweepDefinition, sample_trial
 from dacph_drake.montecarlo.executors import (default_workers, local_process_pool,
                                               stop_local_pool)
 from dacph_drake.montecarlo.store import RowStore, sorted_rows
-from dacph_drake.montecarlo.trial import Trial, failed_row, run_trial
+from dacph_drake.montecarlo.trial import Trial, failed_row, run_trials
 from dacph_drake.loop.progress import progress_bar
 
 
 def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor] = None,
-              slots: Optional[int] = None, progress: bool = False) -> List[Dict]:
+              slots: Optional[int] = None, progress: bool = False,
+              batch_size: Optional[int] = None) -> List[Dict]:
     """Runs the trials of ``definition`` missing from ``out_dir`` and returns all its
     rows, by trial id.
 
-    executor: any concurrent.futures.Executor, with ``slots`` trials kept in flight
-    (default: one per core). None: a local process pool of ``slots`` workers (default:
-    one per core); if one of its workers dies, the trials it may have been running
-    are run again one at a time in a fresh process, and a trial that kills that one
-    too is recorded as failed. A Dask KilledWorker is recorded the same way. A
-    trial's row is the same whichever executor, worker count or order ran it
-    (except its wall times)."""
+    The trials run in batches of ``batch_size`` (default: the sweep's batch_size,
+    else batch_size_for(definition)), each batch one diagram per controller
+    (trial.run_trials) and one task. executor: any concurrent.futures.Executor,
+    with ``slots`` batches kept in flight (default: one per core). None: a local
+    process pool of ``slots`` workers (default: one per core); if one of its
+    workers dies, the trials it may have been running are run again one at a time
+    in a fresh process, and a trial that kills that one too is recorded as
+    failed. A Dask KilledWorker fails its batch's trials the same way. The rows of
+    a batch are saved when it ends, so an interrupted sweep re-runs the trials of
+    its unfinished batches only. A trial's row is the same whichever executor,
+    worker count, batch or order ran it (except its wall times)."""
     from dacph_drake.loop.run_store import versions
     slots = slots or default_workers()
+    batch_size = batch_size or batch_size_for(definition)
     label = (f"{type(executor).__name__}, {slots} slots" if executor
-             else f"local process pool, {slots} workers")
+             else f"local process pool, {slots} workers") + f", batches of {batch_size}"
     store = RowStore(out_dir, definition, versions(), label)
     bar = _Progress(definition.sweep.trials, len(store.rows), progress)
     try:
         pending = [t for t in range(definition.sweep.trials) if t not in store.rows]
-        tasks = (_task(definition, t, store.out) for t in pending)
+        # As many batches as slots at least, so that every worker has one.
+        size = max(1, min(batch_size, -(-len(pending) // slots)))
+        tasks = ([_task(definition, t, store.out) for t in pending[i:i + size]]
+                 for i in range(0, len(pending), size))
 
-        def record(row: Dict) -> None:
-            store.append(row)
-            bar.update(row)
+        def record(rows: List[Dict]) -> None:
+            for row in rows:
+                store.append(row)
+                bar.update(row)
 
         if executor is not None:
             _dispatch(executor, tasks, slots, record, recover=False)
@@ -50,6 +60,20 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
         store.close()
 
 
+# Trials per batch where the sweep does not say (scripts/bench_sweep.py measures it).
+DEFAULT_BATCH_SIZE = 16
+
+
+def batch_size_for(definition: SweepDefinition) -> int:
+    """The sweep's batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a
+    planar arm's sweep and 1 for a described arm's (its systems run one trial per
+    diagram)."""
+    from dacph_drake.scenario import PlanarArm
+    if definition.sweep.batch_size > 0:
+        return definition.sweep.batch_size
+    return DEFAULT_BATCH_SIZE if isinstance(definition.scenario.robot, PlanarArm) else 1
+
+
 def _task(definition: SweepDefinition, trial: int, out) -> Trial:
     sample = sample_trial(definition, trial)
     return Trial(trial=trial, seed=sample.seed, scenario=sample.scenario,
@@ -57,7 +81,7 @@ def _task(definition: SweepDefinition, trial: int, out) -> Trial:
                  log_dir=str(out / "logs") if definition.sweep.save_logs else None)
 
 
-def _run_on_local_pools(tasks: Iterator[Trial], workers: int, record) -> None:
+def _run_on_local_pools(tasks: Iterator[List[Trial]], workers: int, record) -> None:
     while True:
         pool = local_process_pool(workers)
         try:
@@ -68,17 +92,18 @@ def _run_on_local_pools(tasks: Iterator[Trial], workers: int, record) -> None:
         pool.shutdown(wait=False, cancel_futures=True)
         if not suspects:
             return
-        print(f"\na worker process died: trials {[t.trial for t in suspects]} run again, "
+        print(f"\na worker process died: trials "
+              f"{[t.trial for batch in suspects for t in batch]} run again, "
               "each alone in a new process", file=sys.stderr)
-        for task in suspects:
-            record(_run_alone(task))
+        for task in (task for batch in suspects for task in batch):
+            record([_run_alone(task)])
 
 
 def _run_alone(task: Trial) -> Dict:
     """A trial that was running when a worker died, in a process of its own."""
     pool = local_process_pool(1)
     try:
-        row = pool.submit(run_trial, task).result()
+        row = pool.submit(run_trials, [task]).result()[0]
     except BrokenProcessPool:
         row = failed_row(task, "the worker process died while running this trial, also "
                                "when run alone")
@@ -89,18 +114,18 @@ def _run_alone(task: Trial) -> Dict:
     return row
 
 
-def _dispatch(executor: Executor, tasks: Iterator[Trial], slots: int, record,
-              recover: bool) -> List[Trial]:
-    """Keeps ``slots`` tasks in flight and records each row as it arrives. Returns
-    [] when the tasks are done, or, with ``recover``, the tasks in flight when the
-    process pool broke (the rest stay in ``tasks``)."""
+def _dispatch(executor: Executor, tasks: Iterator[List[Trial]], slots: int, record,
+              recover: bool) -> List[List[Trial]]:
+    """Keeps ``slots`` batches in flight and records each batch's rows as they
+    arrive. Returns [] when the batches are done, or, with ``recover``, the batches
+    in flight when the process pool broke (the rest stay in ``tasks``)."""
     in_flight = {}
     while True:
         while len(in_flight) < slots:
             task = next(tasks, None)
             if task is None:
                 break
-            in_flight[executor.submit(run_trial, task)] = task
+            in_flight[executor.submit(run_trials, task)] = task
         if not in_flight:
             return []
         done, _ = wait(in_flight, return_when=FIRST_COMPLETED)
@@ -116,12 +141,12 @@ def _dispatch(executor: Executor, tasks: Iterator[Trial], slots: int, record,
             except Exception as e:
                 if type(e).__name__ != "KilledWorker":      # Dask gave up on the trial
                     raise
-                record(failed_row(task, f"KilledWorker: {e}"))
+                record([failed_row(trial, f"KilledWorker: {e}") for trial in task])
 
 
-def _salvage(in_flight: Dict, record) -> List[Trial]:
+def _salvage(in_flight: Dict, record) -> List[List[Trial]]:
     """Records the rows of a broken pool's finished futures; returns the other
-    tasks."""
+    batches."""
     suspects = []
     for future, task in in_flight.items():
         if future.done() and future.exception() is None:

@@ -21,40 +21,78 @@ class Trial:
 
 
 def run_trial(task: Trial) -> Dict:
-    """Runs each controller on the trial's scenario and returns the trial's row:
-    trial, seed, sampled, status ("ok" or "failed"), reason, wall_time [s] and runs
-    (per controller: status "ok" | "diverged" | "error", reason, final_time,
-    wall_time, metrics). A trial's own failure never raises: an invalid sampled
-    scenario (ConfigError), a divergence or an exception in a run is recorded with
-    its reason."""
+    """run_trials of one trial: its row."""
+    return run_trials([task])[0]
+
+
+def run_trials(tasks: List[Trial]) -> List[Dict]:
+    """Runs each controller on a batch of trials, as one diagram per controller
+    (loop.simulate.simulate_batch: each trial's run is its solo run), and returns
+    each trial's row: trial, seed, sampled, status ("ok" or "failed"), reason,
+    wall_time [s] (its share of the batch's) and runs (per controller: status
+    "ok" | "diverged" | "error", reason, final_time, wall_time, metrics). A
+    trial's own failure never raises: an invalid sampled scenario (ConfigError)
+    is recorded for it alone, a divergence stops it alone, and a batch whose run
+    raises is run again trial by trial, so that an exception is recorded with its
+    reason for the trial that raised it."""
     import torch
-    from dacph_drake.analysis.metrics import run_metrics
-    from dacph_drake.loop.simulate import simulate
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()
-    try:
-        task.scenario.Validate()
-    except ConfigError as e:
-        return failed_row(task, f"invalid sample: {e}", time.perf_counter() - start)
-    runs = {}
-    for controller in task.controllers:
-        out_dir = (Path(task.log_dir) / f"trial_{task.trial:05d}" if task.log_dir
-                   else None)
+    rows, valid = {}, []
+    for task in tasks:
         try:
-            result = simulate(task.scenario, controller, out_dir=out_dir)
-        except Exception as e:   # noqa: BLE001 -- recorded as the run's failure
-            runs[controller] = {"status": "error", "reason": f"{type(e).__name__}: {e}",
-                                "final_time": None, "wall_time": None, "metrics": None}
+            task.scenario.Validate()
+            valid.append(task)
+        except ConfigError as e:
+            rows[task.trial] = failed_row(task, f"invalid sample: {e}", 0.0)
+    runs = {task.trial: {} for task in valid}
+    for controller in tasks[0].controllers if valid else []:
+        if len(valid) == 1:
+            _run_one(valid[0], controller, runs)
             continue
-        metrics = run_metrics(result.logs, task.scenario) if result.status == "ok" else None
-        runs[controller] = {"status": result.status, "reason": result.reason,
-                            "final_time": result.final_time,
-                            "wall_time": result.wall_time, "metrics": metrics}
-    failures = [f"{c} {r['status']}: {r['reason']}" for c, r in runs.items()
-                if r["status"] != "ok"]
-    return {"trial": task.trial, "seed": task.seed, "sampled": task.sampled,
-            "status": "failed" if failures else "ok", "reason": "; ".join(failures),
-            "wall_time": time.perf_counter() - start, "runs": runs}
+        try:
+            _run_batch(valid, controller, runs)
+        except Exception:   # noqa: BLE001 -- each trial alone says whose it was
+            for task in valid:
+                _run_one(task, controller, runs)
+    share = (time.perf_counter() - start) / max(1, len(valid))
+    for task in valid:
+        failures = [f"{c} {r['status']}: {r['reason']}" for c, r in runs[task.trial].items()
+                    if r["status"] != "ok"]
+        rows[task.trial] = {"trial": task.trial, "seed": task.seed,
+                            "sampled": task.sampled,
+                            "status": "failed" if failures else "ok",
+                            "reason": "; ".join(failures), "wall_time": share,
+                            "runs": runs[task.trial]}
+    return [rows[task.trial] for task in tasks]
+
+
+def _run_one(task: Trial, controller: str, runs: Dict) -> None:
+    """One trial's run of ``controller`` alone, an exception recorded as its
+    failure."""
+    try:
+        _run_batch([task], controller, runs)
+    except Exception as e:   # noqa: BLE001 -- recorded as the run's failure
+        runs[task.trial][controller] = {
+            "status": "error", "reason": f"{type(e).__name__}: {e}", "final_time": None,
+            "wall_time": None, "metrics": None}
+
+
+def _run_batch(tasks: List[Trial], controller: str, runs: Dict) -> None:
+    """The batch's run of ``controller``: each trial's entry in ``runs``."""
+    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.simulate import simulate_batch
+    out_dirs = [Path(task.log_dir) / f"trial_{task.trial:05d}" if task.log_dir else None
+                for task in tasks]
+    results = simulate_batch([task.scenario for task in tasks], controller,
+                             out_dirs=out_dirs)
+    for task, result in zip(tasks, results):
+        metrics = (run_metrics(result.logs, task.scenario) if result.status == "ok"
+                   else None)
+        runs[task.trial][controller] = {
+            "status": result.status, "reason": result.reason,
+            "final_time": result.final_time, "wall_time": result.wall_time / len(tasks),
+            "metrics": metrics}
 
 
 def failed_row(task: Trial, reason: str, wall_time: Optional[float] = None) -> Dict:
