@@ -128,9 +128,11 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def _start_cli_sweep(path: Path, out: Path) -> subprocess.Popen:
+def _start_cli_sweep(path: Path, out: Path, workers: int, batch_size: int
+                     ) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "dacph_drake.app.cli", "sweep", str(path),
-                             "--out", str(out), "--workers", "2"],
+                             "--out", str(out), "--workers", str(workers),
+                             "--batch-size", str(batch_size)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
 
@@ -142,17 +144,23 @@ def _wait_for_rows(out: Path, process: subprocess.Popen, timeout: float = 60.0) 
         time.sleep(0.05)
 
 
-def _cli_sweep_with_a_first_row(path: Path, out: Path):
-    """A 2-worker CLI sweep, once its first row is saved: (process, worker pids)."""
-    process = _start_cli_sweep(path, out)
+def _cli_sweep_with_a_first_row(path: Path, out: Path, workers: int = 2,
+                                batch_size: int = 1):
+    """A CLI sweep, once its first row is saved: (process, worker pids)."""
+    process = _start_cli_sweep(path, out, workers, batch_size)
     _wait_for_rows(out, process)
     return process, _spawned_workers(process.pid)
 
 
-def test_sweep_killed_with_sigkill_resumes_without_loss_or_duplicates(serial, tmp_path):
+@pytest.mark.parametrize("workers, batch_size", [(2, 1), (1, 2)])
+def test_sweep_killed_with_sigkill_resumes_without_loss_or_duplicates(
+        serial, tmp_path, workers, batch_size):
+    """Killed once its first rows are saved (one trial per diagram on 2 workers, or
+    batches of 2 on one worker: killed during the second batch), the sweep resumes
+    with the trials not saved, none twice, and the rows of an uninterrupted run."""
     path, _, rows = serial
     out = tmp_path / "out"
-    process, workers = _cli_sweep_with_a_first_row(path, out)
+    process, workers = _cli_sweep_with_a_first_row(path, out, workers, batch_size)
     process.send_signal(signal.SIGKILL)
     process.communicate()
     finished = len(read_rows(out))

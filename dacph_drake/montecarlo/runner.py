@@ -89,7 +89,12 @@ def _run_on_local_pools(tasks: Iterator[List[Trial]], workers: int, record) -> N
         except BaseException:       # an interruption: do not wait for running trials
             stop_local_pool(pool)
             raise
-        pool.shutdown(wait=False, cancel_futures=True)
+        # A worker killed while idle breaks no future, but would keep the
+        # interpreter from exiting: such a pool's other workers are stopped.
+        if any(not worker.is_alive() for worker in (pool._processes or {}).values()):
+            stop_local_pool(pool)
+        else:
+            pool.shutdown(wait=False, cancel_futures=True)
         if not suspects:
             return
         print(f"\na worker process died: trials "
