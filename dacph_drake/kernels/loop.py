@@ -105,9 +105,10 @@ RUNNING, STOPPED, NON_FINITE, RUNAWAY = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _verdict(running, state, rates, tau, bound):
-    """A trial's verdict from its running flag, state, rates and torque: STOPPED,
-    NON_FINITE (state or torque), RUNAWAY (a rate beyond ``bound``) or RUNNING."""
+def _verdict(running, state, rates, more_rates, tau, bound):
+    """A trial's verdict from its running flag, its state, its rates (two views) and
+    its torque: STOPPED, NON_FINITE (state or torque), RUNAWAY (a rate beyond
+    ``bound``) or RUNNING."""
     if running <= 0:
         return STOPPED
     for value in state:
@@ -119,33 +120,41 @@ def _verdict(running, state, rates, tau, bound):
     for value in rates:
         if abs(value) > bound:
             return RUNAWAY
+    for value in more_rates:
+        if abs(value) > bound:
+            return RUNAWAY
     return RUNNING
 
 
 @njit(cache=True)
-def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, bound):
+def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, bound,
+                 verdicts):
     """true_torque of every trial of a batch in one call: trial i's state indices
     indices[i] (its plant.ArmCoordinates.StateIndices in the batch's plant state
     x), command u[i n:(i + 1) n], disturbance model disturbance_models's i-th part
-    and packed arguments packs[offsets[i]:offsets[i + 1]] (stack_packs). Returns
-    (tau, verdicts): a trial's torque is zero unless its verdict (_verdict, with
-    its running flag, state, rates and the rate ``bound``) is RUNNING."""
+    and packed arguments packs[offsets[i]:offsets[i + 1]] (stack_packs). A
+    trial's torque is zero unless its verdict (_verdict, with its running flag,
+    state, base and joint rates and the rate ``bound``), written to verdicts[i],
+    is RUNNING; verdicts[trials] gets the largest verdict."""
     trials = indices.shape[0]
     n = u.shape[0] // trials
     m = disturbance_models.shape[0] // trials
     out = np.zeros(trials * n)
-    verdicts = np.empty(trials, np.int64)
+    worst = RUNNING
     for i in range(trials):
-        arm = x[indices[i]]
-        tau = true_torque(t, x, indices[i], u[i * n:(i + 1) * n],
-                          disturbance_models[i * m:(i + 1) * m],
-                          packs[offsets[i]:offsets[i + 1]]) if running[i] > 0 \
-            else np.zeros(n)
-        verdicts[i] = _verdict(running[i], arm, np.concatenate((arm[1:4], arm[4 + n:])),
-                               tau, bound)
-        if verdicts[i] == RUNNING:
-            out[i * n:(i + 1) * n] = tau
-    return out, verdicts, np.max(verdicts)
+        verdict = STOPPED
+        if running[i] > 0:
+            tau = true_torque(t, x, indices[i], u[i * n:(i + 1) * n],
+                              disturbance_models[i * m:(i + 1) * m],
+                              packs[offsets[i]:offsets[i + 1]])
+            arm = x[indices[i]]         # [theta0, base velocity (3), q (n), qdot (n)]
+            verdict = _verdict(running[i], arm, arm[1:4], arm[4 + n:], tau, bound)
+            if verdict == RUNNING:
+                out[i * n:(i + 1) * n] = tau
+        verdicts[i] = verdict
+        worst = max(worst, verdict)
+    verdicts[trials] = worst
+    return out
 
 
 @njit(cache=True)
@@ -170,17 +179,17 @@ def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
 
 @njit(cache=True)
 def spatial_true_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed,
-                        running, bound):
-    """(tau, [verdict], verdict): tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial
-    arm (SpatialTrueRhs; zero unless the verdict, _verdict, is RUNNING): u_c the
-    command clipped to +-``limit``, p the joint rows of H v (H the plant's mass
-    matrix at x), ``packed`` = pack_true_rhs((), (), uncertainty)."""
+                        running, bound, verdicts):
+    """tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial arm (SpatialTrueRhs; zero
+    unless its verdict, _verdict, written to verdicts[0] and verdicts[1], is
+    RUNNING): u_c the command clipped to +-``limit``, p the joint rows of H v (H the
+    plant's mass matrix at x), ``packed`` = pack_true_rhs((), (), uncertainty)."""
     tau = _spatial_torque(t, x, H, q_index, v_index, u, limit, disturbance_model,
                           packed)
-    verdicts = np.array([_verdict(running[0], x, x[x.shape[0] - H.shape[0]:], tau,
-                                  bound)])
-    return ((tau if verdicts[0] == RUNNING else np.zeros_like(tau)), verdicts,
-            verdicts[0])
+    nq = x.shape[0] - H.shape[0]
+    verdicts[0] = _verdict(running[0], x, x[nq:], x[:0], tau, bound)
+    verdicts[1] = verdicts[0]
+    return tau if verdicts[0] == RUNNING else np.zeros_like(tau)
 
 
 @njit(cache=True)
@@ -250,17 +259,20 @@ def lhs_samples(t, theta0s, q, qdot, chi, coefficients, packs, offsets):
     """lhs_sample of every trial of a batch in one call: trial i's base angle
     theta0s[i], joints q[i n:(i + 1) n], qdot likewise, chi[i], mass-matrix
     coefficients coefficients[i] and packed arguments packs[offsets[i]:offsets[i +
-    1]] (stack_packs); the trials' results stacked, each [tau_c^r (n), log (n + 4),
-    vec(M), vec(C')]."""
+    1]] (stack_packs): (the trials' tau_c^r, their logs (n + 4 each), their
+    [vec(M), vec(C')]), each stacked."""
     trials = theta0s.shape[0]
     n = q.shape[0] // trials
-    width = 2 * n + 4 + 2 * n * n
-    out = np.empty(trials * width)
+    tau, logs = np.empty(trials * n), np.empty(trials * (n + 4))
+    models = np.empty(trials * 2 * n * n)
     for i in range(trials):
-        out[i * width:(i + 1) * width] = lhs_sample(
+        sample = lhs_sample(
             t, theta0s[i], q[i * n:(i + 1) * n], qdot[i * n:(i + 1) * n], chi[i],
             coefficients[i], packs[offsets[i]:offsets[i + 1]])
-    return out
+        tau[i * n:(i + 1) * n] = sample[:n]
+        logs[i * (n + 4):(i + 1) * (n + 4)] = sample[n:2 * n + 4]
+        models[i * 2 * n * n:(i + 1) * 2 * n * n] = sample[2 * n + 4:]
+    return tau, logs, models
 
 
 @njit(cache=True)
@@ -358,34 +370,38 @@ def observer_sample(q, qdot, memory, model, u, noise, constants):
 @njit(cache=True)
 def observer_samples(trials, q, qdot, memory, model, u, noise, constants):
     """observer_sample of each of ``trials`` trials in one call (every other
-    argument but ``constants`` the trials' parts stacked); the trials' results
-    stacked."""
+    argument but ``constants`` the trials' parts stacked): (the trials' tau_obs,
+    their memories [qdot(k), port_sample]), each stacked."""
     n = u.shape[0] // trials
-    out = np.empty(7 * n * trials)
+    tau, memory_out = np.empty(n * trials), np.empty(6 * n * trials)
     for i in range(trials):
-        out[7 * n * i:7 * n * (i + 1)] = observer_sample(
+        sample = observer_sample(
             q[i * n:(i + 1) * n], qdot[i * n:(i + 1) * n],
             memory[6 * n * i:6 * n * (i + 1)],
             model[2 * n * n * i:2 * n * n * (i + 1)], u[i * n:(i + 1) * n],
             noise[i * n:(i + 1) * n], constants)
-    return out
+        tau[i * n:(i + 1) * n] = sample[:n]
+        memory_out[6 * n * i:6 * n * (i + 1)] = sample[n:]
+    return tau, memory_out
 
 
 @njit(cache=True)
 def integrator_samples(trials, fast, gains, tau_request, tau_observed, qdot, constants):
     """integrator_sample of each of ``trials`` trials in one call (``fast``,
     ``gains``, ``tau_request``, ``tau_observed``, ``qdot`` the trials' parts
-    stacked); the trials' results stacked."""
+    stacked): (the trials' fast groups, their u), each stacked."""
     n = qdot.shape[0] // trials
     fast_size, gains_size = fast.shape[0] // trials, gains.shape[0] // trials
-    out = np.empty(trials * (4 * n + 2))
+    fast_out, u = np.empty(trials * fast_size), np.empty(trials * n)
     for i in range(trials):
-        out[(4 * n + 2) * i:(4 * n + 2) * (i + 1)] = integrator_sample(
+        sample = integrator_sample(
             fast[fast_size * i:fast_size * (i + 1)],
             gains[gains_size * i:gains_size * (i + 1)],
             tau_request[i * n:(i + 1) * n], tau_observed[i * n:(i + 1) * n],
             qdot[i * n:(i + 1) * n], constants)
-    return out
+        fast_out[fast_size * i:fast_size * (i + 1)] = sample[:fast_size]
+        u[i * n:(i + 1) * n] = sample[fast_size:]
+    return fast_out, u
 
 
 @njit(cache=True)

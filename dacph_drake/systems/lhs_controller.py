@@ -110,13 +110,12 @@ class LhsController(LeafSystem):
                 chi: float, trial: int = 0):
         """(tau_c^r, lhs_log) of one trial at time t, base angle theta0 and joint
         state (q, qdot)."""
-        n = self._n
-        sample = lhs_samples(t, np.array([theta0]), q, qdot, np.array([chi]),
-                             self._coefficients[trial:trial + 1],
-                             self._packs[self._offsets[trial]:self._offsets[trial + 1]],
-                             np.array([0, self._offsets[trial + 1]
-                                       - self._offsets[trial]]))
-        return sample[:n], self._Log(sample[n:2 * n + 4], sample[2 * n + 4:])
+        tau, log, model = lhs_samples(
+            t, np.array([theta0]), q, qdot, np.array([chi]),
+            self._coefficients[trial:trial + 1],
+            self._packs[self._offsets[trial]:self._offsets[trial + 1]],
+            np.array([0, self._offsets[trial + 1] - self._offsets[trial]]))
+        return tau, self._Log(log, model)
 
     def _Log(self, logs, models):
         """The trials' lhs_log from their kernel logs and [vec(M), vec(C')]."""
@@ -126,18 +125,13 @@ class LhsController(LeafSystem):
                                np.linalg.eigvalsh(M)[:, :1]], axis=1).reshape(-1)
 
     def _UpdateControl(self, context, discrete_state):
-        n, N = self._n, self._trials
-        samples = lhs_samples(context.get_time(),
-                              self._base_pose.Eval(context)[2::3],
-                              self._q.Eval(context), self._qdot.Eval(context),
-                              self._chi.Eval(context), self._Coefficients(context),
-                              self._packs, self._offsets).reshape(N, -1)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(
-            samples[:, :n].reshape(-1))
-        discrete_state.get_mutable_vector(self._log_index).SetFromVector(
-            samples[:, n:2 * n + 4].reshape(-1))
-        discrete_state.get_mutable_vector(self._model_index).SetFromVector(
-            samples[:, 2 * n + 4:].reshape(-1))
+        tau, logs, models = lhs_samples(
+            context.get_time(), self._base_pose.Eval(context)[2::3],
+            self._q.Eval(context), self._qdot.Eval(context), self._chi.Eval(context),
+            self._Coefficients(context), self._packs, self._offsets)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(tau)
+        discrete_state.get_mutable_vector(self._log_index).SetFromVector(logs)
+        discrete_state.get_mutable_vector(self._model_index).SetFromVector(models)
 
     def _Coefficients(self, context) -> np.ndarray:
         """The models' trigonometric coefficients (trials x ...): of the input

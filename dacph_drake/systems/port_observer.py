@@ -80,13 +80,11 @@ class PortObserver(LeafSystem):
         noise = (self._noise_std * np.concatenate([rng.standard_normal(n)
                                                    for rng in self._rngs])
                  if self._noise_std > 0 else self._no_noise)
-        samples = observer_samples(
+        tau, memory = observer_samples(
             trials, self._q.Eval(context), self._qdot.Eval(context),
             context.get_discrete_state(self._memory_index).get_value(),
             self._reduced_model.Eval(context),
             self._u.Eval(context) if self._u.HasValue(context) else self._no_u,
-            noise, self._constants).reshape(trials, 7 * n)
-        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(
-            samples[:, :n].reshape(-1))
-        discrete_state.get_mutable_vector(self._memory_index).SetFromVector(
-            samples[:, n:].reshape(-1))
+            noise, self._constants)
+        discrete_state.get_mutable_vector(self._tau_index).SetFromVector(tau)
+        discrete_state.get_mutable_vector(self._memory_index).SetFromVector(memory)

@@ -246,16 +246,13 @@ class RhsIntegrator(LeafSystem):
         discrete_state.get_mutable_vector(self._gains).SetFromVector(np.concatenate(gains))
 
     def _UpdateIntegrator(self, context, discrete_state):
-        count, fast_size = len(self._trials), self._layout.fast_size
-        samples = integrator_samples(
-            count, context.get_discrete_state(self._fast).get_value(),
+        fast, u = integrator_samples(
+            len(self._trials), context.get_discrete_state(self._fast).get_value(),
             context.get_discrete_state(self._gains).get_value(),
             self._tau_request.Eval(context), self._tau_observed.Eval(context),
-            self._qdot.Eval(context), self._constants).reshape(count, -1)
-        discrete_state.get_mutable_vector(self._fast).SetFromVector(
-            samples[:, :fast_size].reshape(-1))
-        discrete_state.get_mutable_vector(self._u_index).SetFromVector(
-            samples[:, fast_size:].reshape(-1))
+            self._qdot.Eval(context), self._constants)
+        discrete_state.get_mutable_vector(self._fast).SetFromVector(fast)
+        discrete_state.get_mutable_vector(self._u_index).SetFromVector(u)
 
     def _CalcLog(self, context, output):
         L, count = self._layout, len(self._trials)

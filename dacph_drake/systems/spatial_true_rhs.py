@@ -62,11 +62,12 @@ class SpatialTrueRhs(TrueRhsSystem):
 
     def _CalcTau(self, context, output):
         x, H = self._StateAndMassMatrix(context)
-        output.SetFromVector(self._Torque(context, spatial_true_torque(
+        output.SetFromVector(spatial_true_torque(
             context.get_time(), x, H, self._q_index, self._v_index,
             self._u.Eval(context), self._effort_limit,
             self._disturbance_model.Eval(context), self._packed,
-            self._Running(context), RUNAWAY_RATE)))
+            self._Running(context), RUNAWAY_RATE, self._verdicts))
+        self._Record(context)
 
     def _CalcSaturated(self, context, output):
         output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)

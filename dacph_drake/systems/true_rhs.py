@@ -31,6 +31,8 @@ class TrueRhsSystem(LeafSystem):
         # 1 for a trial that runs, 0 for one stopped (Stop): its torque is zero.
         self._running = self.DeclareNumericParameter(BasicVector(np.ones(trials)))
         self._unsound = {}                      # trial -> (reason, first time)
+        self._verdicts = np.zeros(trials + 1, np.int64)      # the kernel's, per call
+        self._all_running, self._any_stopped = np.ones(trials), False
         return DeclareTrueRhsPorts(self, n, state_size, trials)
 
     def Stop(self, context, trial: int) -> None:
@@ -38,6 +40,7 @@ class TrueRhsSystem(LeafSystem):
         zero, whatever its inputs hold: a trial of a batch that stopped
         (loop.simulate) stays where it is while the others run on."""
         context.get_mutable_numeric_parameter(self._running).SetAtIndex(trial, 0.0)
+        self._any_stopped = True
 
     def Unsound(self) -> Dict[int, Tuple[str, float]]:
         """The trials whose state or torque went unsound (a non-finite value, or a
@@ -47,21 +50,23 @@ class TrueRhsSystem(LeafSystem):
         return dict(self._unsound)
 
     def _Running(self, context) -> np.ndarray:
-        """The trials' running flags (Stop), for the kernel."""
+        """The trials' running flags (Stop), for the kernel: read from the context
+        once a trial has stopped, all ones before (no Python call per stage)."""
+        if not self._any_stopped:
+            return self._all_running
         return context.get_numeric_parameter(self._running).get_value()
 
-    def _Torque(self, context, result) -> np.ndarray:
-        """tau of a kernel's (tau, verdicts, worst verdict) (kernels.loop.RUNNING
-        ...), recording the trials that went unsound."""
-        tau, verdicts, worst = result
-        if worst > STOPPED:
-            t = context.get_time()
-            for trial in np.flatnonzero(verdicts > STOPPED):
-                self._unsound.setdefault(int(trial), (
-                    f"non-finite plant state or torque at t = {t:.4f} s"
-                    if verdicts[trial] == NON_FINITE else
-                    f"runaway: a rate exceeded {RUNAWAY_RATE} rad/s at t = {t:.4f} s", t))
-        return tau
+    def _Record(self, context) -> None:
+        """Records the trials whose verdict (self._verdicts, written by the
+        kernel: kernels.loop.RUNNING ...; its last entry the largest) is unsound."""
+        if self._verdicts[-1] <= STOPPED:
+            return
+        t = context.get_time()
+        for trial in np.flatnonzero(self._verdicts[:-1] > STOPPED):
+            self._unsound.setdefault(int(trial), (
+                f"non-finite plant state or torque at t = {t:.4f} s"
+                if self._verdicts[trial] == NON_FINITE else
+                f"runaway: a rate exceeded {RUNAWAY_RATE} rad/s at t = {t:.4f} s", t))
 
 
 class TrueRhs(TrueRhsSystem):
@@ -100,10 +105,12 @@ class TrueRhs(TrueRhsSystem):
             n, plant.num_positions() + plant.num_velocities(), len(models))
 
     def _CalcTau(self, context, output):
-        output.SetFromVector(self._Torque(context, true_torques(
+        output.SetFromVector(true_torques(
             context.get_time(), self._state.Eval(context), self._indices,
             self._u.Eval(context), self._disturbance_model.Eval(context),
-            self._packs, self._offsets, self._Running(context), RUNAWAY_RATE)))
+            self._packs, self._offsets, self._Running(context), RUNAWAY_RATE,
+            self._verdicts))
+        self._Record(context)
 
     def _CalcMatrices(self, context, output):
         x, t = self._state.Eval(context), context.get_time()
