@@ -2,9 +2,11 @@
 
 First, batches (--batch-sizes, default 1 4 16 64): the per-trial wall time per
 simulated second of the planar DAC and model-based loops when that many trials
-share one diagram (loop.simulate.simulate_batch; each batch size in a fresh
-process, with its peak memory), beside the ground-truth plant of one arm alone
-(same step), and the trials per hour of one worker.
+share one diagram (loop.simulate.simulate_batch, its monitor included; each batch
+size in a fresh process, with its peak memory; the trials the short scenario with
+sampled link masses and q0, phases compressed to --batch-duration), beside the
+ground-truth plant of one arm alone (same step), and the trials per hour of one
+worker.
 
 Then, on the same trials, in one run (the machines are shared, so only ratios
 measured together mean something), with one trial per diagram:
@@ -50,9 +52,9 @@ SPIN = "x = 0\nfor i in range(40_000_000):\n    x += i * i\n"
 
 
 BATCH = """\
-import copy, resource, sys, time
+import resource, sys
 import numpy as np
-from dacph_drake.controllers import build_closed_loop
+from dacph_drake.loop.simulate import simulate_batch
 from dacph_drake.scenario import Phases, short_scenario
 controller, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 rng = np.random.default_rng(1)
@@ -65,13 +67,10 @@ for i in range(size):
     s.q0 = [rng.uniform(0.2, 0.4), rng.uniform(0.8, 1.2)]
     s.seed = i
     trials.append(s)
-loop = build_closed_loop(controller, *trials)
-simulator = loop.CreateSimulator()
-simulator.Initialize()
-start = time.perf_counter()
-simulator.AdvanceTo(duration)
-print((time.perf_counter() - start) / duration / size,
-      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+results = simulate_batch(trials, controller, duration=duration)
+print(results[0].wall_time / duration / size,
+      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+      sum(r.status != "ok" for r in results))
 """
 
 PLANT = """\
@@ -109,11 +108,12 @@ def batch_scaling(sizes, duration: float) -> None:
           f"{plant:.4f} s wall per simulated s)")
     for controller in ("dac", "model-based"):
         for size in sizes:
-            per_trial, memory = run(BATCH, controller, size, duration)
+            per_trial, memory, stopped = run(BATCH, controller, size, duration)
             print(f"  {controller:11s} batch {size:3d}: {per_trial:.4f} s per trial per "
                   f"simulated s = {per_trial / plant:5.2f}x the plant alone; "
                   f"{3600 / (per_trial * 26.0):7.0f} trials of 26 s per hour per worker; "
-                  f"peak memory {memory / 1024:.2f} GiB")
+                  f"peak memory {memory / 1024:.2f} GiB"
+                  + (f"; {stopped:.0f} trials stopped early" if stopped else ""))
 
 
 def machine_ceiling() -> float:

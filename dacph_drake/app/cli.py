@@ -321,7 +321,7 @@ def main(argv=None) -> int:
                           "this process); with --dask local, the cluster's workers")
     swp.add_argument("--batch-size", type=int, default=None,
                      help="trials simulated together in one diagram (default: the "
-                          "sweep's batch_size, else 16 for a planar arm, 1 for a "
+                          "sweep's batch_size, else 64 for a planar arm, 1 for a "
                           "described arm); no trial's row depends on it")
     swp.add_argument("--dask", metavar="ADDRESS", default=None,
                      help="run on the Dask cluster at ADDRESS (e.g. tcp://host:8786), "

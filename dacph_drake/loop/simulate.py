@@ -85,9 +85,11 @@ def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
     (controllers.build_closed_loop(controller, *scenarios)): each trial's RunResult
     is its solo simulate's (logs bit for bit, tests/test_batch.py). A trial that
     diverges, collides or leaves its limits stops alone with its reason and final
-    time (its torque zeroed, its state frozen at rest before a NaN reaches Drake)
-    while the others run on. ``out_dirs``: each trial's run directory (as
-    simulate's out_dir; None entries or None: not saved)."""
+    time while the others run on: a non-finite or runaway state or torque is
+    caught at the integrator stage it appears at (its torque is zero from then on:
+    TrueRhsSystem), and the trial is brought to rest at the next check (every
+    MONITOR_PERIOD of simulated time). ``out_dirs``: each trial's run directory
+    (as simulate's out_dir; None entries or None: not saved)."""
     require_controller(controller)
     scenarios = list(scenarios)
     duration = scenarios[0].duration if duration is None else duration
