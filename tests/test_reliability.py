@@ -139,6 +139,30 @@ def test_an_interrupted_run_saves_what_it_has(tmp_path, sig, scenario):
     assert (out / "scenario.yaml").is_file()
 
 
+def test_an_interrupt_inside_a_compiled_kernel_is_an_interrupt(tmp_path, monkeypatch):
+    """SIGINT landing inside a numba kernel's call reaches the loop as a SystemError
+    caused by the KeyboardInterrupt (seen as exit 1 and no saved run in about 1 of
+    5 interrupted CLI runs): the run still ends "interrupted" and saves what it
+    has; where the run is not interruptible (sweeps) the KeyboardInterrupt itself
+    goes up."""
+    import dacph_drake.loop.simulate as module
+
+    def interrupted_kernel(simulator, duration, check, after_chunk):
+        simulator.AdvanceTo(0.05)
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as e:
+            raise SystemError("CPUDispatcher(...) returned a result with an "
+                              "exception set") from e
+    monkeypatch.setattr(module, "advance_in_chunks", interrupted_kernel)
+    result = simulate(short_scenario(), "model-based", duration=1.0,
+                      out_dir=tmp_path / "run", interruptible=True)
+    assert result.status == "interrupted" and "SIGINT" in result.reason
+    assert (tmp_path / "run" / "logs_model-based.npz").is_file()
+    with pytest.raises(KeyboardInterrupt):
+        simulate(short_scenario(), "model-based", duration=1.0)
+
+
 def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
     """A DAC run and a model-based run of another scenario, or of another duration,
     in one directory: report names the problem instead of printing a table."""

@@ -212,11 +212,14 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
         reason = advance_in_chunks(simulator, duration, check, after_chunk)
         if reason and not all(stops):     # the simulation failed: every trial stops
             stops = [stop or (reason, context.get_time()) for stop in stops]
-    except KeyboardInterrupt as e:
-        if not interruptible:
+    except BaseException as e:
+        interruption = _Interruption(e)
+        if interruption is None:
             raise
+        if not interruptible:
+            raise interruption from None
         interrupted = True
-        source = "SIGTERM" if isinstance(e, _Terminated) else "SIGINT"
+        source = "SIGTERM" if isinstance(interruption, _Terminated) else "SIGINT"
         reason = f"interrupted by {source} at t = {context.get_time():.4f} s"
     finally:
         bar.close()
@@ -224,6 +227,19 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
             signal.signal(signal.SIGTERM, previous_term)
     return results("interrupted" if interrupted else "diverged" if reason else "ok",
                    reason)
+
+
+def _Interruption(error: BaseException) -> Optional[KeyboardInterrupt]:
+    """The KeyboardInterrupt (SIGINT, or SIGTERM's _Terminated) behind ``error``:
+    itself, or the cause of the error a callback's caller made of it (numba's
+    dispatcher turns one raised inside a compiled kernel's call into a
+    SystemError, pybind11 one raised inside a Drake callback into its own
+    error); None if there is none."""
+    while error is not None:
+        if isinstance(error, KeyboardInterrupt):
+            return error
+        error = error.__cause__ or error.__context__
+    return None
 
 
 def _Freeze(plant, plant_context, coordinates: ArmCoordinates, q0) -> None:
@@ -253,6 +269,8 @@ def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
         try:
             simulator.AdvanceTo(min(k * MONITOR_PERIOD, duration))
         except RuntimeError as e:
+            if _Interruption(e) is not None:
+                raise
             return str(e).splitlines()[0]
         reason = check(context.get_time())
         if reason:
