@@ -342,6 +342,11 @@ def test_cli_reports_a_malformed_sweep(tmp_path, capsys):
     path = write_sweep(tmp_path, "trials: -2\n")
     assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
     assert "trials = -2 is out of range" in capsys.readouterr().err
+    path = write_sweep(tmp_path, SWEEP)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"),
+                 "--batch-size", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--batch-size = 0; allowed: 1 to 4096" in err and len(err.splitlines()) == 1
 
 
 def test_a_sweep_with_no_successful_trial_exits_1(tmp_path, capsys):
