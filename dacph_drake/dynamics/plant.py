@@ -65,18 +65,16 @@ class ArmCoordinates:
         theta0; a robot from a file's quaternion floating joint: qw, qx, qy, qz, x,
         y, z and omega_W, v_W), the arm's joints are the actuated ones, in actuator
         order. Indices are into the whole plant's q and v."""
-        def mine(element):
-            return instance is None or element.model_instance() == instance
-        on_world = [plant.get_joint(i) for i in plant.GetJointIndices()
+        among = () if instance is None else (instance,)
+        on_world = [plant.get_joint(i) for i in plant.GetJointIndices(*among)
                     if plant.get_joint(i).parent_body().index()
-                    == plant.world_body().index() and mine(plant.get_joint(i))]
+                    == plant.world_body().index()]
         if len(on_world) != 1:
             raise ValueError(f"a free-floating plant has one joint on the world (its "
                              f"base's); this one has {len(on_world)}")
         base = on_world[0]
         joints = [plant.get_joint_actuator(i).joint()
-                  for i in plant.GetJointActuatorIndices()
-                  if mine(plant.get_joint_actuator(i))]
+                  for i in plant.GetJointActuatorIndices(*among)]
         return ArmCoordinates(
             base_q=np.arange(base.position_start(),
                              base.position_start() + base.num_positions()),

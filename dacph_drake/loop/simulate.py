@@ -180,13 +180,13 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
         logs, wall = collect_logs(loop, context), time.perf_counter() - start
         memory = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         out = []
-        for i, stop in enumerate(stops):
+        for i, (stop, (coordinates, _, _)) in enumerate(zip(stops, watched)):
             final = context.get_time() if stop is None else stop[1]
             out.append(RunResult(
                 controller=controller,
                 status=status if stop is None else "diverged",
                 reason=reason if stop is None else stop[0], final_time=final,
-                wall_time=wall, logs=trial_logs(loop, logs, i, final),
+                wall_time=wall, logs=trial_logs(loop, logs, coordinates, i, final),
                 peak_memory_mib=memory, duration=duration))
         return out
 
@@ -294,12 +294,12 @@ def collect_logs(loop, context) -> Dict[str, np.ndarray]:
     return logs
 
 
-def trial_logs(loop, logs: Dict[str, np.ndarray], trial: int,
-               final_time: float) -> Dict[str, np.ndarray]:
+def trial_logs(loop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
+               trial: int, final_time: float) -> Dict[str, np.ndarray]:
     """One trial's part of a batch's logs (collect_logs), up to ``final_time``:
-    its plant state in the layout of a plant of its own ([positions, velocities],
-    plant.trial_coordinates) and its share of every stacked signal."""
-    coordinates = trial_coordinates(loop.plant)[trial]
+    its plant state in the layout of a plant of its own ([positions, velocities];
+    ``coordinates``: the trial's, plant.trial_coordinates) and its share of every
+    stacked signal."""
     nq, count = loop.plant.num_positions(), loop.trials
     kept = logs["time"] <= final_time
     state = np.concatenate([coordinates.base_q, coordinates.joint_q,
