@@ -3,8 +3,7 @@ port (docs/equations.md E19), as TrueRhs is for the planar arms."""
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
-from dacph_drake.kernels.loop import (STOPPED, pack_true_rhs, spatial_true_torque,
-                                      true_matrices)
+from dacph_drake.kernels.loop import pack_true_rhs, spatial_true_torque, true_matrices
 from dacph_drake.dynamics.plant import ArmCoordinates, effort_limits, joint_damping
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
@@ -67,10 +66,8 @@ class SpatialTrueRhs(TrueRhsSystem):
             context.get_time(), x, H, self._q_index, self._v_index,
             self._u.Eval(context), self._effort_limit,
             self._disturbance_model.Eval(context), self._packed,
-            self._Running(context) if self._any_stopped else self._all_running,
-            RUNAWAY_RATE, self._verdicts))
-        if self._verdicts[-1] > STOPPED:
-            self._Record(context)
+            self._Running(context), RUNAWAY_RATE, self._verdicts))
+        self._Record(context)
 
     def _CalcSaturated(self, context, output):
         output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)

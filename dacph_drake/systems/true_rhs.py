@@ -50,15 +50,17 @@ class TrueRhsSystem(LeafSystem):
         return dict(self._unsound)
 
     def _Running(self, context) -> np.ndarray:
-        """The trials' running flags (Stop), for the kernel; callers at every stage
-        pass self._all_running instead until a trial has stopped
-        (self._any_stopped)."""
+        """The trials' running flags (Stop), for the kernel: read from the context
+        once a trial has stopped, all ones before."""
+        if not self._any_stopped:
+            return self._all_running
         return context.get_numeric_parameter(self._running).get_value()
 
     def _Record(self, context) -> None:
         """Records the trials whose verdict (self._verdicts, written by the
-        kernel: kernels.loop.RUNNING ...; its last entry the largest) is unsound;
-        callers at every stage call it only when self._verdicts[-1] > STOPPED."""
+        kernel: kernels.loop.RUNNING ...; its last entry the largest) is unsound."""
+        if self._verdicts[-1] <= STOPPED:
+            return
         t = context.get_time()
         for trial in np.flatnonzero(self._verdicts[:-1] > STOPPED):
             self._unsound.setdefault(int(trial), (
@@ -106,11 +108,9 @@ class TrueRhs(TrueRhsSystem):
         output.SetFromVector(true_torques(
             context.get_time(), self._state.Eval(context), self._indices,
             self._u.Eval(context), self._disturbance_model.Eval(context),
-            self._packs, self._offsets,
-            self._Running(context) if self._any_stopped else self._all_running,
-            RUNAWAY_RATE, self._verdicts))
-        if self._verdicts[-1] > STOPPED:
-            self._Record(context)
+            self._packs, self._offsets, self._Running(context), RUNAWAY_RATE,
+            self._verdicts))
+        self._Record(context)
 
     def _CalcMatrices(self, context, output):
         x, t = self._state.Eval(context), context.get_time()
