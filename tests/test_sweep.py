@@ -347,6 +347,8 @@ def test_cli_reports_a_malformed_sweep(tmp_path, capsys):
                  "--batch-size", "0"]) == 2
     err = capsys.readouterr().err
     assert "--batch-size = 0; allowed: 1 to 4096" in err and len(err.splitlines()) == 1
+    with pytest.raises(ConfigError, match=r"batch_size = 0 is out of range"):
+        run_sweep(load_sweep(path), tmp_path / "api", InProcessExecutor(), 1, batch_size=0)
 
 
 def test_a_sweep_with_no_successful_trial_exits_1(tmp_path, capsys):

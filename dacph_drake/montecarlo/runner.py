@@ -6,6 +6,7 @@ from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Iterator, List, Optional
 
+from dacph_drake.errors import require_in_range
 from dacph_drake.montecarlo.definition import SweepDefinition, sample_trial
 from dacph_drake.montecarlo.executors import (default_workers, local_process_pool,
                                               stop_local_pool)
@@ -33,6 +34,8 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
     worker count, batch or order ran it (except its wall times)."""
     from dacph_drake.loop.run_store import versions
     slots = slots or default_workers()
+    if batch_size is not None:
+        require_in_range("batch_size", batch_size, 1, 4096)
     batch_size = batch_size or batch_size_for(definition)
     label = (f"{type(executor).__name__}, {slots} slots" if executor
              else f"local process pool, {slots} workers") + f", batches of {batch_size}"
