@@ -14,7 +14,7 @@ STABILITY_MARGIN = 0.05
 
 def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float) -> float:
     """Eq. (48): c > 2 Td^2 lambda_max(K_d) / inf_q lambda_min(M) (1 + ln(beta_hat) / 5)."""
-    return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(max(beta_hat, 1.0)) / 5)
+    return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(np.maximum(beta_hat, 1.0)) / 5)
 
 
 def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
@@ -27,24 +27,30 @@ def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float
     return c_lower_bound(Td, damping_rate, 1.0, beta_hat)
 
 
-def integral_gains(B_hat: np.ndarray, c: float):
+def integral_gains(B_hat: np.ndarray, c):
     """k_p = c / Re(lambda_hat_p) and the DIC check.
 
     The eigenvalue paired with channel p is the one nearest B_hat[p, p] (for the
-    near-diagonal B of a decentralized arm the modes are the channels).
+    near-diagonal B of a decentralized arm the modes are the channels), taken in
+    channel order from those not yet paired.
     Returns (k, eigenvalues, dic_ok): dic_ok is det(B_hat) != 0 and Re(lambda_p) > 0.
+    A stack of matrices (trials, n, n), with c per trial, gives each trial's.
     """
     eigenvalues = np.linalg.eigvals(B_hat)
-    remaining = list(eigenvalues)
-    paired = []
-    for p in range(B_hat.shape[0]):
-        i = int(np.argmin([abs(lam - B_hat[p, p]) for lam in remaining]))
-        paired.append(remaining.pop(i))
-    paired = np.array(paired)
-    det = np.prod(eigenvalues).real
-    dic_ok = bool(abs(det) > 1e-9 and np.all(paired.real > 0))
-    k = c / paired.real if dic_ok else np.full(B_hat.shape[0], np.nan)
-    return k, paired, dic_ok
+    n = B_hat.shape[-1]
+    paired = np.empty_like(eigenvalues)
+    free = np.ones(eigenvalues.shape, bool)
+    for p in range(n):
+        distance = np.where(free, np.abs(eigenvalues - B_hat[..., p, p, None]), np.inf)
+        nearest = np.argmin(distance, axis=-1)[..., None]
+        paired[..., p] = np.take_along_axis(eigenvalues, nearest, axis=-1)[..., 0]
+        np.put_along_axis(free, nearest, False, axis=-1)
+    det = np.prod(eigenvalues, axis=-1).real
+    dic_ok = (np.abs(det) > 1e-9) & np.all(paired.real > 0, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where(dic_ok[..., None], np.asarray(c, float)[..., None] / paired.real,
+                     np.nan)
+    return k, paired, (bool(dic_ok) if dic_ok.ndim == 0 else dic_ok)
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
@@ -68,7 +74,7 @@ def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
                 <= radius)
 
 
-def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) -> bool:
+def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float):
     """The bounded-learning-error condition made operational: every paired
     eigenvalue of B_hat lies within a factor ``trust_ratio`` of the anchor's
     ``nominal`` (B0's, or those of the estimate in use: Rhs.trust_anchor),
@@ -84,9 +90,12 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float) ->
     a loop that ran on a right estimate stays certified after any accepted step
     (analysis.rhs_loop: at the defaults the loop is certified for
     lambda~_p / lambda_hat_p in [0.45, 4.2]), while an estimate that follows the
-    truth away from B0 is no longer refused."""
+    truth away from B0 is no longer refused.
+
+    Stacked eigenvalues (trials, n) give each trial's answer."""
     ratio = paired.real / np.asarray(nominal, float)
-    return bool(np.all(ratio >= 1.0 / trust_ratio) and np.all(ratio <= trust_ratio))
+    within = np.all((ratio >= 1.0 / trust_ratio) & (ratio <= trust_ratio), axis=-1)
+    return bool(within) if within.ndim == 0 else within
 
 
 def check_period_order(periods) -> None:

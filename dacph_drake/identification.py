@@ -84,12 +84,14 @@ class PortEvidence:
         self._layout = PortSample(n)
 
     def Update(self, state: np.ndarray, sample: np.ndarray) -> np.ndarray:
-        """The statistics after one more PortSample ``sample``."""
+        """The statistics after one more PortSample ``sample`` (stacked: states
+        (trials, size) and samples (trials, PortSample size), each trial's)."""
         m = 3 * self.n
-        z = np.asarray(sample, float)[self._layout.regressed]
+        z = np.asarray(sample, float)[..., self._layout.regressed]
         out = self.decay * state
-        out[:m * m] += np.outer(z, z).reshape(-1)
-        out[m * m] += 1.0
+        out[..., :m * m] += (z[..., :, None] * z[..., None, :]).reshape(
+            z.shape[:-1] + (m * m,))
+        out[..., m * m] += 1.0
         return out
 
     def Residual(self, state: np.ndarray, B: np.ndarray, D: np.ndarray) -> float:

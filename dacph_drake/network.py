@@ -5,17 +5,18 @@
     D_hat(x) = diag(softplus(W_D h_D + b_D))      (positive definite)
     tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
 
-Trained in torch (float64); the fast loops evaluate an exported copy of the weights
-in numpy (``ExportedNetwork.Evaluate``), so torch never runs inside them. The output layers
-start at zero with biases vec(B0 / F) and softplus^-1(D0): the first estimate is the
+Trained in torch (float64); the fast loops evaluate an exported copy of the
+weights, compiled (``ExportedNetwork.Evaluate``), so torch never runs inside them.
+The output layers start at zero with biases vec(B0 / F) and softplus^-1(D0): the first estimate is the
 nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
 network) unless the learner's ``coupling`` setting is "inertia".
 """
-from typing import List
+from typing import List, Sequence
 
 import numpy as np
 import torch
 
+from dacph_drake.kernels.network import evaluate_networks
 from dacph_drake.scenario import LEARNER_COUPLINGS
 
 
@@ -104,8 +105,9 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 
 
 class ExportedNetwork:
-    """numpy evaluation of RhsNetwork from its exported parameter vector (with the
-    same coupling scale F, default all ones)."""
+    """RhsNetwork evaluated from its exported parameter vector (with the same
+    coupling scale F, default all ones) by a compiled kernel
+    (kernels.network.evaluate_networks)."""
 
     def __init__(self, n: int, hidden: List[int], momentum_scale: float,
                  coupling: np.ndarray = None):
@@ -123,8 +125,7 @@ class ExportedNetwork:
         self._shapes = (shapes_B + shapes_D + [(n * n, hidden[-1]), (n * n,),
                                                (n, hidden[-1]), (n,)])
         self.size = int(sum(np.prod(s) for s in self._shapes))
-        self._layers = len(hidden)
-        self._unpacked_from, self._unpacked = None, None
+        self._hidden = np.asarray(hidden, np.int64)
 
     @staticmethod
     def ForLearner(settings, model, q0) -> "ExportedNetwork":
@@ -137,29 +138,25 @@ class ExportedNetwork:
                                coupling_factors(settings.coupling, np.diag(
                                    model.MassMatrix(np.asarray(q0, float)))))
 
-    def _Unpack(self, weights):
-        """The parameter arrays (copies); the last unpacking is reused while the
-        weights are unchanged (the learner publishes every periods.learner)."""
-        key = weights.tobytes()
-        if key != self._unpacked_from:
-            out, i = [], 0
-            for s in self._shapes:
-                k = int(np.prod(s))
-                out.append(weights[i:i + k].reshape(s).copy())
-                i += k
-            self._unpacked_from, self._unpacked = key, out
-        return self._unpacked
-
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
         """(B_hat (n x n), D_hat diagonal (n,)) at one state."""
-        params = self._Unpack(weights)
-        L = 2 * self._layers
-        X = np.concatenate([q, p / self._momentum_scale])
-        hB, hD = X, X
-        for i in range(0, L, 2):
-            hB = np.tanh(params[i] @ hB + params[i + 1])
-            hD = np.tanh(params[L + i] @ hD + params[L + i + 1])
-        W_B, b_B, W_D, b_D = params[2 * L:]
-        B = (W_B @ hB + b_B).reshape(self.n, self.n) * self.coupling
-        D = np.logaddexp(0.0, W_D @ hD + b_D)          # softplus
-        return B, D
+        B, D = evaluate_networks(
+            self._hidden, self._momentum_scale, np.asarray(weights, float)[None],
+            np.asarray(q, float)[None], np.asarray(p, float)[None], self.coupling[None])
+        return B[0], D[0]
+
+
+class NetworkStack:
+    """The exported networks of a batch's trials (ExportedNetwork, one per trial,
+    alike but for their coupling scales), evaluated in one compiled call."""
+
+    def __init__(self, networks: Sequence[ExportedNetwork]):
+        self._hidden = networks[0]._hidden
+        self._momentum_scale = networks[0]._momentum_scale
+        self._coupling = np.array([network.coupling for network in networks])
+
+    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
+        """(B_hat (trials, n, n), D_hat (trials, n)) of trial i at weights[i] and
+        (q[i], p[i])."""
+        return evaluate_networks(self._hidden, self._momentum_scale, weights, q, p,
+                                 self._coupling)

@@ -98,25 +98,12 @@ class InertialParameters:
         return out
 
 
-    def NodeInertias(self, tree, context):
-        """A map pi -> tree.Inertias (kinematic_tree.KinematicTree: mass, first
-        moment, rotational inertia about the origin, per node) with this layout's
-        bodies at pi and the others (massless ones) as the plant holds them in
-        ``context``: the compiled kernels' inertias without a Drake context."""
-        fixed = tree.Inertias(context)
+    def Nodes(self, tree) -> np.ndarray:
+        """The node of each body of this layout in ``tree``
+        (kinematic_tree.KinematicTree), in layout order: where the compiled
+        kernels (kernels.identification) put each body's parameters."""
         node_of = {int(body.index()): node for node, body in enumerate(tree.bodies)}
-        nodes = np.array([node_of[int(body.index())] for body in self.bodies])
-        rows, columns = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
-
-        def inertias(pi: np.ndarray):
-            blocks = np.asarray(pi, float).reshape(-1, PER_BODY)
-            mass, moment, inertia = (x.copy() for x in fixed)
-            mass[nodes] = blocks[:, MASS]
-            moment[nodes] = blocks[:, MOMENT]
-            inertia[nodes[:, None], rows, columns] = blocks[:, INERTIA]
-            inertia[nodes[:, None], columns, rows] = blocks[:, INERTIA]
-            return mass, moment, inertia
-        return inertias
+        return np.array([node_of[int(body.index())] for body in self.bodies])
 
     def Apply(self, context, pi: np.ndarray) -> None:
         """Sets the plant's bodies in ``context`` to the inertias pi."""
@@ -195,16 +182,26 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
     truth's ray, k = |pi0|^2_S / (pi0^T S^-2 pi~)). Without that constraint the
     ridge alone held the scale, and a controller's model whose link lengths were a
     few percent off the robot's (Y_k pi~ no longer exactly 0 for any pi) shrank to
-    a quarter of the robot's mass."""
-    S2 = scales**2
-    r = prior_weight * float(np.sum(np.diag(information) * S2)) / len(pi0)
-    if not r > 0:
-        return pi0.copy()
+    a quarter of the robot's mass.
+
+    Stacked arguments (information (trials, size, size), pi0 and scales (trials,
+    size)) solve one problem per trial; pi0 where r is not > 0 (no information)."""
+    information, pi0 = np.asarray(information, float), np.asarray(pi0, float)
+    S2 = np.asarray(scales, float)**2
+    size = pi0.shape[-1]
+    r = prior_weight * np.sum(np.diagonal(information, axis1=-2, axis2=-1) * S2,
+                              axis=-1) / size
+    informed = r > 0
+    out = pi0.copy()
+    if not np.any(informed):
+        return out
     # KKT: (S^2 A + r I) pi + mu c = r pi0,  c^T pi = c^T pi0,  c = S^-2 pi0.
-    size = len(pi0)
-    c = pi0 / S2
-    system = np.zeros((size + 1, size + 1))
-    system[:size, :size] = S2[:, None] * information + r * np.eye(size)
-    system[:size, size] = S2 * c
-    system[size, :size] = c
-    return np.linalg.solve(system, np.append(r * pi0, c @ pi0))[:size]
+    S2, A, r, p = S2[informed], information[informed], r[informed], pi0[informed]
+    c = p / S2
+    system = np.zeros(p.shape[:-1] + (size + 1, size + 1))
+    system[..., :size, :size] = S2[..., :, None] * A + r[..., None, None] * np.eye(size)
+    system[..., :size, size] = S2 * c
+    system[..., size, :size] = c
+    rhs = np.concatenate([r[..., None] * p, np.sum(c * p, axis=-1)[..., None]], axis=-1)
+    out[informed] = np.linalg.solve(system, rhs[..., None])[..., :size, 0]
+    return out

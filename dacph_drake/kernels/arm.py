@@ -130,12 +130,36 @@ def joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges):
     velocity (vx, vy, omega0) in the world frame and joint state (q, qdot): with the
     base's velocity turned into its own frame, p = H(q)[3:] T v, which at zero
     momentum is M(q) qdot."""
+    n, R = q.shape[0], ranges.shape[0]
+    p = np.empty(n)
+    _joint_momentum_into(theta0, base_velocity[0], base_velocity[1], base_velocity[2],
+                         q, qdot, coefficients, ranges, np.empty(R), np.empty(R), p)
+    return p
+
+
+@njit(cache=True)
+def _joint_momentum_into(theta0, vx, vy, omega0, q, qdot, coefficients, ranges, c, si,
+                         p):
+    """joint_momentum written into p, with c and si (one entry per range) as work
+    arrays: only H's joint rows are formed, by the same sums as
+    mass_matrix_and_derivatives', without dH."""
     n = q.shape[0]
-    H = mass_matrix_and_derivatives(q, coefficients, ranges)[0]
-    v = np.empty(n + 3)
-    c, s = np.cos(theta0), np.sin(theta0)
-    v[0] = c * base_velocity[0] + s * base_velocity[1]
-    v[1] = -s * base_velocity[0] + c * base_velocity[1]
-    v[2] = base_velocity[2]
-    v[3:] = qdot
-    return matvec(H[3:], v)
+    R = ranges.shape[0]
+    N = n + 3
+    for r in range(R):
+        s = 0.0
+        for k in range(n):
+            s += ranges[r, k] * q[k]
+        c[r], si[r] = np.cos(s), np.sin(s)
+    cos0, sin0 = np.cos(theta0), np.sin(theta0)
+    v0 = cos0 * vx + sin0 * vy
+    v1 = -sin0 * vx + cos0 * vy
+    for i in range(n):
+        p[i] = 0.0
+        for j in range(N):
+            e = (3 + i) * N + j
+            value = coefficients[e, 0]
+            for r in range(R):
+                value += coefficients[e, 1 + r] * c[r] + coefficients[e, 1 + R + r] * si[r]
+            v = v0 if j == 0 else v1 if j == 1 else omega0 if j == 2 else qdot[j - 3]
+            p[i] += value * v

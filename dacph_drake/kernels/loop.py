@@ -5,7 +5,8 @@ docstring states the equations; the kernels are their compiled bodies."""
 import numpy as np
 from numba import njit
 
-from dacph_drake.kernels.arm import dot, joint_momentum, matvec, reduced_dynamics
+from dacph_drake.kernels.arm import (_joint_momentum_into, dot, matvec,
+                                     reduced_dynamics)
 from dacph_drake.kernels.potential import potential
 
 
@@ -15,14 +16,21 @@ def disturbance(t, model):
     omega (n), quadrature (n), hf (n)] (DisturbanceSource)."""
     n = (model.shape[0] - 3) // 5
     d = np.zeros(n)
+    _add_disturbance(t, model, d)
+    return d
+
+
+@njit(cache=True)
+def _add_disturbance(t, model, out):
+    """out += d(t) (disturbance), in place."""
+    n = (model.shape[0] - 3) // 5
     if t < model[0]:
-        return d
+        return
     hf = np.sin(model[2] * t)
     for i in range(n):
         lf = model[3 + i] + model[3 + n + i] * np.sin(model[3 + 2 * n + i] * t
                                                       + model[3 + 3 * n + i])
-        d[i] = model[1] * (lf + model[3 + 4 * n + i] * hf)
-    return d
+        out[i] += model[1] * (lf + model[3 + 4 * n + i] * hf)
 
 
 @njit(cache=True)
@@ -43,24 +51,46 @@ def true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
     """(B~, diag D~) at time t and (q, p) (uncertainty.TrueRhsModel): B~ =
     diag(g(t)) (B0 + Delta B), g from ``actuator`` (actuator_gains)."""
     n = q.shape[0]
-    B = np.zeros((n, n))
-    gains = actuator_gains(t, actuator, n)
-    if t < linear_start:
-        for i in range(n):
-            B[i, i] = gains[i] * B0[i]
-        return B, D0.copy()
-    B_diagonal = B0 + matvec(B_linear, q)
-    D = D0 + D_offset + D_linear * p
-    if t >= nonlinear_start:
-        pp = p * p
-        D = D + D_quadratic * pp
-        B_diagonal = B_diagonal + B_quadratic * pp
-        B += (q[0] * q[0]) * B_q1_squared
-    for i in range(n):
-        B[i, i] += B_diagonal[i]
-        for j in range(n):
-            B[i, j] *= gains[i]
+    B, D = np.empty((n, n)), np.empty(n)
+    _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
+                        B_quadratic, B_q1_squared, linear_start, nonlinear_start,
+                        actuator, B, D)
     return B, D
+
+
+@njit(cache=True)
+def _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
+                        B_quadratic, B_q1_squared, linear_start, nonlinear_start,
+                        actuator, B, D):
+    """true_matrices written into B (n x n) and D (n), allocating nothing."""
+    n = q.shape[0]
+    nonlinear = t >= nonlinear_start
+    q1_squared = q[0] * q[0]
+    for i in range(n):
+        gain = actuator[i]                          # actuator_gains, entry i
+        for k in range((actuator.shape[0] - n) // 3):
+            if t >= actuator[n + 3 * k] and int(actuator[n + 3 * k + 1]) == i:
+                gain *= actuator[n + 3 * k + 2]
+        if t < linear_start:
+            for j in range(n):
+                B[i, j] = 0.0
+            B[i, i] = gain * B0[i]
+            D[i] = D0[i]
+            continue
+        diagonal = 0.0
+        for k in range(n):
+            diagonal += B_linear[i, k] * q[k]
+        diagonal = B0[i] + diagonal
+        D[i] = D0[i] + D_offset[i] + D_linear[i] * p[i]
+        for j in range(n):
+            B[i, j] = 0.0 + q1_squared * B_q1_squared[i, j] if nonlinear else 0.0
+        if nonlinear:
+            pp = p[i] * p[i]
+            D[i] = D[i] + D_quadratic[i] * pp
+            diagonal = diagonal + B_quadratic[i] * pp
+        B[i, i] += diagonal
+        for j in range(n):
+            B[i, j] *= gain
 
 
 def pack_true_rhs(coefficients, ranges, uncertainty) -> np.ndarray:
@@ -80,16 +110,37 @@ def true_torque(t, x, indices, u, disturbance_model, packed):
     (plant.ArmCoordinates.StateIndices), d(t) from ``disturbance_model``
     (disturbance) and ``packed`` = pack_true_rhs(...)."""
     n = u.shape[0]
-    arm = x[indices]
-    theta0, base_velocity, q, qdot = arm[0], arm[1:4], arm[4:4 + n], arm[4 + n:]
+    tau = np.empty(n)
+    _true_torque_into(t, x, indices, u, disturbance_model, packed, torque_scratch(n),
+                      tau)
+    return tau
+
+
+@njit(cache=True)
+def torque_scratch(n):
+    """The work arrays of _true_torque_into for n joints (one set per batch call)."""
+    R = n * (n + 1) // 2
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(R), np.empty(R),
+            np.empty((n, n)), np.empty(n))
+
+
+@njit(cache=True)
+def _true_torque_into(t, x, indices, u, disturbance_model, packed, scratch, tau):
+    """true_torque written into ``tau`` with the work arrays ``scratch``
+    (torque_scratch), allocating nothing."""
+    n = u.shape[0]
+    q, qdot, p, c, si, B, D = scratch
+    for j in range(n):
+        q[j], qdot[j] = x[indices[4 + j]], x[indices[4 + n + j]]
     N, R = n + 3, n * (n + 1) // 2
     o = 0
     coefficients = packed[o:o + N * N * (1 + 2 * R)].reshape(N * N, 1 + 2 * R)
     o += N * N * (1 + 2 * R)
     ranges = packed[o:o + R * n].reshape(R, n)
     o += R * n
-    p = joint_momentum(theta0, base_velocity, q, qdot, coefficients, ranges)
-    return _packed_torque(t, q, p, qdot, u, disturbance_model, packed[o:])
+    _joint_momentum_into(x[indices[0]], x[indices[1]], x[indices[2]], x[indices[3]],
+                         q, qdot, coefficients, ranges, c, si, p)
+    _torque_into(t, q, p, qdot, u, disturbance_model, packed[o:], B, D, tau)
 
 
 def stack_packs(packs) -> "tuple[np.ndarray, np.ndarray]":
@@ -140,15 +191,16 @@ def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, 
     n = u.shape[0] // trials
     m = disturbance_models.shape[0] // trials
     out = np.zeros(trials * n)
+    tau = np.empty(n)
+    scratch = torque_scratch(n)
     worst = RUNNING
     for i in range(trials):
         verdict = STOPPED
         if running[i] > 0:
-            tau = true_torque(t, x, indices[i], u[i * n:(i + 1) * n],
+            _true_torque_into(t, x, indices[i], u[i * n:(i + 1) * n],
                               disturbance_models[i * m:(i + 1) * m],
-                              packs[offsets[i]:offsets[i + 1]])
-            arm = x[indices[i]]         # [theta0, base velocity (3), q (n), qdot (n)]
-            verdict = _verdict(running[i], arm, arm[1:4], arm[4 + n:], tau, bound)
+                              packs[offsets[i]:offsets[i + 1]], scratch, tau)
+            verdict = _planar_verdict(x, indices[i], n, tau, bound)
             if verdict == RUNNING:
                 out[i * n:(i + 1) * n] = tau
         verdicts[i] = verdict
@@ -158,9 +210,38 @@ def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, 
 
 
 @njit(cache=True)
+def _planar_verdict(x, indices, n, tau, bound):
+    """_verdict of a running planar trial whose state is x[indices] = [theta0, base
+    velocity (3), q (n), qdot (n)], read in place."""
+    for k in indices:
+        if not np.isfinite(x[k]):
+            return NON_FINITE
+    for value in tau:
+        if not np.isfinite(value):
+            return NON_FINITE
+    for k in range(1, 4):
+        if abs(x[indices[k]]) > bound:
+            return RUNAWAY
+    for k in range(4 + n, 4 + 2 * n):
+        if abs(x[indices[k]]) > bound:
+            return RUNAWAY
+    return RUNNING
+
+
+@njit(cache=True)
 def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
     """B~ u - D~ qdot + d(t) with the uncertainty's arguments packed as
     pack_true_rhs packs them after the robot's."""
+    n = u.shape[0]
+    tau = np.empty(n)
+    _torque_into(t, q, p, qdot, u, disturbance_model, packed, np.empty((n, n)),
+                 np.empty(n), tau)
+    return tau
+
+
+@njit(cache=True)
+def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
+    """_packed_torque written into ``tau``, with B (n x n) and D (n) as work arrays."""
     n = u.shape[0]
     B0, D0, D_offset, D_linear = (packed[0:n], packed[n:2 * n], packed[2 * n:3 * n],
                                   packed[3 * n:4 * n])
@@ -171,10 +252,15 @@ def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
     o += 2 * n
     B_q1_squared = packed[o:o + n * n].reshape(n, n)
     o += n * n
-    B, D = true_matrices(t, q, p, B0, D0, D_offset, D_linear, B_linear,
-                         D_quadratic, B_quadratic, B_q1_squared, packed[o], packed[o + 1],
-                         packed[o + 2:])
-    return matvec(B, u) - D * qdot + disturbance(t, disturbance_model)
+    _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
+                        B_quadratic, B_q1_squared, packed[o], packed[o + 1],
+                        packed[o + 2:], B, D)
+    for i in range(n):
+        Bu = 0.0
+        for j in range(n):
+            Bu += B[i, j] * u[j]
+        tau[i] = Bu - D[i] * qdot[i]
+    _add_disturbance(t, disturbance_model, tau)
 
 
 @njit(cache=True)

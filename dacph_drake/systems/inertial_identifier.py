@@ -11,7 +11,7 @@ from dacph_drake.dynamics.inertial_parameters import (MASS, PER_BODY, InertialPa
                                              identify_parameters, prior_scales)
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import ArmCoordinates
-from dacph_drake.kernels import spatial
+from dacph_drake.kernels import identification
 from dacph_drake.scenario import InertiaIdentification
 
 
@@ -50,30 +50,36 @@ class InertialIdentifier(LeafSystem):
 
     For a batch (``plants``: each trial's controller plant, ``priors`` each trial's
     pi0 or None; one: a single run) every port carries the trials' signals
-    stacked and each trial is identified alone."""
+    stacked and each trial is identified alone: the regressor's information and
+    the mass matrices of all trials are one compiled call each
+    (kernels.identification), the solves one stacked numpy call."""
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,
                  priors: Optional[Sequence[np.ndarray]] = None):
         super().__init__()
         priors = [None] * len(plants) if priors is None else priors
-        self._trials = [_TrialIdentification(plant, prior)
-                        for plant, prior in zip(plants, priors, strict=True)]
-        self.parameters = self._trials[0].parameters
+        self._trees = _TreeStack(plants)
+        self.parameters = self._trees.parameters
+        self._priors = np.array([
+            self.parameters.FromContext(plant.CreateDefaultContext()) if prior is None
+            else np.asarray(prior, float) for plant, prior in zip(plants, priors,
+                                                                  strict=True)])
+        self._scales = np.array([prior_scales(self.parameters, prior)
+                                 for prior in self._priors])
         self._settings = settings
-        count, size = len(self._trials), self.parameters.size
-        c = self._trials[0].coordinates
+        count, size = len(plants), self.parameters.size
+        c = ArmCoordinates.FromPlant(plants[0])
         self._base_pose = self.DeclareVectorInputPort("base_pose", len(c.base_q) * count)
         self._base_velocity = self.DeclareVectorInputPort("base_velocity",
                                                           len(c.base_v) * count)
         self._q = self.DeclareVectorInputPort("q", c.num_joints * count)
         self._qdot = self.DeclareVectorInputPort("qdot", c.num_joints * count)
         self._information = self.DeclareDiscreteState(size * size * count)
-        priors = np.concatenate([trial.prior for trial in self._trials])
-        self._estimate = self.DeclareDiscreteState(priors)
+        self._estimate = self.DeclareDiscreteState(self._priors.reshape(-1))
         # Per trial [number of the model, the estimate that began it].
-        self._epoch = self.DeclareDiscreteState(np.concatenate([
-            np.concatenate([[0.0], trial.prior]) for trial in self._trials]))
+        self._epoch = self.DeclareDiscreteState(np.concatenate(
+            [np.zeros((count, 1)), self._priors], axis=1).reshape(-1))
         self.DeclareStateOutputPort("inertial_parameters", self._estimate)
         epochs = np.arange(count) * (1 + size)
         self.DeclareVectorOutputPort(
@@ -83,89 +89,85 @@ class InertialIdentifier(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
 
     def _UpdateEstimate(self, context, discrete_state):
-        if context.get_time() > self._settings.start + self._settings.duration:
+        t, settings = context.get_time(), self._settings
+        if t > settings.start + settings.duration:
             return              # the estimate is kept (settings.duration)
-        count = len(self._trials)
-        inputs = [port.Eval(context).reshape(count, -1) for port in
-                  (self._base_pose, self._base_velocity, self._q, self._qdot)]
+        count, size = len(self._priors), self.parameters.size
+        base_pose, base_velocity, q, qdot = (
+            port.Eval(context).reshape(count, -1) for port in
+            (self._base_pose, self._base_velocity, self._q, self._qdot))
         information = context.get_discrete_state(self._information).get_value(
             ).reshape(count, -1).copy()
+        self._trees.AddInformation(base_pose, base_velocity, q, qdot, information)
+        discrete_state.get_mutable_vector(self._information).SetFromVector(
+            information.reshape(-1))
+        if t < settings.start:
+            return
         estimates = context.get_discrete_state(self._estimate).get_value().reshape(
             count, -1).copy()
         epochs = context.get_discrete_state(self._epoch).get_value().reshape(
             count, -1).copy()
-        for i, trial in enumerate(self._trials):
-            base_pose, base_velocity, q, qdot = (x[i] for x in inputs)
-            information[i] += trial.Information(base_pose, base_velocity, q, qdot)
-            if context.get_time() >= self._settings.start:
-                estimate, M = trial.Estimate(information[i], q, self._settings)
-                if estimate is not None:
-                    estimates[i] = estimate
-                    if trial.Changed(M, epochs[i][1:], q,
-                                     self._settings.change_threshold):
-                        epochs[i] = np.concatenate([[epochs[i][0] + 1], estimate])
-        discrete_state.get_mutable_vector(self._information).SetFromVector(
-            information.reshape(-1))
-        if context.get_time() < self._settings.start:
-            return
+        candidates = identify_parameters(information.reshape(count, size, size),
+                                         self._priors, self._scales,
+                                         settings.prior_weight)
+        M = self._trees.ReducedMassMatrices(candidates, q)
+        usable = _PositiveDefinite(M) & np.all(candidates[:, MASS::PER_BODY] > 0, axis=1)
+        estimates[usable] = candidates[usable]
+        # A new epoch where M(q) moved by more than change_threshold in some entry,
+        # relative to sqrt(M_ii M_jj), from the epoch's estimate's.
+        diagonal = np.diagonal(M, axis1=1, axis2=2)
+        with np.errstate(invalid="ignore"):
+            change = np.abs(M - self._trees.ReducedMassMatrices(epochs[:, 1:], q)) / \
+                np.sqrt(diagonal[:, :, None] * diagonal[:, None, :])
+            changed = usable & (np.max(change, axis=(1, 2)) > settings.change_threshold)
+        epochs[changed, 0] += 1
+        epochs[changed, 1:] = candidates[changed]
         discrete_state.get_mutable_vector(self._estimate).SetFromVector(
             estimates.reshape(-1))
         discrete_state.get_mutable_vector(self._epoch).SetFromVector(epochs.reshape(-1))
 
 
-class _TrialIdentification:
-    """One trial's part of an InertialIdentifier: its controller's plant (a context
-    of its own for the momentum regressor), the prior pi0 (the plant's inertias
-    unless given) and the compiled reduced model of any pi."""
+def _PositiveDefinite(M: np.ndarray) -> np.ndarray:
+    """Per matrix of the stack M: finite and positive definite."""
+    finite = np.all(np.isfinite(M), axis=(1, 2))
+    safe = np.where(finite[:, None, None], M, np.eye(M.shape[1]))
+    return finite & (np.linalg.eigvalsh(safe)[:, 0] > 0)
 
-    def __init__(self, plant: MultibodyPlant, prior: Optional[np.ndarray]):
-        self._plant = plant
-        self._context = plant.CreateDefaultContext()
-        self.parameters = InertialParameters(plant)
-        self.coordinates = ArmCoordinates.FromPlant(plant)
-        self.prior = (self.parameters.FromContext(self._context) if prior is None
-                      else np.asarray(prior, float).copy())
-        self._scales = prior_scales(self.parameters, self.prior)
-        self._tree = KinematicTree.FromPlant(plant)
-        self._node_inertias = self.parameters.NodeInertias(self._tree, self._context)
 
-    def Information(self, base_pose, base_velocity, q, qdot) -> np.ndarray:
-        """vec(Y^T Y) of the momentum regressor at the measured state."""
-        c = self.coordinates
-        velocities = np.zeros(self._plant.num_velocities())
-        velocities[c.base_v] = base_velocity
-        velocities[c.joint_v] = qdot
-        self._plant.SetPositionsAndVelocities(self._context, np.concatenate([
-            c.Positions(q, base_pose), velocities]))
-        Y = self.parameters.MomentumRegressor(self._context)
-        return (Y.T @ Y).reshape(-1)
+class _TreeStack:
+    """The trials' controller plants as the compiled kernels read them
+    (kernels.identification): one kinematic tree topology, each trial's fixed
+    transforms and the fixed inertias of its bodies without parameters, stacked."""
 
-    def Estimate(self, information: np.ndarray, q: np.ndarray,
-                 settings: InertiaIdentification):
-        """(pi_hat from the information, its M(q)), or (None, None) where it has no
-        mass matrix (a mass <= 0, or M(q) not positive definite)."""
-        size = self.parameters.size
-        estimate = identify_parameters(information.reshape(size, size), self.prior,
-                                       self._scales, settings.prior_weight)
-        M = self.ReducedMassMatrix(estimate, q)
-        if not (np.all(estimate[MASS::PER_BODY] > 0) and M is not None
-                and np.linalg.eigvalsh(M)[0] > 0):
-            return None, None
-        return estimate, M
+    def __init__(self, plants: Sequence[MultibodyPlant]):
+        trees = [KinematicTree.FromPlant(plant) for plant in plants]
+        first = trees[0]
+        for tree in trees[1:]:
+            if not all(np.array_equal(a, b) for a, b in zip(
+                    (tree.parent, tree.joint, tree.below, tree.base_subspace),
+                    (first.parent, first.joint, first.below, first.base_subspace))):
+                raise ValueError("the trials' arms differ in their kinematic tree")
+        self.parameters = InertialParameters(plants[0])
+        self._nodes = self.parameters.Nodes(first)
+        self._topology = (first.base_subspace, first.parent, first.joint)
+        self._X_PF, self._axis, self._X_MC = (
+            np.array([getattr(tree, name) for tree in trees])
+            for name in ("X_PF", "axis", "X_MC"))
+        self._below, self._joint_below = first.below, first.joint_below
+        fixed = [tree.Inertias(plant.CreateDefaultContext())
+                 for tree, plant in zip(trees, plants)]
+        self._inertias = tuple(np.array(x) for x in zip(*fixed))
 
-    def Changed(self, M, epoch_estimate, q, threshold: float) -> bool:
-        """Whether M (of an estimate, at q) differs from M(q) of the epoch's
-        estimate by more than ``threshold`` in some entry, relative to
-        sqrt(M_ii M_jj)."""
-        change = (np.abs(M - self.ReducedMassMatrix(epoch_estimate, q))
-                  / np.sqrt(np.outer(np.diag(M), np.diag(M))))
-        return np.max(change) > threshold
+    def AddInformation(self, base_pose, base_velocity, q, qdot, information) -> None:
+        """information[i] += vec(Y^T Y) of the momentum regressor at trial i's
+        measured state, for every trial (in place)."""
+        identification.add_momentum_information(
+            *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
+            self._nodes, base_pose, base_velocity, q, qdot, information)
 
-    def ReducedMassMatrix(self, pi: np.ndarray, q: np.ndarray):
-        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm with the bodies' inertias pi (the
-        compiled kernel, kernels.spatial.reduced_model), or None where H_bb is not
-        positive definite (its Cholesky factor then is not finite): with M
-        positive definite too, the full mass matrix H is."""
-        M = spatial.reduced_model(*self._tree.KernelArrays(), *self._node_inertias(pi),
-                                  np.asarray(q, float), False)[0]
-        return M if np.all(np.isfinite(M)) else None
+    def ReducedMassMatrices(self, pis: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """M(q_i) with trial i's bodies at pis[i] (non-finite where H_bb is not
+        positive definite)."""
+        return identification.reduced_mass_matrices(
+            *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
+            self._joint_below, *self._inertias, self._nodes, pis, q)

@@ -8,7 +8,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.identification import (ChangeDetector, NewestRows, PortSample,
                                         RhsIdentifier)
 from dacph_drake.log_layout import LearnerLog
-from dacph_drake.network import ExportedNetwork
+from dacph_drake.network import ExportedNetwork, NetworkStack
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Learner
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
@@ -79,6 +79,7 @@ class RhsLearner(LeafSystem):
         self._min_samples = max(2, int(round(settings.min_window / sample_period)))
         self._networks = [ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
                           for trial in trials]
+        self._network_stack = NetworkStack(self._networks)
         self._identifiers = [RhsIdentifier(n, settings, np.diag(trial.B0), trial.D0,
                                            trial.seed, network.coupling)
                              for trial, network in zip(trials, self._networks)]
@@ -229,13 +230,11 @@ class RhsLearner(LeafSystem):
 
     def _CalcEstimates(self, context, output):
         n, count = self._n, self._trials
-        q_all = self._q.Eval(context).reshape(count, n)
-        qdot_all = self._qdot.Eval(context).reshape(count, n)
-        weights = context.get_discrete_state(self._weights).get_value().reshape(count, -1)
-        estimates = []
-        for i, network in enumerate(self._networks):
-            B, D = network.Evaluate(weights[i], q_all[i], self._reduced_model.Momentum(
-                context, i, q_all[i], qdot_all[i]))
-            estimates += [B.reshape(-1), D]
-        output.SetFromVector(np.concatenate(estimates))
+        q = self._q.Eval(context).reshape(count, n)
+        qdot = self._qdot.Eval(context).reshape(count, n)
+        p = self._reduced_model.Momenta(context, q, qdot)
+        B, D = self._network_stack.Evaluate(
+            context.get_discrete_state(self._weights).get_value().reshape(count, -1),
+            q, p)
+        output.SetFromVector(np.concatenate([B.reshape(count, -1), D], axis=1).reshape(-1))
 

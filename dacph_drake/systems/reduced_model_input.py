@@ -9,8 +9,8 @@ from pydrake.systems.framework import LeafSystem
 
 class ReducedModelInput:
     """Declares input ``reduced_model`` (2 n^2 per trial of ``models``: one model
-    per trial of a batch, stacked) on ``system``; Momentum(context, trial, q, qdot)
-    is that trial's p = M qdot with M from it, or the trial's
+    per trial of a batch, stacked) on ``system``; Momenta(context, q, qdot) is
+    each trial's p = M qdot with M from it, or the trial's
     ``models[trial]``.Momentum(q, qdot) (the controller's nominal model) where it
     is not connected (a system tested alone). Reading M from the LHS keeps p the
     same function of the state in the learner's samples (the observer's p) and in
@@ -22,10 +22,11 @@ class ReducedModelInput:
         self.port = system.DeclareVectorInputPort("reduced_model",
                                                   2 * n * n * len(self._models))
 
-    def Momentum(self, context, trial: int, q: np.ndarray, qdot: np.ndarray
-                 ) -> np.ndarray:
+    def Momenta(self, context, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """Every trial's p = M qdot (q, qdot and the result: trials x n)."""
         if not self.port.HasValue(context):
-            return self._models[trial].Momentum(q, qdot)
+            return np.array([model.Momentum(q_i, qdot_i) for model, q_i, qdot_i
+                             in zip(self._models, q, qdot)])
         n = self._n
-        start = 2 * n * n * trial
-        return self.port.Eval(context)[start:start + n * n].reshape(n, n) @ qdot
+        M = self.port.Eval(context).reshape(-1, 2, n, n)[:, 0]
+        return np.matmul(M, qdot[:, :, None])[:, :, 0]

@@ -11,7 +11,7 @@ from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lo
 from dacph_drake.identification import PortEvidence, PortSample
 from dacph_drake.kernels.loop import integrator_samples
 from dacph_drake.log_layout import RhsLog, RhsState
-from dacph_drake.network import ExportedNetwork
+from dacph_drake.network import ExportedNetwork, NetworkStack
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Rhs, Stress
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
@@ -88,7 +88,9 @@ class RhsIntegrator(LeafSystem):
     c_min, dic_ok, trusted]. For a batch (``trials``: each trial's RhsTrial; one: a
     single run) every port carries the trials' signals stacked; the fast sample of
     all trials is one compiled kernel (kernels.loop.integrator_samples), the
-    model refresh a loop over the trials at the model period."""
+    model refresh one evaluation of all trials' networks (kernels.network) and
+    stacked numpy (the evidence test, which few refreshes reach, trial by
+    trial)."""
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
                  model_period: float, stress: Stress = Stress()):
@@ -96,6 +98,10 @@ class RhsIntegrator(LeafSystem):
         n = trials[0].model.num_joints
         count = len(trials)
         self._n, self._trials = n, list(trials)
+        self._networks = NetworkStack([trial.network for trial in trials])
+        self._B0 = np.array([trial.B0 for trial in trials], float)
+        self._Kd_max = np.array([trial.Kd_max for trial in trials], float)
+        self._lambda_min_M = np.array([trial.lambda_min_M for trial in trials], float)
         self._settings = settings
         self._stress = stress
         self._constants = np.array([period, np.exp(-period / settings.chi_window),
@@ -130,17 +136,17 @@ class RhsIntegrator(LeafSystem):
         # The model group starts at the nominal RHS (B0, D0) with c = (1 + c_margin)
         # c_min(beta_hat = 1); an initialization event then refreshes it from the
         # input ports (the learner's weights at the initial state).
-        models = []
-        for trial in trials:
-            c0 = self._CTarget(trial, 1.0)
-            model = np.zeros(layout.model_size)
-            model[layout.B_inverse] = np.diag(1.0 / np.asarray(trial.B0, float)).reshape(-1)
-            model[layout.D_hat] = trial.D0
-            model[layout.K] = integral_gains(np.diag(np.asarray(trial.B0, float)), c0)[0]
-            model[[layout.c, layout.c_min, layout.dic_ok, layout.trusted]] = [
-                c0, self._CBound(trial, 1.0), 1.0, 1.0]
-            models.append(model)
-        self._gains = self.DeclareDiscreteState(np.concatenate(models))
+        ones = np.ones(count)
+        c0 = self._CTarget(ones)
+        models = np.zeros((count, layout.model_size))
+        models[:, layout.B_inverse] = np.array([np.diag(1.0 / B0) for B0 in self._B0]
+                                               ).reshape(count, -1)
+        models[:, layout.D_hat] = [trial.D0 for trial in trials]
+        models[:, layout.K] = integral_gains(np.array([np.diag(B0) for B0 in self._B0]),
+                                             c0)[0]
+        models[:, layout.c], models[:, layout.c_min] = c0, self._CBound(ones)
+        models[:, layout.dic_ok] = models[:, layout.trusted] = 1.0
+        self._gains = self.DeclareDiscreteState(models.reshape(-1))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         chi = np.arange(count) * layout.fast_size + layout.chi
         self.DeclareStateOutputPort("u", self._u_index)
@@ -155,95 +161,92 @@ class RhsIntegrator(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(model_period, 0.0, self._UpdateModel)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateModel)
 
-    def _CBound(self, trial: RhsTrial, beta: float) -> float:
-        """c_min(beta) of eq. (48) with the trial's LHS rates."""
-        return c_lower_bound(self._settings.Td, trial.Kd_max, trial.lambda_min_M, beta)
+    def _CBound(self, beta: np.ndarray) -> np.ndarray:
+        """c_min(beta) of eq. (48) of each trial, with its LHS rates."""
+        return c_lower_bound(self._settings.Td, self._Kd_max, self._lambda_min_M, beta)
 
-    def _CTarget(self, trial: RhsTrial, beta: float) -> float:
-        return max((1 + self._settings.c_margin) * self._CBound(trial, beta),
-                   self._c_floor)
+    def _CTarget(self, beta: np.ndarray) -> np.ndarray:
+        return np.maximum((1 + self._settings.c_margin) * self._CBound(beta),
+                          self._c_floor)
 
     def GetModelGroup(self, context) -> np.ndarray:
         """The model groups (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
         dic_ok, trusted; per trial, stacked) in ``context``, for inspection."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
-    def _Refresh(self, trial: RhsTrial, gains, weights, q, p, beta, B_hat_scale,
-                 evidence=None):
-        """A trial's model group after one refresh from ``gains`` at x = (q, p) (see
-        class docstring); ``evidence``: the PortEvidence state of the learner's
-        samples, or None."""
+    def _Refresh(self, gains, weights, q, p, beta, B_hat_scale, evidence=None):
+        """The trials' model groups after one refresh from ``gains`` (trials x
+        model group) at their states x = (q, p) (see class docstring; every trial
+        at once); ``evidence``: the PortEvidence states of the learner's samples,
+        or None."""
         L = self._layout
         gains = gains.copy()
-        B_hat, D_hat = trial.network.Evaluate(weights, q, p)
+        B_hat, D_hat = self._networks.Evaluate(weights, q, p)
         B_hat = B_hat_scale * B_hat
-        beta = min(beta, self._settings.beta_max)
-        c_min = self._CBound(trial, beta)
-        c = gains[L.c]
-        c = max(c + self._c_step * (self._CTarget(trial, beta) - c), c_min)
+        beta = np.minimum(beta, self._settings.beta_max)
+        c_min = self._CBound(beta)
+        c = gains[:, L.c]
+        c = np.maximum(c + self._c_step * (self._CTarget(beta) - c), c_min)
         k, paired, dic_ok = integral_gains(B_hat, c)
-        trusted = dic_ok and self._Accepts(trial, gains, B_hat, D_hat, paired, k,
-                                           evidence)
-        if trusted:
-            gains[L.B_inverse] = np.linalg.inv(B_hat).reshape(-1)
-            gains[L.D_hat] = D_hat
-            gains[L.K] = k
-        else:     # keep B_hat^-1, D_hat; K follows c with the kept eigenvalues
-            gains[L.K] *= c / gains[L.c]
-        gains[[L.c, L.c_min, L.dic_ok, L.trusted]] = [c, c_min, float(dic_ok),
-                                                      float(trusted)]
+        trusted = dic_ok & self._Accepts(gains, B_hat, D_hat, paired, k, dic_ok,
+                                          evidence)
+        if np.any(trusted):
+            gains[trusted, L.B_inverse] = np.linalg.inv(B_hat[trusted]).reshape(
+                np.count_nonzero(trusted), -1)
+            gains[trusted, L.D_hat] = D_hat[trusted]
+            gains[trusted, L.K] = k[trusted]
+        kept = ~trusted   # keep B_hat^-1, D_hat; K follows c with the kept eigenvalues
+        gains[kept, L.K] *= (c / gains[:, L.c])[kept, None]
+        gains[:, L.c], gains[:, L.c_min] = c, c_min
+        gains[:, L.dic_ok], gains[:, L.trusted] = dic_ok, trusted
         return gains
 
-    def _Accepts(self, trial: RhsTrial, gains, B_hat, D_hat, paired, k,
-                 evidence) -> bool:
-        """Whether an estimate that passed DIC is adopted (class docstring): within
-        trust_ratio^2 of B0 and within trust_ratio of the anchor (B0 or the estimate
-        in use), or outside the latter on evidence."""
+    def _Accepts(self, gains, B_hat, D_hat, paired, k, dic_ok, evidence) -> np.ndarray:
+        """Which trials' estimates that passed DIC are adopted (class docstring):
+        within trust_ratio^2 of B0 and within trust_ratio of the anchor (B0 or the
+        estimate in use), or outside the latter on evidence."""
         L, settings = self._layout, self._settings
-        B0 = np.asarray(trial.B0, float)
         # Anchored at the estimate in use, the band could follow a learner that
         # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.
-        if not within_trust(paired, B0, settings.trust_ratio**2):
-            return False
-        anchor = (B0 if settings.trust_anchor == "prior"
-                  else gains[L.c] / gains[L.K])       # K_p = c / Re(lambda_p) in use
-        if within_trust(paired, anchor, settings.trust_ratio):
-            return True
-        if (settings.evidence_ratio == 0 or evidence is None
-                or PortEvidence.Weight(evidence) < self._evidence_minimum):
-            return False
-        in_use = np.linalg.inv(gains[L.B_inverse].reshape(B_hat.shape))
-        return (self._evidence.Residual(evidence, B_hat, D_hat)
-                <= settings.evidence_ratio
-                * self._evidence.Residual(evidence, in_use, gains[L.D_hat])
-                and stays_stable_if_wrong(in_use, k, self._period, 1.0 - STABILITY_MARGIN))
+        bounded = dic_ok & within_trust(paired, self._B0, settings.trust_ratio**2)
+        anchor = (self._B0 if settings.trust_anchor == "prior"
+                  else gains[:, L.c, None] / gains[:, L.K])   # K_p = c / Re(lambda_p)
+        accepted = bounded & within_trust(paired, anchor, settings.trust_ratio)
+        if settings.evidence_ratio == 0 or evidence is None:
+            return accepted
+        for i in np.flatnonzero(bounded & ~accepted):
+            if PortEvidence.Weight(evidence[i]) < self._evidence_minimum:
+                continue
+            in_use = np.linalg.inv(gains[i, L.B_inverse].reshape(B_hat[i].shape))
+            accepted[i] = (self._evidence.Residual(evidence[i], B_hat[i], D_hat[i])
+                           <= settings.evidence_ratio
+                           * self._evidence.Residual(evidence[i], in_use,
+                                                     gains[i, L.D_hat])
+                           and stays_stable_if_wrong(in_use, k[i], self._period,
+                                                     1.0 - STABILITY_MARGIN))
+        return accepted
 
     def _UpdateModel(self, context, discrete_state):
         n, count = self._n, len(self._trials)
         betas = (self._beta_hat.Eval(context) if self._beta_hat.HasValue(context)
                  else np.ones(count))
-        samples = (self._port_sample.Eval(context).reshape(count, -1)
-                   if self._port_sample.HasValue(context) else None)
-        evidence_all = context.get_discrete_state(self._evidence_index).get_value(
-            ).reshape(count, -1)
-        if samples is not None:
-            evidence_all = np.array([self._evidence.Update(state, sample) for state, sample
-                                     in zip(evidence_all, samples)])
+        evidence = None
+        if self._port_sample.HasValue(context):
+            evidence = self._evidence.Update(
+                context.get_discrete_state(self._evidence_index).get_value().reshape(
+                    count, -1), self._port_sample.Eval(context).reshape(count, -1))
             discrete_state.get_mutable_vector(self._evidence_index).SetFromVector(
-                evidence_all.reshape(-1))
-        q_all = self._q.Eval(context).reshape(count, n)
-        qdot_all = self._qdot.Eval(context).reshape(count, n)
-        weights_all = self._weights.Eval(context).reshape(count, -1)
-        gains_all = context.get_discrete_state(self._gains).get_value().reshape(count, -1)
+                evidence.reshape(-1))
+        q = self._q.Eval(context).reshape(count, n)
+        qdot = self._qdot.Eval(context).reshape(count, n)
+        p = self._reduced_model.Momenta(context, q, qdot)
         B_hat_scale = (self._stress.B_hat_scale
                        if context.get_time() >= self._stress.start else 1.0)
-        gains = [self._Refresh(trial, gains_all[i], weights_all[i], q_all[i],
-                               self._reduced_model.Momentum(context, i, q_all[i],
-                                                            qdot_all[i]),
-                               betas[i], B_hat_scale,
-                               evidence_all[i] if samples is not None else None)
-                 for i, trial in enumerate(self._trials)]
-        discrete_state.get_mutable_vector(self._gains).SetFromVector(np.concatenate(gains))
+        gains = self._Refresh(
+            context.get_discrete_state(self._gains).get_value().reshape(count, -1),
+            self._weights.Eval(context).reshape(count, -1), q, p, betas, B_hat_scale,
+            evidence)
+        discrete_state.get_mutable_vector(self._gains).SetFromVector(gains.reshape(-1))
 
     def _UpdateIntegrator(self, context, discrete_state):
         fast, u = integrator_samples(

@@ -1,0 +1,184 @@
+"""The inertial identifier's compiled body (systems/inertial_identifier.py), for
+every trial of a batch in one call: the information Y^T Y of the momentum
+regressor (dynamics.inertial_parameters.MomentumRegressor: [L about the world
+origin; P] = Y(x) pi) at the measured state, and the reduced mass matrix M(q) of
+given inertial parameters pi.
+
+The trials' kinematic trees (dynamics.kinematic_tree.KinematicTree) share one
+topology (parent, joint, below, joint_below, base_subspace) and may differ in
+their fixed transforms X_PF, X_MC and axes, stacked along a first axis of length
+trials (TreeStack in the identifier). ``nodes`` lists the node of each body that
+carries parameters (inertial_parameters.InertialParameters.bodies, in order);
+the other nodes keep their fixed inertias.
+
+Kinematics of body C at the measured state: with the base B at the identity
+(spatial.forward_kinematics: X_BC, the joints' motion subspaces S_j about B's
+origin in B's axes) and the base's twist (omega_B; v_B) in B's axes, C's spatial
+velocity about B's origin is V = (omega_B; v_B) + sum_j S_j qdot_j over the joints
+that move C, its origin's velocity v_C = V_lin + V_ang x p_BC, and in the world
+R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC, omega = R_WB V_ang, v = R_WB v_C."""
+import numpy as np
+from numba import njit
+
+from dacph_drake.kernels.spatial import forward_kinematics, reduced_model
+
+PER_BODY = 10           # inertial_parameters.PER_BODY: [m, h (3), I (6)] per body
+
+
+@njit(cache=True)
+def _base_pose(base_subspace, base_pose, base_velocity):
+    """(R_WB, p_WB, omega_B, v_B): the base's pose and its twist in its own axes,
+    from its joint's positions and velocities: a planar joint's (x, y, theta) and
+    (vx, vy, omega) in the world, or a quaternion floating joint's
+    (qw, qx, qy, qz, x, y, z) and (omega, v) in the world (the quaternion
+    normalized, as Drake's RotationMatrix does)."""
+    R, p = np.zeros((3, 3)), np.zeros(3)
+    omega_W, v_W = np.zeros(3), np.zeros(3)
+    if base_subspace.shape[1] == 3:
+        c, s = np.cos(base_pose[2]), np.sin(base_pose[2])
+        R[0, 0], R[0, 1], R[1, 0], R[1, 1], R[2, 2] = c, -s, s, c, 1.0
+        p[0], p[1] = base_pose[0], base_pose[1]
+        v_W[0], v_W[1], omega_W[2] = base_velocity[0], base_velocity[1], base_velocity[2]
+    else:
+        norm = np.sqrt(base_pose[0]**2 + base_pose[1]**2 + base_pose[2]**2
+                       + base_pose[3]**2)
+        w, x, y, z = (base_pose[0] / norm, base_pose[1] / norm, base_pose[2] / norm,
+                      base_pose[3] / norm)
+        R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), \
+            2 * (x * z + w * y)
+        R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), \
+            2 * (y * z - w * x)
+        R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), \
+            1 - 2 * (x * x + y * y)
+        for i in range(3):
+            p[i] = base_pose[4 + i]
+            omega_W[i], v_W[i] = base_velocity[i], base_velocity[3 + i]
+    omega_B, v_B = np.zeros(3), np.zeros(3)
+    for i in range(3):
+        for k in range(3):
+            omega_B[i] += R[k, i] * omega_W[k]
+            v_B[i] += R[k, i] * v_W[k]
+    return R, p, omega_B, v_B
+
+
+@njit(cache=True)
+def momentum_regressor(base_subspace, parent, joint, X_PF, axis, X_MC, below, nodes,
+                       base_pose, base_velocity, q, qdot):
+    """Y (6 x 10 bodies) with [L about the world origin; P] = Y pi at the state
+    (inertial_parameters.InertialParameters.MomentumRegressor, compiled)."""
+    X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
+    R_WB, p_WB, omega_B, v_B = _base_pose(base_subspace, base_pose, base_velocity)
+    n = q.shape[0]
+    Y = np.zeros((6, PER_BODY * nodes.shape[0]))
+    R, o, omega, v = np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(3)
+    V, local = np.empty(6), np.empty(3)
+    for b in range(nodes.shape[0]):
+        node = nodes[b]
+        for i in range(3):
+            V[i], V[3 + i] = omega_B[i], v_B[i]
+        for j in range(n):
+            if below[j, node]:
+                for i in range(6):
+                    V[i] += S[j, i] * qdot[j]
+        # The origin's velocity in B's axes: V_lin + V_ang x p_BC.
+        pc = X[node, :3, 3]
+        local[0] = V[3] + V[1] * pc[2] - V[2] * pc[1]
+        local[1] = V[4] + V[2] * pc[0] - V[0] * pc[2]
+        local[2] = V[5] + V[0] * pc[1] - V[1] * pc[0]
+        for i in range(3):
+            o[i], omega[i], v[i] = p_WB[i], 0.0, 0.0
+            for k in range(3):
+                o[i] += R_WB[i, k] * pc[k]
+                omega[i] += R_WB[i, k] * V[k]
+                v[i] += R_WB[i, k] * local[k]
+                value = 0.0
+                for m in range(3):
+                    value += R_WB[i, m] * X[node, m, k]
+                R[i, k] = value
+        _body_block(Y, PER_BODY * b, R, o, omega, v)
+    return Y
+
+
+@njit(cache=True)
+def _body_block(Y, c, R, o, omega, v):
+    """Body columns c..c+9 of Y: dP/dm = v, dP/dh = [omega]x R,
+    dL/dm = o x v, dL/dh = -[v]x R + [o]x [omega]x R, dL/dI = R W(R^T omega)."""
+    wR = np.empty((3, 3))
+    for k in range(3):                       # [omega]x R, column k = omega x R_k
+        wR[0, k] = omega[1] * R[2, k] - omega[2] * R[1, k]
+        wR[1, k] = omega[2] * R[0, k] - omega[0] * R[2, k]
+        wR[2, k] = omega[0] * R[1, k] - omega[1] * R[0, k]
+    for i in range(3):
+        Y[3 + i, c] = v[i]
+        for k in range(3):
+            Y[3 + i, c + 1 + k] = wR[i, k]
+    Y[0, c] = o[1] * v[2] - o[2] * v[1]
+    Y[1, c] = o[2] * v[0] - o[0] * v[2]
+    Y[2, c] = o[0] * v[1] - o[1] * v[0]
+    for k in range(3):   # -v x R_k + o x (omega x R_k)
+        Y[0, c + 1 + k] = (-(v[1] * R[2, k] - v[2] * R[1, k])
+                           + o[1] * wR[2, k] - o[2] * wR[1, k])
+        Y[1, c + 1 + k] = (-(v[2] * R[0, k] - v[0] * R[2, k])
+                           + o[2] * wR[0, k] - o[0] * wR[2, k])
+        Y[2, c + 1 + k] = (-(v[0] * R[1, k] - v[1] * R[0, k])
+                           + o[0] * wR[1, k] - o[1] * wR[0, k])
+    w = np.zeros(3)                          # R^T omega
+    for i in range(3):
+        for k in range(3):
+            w[i] += R[k, i] * omega[k]
+    # W(w) theta = I w for theta = [Ixx, Iyy, Izz, Ixy, Ixz, Iyz].
+    W = np.zeros((3, 6))
+    W[0, 0], W[0, 3], W[0, 4] = w[0], w[1], w[2]
+    W[1, 1], W[1, 3], W[1, 5] = w[1], w[0], w[2]
+    W[2, 2], W[2, 4], W[2, 5] = w[2], w[0], w[1]
+    for i in range(3):
+        for k in range(6):
+            value = 0.0
+            for m in range(3):
+                value += R[i, m] * W[m, k]
+            Y[i, c + 4 + k] = value
+
+
+@njit(cache=True)
+def add_momentum_information(base_subspace, parent, joint, X_PFs, axes, X_MCs, below,
+                             nodes, base_poses, base_velocities, q, qdot, information):
+    """information[i] += vec(Y_i^T Y_i) for every trial i (momentum_regressor at
+    its row of base_poses, base_velocities, q, qdot, on its tree), in place."""
+    size = PER_BODY * nodes.shape[0]
+    for i in range(q.shape[0]):
+        Y = momentum_regressor(base_subspace, parent, joint, X_PFs[i], axes[i], X_MCs[i],
+                               below, nodes, base_poses[i], base_velocities[i], q[i],
+                               qdot[i])
+        for r in range(size):
+            for c in range(size):
+                value = 0.0
+                for k in range(6):
+                    value += Y[k, r] * Y[k, c]
+                information[i, r * size + c] += value
+
+
+@njit(cache=True)
+def reduced_mass_matrices(base_subspace, parent, joint, X_PFs, axes, X_MCs, below,
+                          joint_below, masses, moments, inertias, nodes, pis, q):
+    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm of every trial i with its parameter-
+    carrying bodies at pis[i] and the other nodes at masses[i], moments[i],
+    inertias[i] (spatial.reduced_model; non-finite where H_bb is not positive
+    definite)."""
+    trials, n = q.shape[0], q.shape[1]
+    out = np.empty((trials, n, n))
+    for i in range(trials):
+        mass, moment, inertia = masses[i].copy(), moments[i].copy(), inertias[i].copy()
+        for b in range(nodes.shape[0]):
+            node, block = nodes[b], pis[i, PER_BODY * b:PER_BODY * (b + 1)]
+            mass[node] = block[0]
+            for k in range(3):
+                moment[node, k] = block[1 + k]
+            xx, yy, zz, xy, xz, yz = block[4], block[5], block[6], block[7], block[8], \
+                block[9]
+            inertia[node, 0, 0], inertia[node, 1, 1], inertia[node, 2, 2] = xx, yy, zz
+            inertia[node, 0, 1] = inertia[node, 1, 0] = xy
+            inertia[node, 0, 2] = inertia[node, 2, 0] = xz
+            inertia[node, 1, 2] = inertia[node, 2, 1] = yz
+        out[i] = reduced_model(base_subspace, parent, joint, X_PFs[i], axes[i], X_MCs[i],
+                               below, joint_below, mass, moment, inertia, q[i], False)[0]
+    return out

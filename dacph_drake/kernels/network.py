@@ -1,0 +1,63 @@
+"""The RHS network's evaluation (network.ExportedNetwork), compiled, for every
+trial of a batch in one call: each trial's exported parameter vector in torch's
+parameters() order (body_B's layers, body_D's, head_B, head_D; each layer its
+weight (rows x columns, row-major) then its bias), evaluated as
+
+    h_B = tanh-MLP_B(X), h_D = tanh-MLP_D(X),  X = (q, p / p_scale)
+    B_hat = F o mat(W_B h_B + b_B),  D_hat = softplus(W_D h_D + b_D)."""
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _dense(weights, offset, rows, columns, x, out, activate):
+    """out = tanh(W x + b) (W x + b if not ``activate``) with W (rows x columns) and
+    b read from ``weights`` at ``offset``; returns the offset after them."""
+    for r in range(rows):
+        value = 0.0
+        for c in range(columns):
+            value += weights[offset + r * columns + c] * x[c]
+        value += weights[offset + rows * columns + r]
+        out[r] = np.tanh(value) if activate else value
+    return offset + rows * columns + rows
+
+
+@njit(cache=True)
+def _body(weights, offset, hidden, x, work):
+    """The tanh MLP's last hidden layer (in ``work`` row len(hidden) - 1, sized
+    max(hidden)); returns the offset after its parameters."""
+    width, source = x.shape[0], x
+    for layer in range(hidden.shape[0]):
+        offset = _dense(weights, offset, hidden[layer], width, source, work[layer],
+                        True)
+        width, source = hidden[layer], work[layer]
+    return offset
+
+
+@njit(cache=True)
+def evaluate_networks(hidden, momentum_scale, weights, q, p, coupling):
+    """(B_hat (trials, n, n), D_hat (trials, n)) of trial i's network at
+    weights[i], its state (q[i], p[i]) and coupling scale F = coupling[i]."""
+    trials, n = q.shape[0], q.shape[1]
+    layers, widest = hidden.shape[0], 0
+    for h in hidden:
+        widest = max(widest, h)
+    B, D = np.empty((trials, n, n)), np.empty((trials, n))
+    x = np.empty(2 * n)
+    work_B, work_D = np.empty((layers, widest)), np.empty((layers, widest))
+    head_B, head_D = np.empty(n * n), np.empty(n)
+    last = hidden[layers - 1]
+    for i in range(trials):
+        for j in range(n):
+            x[j], x[n + j] = q[i, j], p[i, j] / momentum_scale
+        offset = _body(weights[i], 0, hidden, x, work_B)
+        offset = _body(weights[i], offset, hidden, x, work_D)
+        offset = _dense(weights[i], offset, n * n, last, work_B[layers - 1], head_B,
+                        False)
+        _dense(weights[i], offset, n, last, work_D[layers - 1], head_D, False)
+        for r in range(n):
+            for c in range(n):
+                B[i, r, c] = head_B[r * n + c] * coupling[i, r, c]
+            z = head_D[r]               # softplus(z) = log(1 + e^z), stably
+            D[i, r] = max(z, 0.0) + np.log1p(np.exp(-abs(z)))
+    return B, D
