@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from dacph_drake.kernels.arm import joint_momentum, reduced_dynamics
-from dacph_drake.kernels.loop import integrator_sample, pack_true_rhs, true_torque
+from dacph_drake.kernels.loop import (integrator_sample, pack_true_rhs, stack_packs,
+                                      true_matrices_of_trials, true_torque)
 from dacph_drake.kernels.potential import potential
 from dacph_drake.dynamics.plant import ArmCoordinates, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
@@ -73,6 +74,8 @@ def test_potential_kernel_matches_the_model(robot):
         np.testing.assert_allclose(grad2, grad, rtol=0, atol=1e-13 * scale)
         np.testing.assert_allclose(grad_dot2, grad_dot, rtol=0, atol=1e-13 * scale)
         checked_active += U > 0
+        P, _, _, _ = field._Points(q, qdot)
+        assert abs(field.MinClearance(q) - np.min(field._Clearance(P)[0])) <= 1e-14
     assert checked_active > 20         # the field was active on many samples
 
 
@@ -95,6 +98,13 @@ def test_true_torque_kernel_matches_the_reference_by_phase():
         indices = ArmCoordinates.FromPlant(model.plant).StateIndices()
         np.testing.assert_allclose(true_torque(t, x, indices, u, model_vector, packed),
                                    expected, rtol=0, atol=1e-14)
+        # The metrics' [vec(B~), diag(D~)] of a batch: this state as trial 1 of 2.
+        packs, offsets = stack_packs([packed, packed])
+        both = true_matrices_of_trials(t, np.concatenate([0 * x, x]),
+                                       np.array([indices, indices + len(x)]), packs,
+                                       offsets, 2)
+        np.testing.assert_allclose(both[6:], np.concatenate([B.reshape(-1), D]),
+                                   rtol=0, atol=1e-14)
 
 
 def test_integrator_kernel_is_the_integrator_equation():

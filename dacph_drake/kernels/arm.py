@@ -84,26 +84,36 @@ def reduced_dynamics(q, qdot, coefficients, ranges):
     C'_ij = (Mdot_ij + G_ji - G_ij) / 2 with G_ij = sum_k dM_jk/dq_i qdot_k;
     D = 1 - A[2] (alpha_dot = D qdot); dD[k] = -d(A[2])/dq_k."""
     n = q.shape[0]
+    N = n + 3
     H = mass_matrix_and_derivatives(q, coefficients, ranges)
     Hbb_inv = inverse3(np.ascontiguousarray(H[0, :3, :3]))
     A = matmul(Hbb_inv, np.ascontiguousarray(H[0, :3, 3:]))
-    W = np.zeros((n + 3, n))
+    W = np.zeros((N, n))
     for i in range(n):
         W[0, i], W[1, i], W[2, i] = -A[0, i], -A[1, i], -A[2, i]
         W[3 + i, i] = 1.0
-    Wt = np.ascontiguousarray(W.T)
     M = np.empty((n, n))
     dM = np.empty((n, n, n))
     dD = np.empty((n, n))
+    HW = np.empty((N, n))
     for k in range(1 + n):
-        HW = matmul(np.ascontiguousarray(H[k]), W)
-        MW = matmul(Wt, HW)
+        # HW = H_k W, then W^T HW, as matmul sums them (in place).
+        for i in range(N):
+            for j in range(n):
+                HW[i, j] = 0.0
+            for m in range(N):
+                h = H[k, i, m]
+                for j in range(n):
+                    HW[i, j] += h * W[m, j]
         for i in range(n):
             for j in range(n):
+                value = 0.0
+                for m in range(N):
+                    value += W[m, i] * HW[m, j]
                 if k == 0:
-                    M[i, j] = MW[i, j]
+                    M[i, j] = value
                 else:
-                    dM[k - 1, i, j] = MW[i, j]
+                    dM[k - 1, i, j] = value
         if k > 0:
             for j in range(n):
                 dD[k - 1, j] = -(Hbb_inv[2, 0] * HW[0, j] + Hbb_inv[2, 1] * HW[1, j]

@@ -128,8 +128,18 @@ def torque_scratch(n):
 def _true_torque_into(t, x, indices, u, disturbance_model, packed, scratch, tau):
     """true_torque written into ``tau`` with the work arrays ``scratch``
     (torque_scratch), allocating nothing."""
-    n = u.shape[0]
-    q, qdot, p, c, si, B, D = scratch
+    q, qdot, p, _, _, B, D = scratch
+    o = _trial_state_into(x, indices, packed, scratch)
+    _torque_into(t, q, p, qdot, u, disturbance_model, packed[o:], B, D, tau)
+
+
+@njit(cache=True)
+def _trial_state_into(x, indices, packed, scratch):
+    """q, qdot and p = the joint rows of H v (joint_momentum) of the trial whose
+    state is x[indices], written into scratch's first three arrays; returns where
+    the uncertainty's arguments start in ``packed`` (pack_true_rhs)."""
+    q, qdot, p, c, si, _, _ = scratch
+    n = q.shape[0]
     for j in range(n):
         q[j], qdot[j] = x[indices[4 + j]], x[indices[4 + n + j]]
     N, R = n + 3, n * (n + 1) // 2
@@ -140,7 +150,27 @@ def _true_torque_into(t, x, indices, u, disturbance_model, packed, scratch, tau)
     o += R * n
     _joint_momentum_into(x[indices[0]], x[indices[1]], x[indices[2]], x[indices[3]],
                          q, qdot, coefficients, ranges, c, si, p)
-    _torque_into(t, q, p, qdot, u, disturbance_model, packed[o:], B, D, tau)
+    return o
+
+
+@njit(cache=True)
+def true_matrices_of_trials(t, x, indices, packs, offsets, n):
+    """[vec(B~), diag(D~)] of every trial of a batch at its state (arguments as
+    true_torques'), stacked."""
+    trials = indices.shape[0]
+    out = np.empty(trials * (n * n + n))
+    scratch = torque_scratch(n)
+    q, _, p, _, _, B, D = scratch
+    for i in range(trials):
+        packed = packs[offsets[i]:offsets[i + 1]]
+        o = _trial_state_into(x, indices[i], packed, scratch)
+        _matrices_into(t, q, p, packed[o:], B, D)
+        start = i * (n * n + n)
+        for r in range(n):
+            for c in range(n):
+                out[start + r * n + c] = B[r, c]
+            out[start + n * n + r] = D[r]
+    return out
 
 
 def stack_packs(packs) -> "tuple[np.ndarray, np.ndarray]":
@@ -243,6 +273,20 @@ def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
 def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
     """_packed_torque written into ``tau``, with B (n x n) and D (n) as work arrays."""
     n = u.shape[0]
+    _matrices_into(t, q, p, packed, B, D)
+    for i in range(n):
+        Bu = 0.0
+        for j in range(n):
+            Bu += B[i, j] * u[j]
+        tau[i] = Bu - D[i] * qdot[i]
+    _add_disturbance(t, disturbance_model, tau)
+
+
+@njit(cache=True)
+def _matrices_into(t, q, p, packed, B, D):
+    """true_matrices written into B and D, with the uncertainty's arguments packed
+    as pack_true_rhs packs them after the robot's."""
+    n = q.shape[0]
     B0, D0, D_offset, D_linear = (packed[0:n], packed[n:2 * n], packed[2 * n:3 * n],
                                   packed[3 * n:4 * n])
     o = 4 * n
@@ -255,12 +299,6 @@ def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
     _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
                         B_quadratic, B_q1_squared, packed[o], packed[o + 1],
                         packed[o + 2:], B, D)
-    for i in range(n):
-        Bu = 0.0
-        for j in range(n):
-            Bu += B[i, j] * u[j]
-        tau[i] = Bu - D[i] * qdot[i]
-    _add_disturbance(t, disturbance_model, tau)
 
 
 @njit(cache=True)

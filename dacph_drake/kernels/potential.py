@@ -17,15 +17,12 @@ def _firas(rho, k, rho0):
 
 
 @njit(cache=True)
-def potential(q, qdot, geometry, link_of, fraction, radius, gains):
-    """(U, grad U, Hess U qdot). ``geometry`` = [half base size, shoulder x,
-    shoulder y, link lengths (n)]; point j lies ``fraction[j]`` along link
-    ``link_of[j]`` with half width ``radius[j]``; ``gains`` = [base_gain,
-    base_margin, fold_gain, fold_margin]."""
+def _chain(q, qdot, geometry):
+    """(e, edot, O, Odot): each link's unit direction and its rate, each joint's
+    position and velocity (n x 2, base frame, fixed-base kinematics);
+    ``geometry`` as in potential."""
     n = q.shape[0]
-    half = geometry[0]
     lengths = geometry[3:]
-    base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]
     # Scalar loops rather than array expressions (each of those compiles into a
     # kernel of its own).
     e = np.empty((n, 2))
@@ -43,6 +40,58 @@ def potential(q, qdot, geometry, link_of, fraction, radius, gains):
         for c in range(2):
             O[i, c] = O[i - 1, c] + lengths[i - 1] * e[i - 1, c]
             Odot[i, c] = Odot[i - 1, c] + lengths[i - 1] * edot[i - 1, c]
+    return e, edot, O, Odot
+
+
+@njit(cache=True)
+def _box_distance(P0, P1, half, g):
+    """(distance, h00, h01, h11) of the point (P0, P1) from the base square of
+    half size ``half`` (negative inside: minus the depth below the nearest side),
+    its gradient written to g (inside: the nearest side's normal) and, in a
+    corner region, the distance's curvature (zero elsewhere)."""
+    ex0, ex1 = abs(P0) - half, abs(P1) - half
+    out0, out1 = max(ex0, 0.0), max(ex1, 0.0)
+    dist = np.sqrt(out0 * out0 + out1 * out1)
+    h00 = h01 = h11 = 0.0
+    if dist == 0.0:          # inside: the gradient points to the nearest side
+        g[0] = g[1] = 0.0
+        if ex0 >= ex1:
+            g[0], dist = np.sign(P0), ex0
+        else:
+            g[1], dist = np.sign(P1), ex1
+    else:
+        g[0], g[1] = np.sign(P0) * out0 / dist, np.sign(P1) * out1 / dist
+        if ex0 > 0 and ex1 > 0:       # corner region: curvature of the distance
+            h00, h01, h11 = ((1 - g[0] * g[0]) / dist, -g[0] * g[1] / dist,
+                             (1 - g[1] * g[1]) / dist)
+    return dist, h00, h01, h11
+
+
+@njit(cache=True)
+def min_clearance(q, geometry, link_of, fraction, radius):
+    """The smallest clearance rho_j = distance - radius[j] of the sample points
+    from the base (arguments as potential's)."""
+    e, _, O, _ = _chain(q, np.zeros_like(q), geometry)
+    lengths, g, smallest = geometry[3:], np.empty(2), np.inf
+    for j in range(link_of.shape[0]):
+        link = link_of[j]
+        reach = fraction[j] * lengths[link]
+        dist = _box_distance(O[link, 0] + reach * e[link, 0],
+                             O[link, 1] + reach * e[link, 1], geometry[0], g)[0]
+        smallest = min(smallest, dist - radius[j])
+    return smallest
+
+
+@njit(cache=True)
+def potential(q, qdot, geometry, link_of, fraction, radius, gains):
+    """(U, grad U, Hess U qdot). ``geometry`` = [half base size, shoulder x,
+    shoulder y, link lengths (n)]; point j lies ``fraction[j]`` along link
+    ``link_of[j]`` with half width ``radius[j]``; ``gains`` = [base_gain,
+    base_margin, fold_gain, fold_margin]."""
+    n = q.shape[0]
+    lengths = geometry[3:]
+    base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]
+    e, edot, O, Odot = _chain(q, qdot, geometry)
     U = 0.0
     grad = np.zeros(n)
     grad_dot = np.zeros(n)
@@ -52,21 +101,7 @@ def potential(q, qdot, geometry, link_of, fraction, radius, gains):
         reach = fraction[j] * lengths[link]
         P0, P1 = O[link, 0] + reach * e[link, 0], O[link, 1] + reach * e[link, 1]
         Pd0, Pd1 = Odot[link, 0] + reach * edot[link, 0], Odot[link, 1] + reach * edot[link, 1]
-        ex0, ex1 = abs(P0) - half, abs(P1) - half
-        out0, out1 = max(ex0, 0.0), max(ex1, 0.0)
-        dist = np.sqrt(out0 * out0 + out1 * out1)
-        h00 = h01 = h11 = 0.0
-        if dist == 0.0:          # inside: the gradient points to the nearest side
-            g[0] = g[1] = 0.0
-            if ex0 >= ex1:
-                g[0], dist = np.sign(P0), ex0
-            else:
-                g[1], dist = np.sign(P1), ex1
-        else:
-            g[0], g[1] = np.sign(P0) * out0 / dist, np.sign(P1) * out1 / dist
-            if ex0 > 0 and ex1 > 0:       # corner region: curvature of the distance
-                h00, h01, h11 = ((1 - g[0] * g[0]) / dist, -g[0] * g[1] / dist,
-                                 (1 - g[1] * g[1]) / dist)
+        dist, h00, h01, h11 = _box_distance(P0, P1, geometry[0], g)
         rho = dist - radius[j]
         if rho >= base_margin:
             continue

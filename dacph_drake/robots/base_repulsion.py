@@ -12,6 +12,7 @@ closed form; U does not depend on the base pose.
 import numpy as np
 
 from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.kernels.potential import min_clearance
 from dacph_drake.scenario import Potential
 
 _RHO_FLOOR = 1e-4      # clearances are clamped here (inside the base U is finite)
@@ -39,6 +40,7 @@ class BaseRepulsionPotential:
         self._fraction = np.tile(fractions, self._n)
         self._radius = np.array([robot.links[k].width / 2 for k in self._link_of])
         self._s = settings
+        self._geometry = self.kernel_arguments[:4]
 
     @property
     def kernel_arguments(self):
@@ -115,6 +117,6 @@ class BaseRepulsionPotential:
         return U, grad, grad_dot
 
     def MinClearance(self, q: np.ndarray) -> float:
-        """Smallest clearance of the sample points from the base [m]."""
-        P = self._Points(q, np.zeros_like(q))[0]
-        return float(np.min(self._Clearance(P)[0]))
+        """Smallest clearance of the sample points from the base [m] (compiled:
+        kernels.potential.min_clearance)."""
+        return min_clearance(np.asarray(q, float), *self._geometry)

@@ -204,16 +204,20 @@ class RhsLearner(LeafSystem):
         """Whether the network's weights, not the prior's, are published this update.
         Always, unless settings.prior_fallback: then only when this update fitted
         (not holding after a change, min_window seconds of samples since it) and the
-        network explains the samples since the change at least as well as (B0, D0)
-        do, FitStatistics.loss <= nominal_loss; the prior otherwise. After a
-        change the frozen network describes the old relation, and a refit on the
-        first window after it can be further off than the prior."""
+        network explains the samples since the change, and those of the last
+        period, at least as well as (B0, D0) do (FitStatistics.loss <=
+        nominal_loss on each); the prior otherwise. After a change the frozen
+        network describes the old relation, and a refit on the first window after
+        it can be further off than the prior; a change not yet detected shows
+        first in the newest samples."""
         if not self._settings.prior_fallback:
             return True
         if not fitted:
             return False
-        current = identifier.Statistics(rows, t, window_start)
-        return current.loss <= current.nominal_loss
+        since_change = identifier.Statistics(rows, t, window_start)
+        newest = identifier.Statistics(rows, t, t - self._period + 1e-12)
+        return (since_change.loss <= since_change.nominal_loss
+                and newest.loss <= newest.nominal_loss)
 
     def _ModelChanges(self, context, discrete_state) -> np.ndarray:
         """Whether each trial's LHS model changed since the last check (input

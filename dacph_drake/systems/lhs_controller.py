@@ -91,8 +91,8 @@ class LhsController(LeafSystem):
             layouts = [InertialParameters(trial.model.plant) for trial in trials]
             self._parameters = self.DeclareVectorInputPort(
                 "inertial_parameters", sum(layout.size for layout in layouts))
-            self._coefficient_bases = [trial.model.CoefficientBasis(layout)
-                                       for trial, layout in zip(trials, layouts)]
+            self._coefficient_bases = np.array([trial.model.CoefficientBasis(layout)
+                                                for trial, layout in zip(trials, layouts)])
             self._identified_key, self._identified = None, None
         self._tau_index = self.DeclareDiscreteState(n * N)
         self._log_index = self.DeclareDiscreteState((n + 4) * N)   # lhs_log but lambda_min
@@ -143,9 +143,8 @@ class LhsController(LeafSystem):
         key = pi.tobytes()
         if key != self._identified_key:
             self._identified_key = key
-            self._identified = np.ascontiguousarray([
-                np.tensordot(trial_pi, basis, 1) for trial_pi, basis
-                in zip(pi.reshape(self._trials, -1), self._coefficient_bases)])
+            self._identified = np.einsum("tp,tper->ter", pi.reshape(self._trials, -1),
+                                         self._coefficient_bases)
         return self._identified
 
     def _CalcLog(self, context, output):

@@ -7,9 +7,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
-from dacph_drake.kernels.arm import joint_momentum
 from dacph_drake.kernels.loop import (NON_FINITE, STOPPED, pack_true_rhs, stack_packs,
-                                      true_matrices, true_torques)
+                                      true_matrices_of_trials, true_torques)
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.dynamics.plant import MakeArmPlant, trial_coordinates
 from dacph_drake.scenario import Phases, Uncertainty
@@ -94,13 +93,11 @@ class TrueRhs(TrueRhsSystem):
         n = models[0].num_joints
         self._indices = np.array([coordinates.StateIndices()
                                   for coordinates in trial_coordinates(plant)])
-        self._representations = [model.trigonometric_representation for model in models]
-        self._uncertainties = [TrueRhsModel(uncertainty, phase).kernel_arguments
-                               for uncertainty, phase in zip(uncertainties, phases,
-                                                             strict=True)]
         self._packs, self._offsets = stack_packs([
-            pack_true_rhs(*representation, uncertainty) for representation, uncertainty
-            in zip(self._representations, self._uncertainties, strict=True)])
+            pack_true_rhs(*model.trigonometric_representation,
+                          TrueRhsModel(uncertainty, phase).kernel_arguments)
+            for model, uncertainty, phase in zip(models, uncertainties, phases,
+                                                 strict=True)])
         self._u, self._state, self._disturbance_model = self.DeclareTrueRhsPorts(
             n, plant.num_positions() + plant.num_velocities(), len(models))
 
@@ -113,17 +110,9 @@ class TrueRhs(TrueRhsSystem):
         self._Record(context)
 
     def _CalcMatrices(self, context, output):
-        x, t = self._state.Eval(context), context.get_time()
-        matrices = []
-        for indices, representation, uncertainty in zip(
-                self._indices, self._representations, self._uncertainties):
-            arm = x[indices]
-            n = (len(arm) - 4) // 2
-            theta0, base_velocity, q, qdot = arm[0], arm[1:4], arm[4:4 + n], arm[4 + n:]
-            B, D = true_matrices(t, q, joint_momentum(theta0, base_velocity, q, qdot,
-                                                      *representation), *uncertainty)
-            matrices += [B.reshape(-1), D]
-        output.SetFromVector(np.concatenate(matrices))
+        output.SetFromVector(true_matrices_of_trials(
+            context.get_time(), self._state.Eval(context), self._indices, self._packs,
+            self._offsets, self._n))
 
 
 def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int, trials: int = 1):
