@@ -10,12 +10,11 @@ laid out as [q, p, qdot, u, tau_obs] (PortSample). The learner fits the network'
 B_hat(x), D_hat(x) (network.RhsNetwork) to a window of such samples.
 """
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 import torch
 
-from dacph_drake.network import RhsNetwork, port_torque
+from dacph_drake.network import RhsNetwork, StackedRhsNetworks, port_torque
 from dacph_drake.scenario import Learner
 
 
@@ -111,7 +110,9 @@ class PortEvidence:
 class FitStatistics:
     """Of the current network on the weighted window: loss = sum w ||r||^2 (r the
     residual of the port relation), nominal_loss the same for (B0, D0), and
-    beta_hat = 1 + RMS residual / RMS tau (the gain rule's uncertainty estimate)."""
+    beta_hat = 1 + RMS residual / RMS tau (the gain rule's uncertainty estimate).
+    For a batch (RhsIdentifier.StatisticsOfTrials) each field holds every
+    trial's."""
     loss: float
     nominal_loss: float
     beta_hat: float
@@ -134,59 +135,85 @@ class RhsIdentifier:
     dimensionless and the loss O(1) for Adam. ``coupling`` is
     the network's coupling scale F (network.coupling_factors; None: all ones).
 
-    The torch module and Adam's moments are this object's state."""
+    One identifier serves a batch of trials (ForTrials; the constructor makes a
+    batch of one): the trials' networks are one network.StackedRhsNetworks and
+    Adam runs on the stacked parameters with moments and step counts per trial
+    (Adam is elementwise, so these are independent optimizers), so one forward and
+    backward pass fits every trial; the ...OfTrials methods take the trials'
+    windows stacked (trials, samples, 1 + PortSample size), which share their
+    sample times. The networks and Adam's moments are this object's state."""
 
     def __init__(self, n: int, settings: Learner, B0: np.ndarray, D0: np.ndarray,
                  seed: int, coupling: np.ndarray = None):
+        self._Build(n, settings, [B0], [D0], [seed], [coupling])
+
+    @classmethod
+    def ForTrials(cls, n: int, settings: Learner, B0s, D0s, seeds, couplings
+                  ) -> "RhsIdentifier":
+        """An identifier of one network per trial (B0s, D0s, seeds, couplings: the
+        trials')."""
+        self = object.__new__(cls)
+        self._Build(n, settings, B0s, D0s, seeds, couplings)
+        return self
+
+    def _Build(self, n, settings, B0s, D0s, seeds, couplings):
         self.n = n
         self._settings = settings
         self._regularized = settings.mode == "regularized"
         self._layout = PortSample(n)
         torch.set_num_threads(1)
-        self.network = RhsNetwork(n, settings.hidden, B0, D0, settings.momentum_scale,
-                                  seed, coupling)
-        self._optimizer = torch.optim.Adam(
-            self.network.parameters(), lr=settings.learning_rate,
-            betas=(settings.beta1, settings.beta2), eps=settings.eps)
-        self._B0 = torch.as_tensor(np.asarray(B0, float))
-        self._D0 = torch.as_tensor(np.asarray(D0, float))
+        self.network = StackedRhsNetworks([
+            RhsNetwork(n, settings.hidden, B0, D0, settings.momentum_scale, seed,
+                       coupling) for B0, D0, seed, coupling in zip(B0s, D0s, seeds,
+                                                                   couplings)])
+        self._parameters = list(self.network.stacked)
+        trials = len(seeds)
+        self._moments = [(torch.zeros_like(x), torch.zeros_like(x))
+                         for x in self._parameters]
+        self._steps = torch.zeros((trials, len(self._parameters)), dtype=torch.float64)
+        self._B0 = torch.as_tensor(np.array([np.asarray(B0, float) for B0 in B0s]))
+        self._D0 = torch.as_tensor(np.array([np.asarray(D0, float) for D0 in D0s]))
 
     def _Split(self, rows: np.ndarray):
         data = torch.tensor(rows)
         L = self._layout
-        sample = data[:, 1:]
-        return (data[:, 0], sample[:, L.q], sample[:, L.p], sample[:, L.qdot],
-                sample[:, L.u], sample[:, L.tau])
+        sample = data[..., 1:]
+        return (data[..., 0], sample[..., L.q], sample[..., L.p], sample[..., L.qdot],
+                sample[..., L.u], sample[..., L.tau])
 
-    def Weights(self, times: torch.Tensor, t_now: float, window_start: float):
-        """The samples' weights, normalized to sum 1 (uniform in plain mode)."""
+    def Weights(self, times: torch.Tensor, t_now: float, window_starts):
+        """The samples' weights (trials, samples), normalized to sum 1 per trial
+        (uniform in plain mode)."""
         if not self._regularized:
             w = torch.ones_like(times)
         else:
             w = torch.exp((times - t_now) / self._settings.forgetting)
-            w = torch.where(times >= window_start, w, torch.zeros_like(w))
-        return w / torch.clamp(w.sum(), min=1e-300)
+            starts = torch.as_tensor(np.asarray(window_starts, float))[:, None]
+            w = torch.where(times >= starts, w, torch.zeros_like(w))
+        return w / torch.clamp(w.sum(-1, keepdim=True), min=1e-300)
 
-    def _Loss(self, w, q, p, qdot, u, tau):
-        B, D = self.network(q, p)
+    def _Losses(self, w, q, p, qdot, u, tau, trials):
+        """The loss of each trial of ``trials`` on its window (trials,)."""
+        B, D = self.network(q, p, trials)
         residual = tau - port_torque(B, D, u, qdot)
-        data = torch.sum(w * torch.sum(residual**2, 1))
+        data = torch.sum(w * torch.sum(residual**2, -1), -1)
         if not self._regularized:
             return data
-        E_u = torch.sum(w * torch.sum(u**2, 1)) / self.n
-        E_q = torch.sum(w * torch.sum(qdot**2, 1)) / self.n
+        B0, D0 = self._B0[trials][:, None], self._D0[trials][:, None]
+        E_u = torch.sum(w * torch.sum(u**2, -1), -1) / self.n
+        E_q = torch.sum(w * torch.sum(qdot**2, -1), -1) / self.n
         if self._settings.prior_scale == "per_input":
-            E_input = torch.sum(w[:, None] * u**2, 0)
-            E_entry = torch.maximum(E_input[:, None], E_input[None, :])
-            prior_B = torch.sum(w * torch.sum(E_entry * (B - self._B0)**2, (1, 2)))
+            E_input = torch.sum(w[..., None] * u**2, 1)
+            E_entry = torch.maximum(E_input[:, :, None], E_input[:, None, :])
+            prior_B = torch.sum(w * torch.sum(E_entry[:, None] * (B - B0)**2, (2, 3)), -1)
         else:
-            prior_B = E_u * torch.sum(w * torch.sum((B - self._B0)**2, (1, 2)))
-        prior = prior_B + E_q * torch.sum(w * torch.sum((D - self._D0)**2, 1))
+            prior_B = E_u * torch.sum(w * torch.sum((B - B0)**2, (2, 3)), -1)
+        prior = prior_B + E_q * torch.sum(w * torch.sum((D - D0)**2, -1), -1)
         return (data + self._settings.prior_weight * prior) / torch.clamp(
             E_u + E_q, min=1e-300)
 
-    def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float
-                    ) -> np.ndarray:
+    def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float,
+                    trial: int = 0) -> np.ndarray:
         """The constant B that, with the current D_hat(x), minimizes the regularized
         loss on the window (the loss restricted to B_hat independent of x): row i by
         weighted ridge least squares of tau_i + D_hat_i(x) qdot_i on u, each B_ij
@@ -198,17 +225,17 @@ class RhsIdentifier:
         arm's shoulder into its forearm roll made the attitude error 6x the
         learner-off loop's). D is left to Adam: on heavy joints it is hardly in the
         data (a fitted D ended the 6-DOF arm's disturbance phase at 2.3 times the
-        prior's error)."""
-        times, q, p, qdot, u, tau = self._Split(rows)
-        w = self.Weights(times, t_now, window_start).numpy()
+        prior's error). ``rows``: trial ``trial``'s window."""
+        times, q, p, qdot, u, tau = self._Split(rows[None])
+        w = self.Weights(times, t_now, [window_start])[0].numpy()
         with torch.no_grad():
-            D = self.network(q, p)[1].numpy()
-        q, p, qdot, u, tau = (x.numpy() for x in (q, p, qdot, u, tau))
+            D = self.network(q, p, [trial])[1][0].numpy()
+        q, p, qdot, u, tau = (x[0].numpy() for x in (q, p, qdot, u, tau))
         n, rho = self.n, self._settings.prior_weight
         E_input = w @ u**2                                   # E_j, per input
         E_u = E_input.sum() / n
-        B0 = self._B0.numpy()
-        coupling = self.network.coupling.numpy()
+        B0 = self._B0[trial].numpy()
+        coupling = self.network.coupling[trial].numpy()
         normal = u.T @ (w[:, None] * u)
         B = np.empty((n, n))
         target = tau + D * qdot
@@ -220,74 +247,122 @@ class RhsIdentifier:
                                    u.T @ (w * target[:, i]) + prior * B0[i])
         return B
 
-    def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float) -> None:
-        """Sets B_hat to the constant fit of the window (ConstantFit: B's output
-        layer with zero weights and the bias that gives it) and restarts Adam's
-        moments of that layer (only: fresh moments make Adam's next steps about
-        lr on every parameter they concern, which would kick D_hat too): after a
-        hold the new relation's best constant B, not the old estimate, is where
-        Adam starts."""
-        self.network.set_constant_B(self.ConstantFit(rows, t_now, window_start))
-        for parameter in self.network.head_B.parameters():
-            self._optimizer.state.pop(parameter, None)
+    def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float,
+                  trial: int = 0) -> None:
+        """Sets trial ``trial``'s B_hat to the constant fit of its window ``rows``
+        (ConstantFit: B's output layer with zero weights and the bias that gives
+        it) and restarts Adam's moments of that layer (only: fresh moments make
+        Adam's next steps about lr on every parameter they concern, which would
+        kick D_hat too): after a hold the new relation's best constant B, not the
+        old estimate, is where Adam starts."""
+        self.network.set_constant_B(trial, self.ConstantFit(rows, t_now, window_start,
+                                                            trial))
+        head_B = {id(x) for x in self.network.head_B()}
+        for k, parameter in enumerate(self._parameters):
+            if id(parameter) in head_B:
+                for moment in self._moments[k]:
+                    moment[trial] = 0.0
+                self._steps[trial, k] = 0.0
 
     def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> bool:
-        """settings.steps_per_update Adam steps on the window ``rows``; in regularized
-        mode with settings.step_guard = G > 0 they are undone when the window's
+        """FitTrials of a batch of one: whether its steps were kept."""
+        return bool(self.FitTrials(rows[None], t_now, [window_start], np.array([True]))[0])
+
+    def FitTrials(self, rows: np.ndarray, t_now: float, window_starts,
+                  fitting: np.ndarray) -> np.ndarray:
+        """settings.steps_per_update Adam steps of the trials ``fitting`` (a mask)
+        on their windows ``rows`` (trials, samples, width); in regularized mode with
+        settings.step_guard = G > 0 a trial's steps are undone when its window's
         loss after them exceeds G times its value before them, L_after > G L_before
         (Learner.step_guard: the network's parameters go back, Adam's moments keep
-        the gradients seen). Returns whether the steps were kept."""
-        times, q, p, qdot, u, tau = self._Split(rows)
-        w = self.Weights(times, t_now, window_start)
+        the gradients seen). Returns which trials' steps were kept (False for the
+        others)."""
+        trials = np.flatnonzero(fitting)
+        kept = np.zeros(len(fitting), bool)
+        if not len(trials):
+            return kept
+        times, q, p, qdot, u, tau = self._Split(rows[trials])
+        w = self.Weights(times, t_now, np.asarray(window_starts, float)[trials])
         guard = self._settings.step_guard if self._regularized else 0.0
-        before = [x.detach().clone() for x in self.network.parameters()] if guard else None
+        index = torch.as_tensor(trials)
+        before = [x.detach()[index].clone() for x in self._parameters] if guard else None
         loss_before = None
         for _ in range(self._settings.steps_per_update):
-            self._optimizer.zero_grad()
-            loss = self._Loss(w, q, p, qdot, u, tau)
-            loss_before = float(loss.detach()) if loss_before is None else loss_before
-            loss.backward()
-            self._optimizer.step()
+            for x in self._parameters:
+                x.grad = None
+            losses = self._Losses(w, q, p, qdot, u, tau, index)
+            loss_before = losses.detach() if loss_before is None else loss_before
+            torch.sum(losses).backward()
+            self._AdamStep(index)
+        kept[trials] = True
         if not guard or loss_before is None:
-            return True
+            return kept
         with torch.no_grad():
-            if float(self._Loss(w, q, p, qdot, u, tau)) <= guard * loss_before:
-                return True
-            for parameter, value in zip(self.network.parameters(), before):
-                parameter.copy_(value)
-        return False
+            undone = self._Losses(w, q, p, qdot, u, tau, index) > guard * loss_before
+            if torch.any(undone):
+                for x, value in zip(self._parameters, before):
+                    x[index[undone]] = value[undone]
+        kept[trials[undone.numpy()]] = False
+        return kept
+
+    def _AdamStep(self, index) -> None:
+        """One Adam step (torch.optim.Adam's update, settings' learning rate, betas
+        and eps) of the trials ``index``, each with its own moments and step
+        count per parameter."""
+        s = self._settings
+        with torch.no_grad():
+            for k, (x, (m, v)) in enumerate(zip(self._parameters, self._moments)):
+                g = x.grad[index]
+                self._steps[index, k] += 1.0
+                step = self._steps[index, k].reshape((-1,) + (1,) * (g.dim() - 1))
+                m[index] = s.beta1 * m[index] + (1 - s.beta1) * g
+                v[index] = s.beta2 * v[index] + (1 - s.beta2) * g * g
+                correction1 = 1 - s.beta1**step
+                correction2_sqrt = torch.sqrt(1 - s.beta2**step)
+                denominator = torch.sqrt(v[index]) / correction2_sqrt + s.eps
+                x[index] -= (s.learning_rate / correction1) * m[index] / denominator
 
     def Statistics(self, rows: np.ndarray, t_now: float,
                    window_start: float = -np.inf) -> FitStatistics:
-        """FitStatistics on ``rows`` (weighted by recency in regularized mode; by
-        default the samples before a change included: they show the stale model's
-        misfit)."""
+        """FitStatistics of a batch of one (StatisticsOfTrials), as floats."""
+        stats = self.StatisticsOfTrials(rows[None], t_now, [window_start])
+        return FitStatistics(*(float(x[0]) for x in (stats.loss, stats.nominal_loss,
+                                                     stats.beta_hat)))
+
+    def StatisticsOfTrials(self, rows: np.ndarray, t_now: float,
+                           window_starts) -> FitStatistics:
+        """FitStatistics of each trial on its window ``rows`` (weighted by recency
+        in regularized mode; by default the samples before a change included: they
+        show the stale model's misfit); fields of shape (trials,)."""
         times, q, p, qdot, u, tau = self._Split(rows)
-        w = self.Weights(times, t_now, window_start)
+        w = self.Weights(times, t_now, window_starts)
         with torch.no_grad():
             residual = tau - port_torque(*self.network(q, p), u, qdot)
-            nominal = tau - port_torque(self._B0, self._D0, u, qdot)
-            loss = float(torch.sum(w * torch.sum(residual**2, 1)))
-            nominal_loss = float(torch.sum(w * torch.sum(nominal**2, 1)))
-            signal = float(torch.sum(w * torch.sum(tau**2, 1)))
+            nominal = tau - port_torque(self._B0[:, None], self._D0[:, None], u, qdot)
+            loss = torch.sum(w * torch.sum(residual**2, -1), -1).numpy()
+            nominal_loss = torch.sum(w * torch.sum(nominal**2, -1), -1).numpy()
+            signal = torch.sum(w * torch.sum(tau**2, -1), -1).numpy()
         return FitStatistics(loss=loss, nominal_loss=nominal_loss,
-                             beta_hat=1.0 + np.sqrt(loss / max(signal, 1e-300)))
+                             beta_hat=1.0 + np.sqrt(loss / np.maximum(signal, 1e-300)))
 
-    def RelativeResidual(self, rows: np.ndarray) -> float:
-        """sqrt(sum ||r||^2 / sum ||tau||^2) of the current network on ``rows``."""
+    def RelativeResiduals(self, rows: np.ndarray) -> np.ndarray:
+        """sqrt(sum ||r||^2 / sum ||tau||^2) of each trial's network on its rows
+        (trials, samples, width)."""
         _, q, p, qdot, u, tau = self._Split(rows)
         with torch.no_grad():
             residual = tau - port_torque(*self.network(q, p), u, qdot)
-            return float(torch.sqrt(torch.sum(residual**2)
-                                    / torch.clamp(torch.sum(tau**2), min=1e-300)))
+            return torch.sqrt(torch.sum(residual**2, (1, 2)) / torch.clamp(
+                torch.sum(tau**2, (1, 2)), min=1e-300)).numpy()
 
-    def Estimate(self, q: np.ndarray, p: np.ndarray):
-        """(B_hat (n x n), diag D_hat (n,)) at one state."""
+    def Estimate(self, q: np.ndarray, p: np.ndarray, trial: int = 0):
+        """(B_hat (n x n), diag D_hat (n,)) of trial ``trial`` at one state."""
         with torch.no_grad():
-            B, D = self.network(torch.as_tensor(q)[None], torch.as_tensor(p)[None])
-        return B[0].numpy(), D[0].numpy()
+            B, D = self.network(torch.as_tensor(q)[None, None],
+                                torch.as_tensor(p)[None, None], [trial])
+        return B[0, 0].numpy(), D[0, 0].numpy()
 
     def Export(self) -> np.ndarray:
+        """Each trial's exported parameters (trials, size)."""
         return self.network.export()
 
 
@@ -344,7 +419,9 @@ class ChangeDetector:
         return state
 
 
-def NewestRows(rows: np.ndarray, t_now: float, period: float) -> Optional[np.ndarray]:
-    """The rows sampled in the last ``period`` before t_now (None if none)."""
-    newest = rows[rows[:, 0] > t_now - period + 1e-12]
-    return newest if len(newest) else None
+def NewestRows(rows: np.ndarray, t_now: float, period: float) -> np.ndarray:
+    """The rows sampled in the last ``period`` before t_now (along the next-to-last
+    axis: a batch's windows (trials, samples, width), which share their sample
+    times, or one window)."""
+    times = rows.reshape((-1,) + rows.shape[-2:])[0, :, 0]       # the first window's
+    return rows[..., times > t_now - period + 1e-12, :]

@@ -41,9 +41,9 @@ def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
 
 
 def port_torque(B, D, u, qdot):
-    """The RHS's port torque tau = B u - D qdot for a batch of samples (torch): B of
-    shape (m, n, n) or one (n, n) for all, D of shape (m, n) or (n,), u and qdot
-    (m, n)."""
+    """The RHS's port torque tau = B u - D qdot for samples (torch): B of shape
+    (..., n, n), D, u and qdot (..., n), the leading axes broadcast (one (n, n) B
+    for all samples, or a trial's per sample)."""
     return torch.einsum("...ij,...j->...i", B, u) - D * qdot
 
 
@@ -94,6 +94,66 @@ class RhsNetwork(torch.nn.Module):
     def export(self) -> np.ndarray:
         """All parameters as one float64 vector (the order ExportedNetwork.Evaluate reads)."""
         return torch.cat([t.detach().reshape(-1) for t in self.parameters()]).numpy()
+
+
+class StackedRhsNetworks(torch.nn.Module):
+    """The RhsNetworks of a batch's trials as one module whose parameters are the
+    trials' stacked along a first axis (each trial's initialized as its own
+    RhsNetwork: ``networks``), evaluated with batched matrix products: one
+    forward and backward pass trains them all, each trial's gradient its own."""
+
+    def __init__(self, networks: List[RhsNetwork]):
+        super().__init__()
+        first = networks[0]
+        self.n, self.momentum_scale = first.n, first.momentum_scale
+        self.coupling = torch.stack([network.coupling for network in networks])
+        self.layers = len(first.body_B) // 2
+        # In RhsNetwork.parameters()'s order: body_B's, body_D's, head_B, head_D.
+        self.stacked = torch.nn.ParameterList([
+            torch.nn.Parameter(torch.stack([p.detach() for p in parameters]))
+            for parameters in zip(*(network.parameters() for network in networks))])
+
+    def forward(self, q, p, trials=None):
+        """(B_hat (t, m, n, n), D_hat (t, m, n)) of the trials ``trials`` (all by
+        default; t of them) at their samples q, p of shape (t, m, n)."""
+        params = [x if trials is None else x[trials] for x in self.stacked]
+        coupling = self.coupling if trials is None else self.coupling[trials]
+        X = torch.cat([q, p / self.momentum_scale], dim=-1)
+        L = 2 * self.layers
+        hB, hD = X, X
+        for i in range(0, L, 2):
+            hB = torch.tanh(_dense(params[i], params[i + 1], hB))
+            hD = torch.tanh(_dense(params[L + i], params[L + i + 1], hD))
+        W_B, b_B, W_D, b_D = params[2 * L:]
+        t, m = q.shape[0], q.shape[1]
+        B = _dense(W_B, b_B, hB).reshape(t, m, self.n, self.n) * coupling[:, None]
+        D = torch.nn.functional.softplus(_dense(W_D, b_D, hD))
+        return B, D
+
+    def head_B(self) -> List[torch.nn.Parameter]:
+        """B's output layer (weight, bias), stacked."""
+        return list(self.stacked[-4:-2])
+
+    def set_constant_B(self, trial: int, B) -> None:
+        """Trial ``trial``'s B output layer with zero weights and the bias that makes
+        B_hat = B (n x n) at every state (RhsNetwork.set_constant_B)."""
+        weight, bias = self.head_B()
+        with torch.no_grad():
+            weight[trial].zero_()
+            bias[trial].copy_(torch.as_tensor(
+                (np.asarray(B, float) / self.coupling[trial].numpy()).reshape(-1)))
+
+    def export(self) -> np.ndarray:
+        """Each trial's parameters as one float64 vector (RhsNetwork.export's
+        order): shape (trials, size)."""
+        trials = self.stacked[0].shape[0]
+        return torch.cat([x.detach().reshape(trials, -1) for x in self.stacked],
+                         dim=1).numpy()
+
+
+def _dense(weight, bias, x):
+    """x W^T + b per trial: weight (t, out, in), bias (t, out), x (t, m, in)."""
+    return torch.baddbmm(bias[:, None, :], x, weight.transpose(1, 2))
 
 
 def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:

@@ -253,3 +253,73 @@ def test_the_step_guard_undoes_steps_that_raise_the_windows_loss():
     before = identifier.Statistics(rows, t[-1]).loss
     assert identifier.Fit(rows, t[-1]) is True
     assert identifier.Statistics(rows, t[-1]).loss < before
+
+
+def test_one_identifier_fits_a_batch_as_independent_learners():
+    """RhsIdentifier.ForTrials: Adam on the trials' stacked parameters is each
+    trial's own torch.optim.Adam (its update, to round-off), a trial left out of a
+    fit (holding) does not move, and a warm start restarts one trial's moments
+    only: three trials with different priors, seeds and windows, fitted together
+    and replayed alone."""
+    import torch
+    from dacph_drake.network import RhsNetwork
+    t = np.arange(0.0, 2.0, H)
+    u = np.stack([np.sin(2 * np.pi * 3.1 * t), np.sin(2 * np.pi * 4.3 * t)], axis=1)
+    qdot = np.stack([np.cos(2 * np.pi * 2.3 * t), np.sin(2 * np.pi * 5.1 * t)], axis=1)
+    q, p = 0.3 * qdot, 0.01 * qdot
+    truths = [np.array([[1.1, 0.1], [0.0, 0.8]]), np.array([[0.9, 0.0], [0.2, 1.3]]),
+              np.array([[1.2, -0.1], [0.1, 1.0]])]
+    rows = np.array([_rows(t, q, p, qdot, u, u @ B.T - D0 * qdot, band=False)
+                     for B in truths])
+    priors, seeds, starts = [B0, 1.1 * B0, 0.9 * B0], [0, 5, 9], [-np.inf, 0.5, 1.0]
+    settings = Learner()
+    batch = RhsIdentifier.ForTrials(2, settings, priors, [D0] * 3, seeds, [None] * 3)
+    alone = [RhsIdentifier(2, settings, prior, D0, seed)
+             for prior, seed in zip(priors, seeds)]
+    untouched = batch.Export()[1].copy()
+    batch.WarmStart(rows[2], t[-1], starts[2], trial=2)
+    alone[2].WarmStart(rows[2], t[-1], starts[2])
+    for _ in range(3):
+        kept = batch.FitTrials(rows, t[-1], starts, np.array([True, False, True]))
+        assert list(kept) == [True, False, True]
+        for trial in (0, 2):
+            alone[trial].Fit(rows[trial], t[-1], starts[trial])
+    for trial in (0, 2):
+        np.testing.assert_allclose(batch.Export()[trial], alone[trial].Export()[0],
+                                   rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(batch.Export()[1], untouched)
+    stats = batch.StatisticsOfTrials(rows, t[-1], starts)
+    assert stats.loss[0] == pytest.approx(alone[0].Statistics(rows[0], t[-1]).loss,
+                                          rel=1e-10)
+    # One trial alone: torch.optim.Adam on an RhsNetwork of the same seed.
+    network = RhsNetwork(2, settings.hidden, B0, D0, settings.momentum_scale, 0)
+    adam = torch.optim.Adam(network.parameters(), lr=settings.learning_rate,
+                            betas=(settings.beta1, settings.beta2), eps=settings.eps)
+    single = RhsIdentifier(2, settings, B0, D0, 0)
+    for _ in range(4):
+        single.Fit(rows[0], t[-1])
+        for _ in range(settings.steps_per_update):
+            adam.zero_grad()
+            times, q_, p_, qdot_, u_, tau_ = single._Split(rows[:1])
+            w = single.Weights(times, t[-1], [-np.inf])
+            B, D = network(q_[0], p_[0])
+            B, D = B[None], D[None]
+            loss = _window_loss(single, w, B, D, q_, qdot_, u_, tau_)
+            loss.backward()
+            adam.step()
+    np.testing.assert_allclose(single.Export()[0], network.export(), rtol=0, atol=1e-12)
+
+
+def _window_loss(identifier, w, B, D, q, qdot, u, tau):
+    """The regularized loss of RhsIdentifier's docstring, written out for one
+    trial's torch network (B, D evaluated by it)."""
+    import torch
+    from dacph_drake.network import port_torque
+    settings, n = Learner(), 2
+    residual = tau - port_torque(B, D, u, qdot)
+    data = torch.sum(w * torch.sum(residual**2, -1))
+    E_u = torch.sum(w * torch.sum(u**2, -1)) / n
+    E_q = torch.sum(w * torch.sum(qdot**2, -1)) / n
+    prior = (E_u * torch.sum(w * torch.sum((B - torch.as_tensor(B0))**2, (2, 3)))
+             + E_q * torch.sum(w * torch.sum((D - torch.as_tensor(D0))**2, -1)))
+    return (data + settings.prior_weight * prior) / (E_u + E_q)

@@ -80,12 +80,13 @@ class RhsLearner(LeafSystem):
         self._networks = [ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
                           for trial in trials]
         self._network_stack = NetworkStack(self._networks)
-        self._identifiers = [RhsIdentifier(n, settings, np.diag(trial.B0), trial.D0,
-                                           trial.seed, network.coupling)
-                             for trial, network in zip(trials, self._networks)]
+        self._identifier = RhsIdentifier.ForTrials(
+            n, settings, [np.diag(trial.B0) for trial in trials],
+            [trial.D0 for trial in trials], [trial.seed for trial in trials],
+            [network.coupling for network in self._networks])
         self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
                                         settings.change_hold)
-        self._prior_weights = [identifier.Export() for identifier in self._identifiers]
+        self._prior_weights = self._identifier.Export()
         width = 1 + PortSample(n).size
         self._row_width = width
         self._q = self.DeclareVectorInputPort("q", n * count)
@@ -98,7 +99,7 @@ class RhsLearner(LeafSystem):
             ChangeDetector.InitialState(settings.start_hold if self._regularized
                                         and settings.start_hold > 0 else -np.inf),
             count))
-        self._weights = self.DeclareDiscreteState(np.concatenate(self._prior_weights))
+        self._weights = self.DeclareDiscreteState(self._prior_weights.reshape(-1))
         # The window start of the warm start (settings.warm_start), -inf before it.
         self._warm_started = self.DeclareDiscreteState(np.full(count, -np.inf))
         # The LHS model's epoch at the last check (settings.model_change).
@@ -140,84 +141,66 @@ class RhsLearner(LeafSystem):
         samples = int(context.get_discrete_state(self._count).get_value()[0])
         if samples < 2:
             return
-        t, count = context.get_time(), self._trials
-        buffers = context.get_discrete_state(self._buffer).get_value().reshape(
-            count, self._settings.window, self._row_width)[:, :min(samples,
-                                                                   self._settings.window)]
+        t, count, settings = context.get_time(), self._trials, self._settings
+        rows = context.get_discrete_state(self._buffer).get_value().reshape(
+            count, settings.window, self._row_width)[:, :min(samples, settings.window)]
         detectors = context.get_discrete_state(self._detector_state).get_value(
             ).reshape(count, -1).copy()
-        epochs_changed = self._ModelChanges(context, discrete_state)
+        for i in np.flatnonzero(self._ModelChanges(context, discrete_state)):
+            detectors[i] = self._detector.Changed(detectors[i], t)
+        if self._regularized and self._learning:
+            newest = NewestRows(rows, t, self._period)
+            if newest.shape[1]:
+                residuals = self._identifier.RelativeResiduals(newest)
+                for i in range(count):
+                    detectors[i] = self._detector.Update(detectors[i], t, residuals[i])
+        holding = np.array([ChangeDetector.Holding(d, t) for d in detectors])
+        window_starts = np.array([ChangeDetector.WindowStart(d) for d in detectors])
+        fitted = (self._learning & ~holding
+                  & (np.count_nonzero(rows[:, :, 0] >= window_starts[:, None], axis=1)
+                     >= self._min_samples))
         warm_started = context.get_discrete_state(self._warm_started).get_value().copy()
-        weights = context.get_discrete_state(self._weights).get_value().reshape(
-            count, -1).copy()
-        logs = context.get_discrete_state(self._log).get_value().reshape(count, -1).copy()
-        for i in range(count):
-            if epochs_changed[i]:
-                detectors[i] = self._detector.Changed(detectors[i], t)
-            detectors[i], warm_started[i], published_weights, logs[i] = self._Train(
-                i, buffers[i], t, detectors[i], warm_started[i])
-            if published_weights is not None:
-                weights[i] = published_weights
+        if self._regularized and settings.warm_start:
+            for i in np.flatnonzero(fitted & (warm_started == -np.inf)):
+                self._identifier.WarmStart(rows[i], t, window_starts[i], i)
+                warm_started[i] = window_starts[i]
+        self._identifier.FitTrials(rows, t, window_starts, fitted)
+        stats = self._identifier.StatisticsOfTrials(rows, t, np.full(count, -np.inf))
+        published = self._NetworkPublished(rows, t, window_starts, fitted)
+        log = LearnerLog()
+        logs = np.zeros((count, log.size))
+        logs[:, log.loss], logs[:, log.beta_hat] = stats.loss, stats.beta_hat
+        logs[:, log.nominal_loss], logs[:, log.holding] = stats.nominal_loss, holding
+        logs[:, log.network_published] = published
         discrete_state.get_mutable_vector(self._detector_state).SetFromVector(
             detectors.reshape(-1))
         discrete_state.get_mutable_vector(self._warm_started).SetFromVector(warm_started)
         if self._learning:
-            discrete_state.get_mutable_vector(self._weights).SetFromVector(
-                weights.reshape(-1))
+            discrete_state.get_mutable_vector(self._weights).SetFromVector(np.where(
+                published[:, None], self._identifier.Export(), self._prior_weights
+            ).reshape(-1))
         discrete_state.get_mutable_vector(self._log).SetFromVector(logs.reshape(-1))
 
-    def _Train(self, trial: int, rows, t, detector, warm_started):
-        """One training update of one trial on its window ``rows``: (its detector
-        state, its warm start's window start, the weights it publishes (None in
-        the learner-off ablation), its learner_log)."""
-        identifier = self._identifiers[trial]
-        if self._regularized and self._learning:
-            newest = NewestRows(rows, t, self._period)
-            if newest is not None:
-                detector = self._detector.Update(detector, t,
-                                                 identifier.RelativeResidual(newest))
-        holding = ChangeDetector.Holding(detector, t)
-        window_start = ChangeDetector.WindowStart(detector)
-        fitted = (self._learning and not holding
-                  and np.count_nonzero(rows[:, 0] >= window_start) >= self._min_samples)
-        if fitted:
-            if (self._regularized and self._settings.warm_start
-                    and warm_started == -np.inf):
-                identifier.WarmStart(rows, t, window_start)
-                warm_started = window_start
-            identifier.Fit(rows, t, window_start)
-        stats = identifier.Statistics(rows, t)
-        published = self._learning and self._NetworkPublished(identifier, rows, t,
-                                                              window_start, fitted)
-        weights = None
-        if self._learning:
-            weights = identifier.Export() if published else self._prior_weights[trial]
-        log = LearnerLog()
-        values = np.zeros(log.size)
-        values[[log.loss, log.beta_hat, log.nominal_loss, log.holding,
-                log.network_published]] = [stats.loss, stats.beta_hat,
-                                           stats.nominal_loss, float(holding),
-                                           float(published)]
-        return detector, warm_started, weights, values
-
-    def _NetworkPublished(self, identifier, rows, t, window_start, fitted) -> bool:
-        """Whether the network's weights, not the prior's, are published this update.
-        Always, unless settings.prior_fallback: then only when this update fitted
-        (not holding after a change, min_window seconds of samples since it) and the
-        network explains the samples since the change, and those of the last
-        period, at least as well as (B0, D0) do (FitStatistics.loss <=
-        nominal_loss on each); the prior otherwise. After a change the frozen
-        network describes the old relation, and a refit on the first window after
-        it can be further off than the prior; a change not yet detected shows
-        first in the newest samples."""
+    def _NetworkPublished(self, rows, t, window_starts, fitted) -> np.ndarray:
+        """Whether each trial's network weights, not the prior's, are published this
+        update. Always (while learning), unless settings.prior_fallback: then only
+        when this update fitted (not holding after a change, min_window seconds of
+        samples since it) and the network explains the samples since the change,
+        and those of the last period, at least as well as (B0, D0) do
+        (FitStatistics.loss <= nominal_loss on each); the prior otherwise. After a
+        change the frozen network describes the old relation, and a refit on the
+        first window after it can be further off than the prior; a change not yet
+        detected shows first in the newest samples."""
+        count = self._trials
+        if not self._learning:
+            return np.zeros(count, bool)
         if not self._settings.prior_fallback:
-            return True
-        if not fitted:
-            return False
-        since_change = identifier.Statistics(rows, t, window_start)
-        newest = identifier.Statistics(rows, t, t - self._period + 1e-12)
-        return (since_change.loss <= since_change.nominal_loss
-                and newest.loss <= newest.nominal_loss)
+            return np.ones(count, bool)
+        since_change = self._identifier.StatisticsOfTrials(rows, t, window_starts)
+        newest = self._identifier.StatisticsOfTrials(
+            rows, t, np.full(count, t - self._period + 1e-12))
+        return (fitted & (since_change.loss <= since_change.nominal_loss)
+                & (newest.loss <= newest.nominal_loss))
 
     def _ModelChanges(self, context, discrete_state) -> np.ndarray:
         """Whether each trial's LHS model changed since the last check (input
