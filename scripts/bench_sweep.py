@@ -6,7 +6,8 @@ share one diagram (loop.simulate.simulate_batch, its monitor included; each batc
 size in a fresh process, with its peak memory; the trials the short scenario with
 sampled link masses and q0, phases compressed to --batch-duration), beside the
 ground-truth plant of one arm alone (same step), and the trials per hour of one
-worker.
+worker. Then the satellite_6dof DAC loop in batches (--spatial-batch-sizes,
+default 1 4 16), against its batch of 1 (a single run).
 
 Then, on the same trials, in one run (the machines are shared, so only ratios
 measured together mean something), with one trial per diagram:
@@ -73,6 +74,25 @@ print(results[0].wall_time / duration / size,
       sum(r.status != "ok" for r in results))
 """
 
+SPATIAL_BATCH = """\
+import copy, resource, sys
+import numpy as np
+from dacph_drake.loop.simulate import simulate_batch
+from dacph_drake.scenario_files import load_scenario
+name, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+rng = np.random.default_rng(1)
+trials = []
+for i in range(size):
+    s = load_scenario(name)
+    s.q0 = list(np.asarray(s.q0) + rng.uniform(-0.05, 0.05, len(s.q0)))
+    s.seed = i
+    trials.append(s)
+results = simulate_batch(trials, "dac", duration=duration)
+print(results[0].wall_time / duration / size,
+      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+      sum(r.status != "ok" for r in results))
+"""
+
 PLANT = """\
 import sys, time
 from pydrake.systems.framework import DiagramBuilder
@@ -114,6 +134,23 @@ def batch_scaling(sizes, duration: float) -> None:
                   f"{3600 / (per_trial * 26.0):7.0f} trials of 26 s per hour per worker; "
                   f"peak memory {memory / 1024:.2f} GiB"
                   + (f"; {stopped:.0f} trials stopped early" if stopped else ""))
+
+
+def spatial_batch_scaling(name: str, sizes, duration: float) -> None:
+    """The DAC loop of a spatial arm's scenario (its q0 jittered by +-0.05 rad
+    per trial, its own seed) in batches of each size (a fresh process each):
+    per-trial wall per simulated second against the batch of 1 (a single run)."""
+    print(f"{name} DAC batches ({duration:g} s simulated)")
+    single = None
+    for size in sizes:
+        per_trial, memory, stopped = [float(x) for x in subprocess.run(
+            [sys.executable, "-c", SPATIAL_BATCH, name, str(size), str(duration)],
+            check=True, capture_output=True, text=True).stdout.split()]
+        single = per_trial if single is None else single
+        print(f"  batch {size:3d}: {per_trial:.4f} s per trial per simulated s = "
+              f"{per_trial / single:4.2f}x the batch of {sizes[0]}; peak memory "
+              f"{memory / 1024:.2f} GiB" + (f"; {stopped:.0f} trials stopped early"
+                                            if stopped else ""))
 
 
 def machine_ceiling() -> float:
@@ -173,9 +210,17 @@ def main():
     parser.add_argument("--phases", type=float, nargs=4, default=[0.5, 2.0, 2.0, 2.0],
                         metavar=("WARMUP", "LINEAR", "NONLINEAR", "DISTURBANCE"),
                         help="[s] of the benchmark's scenario")
+    parser.add_argument("--spatial-batch-sizes", type=int, nargs="*", default=[1, 4, 16],
+                        help="batch sizes of the satellite_6dof DAC loop (the first: "
+                             "the reference)")
+    parser.add_argument("--spatial-duration", type=float, default=3.0,
+                        help="[s] simulated by each spatial batch")
     args = parser.parse_args()
     if args.batch_sizes:
         batch_scaling(args.batch_sizes, args.batch_duration)
+    if args.spatial_batch_sizes:
+        spatial_batch_scaling("satellite_6dof", args.spatial_batch_sizes,
+                              args.spatial_duration)
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         scenario = short_scenario()

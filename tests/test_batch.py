@@ -54,14 +54,49 @@ def test_every_trial_of_a_batch_is_its_solo_run(controller):
                for trial, result in enumerate(batch) if trial != 2)
 
 
-def test_the_trials_of_a_batch_share_what_shapes_the_diagram():
+def test_the_trials_of_a_batch_share_what_shapes_the_diagram(tmp_path):
     """A trial whose periods differ from trial 0's is refused in one line naming
-    the setting; so is a batch of described arms (not batched yet)."""
+    the setting; so is a batch of described arms whose kinematic trees differ."""
     from dacph_drake.scenario_files import load_scenario
     trials = _trials(2)
     trials[1].periods.lhs = 2e-3
     with pytest.raises(ConfigError, match="trial 1's periods differs"):
         simulate_batch(trials, "dac", duration=0.01)
-    spatial = load_scenario("satellite_3dof")
-    with pytest.raises(ConfigError, match="batch_size 1"):
-        simulate_batch([spatial, copy.deepcopy(spatial)], "dac", duration=0.01)
+    from dacph_drake.robots.description import robot_description
+    three = load_scenario("satellite_3dof")
+    branched = copy.deepcopy(three)           # joint 3 on link 1, not on link 2
+    urdf = robot_description("satellite_3dof").read_text()
+    path = tmp_path / "branched.urdf"
+    path.write_text(urdf.replace('<parent link="link2"/>\n    <child link="link3"/>',
+                                 '<parent link="link1"/>\n    <child link="link3"/>'))
+    branched.robot.description = str(path)
+    with pytest.raises(ConfigError, match="trial 1's robot differs from trial 0's in "
+                                          "its kinematic tree"):
+        simulate_batch([three, branched], "dac", duration=0.01)
+
+
+@pytest.mark.parametrize("controller", ["dac", "model-based"])
+def test_every_trial_of_a_spatial_batch_is_its_solo_run(controller):
+    """A batch of 3 satellite_3dof trials (their own q0, disturbance, seed and
+    actuators; trial 1's made to run away) in one plant of cloned arms
+    (plant.AddClonedArms): each trial's status, reason, final time and every log
+    equal its solo run's (on the parsed plant) bit for bit."""
+    from dacph_drake.scenario_files import load_scenario
+    trials = []
+    for i in range(3):
+        scenario = load_scenario("satellite_3dof")
+        scenario.seed = 10 + i
+        scenario.q0 = list(np.asarray(scenario.q0, float) + 0.03 * i)
+        scenario.disturbance.scale *= 1 + 0.3 * i
+        trials.append(scenario)
+    trials[1].uncertainty.B_scale = [100.0] * 3
+    duration = 0.6
+    batch = simulate_batch(trials, controller, duration=duration)
+    for scenario, result in zip(trials, batch):
+        solo = simulate(scenario, controller, duration=duration)
+        assert (result.status, result.reason, result.final_time) == (
+            solo.status, solo.reason, solo.final_time)
+        assert set(result.logs) == set(solo.logs)
+        for name, log in solo.logs.items():
+            np.testing.assert_array_equal(result.logs[name], log, err_msg=name)
+    assert [result.status for result in batch] == ["ok", "diverged", "ok"]

@@ -18,9 +18,9 @@ import numpy as np
 from pydrake.geometry import Box, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
-from pydrake.multibody.tree import (FixedOffsetFrame, PlanarJoint, default_model_instance,
-                                    RevoluteJoint, RotationalInertia,
-                                    SpatialInertia)
+from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PlanarJoint,
+                                    RevoluteJoint, RotationalInertia, SpatialInertia,
+                                    WeldJoint, default_model_instance)
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Selector, SelectorParams
 
@@ -228,6 +228,60 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
     plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     plant.Finalize()
     return plant, scene_graph
+
+
+def AddClonedArms(builder: DiagramBuilder, sources: Sequence[MultibodyPlant]
+                  ) -> "tuple[MultibodyPlant, SceneGraph]":
+    """Adds the finalized continuous plant of a batch of trials whose arms are the
+    finalized plants ``sources`` (one per trial: an arm from a description file,
+    robots.description.ParsedDescription), each copied into the model instance
+    TRIAL_INSTANCE.format(i): its bodies with their default inertias, its revolute
+    joints (axis, damping) and welds in the same order, its actuators (effort limit,
+    rotor inertia, gear ratio), the free base on the quaternion floating joint
+    Finalize gives it; no geometry (no contact, as in AddFreeFloatingArms) and
+    zero gravity. Each copy's dynamics are its source's."""
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    for i, source in enumerate(sources):
+        instance = plant.AddModelInstance(TRIAL_INSTANCE.format(i))
+        bodies = {source.world_body().index(): plant.world_body()}
+        for b in range(1, source.num_bodies()):
+            body = source.get_body(BodyIndex(b))
+            bodies[body.index()] = plant.AddRigidBody(body.name(), instance,
+                                                      body.default_spatial_inertia())
+        joints = {}
+        for index in source.GetJointIndices():
+            joint = source.get_joint(index)
+            if joint.parent_body().index() == source.world_body().index():
+                continue                         # the free base's: Finalize adds it
+            frames = [_ClonedFrame(plant, bodies[frame.body().index()], frame)
+                      for frame in (joint.frame_on_parent(), joint.frame_on_child())]
+            if joint.num_velocities() == 0:
+                cloned = WeldJoint(joint.name(), *frames, joint.X_FM())
+            elif isinstance(joint, RevoluteJoint):
+                cloned = RevoluteJoint(joint.name(), *frames, joint.revolute_axis(),
+                                       joint.default_damping())
+            else:
+                raise ValueError(f"joint {joint.name()!r}: {joint.type_name()}; "
+                                 "allowed: revolute joints and welds")
+            joints[index] = plant.AddJoint(cloned)
+        for a in source.GetJointActuatorIndices():
+            actuator = source.get_joint_actuator(a)
+            copy = plant.AddJointActuator(actuator.name(), joints[actuator.joint().index()],
+                                          actuator.effort_limit())
+            copy.set_default_rotor_inertia(actuator.default_rotor_inertia())
+            copy.set_default_gear_ratio(actuator.default_gear_ratio())
+    plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
+    plant.Finalize()
+    return plant, scene_graph
+
+
+def _ClonedFrame(plant: MultibodyPlant, body, frame):
+    """``frame`` of a source plant on the cloned ``body``: its body frame, or a
+    FixedOffsetFrame at the same pose in it."""
+    X_BF = frame.GetFixedPoseInBodyFrame()
+    if np.array_equal(X_BF.GetAsMatrix4(), np.eye(4)):
+        return body.body_frame()
+    return plant.AddFrame(FixedOffsetFrame(frame.name(), body.body_frame(), X_BF))
 
 
 def MakeArmPlant(robot: RobotParams) -> MultibodyPlant:

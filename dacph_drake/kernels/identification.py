@@ -20,45 +20,9 @@ R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC, omega = R_WB V_ang, v = R_WB v_C."""
 import numpy as np
 from numba import njit
 
-from dacph_drake.kernels.spatial import forward_kinematics, reduced_model
+from dacph_drake.kernels.spatial import base_pose_and_twist, forward_kinematics, reduced_model
 
 PER_BODY = 10           # inertial_parameters.PER_BODY: [m, h (3), I (6)] per body
-
-
-@njit(cache=True)
-def _base_pose(base_subspace, base_pose, base_velocity):
-    """(R_WB, p_WB, omega_B, v_B): the base's pose and its twist in its own axes,
-    from its joint's positions and velocities: a planar joint's (x, y, theta) and
-    (vx, vy, omega) in the world, or a quaternion floating joint's
-    (qw, qx, qy, qz, x, y, z) and (omega, v) in the world (the quaternion
-    normalized, as Drake's RotationMatrix does)."""
-    R, p = np.zeros((3, 3)), np.zeros(3)
-    omega_W, v_W = np.zeros(3), np.zeros(3)
-    if base_subspace.shape[1] == 3:
-        c, s = np.cos(base_pose[2]), np.sin(base_pose[2])
-        R[0, 0], R[0, 1], R[1, 0], R[1, 1], R[2, 2] = c, -s, s, c, 1.0
-        p[0], p[1] = base_pose[0], base_pose[1]
-        v_W[0], v_W[1], omega_W[2] = base_velocity[0], base_velocity[1], base_velocity[2]
-    else:
-        norm = np.sqrt(base_pose[0]**2 + base_pose[1]**2 + base_pose[2]**2
-                       + base_pose[3]**2)
-        w, x, y, z = (base_pose[0] / norm, base_pose[1] / norm, base_pose[2] / norm,
-                      base_pose[3] / norm)
-        R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), \
-            2 * (x * z + w * y)
-        R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), \
-            2 * (y * z - w * x)
-        R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), \
-            1 - 2 * (x * x + y * y)
-        for i in range(3):
-            p[i] = base_pose[4 + i]
-            omega_W[i], v_W[i] = base_velocity[i], base_velocity[3 + i]
-    omega_B, v_B = np.zeros(3), np.zeros(3)
-    for i in range(3):
-        for k in range(3):
-            omega_B[i] += R[k, i] * omega_W[k]
-            v_B[i] += R[k, i] * v_W[k]
-    return R, p, omega_B, v_B
 
 
 @njit(cache=True)
@@ -67,7 +31,7 @@ def momentum_regressor(base_subspace, parent, joint, X_PF, axis, X_MC, below, no
     """Y (6 x 10 bodies) with [L about the world origin; P] = Y pi at the state
     (inertial_parameters.InertialParameters.MomentumRegressor, compiled)."""
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
-    R_WB, p_WB, omega_B, v_B = _base_pose(base_subspace, base_pose, base_velocity)
+    R_WB, p_WB, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
     n = q.shape[0]
     Y = np.zeros((6, PER_BODY * nodes.shape[0]))
     R, o, omega, v = np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(3)

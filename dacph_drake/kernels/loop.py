@@ -8,6 +8,7 @@ from numba import njit
 from dacph_drake.kernels.arm import (_joint_momentum_into, dot, matvec,
                                      reduced_dynamics)
 from dacph_drake.kernels.potential import potential
+from dacph_drake.kernels.spatial import joint_momentum
 
 
 @njit(cache=True)
@@ -302,31 +303,43 @@ def _matrices_into(t, q, p, packed, B, D):
 
 
 @njit(cache=True)
-def spatial_true_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed,
-                        running, bound, verdicts):
-    """tau = B~(x) u_c - D~(x) qdot + d(t) of a spatial arm (SpatialTrueRhs; zero
-    unless its verdict, _verdict, written to verdicts[0] and verdicts[1], is
-    RUNNING): u_c the command clipped to +-``limit``, p the joint rows of H v (H the
-    plant's mass matrix at x), ``packed`` = pack_true_rhs((), (), uncertainty)."""
-    tau = _spatial_torque(t, x, H, q_index, v_index, u, limit, disturbance_model,
-                          packed)
-    nq = x.shape[0] - H.shape[0]
-    verdicts[0] = _verdict(running[0], x, x[nq:], x[:0], tau, bound)
-    verdicts[1] = verdicts[0]
-    return tau if verdicts[0] == RUNNING else np.zeros_like(tau)
-
-
-@njit(cache=True)
-def _spatial_torque(t, x, H, q_index, v_index, u, limit, disturbance_model, packed):
-    n = u.shape[0]
-    nq = x.shape[0] - H.shape[0]
-    v = x[nq:]
-    Hv = matvec(H, v)
-    q, p, qdot, clipped = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    for j in range(n):
-        q[j], p[j], qdot[j] = x[q_index[j]], Hv[v_index[j]], v[v_index[j]]
-        clipped[j] = min(max(u[j], -limit[j]), limit[j])
-    return _packed_torque(t, q, p, qdot, clipped, disturbance_model, packed)
+def spatial_true_torques(t, x, indices, base_subspace, parent, joint, X_PFs, axes,
+                         X_MCs, below, masses, moments, inertias, u, limits,
+                         disturbance_models, packs, offsets, running, bound, verdicts):
+    """tau = B~(x) u_c - D~(x) qdot + d(t) of every trial of a batch of spatial arms
+    (SpatialTrueRhs), as true_torques does for planar ones: trial i's state is
+    x[indices[i]] = [base pose (7), base velocity (6), q (n), qdot (n)], its
+    tree and inertias the i-th of the stacked ones (spatial.joint_momentum: p the
+    joint rows of H v), u_c its command clipped to +-limits[i], ``packs`` its
+    pack_true_rhs((), (), uncertainty). A trial's torque is zero unless its
+    verdict (_verdict: its state, its velocities, its torque), written to
+    verdicts[i], is RUNNING; verdicts[trials] gets the largest."""
+    trials = indices.shape[0]
+    n = u.shape[0] // trials
+    m = disturbance_models.shape[0] // trials
+    out = np.zeros(trials * n)
+    tau, clipped, B, D = np.empty(n), np.empty(n), np.empty((n, n)), np.empty(n)
+    worst = RUNNING
+    for i in range(trials):
+        verdict = STOPPED
+        if running[i] > 0:
+            arm = x[indices[i]]
+            q, qdot = arm[13:13 + n], arm[13 + n:]
+            p = joint_momentum(base_subspace, parent, joint, X_PFs[i], axes[i],
+                               X_MCs[i], below, masses[i], moments[i], inertias[i],
+                               arm[:7], arm[7:13], q, qdot)
+            for j in range(n):
+                command = u[i * n + j]
+                clipped[j] = min(max(command, -limits[i, j]), limits[i, j])
+            _torque_into(t, q, p, qdot, clipped, disturbance_models[i * m:(i + 1) * m],
+                         packs[offsets[i]:offsets[i + 1]], B, D, tau)
+            verdict = _verdict(running[i], arm, arm[7:13], qdot, tau, bound)
+            if verdict == RUNNING:
+                out[i * n:(i + 1) * n] = tau
+        verdicts[i] = verdict
+        worst = max(worst, verdict)
+    verdicts[trials] = worst
+    return out
 
 
 def pack_lhs(ranges, geometry, link_of, fraction, radius,

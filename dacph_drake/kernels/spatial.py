@@ -321,3 +321,91 @@ def point_jacobian(base_subspace, parent, joint, X, S, A, node, p_W):
     out[:3] = J[:3]
     out[3:] = J[3:] - matmul(P, J[:3])    # v_P = v_O + omega x p
     return out[:, nb:] - matmul(out[:, :nb], A)
+
+
+@njit(cache=True)
+def base_pose_and_twist(base_subspace, base_pose, base_velocity):
+    """(R_WB, p_WB, omega_B, v_B): the base's pose and its twist in its own axes,
+    from its joint's positions and velocities: a planar joint's (x, y, theta) and
+    (vx, vy, omega) in the world, or a quaternion floating joint's
+    (qw, qx, qy, qz, x, y, z) and (omega, v) in the world (the quaternion
+    normalized, as Drake's RotationMatrix does)."""
+    R, p = np.zeros((3, 3)), np.zeros(3)
+    omega_W, v_W = np.zeros(3), np.zeros(3)
+    if base_subspace.shape[1] == 3:
+        c, s = np.cos(base_pose[2]), np.sin(base_pose[2])
+        R[0, 0], R[0, 1], R[1, 0], R[1, 1], R[2, 2] = c, -s, s, c, 1.0
+        p[0], p[1] = base_pose[0], base_pose[1]
+        v_W[0], v_W[1], omega_W[2] = base_velocity[0], base_velocity[1], base_velocity[2]
+    else:
+        norm = np.sqrt(base_pose[0]**2 + base_pose[1]**2 + base_pose[2]**2
+                       + base_pose[3]**2)
+        w, x, y, z = (base_pose[0] / norm, base_pose[1] / norm, base_pose[2] / norm,
+                      base_pose[3] / norm)
+        R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), \
+            2 * (x * z + w * y)
+        R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), \
+            2 * (y * z - w * x)
+        R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), \
+            1 - 2 * (x * x + y * y)
+        for i in range(3):
+            p[i] = base_pose[4 + i]
+            omega_W[i], v_W[i] = base_velocity[i], base_velocity[3 + i]
+    omega_B, v_B = np.zeros(3), np.zeros(3)
+    for i in range(3):
+        for k in range(3):
+            omega_B[i] += R[k, i] * omega_W[k]
+            v_B[i] += R[k, i] * v_W[k]
+    return R, p, omega_B, v_B
+
+
+@njit(cache=True)
+def joint_momenta(base_subspace, parent, joint, X_PFs, axes, X_MCs, below, masses,
+                  moments, inertias, base_poses, base_velocities, q, qdot):
+    """p (trials, n): each trial's joint rows of H(q) v, the momentum conjugate to
+    its joints (at zero momentum M(q) qdot), on its tree (X_PFs[i], axes[i],
+    X_MCs[i], the bodies' inertias masses[i], moments[i], inertias[i]) at its
+    base pose and twist (base_pose_and_twist) and joint state (joint_momentum)."""
+    trials, n = q.shape[0], q.shape[1]
+    out = np.zeros((trials, n))
+    for i in range(trials):
+        out[i] = joint_momentum(base_subspace, parent, joint, X_PFs[i], axes[i],
+                                X_MCs[i], below, masses[i], moments[i], inertias[i],
+                                base_poses[i], base_velocities[i], q[i], qdot[i])
+    return out
+
+
+@njit(cache=True)
+def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
+                   moment, inertia, base_pose, base_velocity, q, qdot):
+    """p (n): the joint rows of H(q) v,
+
+        p_j = S_j . sum_{bodies C joint j moves} I_C V_C,
+        V_C = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
+
+    everything about the base's origin in its axes (the base at the identity:
+    p does not depend on the base's pose, only on its twist in its own axes)."""
+    n, nodes = q.shape[0], parent.shape[0]
+    X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
+    spatial = _spatial_inertias(X, mass, moment, inertia)
+    _, _, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
+    p = np.zeros(n)
+    V, h = np.empty(6), np.empty(6)
+    for node in range(nodes):
+        if mass[node] <= 0.0:
+            continue
+        for r in range(3):
+            V[r], V[3 + r] = omega_B[r], v_B[r]
+        for k in range(n):
+            if below[k, node]:
+                for r in range(6):
+                    V[r] += S[k, r] * qdot[k]
+        for r in range(6):
+            value = 0.0
+            for c in range(6):
+                value += spatial[node, r, c] * V[c]
+            h[r] = value
+        for j in range(n):
+            if below[j, node]:
+                p[j] += dot(S[j], h)
+    return p

@@ -297,13 +297,16 @@ def collect_logs(loop, context) -> Dict[str, np.ndarray]:
 def trial_logs(loop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
                trial: int, final_time: float) -> Dict[str, np.ndarray]:
     """One trial's part of a batch's logs (collect_logs), up to ``final_time``:
-    its plant state in the layout of a plant of its own ([positions, velocities];
-    ``coordinates``: the trial's, plant.trial_coordinates) and its share of every
-    stacked signal."""
+    its plant state in the layout of a plant of its own (its Robot's model's
+    plant: [positions, velocities]; ``coordinates``: the trial's in the batch's
+    plant, plant.trial_coordinates) and its share of every stacked signal."""
     nq, count = loop.plant.num_positions(), loop.trials
     kept = logs["time"] <= final_time
-    state = np.concatenate([coordinates.base_q, coordinates.joint_q,
-                            nq + coordinates.base_v, nq + coordinates.joint_v])
+    solo = ArmCoordinates.FromPlant(loop.robots[trial].model.plant)
+    state = np.empty(solo.plant_positions + len(solo.base_v) + solo.num_joints, int)
+    state[solo.base_q], state[solo.joint_q] = coordinates.base_q, coordinates.joint_q
+    state[solo.plant_positions + solo.base_v] = nq + coordinates.base_v
+    state[solo.plant_positions + solo.joint_v] = nq + coordinates.joint_v
     out = {}
     for name, data in logs.items():
         data = data[kept]

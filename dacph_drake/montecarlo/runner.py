@@ -63,19 +63,21 @@ def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor]
         store.close()
 
 
-# Trials per batch where the sweep does not say: scripts/bench_sweep.py's fastest
-# per trial (DAC 0.080 s per simulated s at 64 against 0.093 at 16, 0.68 GiB).
+# Trials per batch where the sweep does not say, from scripts/bench_sweep.py: a
+# planar arm's fastest per trial (DAC 0.080 s per simulated s at 64 against 0.093
+# at 16, 0.68 GiB); a described arm's (satellite_6dof DAC) gains little beyond 16.
 DEFAULT_BATCH_SIZE = 64
+DESCRIBED_BATCH_SIZE = 16
 
 
 def batch_size_for(definition: SweepDefinition) -> int:
     """The sweep's batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a
-    planar arm's sweep and 1 for a described arm's (its systems run one trial per
-    diagram)."""
+    planar arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
     from dacph_drake.scenario import PlanarArm
     if definition.sweep.batch_size > 0:
         return definition.sweep.batch_size
-    return DEFAULT_BATCH_SIZE if isinstance(definition.scenario.robot, PlanarArm) else 1
+    return (DEFAULT_BATCH_SIZE if isinstance(definition.scenario.robot, PlanarArm)
+            else DESCRIBED_BATCH_SIZE)
 
 
 def _task(definition: SweepDefinition, trial: int, out) -> Trial:

@@ -5,7 +5,7 @@ the free base) tracking its end effector's 3D attitude
 controller's model evaluates in contexts of its own with its inertias scaled
 (floating_model.FloatingBaseModel) and the clearance potential queries with its
 collision geometry; and the AttitudeController."""
-from typing import Dict
+from typing import Dict, Optional
 
 import numpy as np
 
@@ -13,11 +13,12 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
+from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import AddClonedArms, ArmCoordinates
 from dacph_drake.scenario import Scenario
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
-from dacph_drake.systems.attitude_controller import AttitudeController
+from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
 
@@ -54,15 +55,20 @@ class DescribedRobot:
 
     @classmethod
     def AddGroundTruth(cls, builder, trials):
-        """The parsed plant and its SceneGraph (ParsedDescription.AddTo): the
-        description is parsed once per diagram (one trial: _OneTrial)."""
-        return _OneTrial(trials).parsed.AddTo(builder)
+        """One trial: its parsed plant and SceneGraph (ParsedDescription.AddTo: the
+        description is parsed once per diagram). A batch: one plant holding a copy
+        of each trial's arm (plant.AddClonedArms), whose dynamics are the parsed
+        plant's bit for bit."""
+        if len(trials) == 1:
+            return trials[0].parsed.AddTo(builder)
+        _RequireOneTree(trials)
+        return AddClonedArms(builder, [trial.parsed.plant for trial in trials])
 
     @classmethod
     def MakeTrueRhs(cls, plant, trials) -> SpatialTrueRhs:
-        trial = _OneTrial(trials)
-        return SpatialTrueRhs(plant=plant, uncertainty=trial.scenario.uncertainty,
-                              phases=trial.scenario.phases)
+        return SpatialTrueRhs(plant=plant, arms=[trial.parsed.plant for trial in trials],
+                              uncertainties=[t.scenario.uncertainty for t in trials],
+                              phases=[t.scenario.phases for t in trials])
 
     def RequireRunnableStart(self) -> None:
         """q0 within the description's joint limits (robot.joint_limits "stop");
@@ -107,27 +113,34 @@ class DescribedRobot:
 
     @classmethod
     def AddLhsController(cls, controller, trials, excitation, identify: bool) -> Dict:
-        """The AttitudeController (with the clearance potential unless its gain is
-        0), fed by an InertialIdentifier (scenario.inertia) with ``identify`` (one
-        trial: _OneTrial)."""
-        self = _OneTrial(trials)
-        scenario, builder, arm = self.scenario, controller.builder, self.scenario.robot
-        potential = (BaseClearancePotential(
-            parsed=self.parsed, model=self.model, gain=arm.potential.gain,
-            margin=arm.potential.margin) if arm.potential.gain > 0 else None)
-        lhs = builder.AddNamedSystem(self.lhs_name, AttitudeController(
-            model=self.model, reference=scenario.task.reference,
-            gains=scenario.task.gains, period=scenario.periods.lhs, q0=scenario.q0,
-            potential=potential, eta=arm.potential.eta, excitation=excitation,
+        """The AttitudeController of the ``trials`` (each with its clearance
+        potential unless its gain is 0), fed by an InertialIdentifier
+        (scenario.inertia) with ``identify``."""
+        first = trials[0].scenario
+        builder, arm = controller.builder, first.robot
+        lhs = builder.AddNamedSystem(cls.lhs_name, AttitudeController(
+            trials=[AttitudeTrial(model=trial.model, potential=trial._Potential(),
+                                  q0=trial.scenario.q0) for trial in trials],
+            reference=first.task.reference, gains=first.task.gains,
+            period=first.periods.lhs, eta=arm.potential.eta, excitation=excitation,
             identify=identify))
         for signal in ("base_pose", "base_velocity", "q", "qdot"):
             controller.Input(lhs.GetInputPort(signal), signal)
         if not identify:
-            return {self.lhs_name: lhs}
+            return {cls.lhs_name: lhs}
         identifier = builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
-            plants=[self.model.plant], priors=[self.model.inertial_parameters],
-            settings=scenario.inertia, period=scenario.periods.learner_sample))
-        return {self.lhs_name: lhs, "inertial_identifier": identifier}
+            plants=[trial.model.plant for trial in trials],
+            priors=[trial.model.inertial_parameters for trial in trials],
+            settings=first.inertia, period=first.periods.learner_sample))
+        return {cls.lhs_name: lhs, "inertial_identifier": identifier}
+
+    def _Potential(self) -> Optional[BaseClearancePotential]:
+        """The link-base clearance potential of this trial's arm (None with a zero
+        gain)."""
+        arm = self.scenario.robot
+        return (BaseClearancePotential(parsed=self.parsed, model=self.model,
+                                       gain=arm.potential.gain, margin=arm.potential.margin)
+                if arm.potential.gain > 0 else None)
 
     def Clearance(self):
         return None
@@ -224,10 +237,16 @@ class DescribedRobot:
                       "sup_max_diagonal_M": max_diagonal_M})
 
 
-def _OneTrial(trials) -> DescribedRobot:
-    """The one trial of a described arm's diagram: its systems are not batched yet
-    (ConfigError for more)."""
-    if len(trials) != 1:
-        raise ConfigError(f"a batch of {len(trials)} trials of a described arm; "
-                          "allowed: batch_size 1 (the spatial systems are not batched yet)")
-    return trials[0]
+def _RequireOneTree(trials) -> None:
+    """ConfigError unless the trials' arms have one kinematic tree (the same
+    joints on the same bodies: the batch's compiled kernels share it; their
+    dimensions, axes and inertias may differ)."""
+    first = KinematicTree.FromPlant(trials[0].parsed.plant)
+    for i, trial in enumerate(trials[1:], start=1):
+        tree = KinematicTree.FromPlant(trial.parsed.plant)
+        if not all(np.array_equal(a, b) for a, b in (
+                (tree.parent, first.parent), (tree.joint, first.joint),
+                (tree.below, first.below))):
+            raise ConfigError(f"trial {i}'s robot differs from trial 0's in its "
+                              "kinematic tree; allowed: one arm for the trials of a "
+                              "batch (its dimensions, axes and inertias may differ)")

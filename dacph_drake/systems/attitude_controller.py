@@ -1,6 +1,9 @@
 """LHS controller of a spatial arm: the sliding-mode law of LhsController with the 3D
 end-effector attitude as its task (attitude.py) and the damping and the robust
 term's boundary layer scaled to the inertia (scenario.AttitudeGains)."""
+from dataclasses import dataclass
+from typing import Optional, Sequence
+
 import numpy as np
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import LeafSystem
@@ -16,6 +19,17 @@ XI_DOT_STEP = 1e-5              # [s] of xi's central difference along the motio
 # [m] beyond the potential's margin, the nearest link keeps xi = -eta grad U zero at
 # q +- h qdot (it would move faster than FAR / XI_DOT_STEP = 1000 m/s to reach it).
 FAR = 0.01
+
+
+@dataclass
+class AttitudeTrial:
+    """One trial's part of an AttitudeController: the controller's model (its
+    inertias set from input ``inertial_parameters`` with ``identify``), the
+    clearance potential (or None) and q0 (R_d(0) is the end effector's attitude
+    there)."""
+    model: FloatingBaseModel
+    potential: Optional[BaseClearancePotential]
+    q0: Sequence[float]
 
 
 class AttitudeController(LeafSystem):
@@ -50,17 +64,21 @@ class AttitudeController(LeafSystem):
     port observer. With ``identify``, input ``inertial_parameters`` (an
     InertialIdentifier's estimate) sets the model's inertias before every update
     (FloatingBaseModel.SetInertialParameters): M, C', the GJM and the clearance
-    potential's gradient are then the identified bodies'."""
+    potential's gradient are then the identified bodies'.
 
-    def __init__(self, *, model: FloatingBaseModel, reference: AttitudeReference,
-                 gains: AttitudeGains, period: float, q0,
-                 potential: BaseClearancePotential = None, eta: float = 0.0,
+    For a batch (``trials``: each trial's AttitudeTrial; one: a single run) every
+    port carries the trials' signals stacked; each trial's update is its own
+    compiled call, in one callback for all trials."""
+
+    def __init__(self, *, trials: Sequence[AttitudeTrial], reference: AttitudeReference,
+                 gains: AttitudeGains, period: float, eta: float = 0.0,
                  excitation: Excitation = Excitation(amplitude=0.0),
                  identify: bool = False):
         super().__init__()
-        n = model.num_joints
-        self._model, self._reference, self._gains = model, reference, gains
-        self._potential, self._eta = potential, eta
+        self._trials = list(trials)
+        model = trials[0].model
+        n, count = model.num_joints, len(trials)
+        self._n, self._reference, self._gains, self._eta = n, reference, gains, eta
         self._excitation = np.concatenate([[excitation.amplitude],
                                            2 * np.pi * excitation.Frequencies(n)])
         self._gain_arguments = np.array([gains.Lambda, gains.task_damping,
@@ -69,76 +87,100 @@ class AttitudeController(LeafSystem):
         end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         node, X_CE = model.FrameNode(end_effector)
         self._end_effector_node = (node, np.ascontiguousarray(X_CE[:3, :3]))
-        self._R_d0 = reference.Start(RotationMatrix(model.FramePose(
-            end_effector, model.Evaluate(np.asarray(q0, float), derivatives=False))))
         axis = np.asarray(reference.axis, float)
-        self._reference_arguments = (self._R_d0.matrix(), axis / np.linalg.norm(axis),
-                                     float(reference.amplitude),
-                                     2 * np.pi / reference.period)
-        self._base_pose = self.DeclareVectorInputPort("base_pose", 7)
-        self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6)
-        self._q = self.DeclareVectorInputPort("q", n)
-        self._qdot = self.DeclareVectorInputPort("qdot", n)
-        self._chi = self.DeclareVectorInputPort("chi", 1)
+        self._R_d0, self._reference_arguments = [], []
+        for trial in trials:
+            R_d0 = reference.Start(RotationMatrix(trial.model.FramePose(
+                end_effector, trial.model.Evaluate(np.asarray(trial.q0, float),
+                                                   derivatives=False))))
+            self._R_d0.append(R_d0)
+            self._reference_arguments.append((R_d0.matrix(), axis / np.linalg.norm(axis),
+                                              float(reference.amplitude),
+                                              2 * np.pi / reference.period))
+        self._base_pose = self.DeclareVectorInputPort("base_pose", 7 * count)
+        self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6 * count)
+        self._q = self.DeclareVectorInputPort("q", n * count)
+        self._qdot = self.DeclareVectorInputPort("qdot", n * count)
+        self._chi = self.DeclareVectorInputPort("chi", count)
         self._parameters = (self.DeclareVectorInputPort(
-            "inertial_parameters", model.parameters.size) if identify else None)
-        self._tau_index = self.DeclareDiscreteState(n)
-        self._log_index = self.DeclareDiscreteState(AttitudeLog().size)
-        self._model_index = self.DeclareDiscreteState(2 * n * n)
+            "inertial_parameters", model.parameters.size * count) if identify else None)
+        self._tau_index = self.DeclareDiscreteState(n * count)
+        self._log_index = self.DeclareDiscreteState(AttitudeLog().size * count)
+        self._model_index = self.DeclareDiscreteState(2 * n * n * count)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareVectorOutputPort(
-            "attitude_log", AttitudeLog().size, self._CalcAttitudeLog,
+            "attitude_log", AttitudeLog().size * count, self._CalcAttitudeLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._log_index),
                                    self._q.ticket(), self._base_pose.ticket()})
         self.DeclareStateOutputPort("reduced_model", self._model_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
-    def DesiredAttitude(self, t: float):
-        """(R_d(t), omega_d(t))."""
-        return self._reference.At(self._R_d0, t)
+    def DesiredAttitude(self, t: float, trial: int = 0):
+        """(R_d(t), omega_d(t)) of trial ``trial``."""
+        return self._reference.At(self._R_d0[trial], t)
 
-    def _Secondary(self, q, base_pose):
+    def _Secondary(self, potential, q, base_pose):
         """(xi = -eta grad U, the nearest link-base distance if within the
         potential's margin + FAR, else inf) at q and the base pose."""
-        if self._potential is None:
-            return np.zeros(self._model.num_joints), np.inf
-        potential = self._potential.Evaluate(q, base_pose,
-                                             query_distance=self._potential.margin + FAR)
-        return -self._eta * potential.gradient, potential.min_distance
+        if potential is None:
+            return np.zeros(self._n), np.inf
+        clearance = potential.Evaluate(q, base_pose,
+                                       query_distance=potential.margin + FAR)
+        return -self._eta * clearance.gradient, clearance.min_distance
 
     def _CalcAttitudeLog(self, context, output):
-        """The update's log with the smallest link-base distance at the current
+        """The update's logs with the smallest link-base distance at the current
         state (the full query, at the loggers' rate rather than every update)."""
-        log = context.get_discrete_state(self._log_index).CopyToVector()
-        if self._potential is not None:
-            log[AttitudeLog().clearance] = self._potential.Evaluate(
-                self._q.Eval(context), self._base_pose.Eval(context)).min_distance
-        output.SetFromVector(log)
+        count = len(self._trials)
+        logs = context.get_discrete_state(self._log_index).CopyToVector().reshape(
+            count, -1)
+        q = self._q.Eval(context).reshape(count, -1)
+        base_pose = self._base_pose.Eval(context).reshape(count, -1)
+        for i, trial in enumerate(self._trials):
+            if trial.potential is not None:
+                logs[i, AttitudeLog().clearance] = trial.potential.Evaluate(
+                    q[i], base_pose[i]).min_distance
+        output.SetFromVector(logs.reshape(-1))
 
     def _UpdateControl(self, context, discrete_state):
-        if self._parameters is not None and self._parameters.HasValue(context):
-            self._model.SetInertialParameters(self._parameters.Eval(context))
-        t = context.get_time()
-        base_pose = self._base_pose.Eval(context)
-        omega_base = self._base_velocity.Eval(context)[:3]
-        q, qdot = self._q.Eval(context), self._qdot.Eval(context)
-        xi, clearance = self._Secondary(q, base_pose)
+        count, t = len(self._trials), context.get_time()
+        parameters = (self._parameters.Eval(context).reshape(count, -1)
+                      if self._parameters is not None and self._parameters.HasValue(
+                          context) else None)
+        base_pose, base_velocity, q, qdot = (
+            port.Eval(context).reshape(count, -1) for port in
+            (self._base_pose, self._base_velocity, self._q, self._qdot))
+        chi = self._chi.Eval(context)
+        tau, models, logs = [], [], []
+        for i, trial in enumerate(self._trials):
+            if parameters is not None:
+                trial.model.SetInertialParameters(parameters[i])
+            torque, M, C, log = self._Update(trial, i, t, base_pose[i],
+                                             base_velocity[i][:3], q[i], qdot[i], chi[i])
+            tau.append(torque)
+            models += [M.reshape(-1), C.reshape(-1)]
+            logs.append(log)
+        discrete_state.set_value(self._tau_index, np.concatenate(tau))
+        discrete_state.set_value(self._model_index, np.concatenate(models))
+        discrete_state.set_value(self._log_index, np.concatenate(logs))
+
+    def _Update(self, trial: AttitudeTrial, i: int, t, base_pose, omega_base, q, qdot,
+                chi):
+        """One trial's (tau, M, C', attitude log) (class docstring)."""
+        potential = trial.potential
+        xi, clearance = self._Secondary(potential, q, base_pose)
         xi_dot = np.zeros_like(xi)
-        if self._potential is not None and clearance <= self._potential.margin + FAR:
+        if potential is not None and clearance <= potential.margin + FAR:
             h, sides = XI_DOT_STEP, []
             for sign in (1.0, -1.0):
                 q_h = q + sign * h * qdot
                 pose_h = np.concatenate([turned(base_pose[:4], sign * h * omega_base),
                                          base_pose[4:]])
-                sides.append(self._Secondary(q_h, pose_h)[0])
+                sides.append(self._Secondary(potential, q_h, pose_h)[0])
             xi_dot = (sides[0] - sides[1]) / (2 * h)
         tau, M, C, log, desired = attitude_update(
-            self._model.kernel_tree, q, qdot, base_pose[:4], omega_base, t,
-            self._reference_arguments, self._end_effector_node, xi, xi_dot,
-            self._gain_arguments, self._chi.Eval(context)[0], self._excitation)
-        discrete_state.set_value(self._tau_index, tau)
-        discrete_state.set_value(self._model_index,
-                                 np.concatenate([M.reshape(-1), C.reshape(-1)]))
-        discrete_state.set_value(self._log_index, np.concatenate([log, [np.inf],
-                                                                  desired]))
+            trial.model.kernel_tree, q, qdot, base_pose[:4], omega_base, t,
+            self._reference_arguments[i], self._end_effector_node, xi, xi_dot,
+            self._gain_arguments, chi, self._excitation)
+        return tau, M, C, np.concatenate([log, [np.inf], desired])

@@ -42,10 +42,11 @@ class RhsLearner(LeafSystem):
     fit of the run starts from the window's best constant B (settings.warm_start,
     RhsIdentifier.WarmStart). With settings.prior_fallback the published weights
     are the prior's (B_hat = B0, D_hat = D0) whenever the network does not beat
-    them on the samples since the last change (_NetworkPublished).
+    them on the samples since the last change or on the last period's
+    (_NetworkPublished).
 
     Outputs: ``weights`` (the exported parameter vector, held between updates; the
-    fast loops evaluate it with numpy), ``beta_hat`` (FitStatistics.beta_hat, used
+    fast loops evaluate it compiled), ``beta_hat`` (FitStatistics.beta_hat, used
     by the gain rule), ``learner_log`` (log_layout.LearnerLog: loss, beta_hat,
     nominal loss of (B0, D0) on the same samples, and whether training is paused)
     and ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] at the current plant state
@@ -56,9 +57,11 @@ class RhsLearner(LeafSystem):
     diag M(q0) of ``model`` at the start configuration ``q0``.
 
     For a batch (``trials``: each trial's LearnerTrial; one: a single run) every
-    port carries the trials' signals stacked, and each trial has a network,
-    optimizer, window and change detector of its own: its updates are its solo
-    run's, whatever the other trials do.
+    port carries the trials' signals stacked, and each trial has a network, Adam
+    moments, window and change detector of its own: its updates are its solo
+    run's (to round-off), whatever the other trials do. One torch forward and
+    backward pass fits every trial that fits this update
+    (RhsIdentifier.FitTrials).
 
     The torch modules and Adam's moments live in this object, not in the Context:
     a diagram with a learner simulates one trajectory at a time (build one diagram

@@ -1,78 +1,96 @@
 """The ground truth's actuator for a robot from a description file: the RHS of the
 port (docs/equations.md E19), as TrueRhs is for the planar arms."""
+from typing import Sequence
+
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
-from dacph_drake.kernels.loop import pack_true_rhs, spatial_true_torque, true_matrices
-from dacph_drake.dynamics.plant import ArmCoordinates, effort_limits, joint_damping
+from dacph_drake.dynamics.kinematic_tree import KinematicTree
+from dacph_drake.dynamics.plant import effort_limits, joint_damping, trial_coordinates
+from dacph_drake.dynamics.uncertainty import TrueRhsModel
+from dacph_drake.kernels.loop import (pack_true_rhs, spatial_true_torques, stack_packs,
+                                      true_matrices)
+from dacph_drake.kernels.spatial import joint_momentum
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
-from dacph_drake.dynamics.uncertainty import TrueRhsModel
 
 
 class SpatialTrueRhs(TrueRhsSystem):
     """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p) and p the joint rows of
     H(q_full) v, which at zero momentum is M(q) qdot exactly (the base rows of H v
-    are the conserved momentum). B~, D~ (uncertainty.TrueRhsModel) and d(t)
-    (DisturbanceSource's parameters, input ``disturbance_model``) are the planar
-    ground truth's compiled kernels, which hold for any number of joints.
+    are the conserved momentum), for every trial of a batch (one trial: a single
+    run). B~, D~ (uncertainty.TrueRhsModel) and d(t) (DisturbanceSource's
+    parameters, input ``disturbance_model``) are the planar ground truth's
+    compiled kernels, which hold for any number of joints; p comes from each
+    trial's kinematic tree and inertias (kernels.spatial.joint_momentum), all
+    trials in one compiled call (kernels.loop.spatial_true_torques).
 
     Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
-    plant's) and time, so it adds no delay; it feeds the plant's actuation input.
-    u is clipped to the actuators' effort limits (scenario.DescribedArm.effort_limits;
-    output ``saturated``: 1 for each joint whose command was clipped).
-    Output ``true_matrices`` = [vec(B~) (row-major), diag(D~)] for the metrics, D~
-    with the description's joint damping, which the plant applies itself
-    (scenario.DescribedArm.joint_damping "keep"; zero otherwise).
-    ``plant`` is the ground truth (finalized); the scratch context for its mass
-    matrix is made here."""
+    batch's plant's, each trial's part read through plant.trial_coordinates) and
+    time, so it adds no delay; it feeds the plant's actuation input. u is clipped
+    to the actuators' effort limits (scenario.DescribedArm.effort_limits; output
+    ``saturated``: 1 for each joint whose command was clipped). Output
+    ``true_matrices`` = [vec(B~) (row-major), diag(D~)] per trial for the metrics,
+    D~ with the description's joint damping, which the plant applies itself
+    (scenario.DescribedArm.joint_damping "keep"; zero otherwise). ``plant`` is
+    the batch's ground truth (finalized), ``arms`` each trial's arm as a plant of
+    its own (its inertias the defaults), ``uncertainties`` and ``phases`` each
+    trial's."""
 
-    def __init__(self, *, plant: MultibodyPlant, uncertainty: Uncertainty,
-                 phases: Phases):
+    def __init__(self, *, plant: MultibodyPlant, arms: Sequence[MultibodyPlant],
+                 uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):
         super().__init__()
-        self._plant = plant
-        self._context = plant.CreateDefaultContext()
-        coordinates = ArmCoordinates.FromPlant(plant)
-        self._q_index = coordinates.joint_q
-        self._v_index = coordinates.joint_v
-        self._nq = plant.num_positions()
-        n = coordinates.num_joints
-        self._joint_damping = joint_damping(plant, self._v_index)
-        self._effort_limit = effort_limits(plant, self._v_index)
-        self._uncertainty = TrueRhsModel(uncertainty, phases).kernel_arguments
-        self._packed = pack_true_rhs((), (), self._uncertainty)
+        coordinates = trial_coordinates(plant)
+        nq = plant.num_positions()
+        self._indices = np.array([np.concatenate([
+            c.base_q, nq + c.base_v, c.joint_q, nq + c.joint_v]) for c in coordinates])
+        n = coordinates[0].num_joints
+        self._joint_damping = np.array([joint_damping(plant, c.joint_v)
+                                        for c in coordinates])
+        self._effort_limit = np.array([effort_limits(plant, c.joint_v)
+                                       for c in coordinates])
+        trees = [KinematicTree.FromPlant(arm) for arm in arms]
+        tree = trees[0]
+        self._topology = (tree.base_subspace, tree.parent, tree.joint)
+        self._frames = tuple(np.array([getattr(t, name) for t in trees])
+                             for name in ("X_PF", "axis", "X_MC"))
+        self._below = tree.below
+        self._inertias = tuple(np.array(x) for x in zip(*(
+            t.Inertias(arm.CreateDefaultContext()) for t, arm in zip(trees, arms))))
+        self._uncertainties = [TrueRhsModel(uncertainty, phase).kernel_arguments
+                               for uncertainty, phase in zip(uncertainties, phases,
+                                                             strict=True)]
+        self._packs, self._offsets = stack_packs([
+            pack_true_rhs((), (), uncertainty) for uncertainty in self._uncertainties])
         self._u, self._state, self._disturbance_model = self.DeclareTrueRhsPorts(
-            n, plant.num_positions() + plant.num_velocities())
-        self.DeclareVectorOutputPort("saturated", n, self._CalcSaturated,
+            n, plant.num_positions() + plant.num_velocities(), len(coordinates))
+        self.DeclareVectorOutputPort("saturated", n * len(coordinates),
+                                     self._CalcSaturated,
                                      prerequisites_of_calc={self._u.ticket()})
 
-    def _StateAndMassMatrix(self, context):
-        """(x, H): the input plant state and the plant's mass matrix there."""
-        x = self._state.Eval(context)
-        self._plant.SetPositionsAndVelocities(self._context, x)
-        return x, self._plant.CalcMassMatrix(self._context)
-
-    def _Matrices(self, context):
-        """(B~, diag D~, qdot) at the context's time and input state."""
-        x, H = self._StateAndMassMatrix(context)
-        v = x[self._nq:]
-        p = (H @ v)[self._v_index]
-        B, D = true_matrices(context.get_time(), x[self._q_index], p, *self._uncertainty)
-        return B, D, v[self._v_index]
-
     def _CalcTau(self, context, output):
-        x, H = self._StateAndMassMatrix(context)
-        output.SetFromVector(spatial_true_torque(
-            context.get_time(), x, H, self._q_index, self._v_index,
+        output.SetFromVector(spatial_true_torques(
+            context.get_time(), self._state.Eval(context), self._indices,
+            *self._topology, *self._frames, self._below, *self._inertias,
             self._u.Eval(context), self._effort_limit,
-            self._disturbance_model.Eval(context), self._packed,
+            self._disturbance_model.Eval(context), self._packs, self._offsets,
             self._Running(context), RUNAWAY_RATE, self._verdicts))
         self._Record(context)
 
     def _CalcSaturated(self, context, output):
-        output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit)
+        output.SetFromVector((np.abs(self._u.Eval(context)) > self._effort_limit.reshape(-1))
                              .astype(float))
 
     def _CalcMatrices(self, context, output):
-        B, D, _ = self._Matrices(context)
-        output.SetFromVector(np.concatenate([B.reshape(-1), D + self._joint_damping]))
+        x, t, n = self._state.Eval(context), context.get_time(), self._n
+        matrices = []
+        for i, uncertainty in enumerate(self._uncertainties):
+            arm = x[self._indices[i]]
+            q, qdot = arm[13:13 + n], arm[13 + n:]
+            p = joint_momentum(*self._topology, self._frames[0][i], self._frames[1][i],
+                               self._frames[2][i], self._below,
+                               *(inertia[i] for inertia in self._inertias), arm[:7],
+                               arm[7:13], q, qdot)
+            B, D = true_matrices(t, q, p, *uncertainty)
+            matrices += [B.reshape(-1), D + self._joint_damping[i]]
+        output.SetFromVector(np.concatenate(matrices))
