@@ -36,15 +36,18 @@ def integral_gains(B_hat: np.ndarray, c):
     Returns (k, eigenvalues, dic_ok): dic_ok is det(B_hat) != 0 and Re(lambda_p) > 0.
     A stack of matrices (trials, n, n), with c per trial, gives each trial's.
     """
-    eigenvalues = np.linalg.eigvals(B_hat)
     n = B_hat.shape[-1]
+    stack = np.reshape(B_hat, (-1, n, n))
+    eigenvalues = np.linalg.eigvals(stack)
+    rows = np.arange(len(stack))
     paired = np.empty_like(eigenvalues)
     free = np.ones(eigenvalues.shape, bool)
     for p in range(n):
-        distance = np.where(free, np.abs(eigenvalues - B_hat[..., p, p, None]), np.inf)
-        nearest = np.argmin(distance, axis=-1)[..., None]
-        paired[..., p] = np.take_along_axis(eigenvalues, nearest, axis=-1)[..., 0]
-        np.put_along_axis(free, nearest, False, axis=-1)
+        distance = np.where(free, np.abs(eigenvalues - stack[:, p, p, None]), np.inf)
+        nearest = np.argmin(distance, axis=1)
+        paired[:, p] = eigenvalues[rows, nearest]
+        free[rows, nearest] = False
+    eigenvalues, paired = (x.reshape(B_hat.shape[:-1]) for x in (eigenvalues, paired))
     det = np.prod(eigenvalues, axis=-1).real
     dic_ok = (np.abs(det) > 1e-9) & np.all(paired.real > 0, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):

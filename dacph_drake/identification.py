@@ -166,11 +166,10 @@ class RhsIdentifier:
             RhsNetwork(n, settings.hidden, B0, D0, settings.momentum_scale, seed,
                        coupling) for B0, D0, seed, coupling in zip(B0s, D0s, seeds,
                                                                    couplings)])
-        self._parameters = list(self.network.stacked)
-        trials = len(seeds)
-        self._moments = [(torch.zeros_like(x), torch.zeros_like(x))
-                         for x in self._parameters]
-        self._steps = torch.zeros((trials, len(self._parameters)), dtype=torch.float64)
+        flat = self.network.flat
+        # Adam's moments and step counts, per trial and parameter.
+        self._m, self._v = torch.zeros_like(flat), torch.zeros_like(flat)
+        self._steps = torch.zeros_like(flat)
         self._B0 = torch.as_tensor(np.array([np.asarray(B0, float) for B0 in B0s]))
         self._D0 = torch.as_tensor(np.array([np.asarray(D0, float) for D0 in D0s]))
 
@@ -193,13 +192,15 @@ class RhsIdentifier:
         return w / torch.clamp(w.sum(-1, keepdim=True), min=1e-300)
 
     def _Losses(self, w, q, p, qdot, u, tau, trials):
-        """The loss of each trial of ``trials`` on its window (trials,)."""
+        """The loss of each trial of ``trials`` (None: all) on its window."""
         B, D = self.network(q, p, trials)
         residual = tau - port_torque(B, D, u, qdot)
         data = torch.sum(w * torch.sum(residual**2, -1), -1)
         if not self._regularized:
             return data
-        B0, D0 = self._B0[trials][:, None], self._D0[trials][:, None]
+        B0, D0 = ((self._B0, self._D0) if trials is None
+                  else (self._B0[trials], self._D0[trials]))
+        B0, D0 = B0[:, None], D0[:, None]
         E_u = torch.sum(w * torch.sum(u**2, -1), -1) / self.n
         E_q = torch.sum(w * torch.sum(qdot**2, -1), -1) / self.n
         if self._settings.prior_scale == "per_input":
@@ -257,12 +258,8 @@ class RhsIdentifier:
         old estimate, is where Adam starts."""
         self.network.set_constant_B(trial, self.ConstantFit(rows, t_now, window_start,
                                                             trial))
-        head_B = {id(x) for x in self.network.head_B()}
-        for k, parameter in enumerate(self._parameters):
-            if id(parameter) in head_B:
-                for moment in self._moments[k]:
-                    moment[trial] = 0.0
-                self._steps[trial, k] = 0.0
+        head = self.network.head_B_columns
+        self._m[trial, head] = self._v[trial, head] = self._steps[trial, head] = 0.0
 
     def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> bool:
         """FitTrials of a batch of one: whether its steps were kept."""
@@ -284,43 +281,42 @@ class RhsIdentifier:
         times, q, p, qdot, u, tau = self._Split(rows[trials])
         w = self.Weights(times, t_now, np.asarray(window_starts, float)[trials])
         guard = self._settings.step_guard if self._regularized else 0.0
-        index = torch.as_tensor(trials)
-        before = [x.detach()[index].clone() for x in self._parameters] if guard else None
+        every = len(trials) == len(fitting)
+        index = None if every else torch.as_tensor(trials)
+        flat = self.network.flat
+        before = flat.detach()[trials].clone() if guard else None
         loss_before = None
         for _ in range(self._settings.steps_per_update):
-            for x in self._parameters:
-                x.grad = None
+            flat.grad = None
             losses = self._Losses(w, q, p, qdot, u, tau, index)
             loss_before = losses.detach() if loss_before is None else loss_before
             torch.sum(losses).backward()
-            self._AdamStep(index)
+            self._AdamStep(trials, every)
         kept[trials] = True
         if not guard or loss_before is None:
             return kept
         with torch.no_grad():
-            undone = self._Losses(w, q, p, qdot, u, tau, index) > guard * loss_before
-            if torch.any(undone):
-                for x, value in zip(self._parameters, before):
-                    x[index[undone]] = value[undone]
-        kept[trials[undone.numpy()]] = False
+            undone = (self._Losses(w, q, p, qdot, u, tau, index)
+                      > guard * loss_before).numpy()
+            if np.any(undone):
+                flat[trials[undone]] = before[undone]
+        kept[trials[undone]] = False
         return kept
 
-    def _AdamStep(self, index) -> None:
+    def _AdamStep(self, trials: np.ndarray, every: bool) -> None:
         """One Adam step (torch.optim.Adam's update, settings' learning rate, betas
-        and eps) of the trials ``index``, each with its own moments and step
-        count per parameter."""
-        s = self._settings
+        and eps) of the trials ``trials`` (``every``: all of them), each parameter
+        of each trial with its own moments and step count."""
+        s, flat = self._settings, self.network.flat
+        rows = slice(None) if every else torch.as_tensor(trials)
         with torch.no_grad():
-            for k, (x, (m, v)) in enumerate(zip(self._parameters, self._moments)):
-                g = x.grad[index]
-                self._steps[index, k] += 1.0
-                step = self._steps[index, k].reshape((-1,) + (1,) * (g.dim() - 1))
-                m[index] = s.beta1 * m[index] + (1 - s.beta1) * g
-                v[index] = s.beta2 * v[index] + (1 - s.beta2) * g * g
-                correction1 = 1 - s.beta1**step
-                correction2_sqrt = torch.sqrt(1 - s.beta2**step)
-                denominator = torch.sqrt(v[index]) / correction2_sqrt + s.eps
-                x[index] -= (s.learning_rate / correction1) * m[index] / denominator
+            g = flat.grad[rows]
+            steps = self._steps[rows] + 1.0
+            m = s.beta1 * self._m[rows] + (1 - s.beta1) * g
+            v = s.beta2 * self._v[rows] + (1 - s.beta2) * g * g
+            self._steps[rows], self._m[rows], self._v[rows] = steps, m, v
+            denominator = torch.sqrt(v) / torch.sqrt(1 - s.beta2**steps) + s.eps
+            flat[rows] -= (s.learning_rate / (1 - s.beta1**steps)) * m / denominator
 
     def Statistics(self, rows: np.ndarray, t_now: float,
                    window_start: float = -np.inf) -> FitStatistics:

@@ -97,10 +97,12 @@ class RhsNetwork(torch.nn.Module):
 
 
 class StackedRhsNetworks(torch.nn.Module):
-    """The RhsNetworks of a batch's trials as one module whose parameters are the
-    trials' stacked along a first axis (each trial's initialized as its own
-    RhsNetwork: ``networks``), evaluated with batched matrix products: one
-    forward and backward pass trains them all, each trial's gradient its own."""
+    """The RhsNetworks of a batch's trials as one module with one parameter
+    ``flat`` (trials x P): row i is trial i's exported parameter vector
+    (RhsNetwork.export's order; each trial initialized as its own RhsNetwork:
+    ``networks``), the layers views of it, evaluated with batched matrix
+    products: one forward and backward pass trains them all, each trial's
+    gradient its own row."""
 
     def __init__(self, networks: List[RhsNetwork]):
         super().__init__()
@@ -108,15 +110,22 @@ class StackedRhsNetworks(torch.nn.Module):
         self.n, self.momentum_scale = first.n, first.momentum_scale
         self.coupling = torch.stack([network.coupling for network in networks])
         self.layers = len(first.body_B) // 2
+        self.flat = torch.nn.Parameter(torch.as_tensor(np.array(
+            [network.export() for network in networks])))
         # In RhsNetwork.parameters()'s order: body_B's, body_D's, head_B, head_D.
-        self.stacked = torch.nn.ParameterList([
-            torch.nn.Parameter(torch.stack([p.detach() for p in parameters]))
-            for parameters in zip(*(network.parameters() for network in networks))])
+        self._views, start = [], 0
+        for parameter in first.parameters():
+            size = parameter.numel()
+            self._views.append((slice(start, start + size), tuple(parameter.shape)))
+            start += size
+        head_B = self._views[-4:-2]
+        self.head_B_columns = slice(head_B[0][0].start, head_B[1][0].stop)
 
     def forward(self, q, p, trials=None):
         """(B_hat (t, m, n, n), D_hat (t, m, n)) of the trials ``trials`` (all by
         default; t of them) at their samples q, p of shape (t, m, n)."""
-        params = [x if trials is None else x[trials] for x in self.stacked]
+        flat = self.flat if trials is None else self.flat[trials]
+        params = [flat[:, columns].reshape((-1,) + shape) for columns, shape in self._views]
         coupling = self.coupling if trials is None else self.coupling[trials]
         X = torch.cat([q, p / self.momentum_scale], dim=-1)
         L = 2 * self.layers
@@ -130,25 +139,19 @@ class StackedRhsNetworks(torch.nn.Module):
         D = torch.nn.functional.softplus(_dense(W_D, b_D, hD))
         return B, D
 
-    def head_B(self) -> List[torch.nn.Parameter]:
-        """B's output layer (weight, bias), stacked."""
-        return list(self.stacked[-4:-2])
-
     def set_constant_B(self, trial: int, B) -> None:
         """Trial ``trial``'s B output layer with zero weights and the bias that makes
         B_hat = B (n x n) at every state (RhsNetwork.set_constant_B)."""
-        weight, bias = self.head_B()
+        (weight, _), (bias, _) = self._views[-4:-2]
         with torch.no_grad():
-            weight[trial].zero_()
-            bias[trial].copy_(torch.as_tensor(
-                (np.asarray(B, float) / self.coupling[trial].numpy()).reshape(-1)))
+            self.flat[trial, weight] = 0.0
+            self.flat[trial, bias] = torch.as_tensor(
+                (np.asarray(B, float) / self.coupling[trial].numpy()).reshape(-1))
 
     def export(self) -> np.ndarray:
         """Each trial's parameters as one float64 vector (RhsNetwork.export's
         order): shape (trials, size)."""
-        trials = self.stacked[0].shape[0]
-        return torch.cat([x.detach().reshape(trials, -1) for x in self.stacked],
-                         dim=1).numpy()
+        return self.flat.detach().numpy().copy()
 
 
 def _dense(weight, bias, x):

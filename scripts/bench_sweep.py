@@ -203,7 +203,8 @@ def _check(rows) -> None:
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--trials", type=int, default=6)
+    parser.add_argument("--trials", type=int, default=6,
+                        help="trials of the sweep comparison (0: batches only)")
     parser.add_argument("--batch-sizes", type=int, nargs="*", default=[1, 4, 16, 64])
     parser.add_argument("--batch-duration", type=float, default=4.0,
                         help="[s] simulated by each batch")
@@ -221,6 +222,8 @@ def main():
     if args.spatial_batch_sizes:
         spatial_batch_scaling("satellite_6dof", args.spatial_batch_sizes,
                               args.spatial_duration)
+    if args.trials <= 0:
+        return
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         scenario = short_scenario()

@@ -30,13 +30,8 @@ from dacph_drake.kernels.arm import dot, matmul, matvec
 @njit(cache=True)
 def _rotation(axis, angle):
     """Rodrigues: the rotation by ``angle`` about the unit ``axis``."""
-    x, y, z = axis[0], axis[1], axis[2]
-    c, s = np.cos(angle), np.sin(angle)
-    t = 1.0 - c
     R = np.empty((3, 3))
-    R[0, 0], R[0, 1], R[0, 2] = t * x * x + c, t * x * y - s * z, t * x * z + s * y
-    R[1, 0], R[1, 1], R[1, 2] = t * x * y + s * z, t * y * y + c, t * y * z - s * x
-    R[2, 0], R[2, 1], R[2, 2] = t * x * z - s * y, t * y * z + s * x, t * z * z + c
+    _rotation_into(axis, angle, R)
     return R
 
 
@@ -54,24 +49,58 @@ def _skew(v):
 @njit(cache=True)
 def forward_kinematics(parent, joint, X_PF, axis, X_MC, q):
     """(X_WC (nodes, 4, 4), S (n, 6)): every body's pose and every joint's motion
-    subspace, the base at the identity."""
+    subspace, the base at the identity. The products are matmul's sums, written
+    into work arrays (no allocation per node)."""
     nodes, n = parent.shape[0], q.shape[0]
     X = np.empty((nodes, 4, 4))
     S = np.zeros((n, 6))
     X[0] = np.eye(4)
+    X_WF, X_WM, R, RR = np.empty((4, 4)), np.empty((4, 4)), np.empty((3, 3)), \
+        np.empty((3, 3))
     for node in range(1, nodes):
-        X_WF = matmul(X[parent[node]], X_PF[node])
+        _product_into(X[parent[node]], X_PF[node], X_WF)
         j = joint[node]
         if j >= 0:
-            a = matvec(X_WF[:3, :3], axis[node])
-            S[j, :3] = a
-            S[j, 3:] = _cross(X_WF[:3, 3], a)
-            X_WM = X_WF.copy()
-            X_WM[:3, :3] = matmul(X_WF[:3, :3], _rotation(axis[node], q[j]))
-            X[node] = matmul(X_WM, X_MC[node])
+            a0, a1, a2 = 0.0, 0.0, 0.0                  # a = R_WF axis (matvec)
+            for k in range(3):
+                a0 += X_WF[0, k] * axis[node, k]
+                a1 += X_WF[1, k] * axis[node, k]
+                a2 += X_WF[2, k] * axis[node, k]
+            S[j, 0], S[j, 1], S[j, 2] = a0, a1, a2
+            p0, p1, p2 = X_WF[0, 3], X_WF[1, 3], X_WF[2, 3]
+            S[j, 3], S[j, 4], S[j, 5] = p1 * a2 - p2 * a1, p2 * a0 - p0 * a2, \
+                p0 * a1 - p1 * a0
+            _rotation_into(axis[node], q[j], R)
+            _product_into(X_WF[:3, :3], R, RR)
+            X_WM[:, :] = X_WF
+            X_WM[:3, :3] = RR
+            _product_into(X_WM, X_MC[node], X[node])
         else:
-            X[node] = matmul(X_WF, X_MC[node])
+            _product_into(X_WF, X_MC[node], X[node])
     return X, S
+
+
+@njit(cache=True)
+def _product_into(A, B, out):
+    """out = A B, summed as arm.matmul sums it."""
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            out[i, j] = 0.0
+        for k in range(A.shape[1]):
+            a = A[i, k]
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+
+
+@njit(cache=True)
+def _rotation_into(axis, angle, R):
+    """_rotation written into R."""
+    x, y, z = axis[0], axis[1], axis[2]
+    c, s = np.cos(angle), np.sin(angle)
+    t = 1.0 - c
+    R[0, 0], R[0, 1], R[0, 2] = t * x * x + c, t * x * y - s * z, t * x * z + s * y
+    R[1, 0], R[1, 1], R[1, 2] = t * x * y + s * z, t * y * y + c, t * y * z - s * x
+    R[2, 0], R[2, 1], R[2, 2] = t * x * z - s * y, t * y * z + s * x, t * z * z + c
 
 
 @njit(cache=True)
@@ -380,19 +409,23 @@ def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
                    moment, inertia, base_pose, base_velocity, q, qdot):
     """p (n): the joint rows of H(q) v,
 
-        p_j = S_j . sum_{bodies C joint j moves} I_C V_C,
-        V_C = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
+        p_j = S_j . sum_{bodies C joint j moves} h_C,   h_C = (L_C; P_C),
+        V_C = (omega; v_O) = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
+        P_C = m (v_O + omega x c),  L_C = R I_c R^T omega + c x P_C,
 
-    everything about the base's origin in its axes (the base at the identity:
-    p does not depend on the base's pose, only on its twist in its own axes)."""
+    (c the body's centre of mass, I_c its inertia about it in its own axes, R its
+    orientation), everything about the base's origin in its axes (the base at
+    the identity: p does not depend on the base's pose, only on its twist in its
+    own axes). Scalar loops: no allocation per body."""
     n, nodes = q.shape[0], parent.shape[0]
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
-    spatial = _spatial_inertias(X, mass, moment, inertia)
     _, _, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
     p = np.zeros(n)
-    V, h = np.empty(6), np.empty(6)
+    V, h, c_B, c, w, Iw = (np.empty(6), np.empty(6), np.empty(3), np.empty(3),
+                           np.empty(3), np.empty(3))
     for node in range(nodes):
-        if mass[node] <= 0.0:
+        m = mass[node]
+        if m <= 0.0:
             continue
         for r in range(3):
             V[r], V[3 + r] = omega_B[r], v_B[r]
@@ -400,11 +433,29 @@ def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
             if below[k, node]:
                 for r in range(6):
                     V[r] += S[k, r] * qdot[k]
-        for r in range(6):
-            value = 0.0
-            for c in range(6):
-                value += spatial[node, r, c] * V[c]
-            h[r] = value
+        cc = 0.0
+        for r in range(3):
+            c_B[r] = moment[node, r] / m
+            cc += c_B[r] * c_B[r]
+        for r in range(3):          # c = p + R c_B, w = R^T omega (body axes)
+            c[r], w[r] = X[node, r, 3], 0.0
+            for k in range(3):
+                c[r] += X[node, r, k] * c_B[k]
+                w[r] += X[node, k, r] * V[k]
+        for r in range(3):          # I_c w, I_c = I_o - m (|c_B|^2 1 - c_B c_B^T)
+            value = -m * cc * w[r]
+            for k in range(3):
+                value += (inertia[node, r, k] + m * c_B[r] * c_B[k]) * w[k]
+            Iw[r] = value
+        # P = m (v_O + omega x c); L = R (I_c w) + c x P.
+        h[3] = m * (V[3] + V[1] * c[2] - V[2] * c[1])
+        h[4] = m * (V[4] + V[2] * c[0] - V[0] * c[2])
+        h[5] = m * (V[5] + V[0] * c[1] - V[1] * c[0])
+        for r in range(3):
+            h[r] = X[node, r, 0] * Iw[0] + X[node, r, 1] * Iw[1] + X[node, r, 2] * Iw[2]
+        h[0] += c[1] * h[5] - c[2] * h[4]
+        h[1] += c[2] * h[3] - c[0] * h[5]
+        h[2] += c[0] * h[4] - c[1] * h[3]
         for j in range(n):
             if below[j, node]:
                 p[j] += dot(S[j], h)
