@@ -32,6 +32,20 @@ def _trials(count: int, diverging: int = None):
     return trials
 
 
+def _batch_equal_to_solo_runs(trials, controller: str, duration: float):
+    """The batch's results, each trial's status, reason, final time and every log
+    asserted equal to its solo run's, bit for bit."""
+    batch = simulate_batch(trials, controller, duration=duration)
+    for scenario, result in zip(trials, batch):
+        solo = simulate(scenario, controller, duration=duration)
+        assert (result.status, result.reason, result.final_time) == (
+            solo.status, solo.reason, solo.final_time)
+        assert set(result.logs) == set(solo.logs)
+        for name, log in solo.logs.items():
+            np.testing.assert_array_equal(result.logs[name], log, err_msg=name)
+    return batch
+
+
 @pytest.mark.parametrize("controller", ["dac", "model-based"])
 def test_every_trial_of_a_batch_is_its_solo_run(controller):
     """A batch of 4 trials (different robots, RHS, disturbances, q0 and seeds; trial
@@ -40,14 +54,7 @@ def test_every_trial_of_a_batch_is_its_solo_run(controller):
     trial stopped alone, at the integrator stage where its rate ran away."""
     trials = _trials(4, diverging=2)
     duration = 1.2
-    batch = simulate_batch(trials, controller, duration=duration)
-    for trial, (scenario, result) in enumerate(zip(trials, batch)):
-        solo = simulate(scenario, controller, duration=duration)
-        assert (result.status, result.reason, result.final_time) == (
-            solo.status, solo.reason, solo.final_time)
-        assert set(result.logs) == set(solo.logs)
-        for name, log in solo.logs.items():
-            np.testing.assert_array_equal(result.logs[name], log, err_msg=name)
+    batch = _batch_equal_to_solo_runs(trials, controller, duration)
     assert batch[2].status == "diverged" and "runaway" in batch[2].reason
     assert batch[2].final_time < 0.05
     assert all(result.status == "ok" and result.final_time == pytest.approx(duration)
@@ -90,13 +97,5 @@ def test_every_trial_of_a_spatial_batch_is_its_solo_run(controller):
         scenario.disturbance.scale *= 1 + 0.3 * i
         trials.append(scenario)
     trials[1].uncertainty.B_scale = [100.0] * 3
-    duration = 0.6
-    batch = simulate_batch(trials, controller, duration=duration)
-    for scenario, result in zip(trials, batch):
-        solo = simulate(scenario, controller, duration=duration)
-        assert (result.status, result.reason, result.final_time) == (
-            solo.status, solo.reason, solo.final_time)
-        assert set(result.logs) == set(solo.logs)
-        for name, log in solo.logs.items():
-            np.testing.assert_array_equal(result.logs[name], log, err_msg=name)
+    batch = _batch_equal_to_solo_runs(trials, controller, duration=0.6)
     assert [result.status for result in batch] == ["ok", "diverged", "ok"]

@@ -94,6 +94,25 @@ def test_the_mass_matrix_and_the_momentum_are_linear_in_the_inertias(plant):
     np.testing.assert_allclose(parameters.MomentumRegressor(context) @ pi,
                                np.concatenate([h.rotational(), h.translational()]),
                                atol=1e-12)
+    # The compiled kernels (kernels.identification, kernels.spatial) on the
+    # plant's kinematic tree: the same regressor, and p = the joint rows of H v.
+    from dacph_drake.dynamics.kinematic_tree import KinematicTree
+    from dacph_drake.kernels.identification import momentum_regressor
+    from dacph_drake.kernels.spatial import joint_momentum
+    tree = KinematicTree.FromPlant(plant)
+    x = plant.GetPositionsAndVelocities(context)
+    base_pose, q, base_velocity, qdot = coordinates.Split(x)
+    np.testing.assert_allclose(
+        momentum_regressor(tree.base_subspace, tree.parent, tree.joint, tree.X_PF,
+                           tree.axis, tree.X_MC, tree.below, parameters.Nodes(tree),
+                           base_pose, base_velocity, q, qdot),
+        parameters.MomentumRegressor(context), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(
+        joint_momentum(tree.base_subspace, tree.parent, tree.joint, tree.X_PF,
+                       tree.axis, tree.X_MC, tree.below, *tree.Inertias(context),
+                       base_pose, base_velocity, q, qdot),
+        (H @ plant.GetVelocities(context))[coordinates.joint_v], rtol=0,
+        atol=1e-13 * np.abs(H).max())
     parameters.Apply(context, 1.3 * pi)
     np.testing.assert_allclose(plant.CalcMassMatrix(context), 1.3 * H,
                                atol=1e-13 * np.abs(H).max())

@@ -20,7 +20,8 @@ R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC, omega = R_WB V_ang, v = R_WB v_C."""
 import numpy as np
 from numba import njit
 
-from dacph_drake.kernels.spatial import base_pose_and_twist, forward_kinematics, reduced_model
+from dacph_drake.kernels.spatial import (base_pose_and_twist, body_twist_into,
+                                         forward_kinematics, reduced_model)
 
 PER_BODY = 10           # inertial_parameters.PER_BODY: [m, h (3), I (6)] per body
 
@@ -32,18 +33,12 @@ def momentum_regressor(base_subspace, parent, joint, X_PF, axis, X_MC, below, no
     (inertial_parameters.InertialParameters.MomentumRegressor, compiled)."""
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     R_WB, p_WB, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
-    n = q.shape[0]
     Y = np.zeros((6, PER_BODY * nodes.shape[0]))
     R, o, omega, v = np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(3)
     V, local = np.empty(6), np.empty(3)
     for b in range(nodes.shape[0]):
         node = nodes[b]
-        for i in range(3):
-            V[i], V[3 + i] = omega_B[i], v_B[i]
-        for j in range(n):
-            if below[j, node]:
-                for i in range(6):
-                    V[i] += S[j, i] * qdot[j]
+        body_twist_into(V, omega_B, v_B, S, qdot, below, node)
         # The origin's velocity in B's axes: V_lin + V_ang x p_BC.
         pc = X[node, :3, 3]
         local[0] = V[3] + V[1] * pc[2] - V[2] * pc[1]

@@ -224,7 +224,7 @@ def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, 
     out = np.zeros(trials * n)
     tau = np.empty(n)
     scratch = torque_scratch(n)
-    worst = RUNNING
+    verdicts[trials] = RUNNING
     for i in range(trials):
         verdict = STOPPED
         if running[i] > 0:
@@ -232,12 +232,19 @@ def true_torques(t, x, indices, u, disturbance_models, packs, offsets, running, 
                               disturbance_models[i * m:(i + 1) * m],
                               packs[offsets[i]:offsets[i + 1]], scratch, tau)
             verdict = _planar_verdict(x, indices[i], n, tau, bound)
-            if verdict == RUNNING:
-                out[i * n:(i + 1) * n] = tau
-        verdicts[i] = verdict
-        worst = max(worst, verdict)
-    verdicts[trials] = worst
+        _settle(out, verdicts, i, verdict, tau)
     return out
+
+
+@njit(cache=True)
+def _settle(out, verdicts, i, verdict, tau):
+    """Trial i's verdict recorded (verdicts[i]; the largest so far in the last
+    entry) and, while it runs, its torque in its part of ``out``."""
+    n = tau.shape[0]
+    if verdict == RUNNING:
+        out[i * n:(i + 1) * n] = tau
+    verdicts[i] = verdict
+    verdicts[verdicts.shape[0] - 1] = max(verdicts[verdicts.shape[0] - 1], verdict)
 
 
 @njit(cache=True)
@@ -319,7 +326,7 @@ def spatial_true_torques(t, x, indices, base_subspace, parent, joint, X_PFs, axe
     m = disturbance_models.shape[0] // trials
     out = np.zeros(trials * n)
     tau, clipped, B, D = np.empty(n), np.empty(n), np.empty((n, n)), np.empty(n)
-    worst = RUNNING
+    verdicts[trials] = RUNNING
     for i in range(trials):
         verdict = STOPPED
         if running[i] > 0:
@@ -334,11 +341,7 @@ def spatial_true_torques(t, x, indices, base_subspace, parent, joint, X_PFs, axe
             _torque_into(t, q, p, qdot, clipped, disturbance_models[i * m:(i + 1) * m],
                          packs[offsets[i]:offsets[i + 1]], B, D, tau)
             verdict = _verdict(running[i], arm, arm[7:13], qdot, tau, bound)
-            if verdict == RUNNING:
-                out[i * n:(i + 1) * n] = tau
-        verdicts[i] = verdict
-        worst = max(worst, verdict)
-    verdicts[trials] = worst
+        _settle(out, verdicts, i, verdict, tau)
     return out
 
 

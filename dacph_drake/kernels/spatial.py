@@ -405,6 +405,19 @@ def joint_momenta(base_subspace, parent, joint, X_PFs, axes, X_MCs, below, masse
 
 
 @njit(cache=True)
+def body_twist_into(V, omega_B, v_B, S, qdot, below, node):
+    """V = (omega; v_O) of body ``node``: the base's twist (omega_B; v_B) plus
+    S_k qdot_k of every joint k that moves it (about the base's origin, in its
+    axes)."""
+    for r in range(3):
+        V[r], V[3 + r] = omega_B[r], v_B[r]
+    for k in range(qdot.shape[0]):
+        if below[k, node]:
+            for r in range(6):
+                V[r] += S[k, r] * qdot[k]
+
+
+@njit(cache=True)
 def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
                    moment, inertia, base_pose, base_velocity, q, qdot):
     """p (n): the joint rows of H(q) v,
@@ -427,12 +440,7 @@ def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
         m = mass[node]
         if m <= 0.0:
             continue
-        for r in range(3):
-            V[r], V[3 + r] = omega_B[r], v_B[r]
-        for k in range(n):
-            if below[k, node]:
-                for r in range(6):
-                    V[r] += S[k, r] * qdot[k]
+        body_twist_into(V, omega_B, v_B, S, qdot, below, node)
         cc = 0.0
         for r in range(3):
             c_B[r] = moment[node, r] / m
