@@ -102,6 +102,7 @@ def load_robot(path: str) -> RobotParams:
 
 
 def save_robot(robot: RobotParams, path: str) -> None:
+    """Writes ``robot`` as typed YAML to ``path``."""
     with open(path, "w") as f:
         f.write(yaml_dump_typed(robot))
 

@@ -401,6 +401,8 @@ class ChangeDetector:
         return state
 
     def Update(self, state: np.ndarray, t: float, e_new: float) -> np.ndarray:
+        """The state after the newest samples' relative residual ``e_new`` at time t
+        (see the class docstring)."""
         state = state.copy()
         if t < state[0] or not np.isfinite(e_new):
             return state

@@ -30,7 +30,7 @@ def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
     a light joint i is scaled down by m_i / m_j, and so are its learning steps.
     Why: an error delta in B_ij adds delta u_j to joint i's torque; where u_j is a
     shoulder's N m and joint i a wrist of 1e-3 kg m^2, no in-band data bound delta
-    tightly enough (README, "Spatial robots"). Couplings into heavier joints and
+    tightly enough (docs/results/spatial.md). Couplings into heavier joints and
     the diagonal keep F = 1."""
     m = np.asarray(joint_inertias, float)
     if coupling == "uniform":
@@ -48,6 +48,9 @@ def port_torque(B, D, u, qdot):
 
 
 class RhsNetwork(torch.nn.Module):
+    """The physics-informed RHS network of one trial (module docstring): two tanh MLPs
+    on X = (q, p / p_scale) and the output layers of B_hat and D_hat, starting at the
+    constant prior (B0, D0), seeded by ``seed``; ``coupling`` is F."""
     def __init__(self, n: int, hidden: List[int], B0, D0, momentum_scale: float,
                  seed: int, coupling: np.ndarray = None):
         super().__init__()
@@ -81,6 +84,7 @@ class RhsNetwork(torch.nn.Module):
                 (np.asarray(B, float) / self.coupling.numpy()).reshape(-1)))
 
     def features(self, q, p):
+        """X = (q, p / p_scale), the MLPs' input."""
         return torch.cat([q, p / self.momentum_scale], dim=-1)
 
     def forward(self, q, p):

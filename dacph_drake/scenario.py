@@ -63,7 +63,7 @@ class LhsGains:
 @dataclass
 class InertiaIdentification:
     """The DAC loops' identification of the bodies' inertial parameters from momentum
-    conservation (systems/inertial_identifier.py; README, "Model error"): from
+    conservation (systems/inertial_identifier.py; docs/results/model-error.md): from
     ``start`` [s] on, the LHS controller, and through it the port observer and the
     learner's samples, use the parameters that the measured base and joint motion
     determine, in place of nominal_robot's. Directions informed less than
@@ -291,7 +291,7 @@ class Learner:
     mean ||tau_obs - (B_hat u - D_hat qdot)||^2, no prior.
 
     ``mode`` "regularized" (default) identifies only what the closed-loop data
-    inform (README, "Identifiability in closed loop"):
+    inform (docs/concepts/identifiability.md):
     - band: u, qdot, tau_obs pass the same band-pass filter before the regression
       (band_sections[0] first-order high-pass sections at band[0] Hz, then
       band_sections[1] low-pass sections at band[1] Hz). The relation
@@ -371,7 +371,7 @@ class Learner:
     (network.coupling_factors): "uniform" (the paper) or "inertia", where the
     coupling from a heavy joint j into a light joint i is scaled by
     min(1, m_i / m_j), m = diag M(q0). For arms whose joint inertias lie decades
-    apart (the spatial robots' shipped scenarios use it; README, "Spatial robots")."""
+    apart (the spatial robots' shipped scenarios use it; docs/results/spatial.md)."""
     mode: str = "regularized"
     hidden: List[int] = field(default_factory=lambda: [16, 8])
     learning_rate: float = 1e-2
@@ -402,13 +402,13 @@ class Learner:
 class Excitation:
     """A persistently exciting port request for the learner (DAC only): the LHS
     adds tau_pe(t) = amplitude sin(2 pi f_j t) to channel j of tau_c^r, with f_j
-    spread geometrically over ``frequencies`` = [f_first, f_last] [Hz]
+    spread geometrically over ``frequencies`` = [f_first, f_last] in Hz
     (f_j = f_first (f_last / f_first)^(j / (n - 1))). amplitude = 0 switches it off.
 
     Why: under the slow reference the data inform B only weakly, and from phase 3
     on the low-frequency disturbance shares the reference's band; a small request
     inside the learner's band, away from both, makes B and D identifiable
-    (README, "Identifiability in closed loop")."""
+    (docs/concepts/identifiability.md)."""
     amplitude: float = 2e-4         # [N m]
     frequencies: List[float] = field(default_factory=lambda: [3.1, 4.3])   # [Hz]
 
@@ -524,7 +524,7 @@ class ArmBase:
     """robot.base: the free-floating body an arm's own description is mounted on,
     a uniform box of ``mass`` [kg] and ``size`` [m] (its inertia and its collision
     shape, which the clearance potential keeps the links from), the arm's root
-    frame welded to it at ``mount`` = [x, y, z] [m], [roll, pitch, yaw] [rad] in the
+    frame welded to it at ``mount`` = [x, y, z] in m, [roll, pitch, yaw] in rad, in the
     box's centre frame. ``mass`` 0: no base is added, the description is the whole
     robot (its root body is the free base)."""
     mass: float = 0.0               # [kg]
@@ -654,6 +654,7 @@ class EndEffectorAngle:
     gains: LhsGains = field(default_factory=LhsGains)
 
     def Validate(self, periods: Periods) -> None:
+        """ConfigError naming the first gain or reference setting out of range."""
         for name in ("Kd", "Lambda", "epsilon", "eta"):
             require_positive(f"task.gains.{name}", getattr(self.gains, name))
         require_nonnegative("task.gains.chi_model_based", self.gains.chi_model_based,
@@ -676,6 +677,7 @@ class EndEffectorAttitude:
     gains: AttitudeGains = field(default_factory=AttitudeGains)
 
     def Validate(self, periods: Periods) -> None:
+        """ConfigError naming the first gain or reference setting out of range."""
         r, g = self.reference, self.gains
         require_positive("task.reference.period", r.period, "s")
         require_nonnegative("task.reference.amplitude", r.amplitude, "rad")
@@ -934,8 +936,8 @@ def described_arm_rhs() -> Rhs:
 
 
 def described_arm_learner() -> Learner:
-    """The learner on joints whose inertias lie decades apart (README, "Spatial
-    robots"): 8 high-pass sections (with the planar 4, the slow reference's N m
+    """The learner on joints whose inertias lie decades apart (docs/results/spatial.md):
+    8 high-pass sections (with the planar 4, the slow reference's N m
     torques leak into the band and leave 10-92 % of the heavy joints' in-band port
     torque unexplained by the true model: 1-5 % with 8); the prior weighted 0.1
     (heavy joints' damping torque is under 1 % of their in-band inertial torque: D
@@ -967,6 +969,7 @@ def six_dof_uncertainty(scale: float = 1.0) -> Uncertainty:
 
 
 def six_dof_disturbance(scale: float = 1.0) -> Disturbance:
+    """The shipped 6-DOF arm's disturbance d(t), times ``scale``."""
     return Disturbance(
         scale=scale, lf_offset=[0.03, -0.02, 0.02, -0.002, 0.002, -0.001],
         lf_amplitude=[0.02, 0.02, 0.01, 0.002, 0.002, 0.001],

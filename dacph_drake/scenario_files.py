@@ -97,6 +97,7 @@ class PlanarLayoutV1:
             reference=scenario.task.reference, **_shared(scenario))
 
     def ToScenario(self, path=None) -> Scenario:
+        """The Scenario this file layout describes."""
         return Scenario(
             robot=PlanarArm(truth=self.robot, nominal=self.nominal_robot,
                             potential=self.potential),
@@ -299,5 +300,6 @@ def saved_forms(scenario: Scenario) -> List[str]:
 
 
 def save_scenario(scenario: Scenario, path) -> None:
+    """Writes ``scenario`` as YAML to ``path`` (load_scenario reads it back)."""
     with open(path, "w") as f:
         f.write(yaml_dump_typed(scenario))

@@ -1,4 +1,4 @@
-"""Speed figures for the README (run: .venv/bin/python scripts/bench.py).
+"""Speed figures for docs/results/performance.md (run: .venv/bin/python scripts/bench.py).
 
 Each comparison is a ratio measured in this one run (the machines are shared).
 """

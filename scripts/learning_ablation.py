@@ -4,7 +4,7 @@ regularized learner minus one component at a time, over several learner seeds.
 
     .venv/bin/python scripts/learning_ablation.py --out runs/learning_ablation
 
-Writes ablation.md (the table quoted in the README) and ablation.json (every run's
+Writes ablation.md (the table quoted in docs/concepts/identifiability.md) and ablation.json (every run's
 metrics). Each row is the median over scenarios x seeds of the per-phase
 learned / nominal error ratios of B and D (below 1: learning beats the prior B0,
 D0), with the largest share of rejected B_hat, the RMS e_tau of phases 1-2 and the

@@ -1,5 +1,4 @@
-"""Control under model error, each part of it against the run without it (README,
-"Model error"): actuators off the prior (x0.4, x3, one of each), a fault, the
+"""Control under model error, each part of it against the run without it (docs/results/model-error.md): actuators off the prior (x0.4, x3, one of each), a fault, the
 controller's inertias off the robot's (20 % in opposite directions, and each body
 on its own), and the nominal robot; two seeds each (the learner's seed and the
 start configuration). Every DAC run is also verified (dacph verify's checks), and

@@ -1,4 +1,4 @@
-"""The spatial robots' ablation (README, "Spatial robots"): DAC, its learner-off
+"""The spatial robots' ablation (docs/results/spatial.md): DAC, its learner-off
 ablation (dac-nominal) and the model-based baseline on the shipped spatial scenarios,
 DAC and dac-nominal with two seeds. Prints the Markdown table and writes every run's
 metrics to --out (JSON). About 1 minute on one core.

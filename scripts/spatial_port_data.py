@@ -1,4 +1,4 @@
-"""What the learner's data say on a spatial robot (README, "Spatial robots"): runs
+"""What the learner's data say on a spatial robot (docs/results/spatial.md): runs
 the learner-off DAC loop (dac-nominal) of a shipped spatial scenario and, at the end
 of each phase, fits B and D by least squares, joint by joint, to the last 2 s of the
 learner's own band-passed port samples, next to the ground truth's B~, D~ at that

@@ -144,3 +144,20 @@ def test_driving_the_diagram_yourself_is_the_same_run():
     mine = loop.loggers["lhs_log"].FindLog(simulator.get_context()).data().T
     theirs = simulate(scenario, "model-based", duration=0.5).logs["lhs_log"]
     assert mine.shape == theirs.shape and np.array_equal(mine, theirs)
+
+
+def test_the_readme_example_runs(tmp_path, monkeypatch):
+    """The README's Python example, as printed there (the plots to a file-less
+    backend, its run directory under tmp_path), runs to the end."""
+    import re
+    from pathlib import Path
+    import matplotlib
+    matplotlib.use("Agg")
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    example = re.search(r"```python\n(.*?)```", readme, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    exec(compile(example, "README.md", "exec"), namespace)
+    assert namespace["dac"].status == "ok" and namespace["baseline"].status == "ok"
+    assert [trial.status for trial in namespace["trials"]] == ["ok"] * 4
+    assert (tmp_path / "runs" / "mine" / "run_dac.json").exists()

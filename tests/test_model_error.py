@@ -1,4 +1,4 @@
-"""Control when the robot is not what the controller assumed (README, "Model error"):
+"""Control when the robot is not what the controller assumed (docs/results/model-error.md):
 actuators off their prior and failing, the controller's inertias off the robot's.
 Each mechanism is tested alone (the true RHS's actuator gains, the inertial
 parameters and their identification from momentum, the learner's constant fit, the

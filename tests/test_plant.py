@@ -16,7 +16,7 @@ def test_free_flight_conserves_momentum_and_energy(robot, rng):
 
 def test_the_closed_loops_integrator_keeps_the_bookkeeping(robot, rng):
     """The closed loops integrate with Scenario().simulator (RK2 at 0.25 ms,
-    chosen for speed, README "Measured figures"): momentum stays at round-off like
+    chosen for speed, docs/results/performance.md): momentum stays at round-off like
     RK3's, and the energy balance closes to 5.8e-6 over 20 s (RK3: 2.3e-7), which
     this bounds at 2e-5."""
     from dacph_drake.scenario import Scenario

@@ -94,7 +94,7 @@ BAD_SCENARIO_FILES = [
     ("simulator: {step: 0.001}\n", r"s.yaml.*step"),
     ("integration_scheme: runge_kutta3\nsimulator: {max_step_size: 0.001}\n",
      r"s.yaml: both integration_scheme: and simulator: are set"),
-    # model error (README, "Model error")
+    # model error (docs/results/model-error.md)
     ("uncertainty: {B_scale: [1.0]}\n", r"uncertainty.B_scale has 1 entries"),
     ("uncertainty: {B_scale: [1.0, 0.0]}\n", r"uncertainty.B_scale\[1\] = 0.0 .*in \[0.01"),
     ("uncertainty: {faults: [{time: -1.0, joint: 1, gain: 0.5}]}\n",

@@ -87,6 +87,7 @@ class EnvelopeConstants:
             slope_scale=max_diagonal_M / lam**2)
 
     def Layer(self, chi):
+        """The boundary layer phi = layer_base + layer_per_chi chi at the RHS bound chi."""
         return self.layer_base + self.layer_per_chi * chi
 
     def TanhRate(self, chi):
@@ -107,6 +108,7 @@ class EnvelopeCheck:
     reason: str
 
     def as_dict(self):
+        """This check as a plain dict (for JSON)."""
         return asdict(self)
 
 

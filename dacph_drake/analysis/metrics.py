@@ -1,5 +1,5 @@
-"""The metrics of a run (the paper's reported quantities and this project's, README
-"Reproducing the paper"), computed from its logs."""
+"""The metrics of a run (the paper's reported quantities and this project's,
+docs/results/paper.md), computed from its logs."""
 from typing import Dict
 
 import numpy as np

@@ -54,6 +54,7 @@ class RegionCertificate:
     skipped: str = ""               # why no certificate was computed (budget), or ""
 
     def as_dict(self):
+        """This certificate as a plain dict (for JSON)."""
         return asdict(self)
 
 

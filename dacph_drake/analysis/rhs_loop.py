@@ -47,6 +47,7 @@ class RhsLoopCheck:
     reason: str
 
     def as_dict(self):
+        """This check as a plain dict (for JSON)."""
         return asdict(self)
 
 

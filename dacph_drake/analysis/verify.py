@@ -49,6 +49,7 @@ class LoopSeries:
     failure_times: List[float] = field(default_factory=list)
 
     def summary(self) -> Dict:
+        """{evaluated, ok, min_margin, and the worst sample's time} of the series."""
         if not self.time:
             return {"evaluated": 0, "ok": True, "min_margin": None}
         worst = int(np.argmin(self.margin))

@@ -249,6 +249,8 @@ def _AddSimulateArguments(command) -> None:
 
 
 def main(argv=None) -> int:
+    """The ``dacph`` command line: parses ``argv`` (default: sys.argv) and runs the
+    command; returns the exit status (2 for bad input, with one line naming it)."""
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     free = commands.add_parser(

@@ -24,6 +24,7 @@ class WorkMeter(LeafSystem):
         self.DeclareContinuousState(1)
 
     def DoCalcTimeDerivatives(self, context, derivatives):
+        """d/dt W = tau . qdot, the power the joint torques put in."""
         power = self._tau.Eval(context) @ self._state.Eval(context)[self._joint_v]
         derivatives.get_mutable_vector().SetAtIndex(0, power)
 

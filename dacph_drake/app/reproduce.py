@@ -142,6 +142,8 @@ def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
 
 
 def ablation_markdown(rows: List[Dict], title: str) -> str:
+    """A Markdown table (under ``title``) of per-phase ablation ``rows``
+    (metric, phase 1, phase 2, phase 3)."""
     lines = [f"## {title}", "", "| metric | phase 1 (linear) | phase 2 (+ nonlinear) | "
              "phase 3 (+ disturbance) |", "|---|---|---|---|"]
     for row in rows:
@@ -169,6 +171,8 @@ def format_value(value, unit: str, missing: str = "n/a") -> str:
 
 
 def table_markdown(rows: List[Dict], title: str) -> str:
+    """A Markdown table (under ``title``) of ``rows`` (metric, the paper's value, this
+    project's, the target)."""
     lines = [f"## {title}", "", "| metric | paper | this project | target |",
              "|---|---|---|---|"]
     for row in rows:

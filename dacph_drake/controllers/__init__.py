@@ -22,7 +22,7 @@ from dacph_drake.errors import require_one_of
 @dataclass(frozen=True)
 class Controller:
     builder: str            # "module:function" returning a closed_loop.ClosedLoop
-    description: str        # one line, for --help and the README
+    description: str        # one line, for --help
     label: str = ""         # in legends (empty: the registered name)
     color: str = "C7"       # in figures (matplotlib colour and line style)
     linestyle: str = "-."

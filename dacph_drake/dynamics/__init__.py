@@ -12,6 +12,8 @@ class ReducedModel(Protocol):
     for described ones): M(q) qdot = p is the port's momentum."""
     num_joints: int
 
-    def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray: ...
+    def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """p = M(q) qdot."""
 
-    def MassMatrix(self, q: np.ndarray) -> np.ndarray: ...
+    def MassMatrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q), the reduced mass matrix (n x n)."""

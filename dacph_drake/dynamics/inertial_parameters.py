@@ -66,6 +66,7 @@ class InertialParameters:
         self.size = PER_BODY * len(self.bodies)
 
     def body_slice(self, k: int) -> slice:
+        """The columns of body ``k``'s ten parameters in pi."""
         return slice(PER_BODY * k, PER_BODY * (k + 1))
 
     def FromContext(self, context) -> np.ndarray:

@@ -38,6 +38,7 @@ def joint_name(k: int) -> str:
 
 
 def link_name(k: int) -> str:
+    """The name of the planar arm's link ``k`` (0-based): link1, link2, ..."""
     return f"link{k + 1}"
 
 

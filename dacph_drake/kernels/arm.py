@@ -10,6 +10,7 @@ from numba import njit
 # project does not need, and for n <= 7 the loops are faster than a BLAS call.
 @njit(cache=True)
 def matmul(A, B):
+    """A B (loops: no BLAS)."""
     out = np.zeros((A.shape[0], B.shape[1]))
     for i in range(A.shape[0]):
         for k in range(A.shape[1]):
@@ -21,6 +22,7 @@ def matmul(A, B):
 
 @njit(cache=True)
 def matvec(A, x):
+    """A x (loops: no BLAS)."""
     out = np.zeros(A.shape[0])
     for i in range(A.shape[0]):
         for k in range(A.shape[1]):
@@ -30,6 +32,7 @@ def matvec(A, x):
 
 @njit(cache=True)
 def dot(a, b):
+    """a . b (a loop)."""
     out = 0.0
     for i in range(a.shape[0]):
         out += a[i] * b[i]

@@ -84,6 +84,8 @@ class ControllerBuilder:
         self._inputs = set()
 
     def Input(self, port, signal: str) -> None:
+        """Feeds ``port`` from the controller's input ``signal`` (a plant signal: q,
+        qdot, base_pose, base_velocity), exported on first use."""
         if signal in self._inputs:
             self.builder.ConnectInput(signal, port)
         else:

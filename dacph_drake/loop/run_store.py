@@ -47,6 +47,7 @@ def scenario_fingerprints(scenario: Scenario) -> List[str]:
 
 
 def versions() -> Dict[str, str]:
+    """The versions of Python and the libraries a run depends on, for run.json."""
     import drake
     import torch
     out = {"python": platform.python_version(), "numpy": np.__version__,

@@ -19,6 +19,7 @@ class InProcessExecutor(Executor):
     """Runs each submitted call at once, in this process."""
 
     def submit(self, fn, /, *args, **kwargs) -> Future:
+        """Runs fn(*args, **kwargs) now and returns its finished Future."""
         future = Future()
         try:
             future.set_result(fn(*args, **kwargs))

@@ -117,6 +117,7 @@ class RowStore:
         self.rows[row["trial"]] = row
 
     def close(self) -> None:
+        """Closes the rows file and releases the directory's lock."""
         if self._fd >= 0:
             os.close(self._fd)      # also releases the lock
             self._fd = -1
@@ -128,4 +129,5 @@ def _write_atomically(path: Path, text: str) -> None:
 
 
 def sorted_rows(rows: Dict[int, Dict]) -> List[Dict]:
+    """The rows in trial order."""
     return [rows[t] for t in sorted(rows)]

@@ -260,6 +260,8 @@ def write_summary(out_dir, definition: SweepDefinition) -> Dict:
 
 
 def write_parquet(flat: List[Dict], path: Path) -> str:
+    """Writes the flat rows to a Parquet file at ``path`` (pyarrow); returns a note
+    of what was written or why not."""
     try:
         import pyarrow
         import pyarrow.parquet

@@ -28,6 +28,9 @@ def _firas(rho, k, rho0):
 
 
 class BaseRepulsionPotential:
+    """The planar arm's null-space potential U(q) of the module docstring, for
+    ``robot`` (the controller's nominal arm) with the gains and margins of
+    ``settings``."""
     def __init__(self, robot: RobotParams, settings: Potential):
         self._n = robot.num_links
         self._half_size = robot.base.size / 2

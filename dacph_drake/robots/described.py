@@ -143,6 +143,7 @@ class DescribedRobot:
                 if arm.potential.gain > 0 else None)
 
     def Clearance(self):
+        """None: the clearance of a described arm is its AttitudeController's log."""
         return None
 
     def LiveView(self, loop, meshcat):
@@ -154,6 +155,7 @@ class DescribedRobot:
             x, controller.DesiredAttitude(t)[0]))
 
     def WriteAnimation(self, logs, out_html):
+        """Writes the HTML replay of ``logs`` to ``out_html``."""
         from dacph_drake.robots.viewers import write_spatial_animation
         return write_spatial_animation(self.scenario.robot, logs, out_html)
 
@@ -199,6 +201,7 @@ class DescribedRobot:
                                        if "saturated" in logs and len(t) else nan)}
 
     def TotalMass(self) -> float:
+        """The ground truth's total mass [kg] (its bodies with mass)."""
         return float(sum(body.default_mass()
                          for body in InertialParameters(self.truth_plant).bodies))
 

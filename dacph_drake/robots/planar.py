@@ -106,17 +106,21 @@ class PlanarRobot:
                                       if identify else {})}
 
     def LimitViolation(self):
+        """None: the planar arm's joints turn freely."""
         return None                 # the planar arm's joints turn freely
 
     def Clearance(self):
+        """q -> the smallest clearance of the true arm's links from the base [m]."""
         return BaseRepulsionPotential(self.scenario.robot.truth,
                                       self.scenario.robot.potential).MinClearance
 
     def LiveView(self, loop, meshcat):
+        """A LiveView of the planar loop in ``meshcat``."""
         from dacph_drake.robots.viewers import LiveView
         return LiveView.ForPlanarLoop(loop, meshcat)
 
     def WriteAnimation(self, logs, out_html):
+        """Writes the HTML replay of ``logs`` to ``out_html``."""
         from dacph_drake.robots.viewers import write_animation
         return write_animation(self.scenario, logs, out_html)
 
@@ -132,9 +136,11 @@ class PlanarRobot:
                 base_pose[:, 2] - base_pose[0, 2])
 
     def TaskMetrics(self, logs) -> Dict[str, float]:
+        """None beyond the common metrics (analysis.metrics) for the planar task."""
         return {}
 
     def TotalMass(self) -> float:
+        """The true arm's total mass [kg], base and links."""
         truth = self.scenario.robot.truth
         return truth.base.mass + sum(link.mass for link in truth.links)
 

@@ -145,6 +145,8 @@ class LiveView:
         return LiveView(loop.plant, meshcat, draw, fps)
 
     def Update(self, root_context) -> None:
+        """Draws the robot at ``root_context``'s state when its next frame is due (a
+        Simulator monitor)."""
         t = root_context.get_time()
         if t < self._next:
             return

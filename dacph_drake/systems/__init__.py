@@ -1,0 +1,1 @@
+"""The closed loop's Drake LeafSystems, one per module (docs/concepts/closed-loop.md)."""

@@ -6,6 +6,8 @@ from dacph_drake.scenario import Reference
 
 
 class OrientationReference:
+    """alpha_d(t) of the module docstring from ``reference`` and alpha(0) =
+    ``alpha0``, callable at t."""
     def __init__(self, reference: Reference, alpha0: float):
         self._a = np.asarray(reference.amplitudes, float)
         self._w = 2 * np.pi / np.asarray(reference.periods, float)

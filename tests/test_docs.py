@@ -1,0 +1,63 @@
+"""The documentation site (mkdocs.yml, docs/): it builds in strict mode (a broken
+link, a missing page or a failing cross-reference fails it), the tutorial notebook
+executed into it; every public module is in the API reference and every public
+class, function and method has a docstring."""
+import importlib
+import inspect
+import os
+import pkgutil
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import dacph_drake
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _public_modules():
+    return [info.name for info in pkgutil.walk_packages(dacph_drake.__path__,
+                                                        "dacph_drake.")
+            if not info.name.endswith("__main__")]
+
+
+def test_every_public_module_is_in_the_api_reference():
+    documented = set()
+    for page in (ROOT / "docs" / "reference").glob("*.md"):
+        documented |= set(re.findall(r"^::: (\S+)$", page.read_text(), re.M))
+    assert sorted(set(_public_modules()) - documented) == []
+
+
+def test_every_public_symbol_has_a_docstring():
+    missing = []
+    for name in _public_modules():
+        module = importlib.import_module(name)
+        if not (module.__doc__ or "").strip():
+            missing.append(name)
+        for symbol, obj in vars(module).items():
+            if symbol.startswith("_") or getattr(obj, "__module__", None) != name:
+                continue
+            if not (inspect.isclass(obj) or inspect.isfunction(obj)
+                    or hasattr(obj, "py_func")):
+                continue
+            if not (obj.__doc__ or "").strip():
+                missing.append(f"{name}.{symbol}")
+            if inspect.isclass(obj):
+                missing += [f"{name}.{symbol}.{method}" for method, f in vars(obj).items()
+                            if not method.startswith("_") and inspect.isfunction(f)
+                            and not (f.__doc__ or "").strip()]
+    assert missing == []
+
+
+def test_the_site_builds_in_strict_mode(tmp_path):
+    build = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir",
+         str(tmp_path / "site")], cwd=ROOT, capture_output=True, text=True,
+        env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+    assert build.returncode == 0, build.stderr[-3000:]
+    assert "WARNING" not in build.stderr, build.stderr[-3000:]
+    site = tmp_path / "site"
+    assert (site / "reference" / "systems" / "index.html").read_text().count(
+        "RhsIntegrator") > 0
+    assert "jp-OutputArea" in (site / "tutorial" / "index.html").read_text()
