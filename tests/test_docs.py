@@ -56,7 +56,9 @@ def test_the_site_builds_in_strict_mode(tmp_path):
          str(tmp_path / "site")], cwd=ROOT, capture_output=True, text=True,
         env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
     assert build.returncode == 0, build.stderr[-3000:]
-    assert "WARNING" not in build.stderr, build.stderr[-3000:]
+    # MkDocs' own warnings (strict mode also fails on them); the notebook's kernel
+    # may log one of its own, which is not the site's.
+    assert not re.search(r"^WARNING\s+-", build.stderr, re.M), build.stderr[-3000:]
     site = tmp_path / "site"
     assert (site / "reference" / "systems" / "index.html").read_text().count(
         "RhsIntegrator") > 0
