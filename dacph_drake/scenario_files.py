@@ -14,7 +14,7 @@ import logging
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import List, Optional, Tuple
+from typing import List, Optional, Tuple, Union
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
@@ -214,13 +214,24 @@ def load_older_layout(path) -> Optional[Scenario]:
                                migrate=_migrate_file).ToScenario(path)
 
 
-def load_scenario(path) -> Scenario:
-    """Loads and validates a scenario: a built-in name (BUILT_IN_SCENARIOS) where no
-    file of that name exists, or a YAML file (unknown keys and wrong types are
-    errors that name the file and the key; a file without a robot: section gets the
-    paper's arm and a logged warning saying so). Files of the layouts before the
-    robot: and task: sections (PlanarLayoutV1, SpatialLayoutV1) load with a logged
-    note."""
+def load_scenario(path: Union[str, Path]) -> Scenario:
+    """Loads and validates a scenario.
+
+    A file without a robot: section gets the paper's arm and a logged warning
+    saying so. Files of the layouts before the robot: and task: sections
+    (PlanarLayoutV1, SpatialLayoutV1) load with a logged note.
+
+    Args:
+        path: A YAML file, or a built-in name (BUILT_IN_SCENARIOS: paper, short,
+            satellite_6dof, satellite_3dof) where no file of that name exists.
+
+    Returns:
+        The validated Scenario.
+
+    Raises:
+        ConfigError: No such file or name, malformed YAML, an unknown key, a wrong
+            type or a setting out of range (one line naming the file and the
+            setting)."""
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
@@ -299,7 +310,11 @@ def saved_forms(scenario: Scenario) -> List[str]:
         for form in globals()[layout].From(scenario).SavedForms()]
 
 
-def save_scenario(scenario: Scenario, path) -> None:
-    """Writes ``scenario`` as YAML to ``path`` (load_scenario reads it back)."""
+def save_scenario(scenario: Scenario, path: Union[str, Path]) -> None:
+    """Writes a scenario as YAML (load_scenario reads it back).
+
+    Args:
+        scenario: The scenario.
+        path: The file to write."""
     with open(path, "w") as f:
         f.write(yaml_dump_typed(scenario))

@@ -63,3 +63,26 @@ def test_the_site_builds_in_strict_mode(tmp_path):
     assert (site / "reference" / "systems" / "index.html").read_text().count(
         "RhsIntegrator") > 0
     assert "jp-OutputArea" in (site / "tutorial" / "index.html").read_text()
+
+
+def test_the_entry_points_document_their_arguments_in_google_style():
+    """The functions a user calls first have Google-style sections (Args, Returns)
+    naming every parameter; mkdocstrings renders them as tables."""
+    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.analysis.verify import verify_run
+    from dacph_drake.controllers import build_closed_loop
+    from dacph_drake.controllers.dac import build_dac_diagram, build_dac_nominal_diagram
+    from dacph_drake.controllers.model_based import build_model_based_diagram
+    from dacph_drake.loop.simulate import simulate, simulate_batch
+    from dacph_drake.montecarlo.runner import run_sweep
+    from dacph_drake.scenario_files import load_scenario, save_scenario
+    for function in (simulate, simulate_batch, build_closed_loop, build_dac_diagram,
+                     build_dac_nominal_diagram, build_model_based_diagram,
+                     load_scenario, save_scenario, run_sweep, verify_run, run_metrics):
+        doc = inspect.getdoc(function)
+        assert "\nArgs:\n" in doc, function.__name__
+        arguments = doc.split("\nArgs:\n")[1]
+        for name, parameter in inspect.signature(function).parameters.items():
+            shown = "*" + name if parameter.kind is parameter.VAR_POSITIONAL else name
+            assert re.search(rf"^    {re.escape(shown)}:", arguments, re.M), (
+                function.__name__, name)

@@ -93,16 +93,24 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     return out
 
 
-def run_metrics(logs: Dict[str, np.ndarray], scenario) -> Dict[str, float]:
-    """Per-run metrics over phases 1-3 (t >= end of warm-up) unless named otherwise;
+def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
+    """Computes a run's metrics.
+
+    Metrics are over phases 1-3 (t >= end of warm-up) unless named otherwise:
     "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
     tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics;
     "faultK.NAME" for the K-th actuator fault (uncertainty.faults): the RMS tracking
-    error over the FAULT_WINDOW seconds before and after it, and their ratio.
-    The tracking error and the task's own metrics are the robot's
-    (robots.Robot.TaskSignals, TaskMetrics: a planar arm's alpha~ [rad], a
-    described arm's attitude error |e| [rad]). A phase the run did not reach is
-    nan."""
+    error over the FAULT_WINDOW seconds before and after it, and their ratio. The
+    tracking error and the task's own metrics are the robot's
+    (robots.Robot.TaskSignals, TaskMetrics: a planar arm's alpha~ in rad, a
+    described arm's attitude error |e| in rad).
+
+    Args:
+        logs: The run's logs (RunResult.logs).
+        scenario: The scenario it ran.
+
+    Returns:
+        Metric name -> value; nan for a phase the run did not reach."""
     with np.errstate(invalid="ignore"):        # a phase not reached: nan
         return _RunMetrics(logs, scenario, robot_of(scenario))
 

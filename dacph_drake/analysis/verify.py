@@ -20,7 +20,7 @@ and the inertia-scaled boundary layer, EnvelopeConstants.ForInertiaScaled).
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Optional, Union
 
 import matplotlib
 
@@ -146,11 +146,24 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
     return report
 
 
-def verify_run(run_dir, out_dir=None, controller: str = "dac",
+def verify_run(run_dir: Union[str, Path], out_dir: Optional[Union[str, Path]] = None,
+               controller: str = "dac",
                region_budget: float = REGION_BUDGET) -> Dict:
-    """verify_logs on the run of ``controller`` (one with the RHS integrator: DAC,
-    its ablation, or a registered variant) saved in run_dir (by ``dacph simulate``
-    or ``dacph reproduce``); the report goes to out_dir (default: run_dir)."""
+    """Verifies a saved run against its Lyapunov claims (verify_logs).
+
+    Args:
+        run_dir: A run directory written by ``dacph simulate`` or ``dacph
+            reproduce``.
+        out_dir: Where the report goes; default: run_dir.
+        controller: The run to verify: one with the RHS integrator (DAC, its
+            ablation, or a registered variant).
+        region_budget: Wall-time budget [s] of the region-of-attraction search.
+
+    Returns:
+        The report as a dict (its "ok" entry: every check passed).
+
+    Raises:
+        ConfigError: The run has no RHS loop to verify, or a file is missing."""
     logs, scenario, meta = load_run(run_dir, controller)
     if "rhs_log" not in logs:
         raise ConfigError(f"{run_dir}: the {controller} run has no RHS loop to verify "

@@ -15,8 +15,13 @@ take their names from here. To add a controller, write its module and add one
 entry below."""
 import importlib
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from dacph_drake.errors import require_one_of
+
+if TYPE_CHECKING:
+    from dacph_drake.loop.closed_loop import ClosedLoop
+    from dacph_drake.scenario import Scenario
 
 
 @dataclass(frozen=True)
@@ -52,8 +57,15 @@ def require_controller(name: str) -> Controller:
     return REGISTRY[name]
 
 
-def build_closed_loop(name: str, *scenarios):
-    """The loop (closed_loop.ClosedLoop) of controller ``name`` for ``scenarios``
-    (one: a single run; several: a batch of trials in one diagram)."""
+def build_closed_loop(name: str, *scenarios: "Scenario") -> "ClosedLoop":
+    """Builds the closed loop of a registered controller.
+
+    Args:
+        name: A name of REGISTRY.
+        *scenarios: One scenario (a single run) or several (a batch of trials in one
+            diagram).
+
+    Returns:
+        The closed_loop.ClosedLoop: its diagram, plant, loggers and named systems."""
     module, function = require_controller(name).builder.split(":")
     return getattr(importlib.import_module(module), function)(*scenarios)

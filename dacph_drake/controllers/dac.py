@@ -15,12 +15,21 @@ from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
 
 
 def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
-    """Plant + true RHS + disturbance, closed by the DAC-pH controller: the robot's
-    LHS controller (chi from the RHS loop, plus scenario.excitation; an inertial
-    identifier with inertia.identify), the port observer, the RHS integrator and
-    the learner (in regularized mode behind a RegressionFilter). With ``learning``
-    False the learner keeps its initial weights, so the integrator runs on the
-    nominal RHS (B0, D0): the dac-nominal ablation, otherwise the same diagram."""
+    """Builds the DAC-pH closed loop.
+
+    Plant, true RHS and disturbance, closed by the robot's LHS controller (chi from
+    the RHS loop, plus scenario.excitation; an inertial identifier with
+    inertia.identify), the port observer, the RHS integrator and the learner (in
+    regularized mode behind a RegressionFilter).
+
+    Args:
+        *scenarios: One scenario, or a batch of trials for one diagram.
+        learning: False keeps the learner's initial weights, so the integrator runs
+            on the nominal RHS (B0, D0): the dac-nominal ablation, otherwise the
+            same diagram.
+
+    Returns:
+        The ClosedLoop, named "dac" (or "dac_nominal")."""
     def add(loop: ClosedLoop, controller: ControllerBuilder):
         lhs, systems = AddLhsSide(loop, controller, loop.scenario.excitation,
                                   identify=loop.scenario.inertia.identify)
@@ -31,9 +40,16 @@ def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop
 
 
 def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
-    """The learning ablation: build_dac_diagram with the learner switched off (the
-    integrator on the nominal RHS B0, D0; the excitation stays, so that learning is
-    the only difference)."""
+    """Builds the learning ablation: build_dac_diagram with the learner off.
+
+    The integrator runs on the nominal RHS (B0, D0); the excitation stays, so that
+    learning is the only difference.
+
+    Args:
+        *scenarios: One scenario, or a batch of trials for one diagram.
+
+    Returns:
+        The ClosedLoop, named "dac_nominal"."""
     return build_dac_diagram(*scenarios, learning=False)
 
 

@@ -6,9 +6,10 @@ import signal
 import threading
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
+from pydrake.geometry import Meshcat
 
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
@@ -31,25 +32,42 @@ def _RaiseTerminated(signum, frame):
 
 
 def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[float] = None,
-             out_dir=None, progress: bool = False, interruptible: bool = False,
-             checkpoint_seconds: Optional[float] = None, meshcat=None) -> RunResult:
-    """Builds the ``controller`` (controllers.REGISTRY) loop for ``scenario``,
-    simulates it for ``duration`` (default: the scenario's) and, when ``out_dir`` is
-    given, saves logs.npz, scenario.yaml and run.json there (out_dir is checked
-    before the simulation starts and locked against a second writer of the same
-    controller; run.json records the duration and scenario_fingerprint). A run
-    whose state turns non-finite or whose rates exceed RUNAWAY_RATE (true_rhs) stops
-    with a reason and still saves what it has. With ``interruptible`` (the CLI's
-    single runs), SIGINT and SIGTERM stop the run the same way, with status
-    "interrupted"; sweeps and pools leave it off so that an interrupted trial is
-    redone on resume. With ``checkpoint_seconds`` and out_dir, the logs so far are
-    saved every checkpoint_seconds of wall time with status "incomplete", so that a
-    crash or kill -9 loses at most that much (every file is replaced atomically).
-    A directory holding another controller's run of another scenario is refused
-    (require_one_scenario). With ``meshcat`` (a pydrake Meshcat), the ground truth
-    is drawn there while it simulates (robots.Robot.LiveView;
-    scenario.simulator.target_realtime_rate paces it); the diagram and the results
-    are the same as without."""
+             out_dir: Optional[Union[str, Path]] = None, progress: bool = False,
+             interruptible: bool = False, checkpoint_seconds: Optional[float] = None,
+             meshcat: Optional[Meshcat] = None) -> RunResult:
+    """Builds a controller's closed loop for a scenario and simulates it.
+
+    A run whose state turns non-finite or whose rates exceed RUNAWAY_RATE (true_rhs)
+    stops with a reason and still saves what it has. Every saved file is replaced
+    atomically.
+
+    Args:
+        scenario: The scenario (robot, task, uncertainty, phases, settings).
+        controller: A name of controllers.REGISTRY ("dac", "dac-nominal",
+            "model-based", or one you registered).
+        duration: Simulated time [s]; default: the scenario's phases.
+        out_dir: Where to save logs_C.npz, scenario.yaml and run_C.json (None: not
+            saved). Checked before the simulation starts and locked against a second
+            writer of the same controller; a directory holding another
+            controller's run of another scenario is refused (require_one_scenario).
+        progress: Show a progress bar.
+        interruptible: SIGINT and SIGTERM stop the run with status "interrupted"
+            and its logs saved (the CLI's single runs; sweeps leave it off so that an
+            interrupted trial is redone on resume).
+        checkpoint_seconds: With ``out_dir``, save the logs so far every this many
+            seconds of wall time with status "incomplete" (a crash or kill -9 loses
+            at most that much).
+        meshcat: A pydrake Meshcat to draw the ground truth in while it simulates
+            (robots.Robot.LiveView; scenario.simulator.target_realtime_rate paces
+            it); the diagram and the results are the same as without.
+
+    Returns:
+        The run's RunResult: status ("ok", "diverged", "interrupted"), reason,
+        final time, wall time and logs.
+
+    Raises:
+        ConfigError: A setting, the controller's name, the duration or out_dir is
+            not allowed (one line naming it)."""
     require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
@@ -81,15 +99,30 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
 def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
                    duration: Optional[float] = None,
                    out_dirs: Optional[Sequence] = None) -> List[RunResult]:
-    """A batch of trials (``scenarios``, RequireOneDiagram) simulated in one diagram
-    (controllers.build_closed_loop(controller, *scenarios)): each trial's RunResult
-    is its solo simulate's (logs bit for bit, tests/test_batch.py). A trial that
-    diverges, collides or leaves its limits stops alone with its reason and final
-    time while the others run on: a non-finite or runaway state or torque is
-    caught at the integrator stage it appears at (its torque is zero from then on:
-    TrueRhsSystem), and the trial is brought to rest at the next check (every
-    MONITOR_PERIOD of simulated time). ``out_dirs``: each trial's run directory
-    (as simulate's out_dir; None entries or None: not saved)."""
+    """Simulates a batch of trials in one diagram.
+
+    The diagram is controllers.build_closed_loop(controller, *scenarios); each
+    trial's RunResult is its solo simulate's (logs bit for bit,
+    tests/test_batch.py). A trial that diverges, collides or leaves its limits stops
+    alone with its reason and final time while the others run on: a non-finite or
+    runaway state or torque is caught at the integrator stage it appears at (its
+    torque is zero from then on: TrueRhsSystem), and the trial is brought to rest at
+    the next check (every MONITOR_PERIOD of simulated time).
+
+    Args:
+        scenarios: The trials; they may differ in robot, q0, uncertainty,
+            disturbance and seed only (RequireOneDiagram).
+        controller: A name of controllers.REGISTRY.
+        duration: Simulated time [s]; default: the first trial's phases.
+        out_dirs: Each trial's run directory, as simulate's out_dir (None, or None
+            entries: not saved).
+
+    Returns:
+        Each trial's RunResult, in trial order.
+
+    Raises:
+        ConfigError: The trials differ in a setting that shapes the diagram, or a
+            setting is not allowed (one line naming it)."""
     require_controller(controller)
     scenarios = list(scenarios)
     duration = scenarios[0].duration if duration is None else duration

@@ -4,7 +4,8 @@ arrives, show progress with an ETA."""
 import sys
 from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from concurrent.futures.process import BrokenProcessPool
-from typing import Dict, Iterator, List, Optional
+from pathlib import Path
+from typing import Dict, Iterator, List, Optional, Union
 
 from dacph_drake.errors import require_in_range
 from dacph_drake.montecarlo.definition import SweepDefinition, sample_trial
@@ -15,23 +16,32 @@ from dacph_drake.montecarlo.trial import Trial, failed_row, run_trials
 from dacph_drake.loop.progress import progress_bar
 
 
-def run_sweep(definition: SweepDefinition, out_dir, executor: Optional[Executor] = None,
+def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: Optional[Executor] = None,
               slots: Optional[int] = None, progress: bool = False,
               batch_size: Optional[int] = None) -> List[Dict]:
-    """Runs the trials of ``definition`` missing from ``out_dir`` and returns all its
-    rows, by trial id.
+    """Runs the trials of a sweep missing from its directory.
 
-    The trials run in batches of ``batch_size`` (default: the sweep's batch_size,
-    else batch_size_for(definition)), each batch one diagram per controller
-    (trial.run_trials) and one task. executor: any concurrent.futures.Executor,
-    with ``slots`` batches kept in flight (default: one per core). None: a local
-    process pool of ``slots`` workers (default: one per core); if one of its
-    workers dies, the trials it may have been running are run again one at a time
-    in a fresh process, and a trial that kills that one too is recorded as
-    failed. A Dask KilledWorker fails its batch's trials the same way. The rows of
-    a batch are saved when it ends, so an interrupted sweep re-runs the trials of
+    Each batch is one diagram per controller (trial.run_trials) and one task. If a
+    local pool's worker dies, the trials it may have been running are run again one
+    at a time in a fresh process, and a trial that kills that one too is recorded
+    as failed; a Dask KilledWorker fails its batch's trials the same way. The rows
+    of a batch are saved when it ends, so an interrupted sweep re-runs the trials of
     its unfinished batches only. A trial's row is the same whichever executor,
-    worker count, batch or order ran it (except its wall times)."""
+    worker count, batch or order ran it (except its wall times).
+
+    Args:
+        definition: The loaded sweep (definition.load_sweep).
+        out_dir: The sweep's directory (rows.jsonl, manifest.json); resumed if it
+            holds this sweep, refused if it holds another.
+        executor: Any concurrent.futures.Executor (e.g. Dask's), or None for a local
+            process pool.
+        slots: Batches kept in flight (the pool's workers); default: one per core.
+        progress: Show a progress bar.
+        batch_size: Trials per diagram; default: the sweep's batch_size, else
+            batch_size_for(definition).
+
+    Returns:
+        Every trial's row, by trial id."""
     from dacph_drake.loop.run_store import versions
     slots = slots or default_workers()
     if batch_size is not None:
