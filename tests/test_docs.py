@@ -66,8 +66,9 @@ def test_the_site_builds_in_strict_mode(tmp_path):
 
 
 def test_the_entry_points_document_their_arguments_in_google_style():
-    """The functions a user calls first have Google-style sections (Args, Returns)
-    naming every parameter; mkdocstrings renders them as tables."""
+    """The functions a user calls first, and every LeafSystem's constructor, have
+    Google-style sections (Args, Returns) naming every parameter; mkdocstrings
+    renders them as tables."""
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.controllers import build_closed_loop
@@ -76,9 +77,20 @@ def test_the_entry_points_document_their_arguments_in_google_style():
     from dacph_drake.loop.simulate import simulate, simulate_batch
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.scenario_files import load_scenario, save_scenario
+    from dacph_drake import systems
+    leaf_systems = [getattr(importlib.import_module(f"dacph_drake.systems.{module}"),
+                            name) for module, name in (
+        ("attitude_controller", "AttitudeController"), ("disturbance", "DisturbanceSource"),
+        ("inertial_identifier", "InertialIdentifier"), ("learner", "RhsLearner"),
+        ("lhs_controller", "LhsController"), ("model_based_inverter", "ModelBasedInverter"),
+        ("port_observer", "PortObserver"), ("regression_filter", "RegressionFilter"),
+        ("rhs_integrator", "RhsIntegrator"), ("spatial_true_rhs", "SpatialTrueRhs"),
+        ("true_rhs", "TrueRhs"))]
+    assert systems.__doc__
     for function in (simulate, simulate_batch, build_closed_loop, build_dac_diagram,
                      build_dac_nominal_diagram, build_model_based_diagram,
-                     load_scenario, save_scenario, run_sweep, verify_run, run_metrics):
+                     load_scenario, save_scenario, run_sweep, verify_run, run_metrics,
+                     *leaf_systems):
         doc = inspect.getdoc(function)
         assert "\nArgs:\n" in doc, function.__name__
         arguments = doc.split("\nArgs:\n")[1]

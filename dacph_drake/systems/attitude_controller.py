@@ -68,7 +68,18 @@ class AttitudeController(LeafSystem):
 
     For a batch (``trials``: each trial's AttitudeTrial; one: a single run) every
     port carries the trials' signals stacked; each trial's update is its own
-    compiled call, in one callback for all trials."""
+    compiled call, in one callback for all trials.
+
+    Args:
+        trials: Each trial's AttitudeTrial (model, clearance potential, q0); one: a
+            single run.
+        reference: The attitude reference R_d(t) (task.reference).
+        gains: The sliding-mode gains (task.gains).
+        period: The update period [s] (periods.lhs).
+        eta: The null-space gain of xi = -eta grad U.
+        excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
+        identify: Declare input ``inertial_parameters`` (an InertialIdentifier's).
+    """
 
     def __init__(self, *, trials: Sequence[AttitudeTrial], reference: AttitudeReference,
                  gains: AttitudeGains, period: float, eta: float = 0.0,

@@ -19,7 +19,12 @@ class DisturbanceSource(LeafSystem):
     2 pi f_HF, offset, amplitude, 2 pi f, quadrature, a_HF direction]); the true
     RHS evaluates d(t) from it at every integrator stage inside its compiled
     kernel, so d(t) costs no Python call per stage. Output ``disturbance``: the
-    trials' d(t) (time only), for loggers and users."""
+    trials' d(t) (time only), for loggers and users.
+
+    Args:
+        settings: Each trial's disturbance d(t) (scenario.disturbance).
+        starts: Each trial's start time of d(t) [s] (the disturbance phase).
+    """
 
     def __init__(self, *, settings: Sequence[Disturbance], starts: Sequence[float]):
         super().__init__()

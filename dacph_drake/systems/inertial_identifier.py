@@ -52,7 +52,14 @@ class InertialIdentifier(LeafSystem):
     pi0 or None; one: a single run) every port carries the trials' signals
     stacked and each trial is identified alone: the regressor's information and
     the mass matrices of all trials are one compiled call each
-    (kernels.identification), the solves one stacked numpy call."""
+    (kernels.identification), the solves one stacked numpy call.
+
+    Args:
+        plants: Each trial's controller plant (its kinematic tree and layout).
+        settings: The identification's settings (scenario.inertia).
+        period: The sample period [s] (periods.learner_sample).
+        priors: Each trial's prior pi0, or None for the plant's own inertias.
+    """
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,

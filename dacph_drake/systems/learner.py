@@ -65,7 +65,16 @@ class RhsLearner(LeafSystem):
 
     The torch modules and Adam's moments live in this object, not in the Context:
     a diagram with a learner simulates one trajectory at a time (build one diagram
-    per run, as the package's builders do)."""
+    per run, as the package's builders do).
+
+    Args:
+        trials: Each trial's LearnerTrial (model, prior, seed, q0).
+        settings: The learner's settings (scenario.learner).
+        period: The training period [s] (periods.learner).
+        sample_period: The sampling period [s] (periods.learner_sample).
+        learning: False keeps the initial weights (the dac-nominal ablation).
+        watch_model: Declare input ``model_epoch`` (an InertialIdentifier's).
+    """
 
     def __init__(self, *, trials: Sequence[LearnerTrial], settings: Learner,
                  period: float, sample_period: float, learning: bool = True,

@@ -62,7 +62,15 @@ class LhsController(LeafSystem):
     identified bodies (ReducedOrderModel.CoefficientBasis: the mass matrix is linear
     in them). Every port carries the trials' signals stacked in trial order. The
     update is one compiled kernel for all trials (kernels.loop.lhs_samples);
-    lambda_min(M) of the log is computed when the log is read."""
+    lambda_min(M) of the log is computed when the log is read.
+
+    Args:
+        trials: Each trial's LhsTrial (model, potential, reference, lambda_min_M).
+        gains: The sliding-mode gains (task.gains).
+        period: The update period [s] (periods.lhs).
+        excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
+        identify: Declare input ``inertial_parameters`` (an InertialIdentifier's).
+    """
 
     def __init__(self, *, trials: Sequence[LhsTrial], gains: LhsGains, period: float,
                  excitation: Excitation = Excitation(amplitude=0.0),

@@ -16,7 +16,11 @@ class ModelBasedInverter(Diagram):
     It feeds the true RHS, which the integrator evaluates at every stage, so it is
     built from Drake's C++ primitives (no Python call per stage): a Multiplexer
     stacks [tau_c^r; qdot] and a MatrixGain applies [blockdiag(B0^-1) |
-    blockdiag(B0^-1 diag(D0))] over the trials."""
+    blockdiag(B0^-1 diag(D0))] over the trials.
+
+    Args:
+        uncertainties: Each trial's uncertainty (its nominal B0 and D0).
+    """
 
     def __init__(self, *, uncertainties: Sequence[Uncertainty]):
         super().__init__()

@@ -35,7 +35,15 @@ class PortObserver(LeafSystem):
     Inputs ``q``, ``qdot`` (the plant's joint state), ``reduced_model`` and ``u``.
     For a batch of trials (``seeds``: each trial's noise seed; one: a single run)
     every port carries the trials' signals stacked, and the sample of all trials
-    is one compiled kernel (kernels.loop.observer_samples)."""
+    is one compiled kernel (kernels.loop.observer_samples).
+
+    Args:
+        num_joints: n.
+        sample_period: The observer's period h [s] (periods.rhs).
+        noise_std: The standard deviation of the measurement noise on tau_obs [N m].
+        seeds: Each trial's noise seed.
+        anti_alias_cutoff: The anti-alias filter's cutoff [Hz] (0: none).
+    """
 
     def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,
                  seeds: Sequence[int], anti_alias_cutoff: float = 0.0):

@@ -17,7 +17,14 @@ class RegressionFilter(LeafSystem):
     against the filter's memory, and removes d(t) where it lies outside the band.
     q and p pass unfiltered: they are the network's features. For a batch of
     ``trials`` trials every port carries the trials' samples stacked, each
-    filtered alone (the cascade acts entry by entry)."""
+    filtered alone (the cascade acts entry by entry).
+
+    Args:
+        settings: The learner's settings (its band and sections).
+        num_joints: n.
+        period: The sample period [s] (periods.learner_sample).
+        trials: The number of trials of the batch.
+    """
 
     def __init__(self, *, settings: Learner, num_joints: int, period: float,
                  trials: int = 1):

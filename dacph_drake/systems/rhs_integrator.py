@@ -90,7 +90,15 @@ class RhsIntegrator(LeafSystem):
     all trials is one compiled kernel (kernels.loop.integrator_samples), the
     model refresh one evaluation of all trials' networks (kernels.network) and
     stacked numpy (the evidence test, which few refreshes reach, trial by
-    trial)."""
+    trial).
+
+    Args:
+        trials: Each trial's RhsTrial (model, network, LHS rates, nominal RHS).
+        settings: The RHS loop's settings (scenario.rhs).
+        period: The integrator's period h [s] (periods.rhs).
+        model_period: The model refresh's period [s] (periods.learner_sample).
+        stress: A verification setting that scales B_hat from a time on.
+    """
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
                  model_period: float, stress: Stress = Stress()):

@@ -35,7 +35,15 @@ class SpatialTrueRhs(TrueRhsSystem):
     (scenario.DescribedArm.joint_damping "keep"; zero otherwise). ``plant`` is
     the batch's ground truth (finalized), ``arms`` each trial's arm as a plant of
     its own (its inertias the defaults), ``uncertainties`` and ``phases`` each
-    trial's."""
+    trial's.
+
+    Args:
+        plant: The batch's ground truth (finalized).
+        arms: Each trial's arm as a plant of its own (its kinematic tree and
+            inertias).
+        uncertainties: Each trial's true RHS (scenario.uncertainty).
+        phases: Each trial's phases.
+    """
 
     def __init__(self, *, plant: MultibodyPlant, arms: Sequence[MultibodyPlant],
                  uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):

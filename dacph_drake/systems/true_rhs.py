@@ -84,7 +84,14 @@ class TrueRhs(TrueRhsSystem):
     metrics. ``plant`` is the batch's ground truth (finalized); ``truths`` each
     trial's arm (RobotParams), whose mass matrix's closed form (ReducedOrderModel)
     is fitted once here; ``uncertainties`` and ``phases`` each trial's. Port sizes
-    are the trials' signals stacked in trial order."""
+    are the trials' signals stacked in trial order.
+
+    Args:
+        plant: The batch's ground truth (finalized).
+        truths: Each trial's true arm (RobotParams).
+        uncertainties: Each trial's true RHS (scenario.uncertainty).
+        phases: Each trial's phases.
+    """
 
     def __init__(self, *, plant: MultibodyPlant, truths: Sequence[RobotParams],
                  uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):
