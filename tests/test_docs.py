@@ -74,8 +74,11 @@ def test_the_entry_points_document_their_arguments_in_google_style():
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.controllers.dac import build_dac_diagram, build_dac_nominal_diagram
     from dacph_drake.controllers.model_based import build_model_based_diagram
+    from dacph_drake.loop.closed_loop import (AddLhsSide, RequireOneDiagram,
+                                              assemble_closed_loop)
     from dacph_drake.loop.simulate import simulate, simulate_batch
     from dacph_drake.montecarlo.runner import run_sweep
+    from dacph_drake.robots import robot_of, robots_of
     from dacph_drake.scenario_files import load_scenario, save_scenario
     from dacph_drake import systems
     leaf_systems = [getattr(importlib.import_module(f"dacph_drake.systems.{module}"),
@@ -90,7 +93,8 @@ def test_the_entry_points_document_their_arguments_in_google_style():
     for function in (simulate, simulate_batch, build_closed_loop, build_dac_diagram,
                      build_dac_nominal_diagram, build_model_based_diagram,
                      load_scenario, save_scenario, run_sweep, verify_run, run_metrics,
-                     *leaf_systems):
+                     assemble_closed_loop, RequireOneDiagram, AddLhsSide, robot_of,
+                     robots_of, *leaf_systems):
         doc = inspect.getdoc(function)
         assert "\nArgs:\n" in doc, function.__name__
         arguments = doc.split("\nArgs:\n")[1]

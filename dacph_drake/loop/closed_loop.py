@@ -9,7 +9,7 @@ function adding its systems to a ControllerBuilder; the robot
 (robots.robot_of(scenario)) supplies the ground truth, the controller's model and
 the LHS controller."""
 from dataclasses import dataclass, field, fields
-from typing import Dict, List, Sequence
+from typing import Callable, Dict, List, Sequence, Tuple
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import Simulator
@@ -20,7 +20,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
 from dacph_drake.dynamics.plant import AddStateSplitter, SetArmsAtRest
 from dacph_drake.robots import Robot, robots_of
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.loop.simulator import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
 
@@ -93,16 +93,31 @@ class ControllerBuilder:
             self._inputs.add(signal)
 
 
-def assemble_closed_loop(scenario: Scenario, name: str, add_controller,
+def assemble_closed_loop(scenario: Scenario, name: str,
+                         add_controller: Callable[[ClosedLoop, ControllerBuilder], Dict],
                          more_trials: Sequence[Scenario] = ()) -> ClosedLoop:
-    """The ground truth of ``scenario`` (and of ``more_trials``: a batch of trials
-    in one diagram, ``scenario`` its first): plant, state splitter, true RHS,
-    disturbance, closed by the controller that ``add_controller(loop,
-    controller_builder)`` builds into its ControllerBuilder (returning its named
-    systems; loop.scenarios and loop.robots hold every trial's); every signal of
-    the ground truth and every output of the controller is logged at
-    periods.log. The diagram is named ``{name}_closed_loop``. The trials share
-    the settings that shape the diagram (RequireOneDiagram)."""
+    """Builds the ground truth and closes it with a controller.
+
+    The ground truth is the plant, the state splitter, the true RHS and the
+    disturbance; every signal of it and every output of the controller is logged at
+    periods.log. The trials share the settings that shape the diagram
+    (RequireOneDiagram).
+
+    Args:
+        scenario: The (first) trial's scenario.
+        name: The controller's name: the diagram is ``{name}_closed_loop``.
+        add_controller: ``add_controller(loop, controller_builder)`` adds the
+            controller's systems to controller_builder.builder (a
+            ControllerBuilder; loop.scenarios and loop.robots hold every trial's)
+            and returns them by name.
+        more_trials: The batch's other trials (one diagram for all).
+
+    Returns:
+        The ClosedLoop.
+
+    Raises:
+        ConfigError: The trials differ in a setting that shapes the diagram, or a
+            run cannot start at a trial's q0."""
     scenarios = [scenario, *more_trials]
     RequireOneDiagram(scenarios)
     robots = robots_of(scenarios)
@@ -154,9 +169,17 @@ PER_TRIAL_SETTINGS = ("robot", "q0", "uncertainty", "disturbance", "seed")
 
 
 def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
-    """ConfigError naming the first setting in which a trial differs from trial 0
-    beyond PER_TRIAL_SETTINGS (compared in their YAML form: Drake's
-    SimulatorConfig has no equality of its own)."""
+    """Requires the trials of a batch to share every setting that shapes the diagram.
+
+    Settings are compared in their YAML form (Drake's SimulatorConfig has no
+    equality of its own).
+
+    Args:
+        scenarios: The batch's trials.
+
+    Raises:
+        ConfigError: Naming the first setting in which a trial differs from trial 0
+            beyond PER_TRIAL_SETTINGS."""
     first = scenarios[0]
     for i, scenario in enumerate(scenarios[1:], start=1):
         for setting in fields(first):
@@ -168,13 +191,22 @@ def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
                     f"trials of one batch differ only in {', '.join(PER_TRIAL_SETTINGS)}")
 
 
-def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation,
-               identify: bool):
-    """The robot's LHS controller (robots.Robot.AddLhsController), its request and
-    log exported as the controller's outputs ``tau_request`` and the robot's log
-    name; with ``identify``, the InertialIdentifier fed from the controller's state
-    inputs, feeding the LHS, its estimate the output ``inertial_parameters``.
-    Returns (the LHS controller, the named systems)."""
+def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Excitation,
+               identify: bool) -> Tuple[object, Dict]:
+    """Adds the robot's LHS controller to a controller's diagram.
+
+    Its request and log are exported as the controller's outputs ``tau_request``
+    and the robot's log name (robots.Robot.AddLhsController).
+
+    Args:
+        loop: The loop being built (its robots: the trials').
+        controller: The controller's ControllerBuilder.
+        excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
+        identify: Add an InertialIdentifier fed from the controller's state inputs,
+            feeding the LHS; its estimate is the output ``inertial_parameters``.
+
+    Returns:
+        (the LHS controller, its named systems)."""
     robot, builder = loop.robot, controller.builder
     systems = type(robot).AddLhsController(controller, loop.robots, excitation, identify)
     lhs = systems[robot.lhs_name]

@@ -8,12 +8,16 @@ dispatches on them, returning an object with the Robot protocol below
 (loop.closed_loop), ``loop.simulate``, the metrics, the figures, ``dacph verify``
 and the animations use that protocol only."""
 import importlib
-from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
+from typing import (TYPE_CHECKING, Callable, Dict, List, Optional, Protocol, Sequence,
+                    Tuple)
 
 import numpy as np
 
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.errors import ConfigError
+
+if TYPE_CHECKING:
+    from dacph_drake.scenario import Scenario
 
 
 class Robot(Protocol):
@@ -98,15 +102,31 @@ def robot_type(scenario):
     return getattr(importlib.import_module(module), name)
 
 
-def robot_of(scenario) -> Robot:
-    """The Robot of ``scenario`` (a scenario.Scenario; validating the scenario
-    against it: ConfigError naming the first invalid setting)."""
+def robot_of(scenario: "Scenario") -> Robot:
+    """Makes the Robot of a scenario, validating the scenario against it.
+
+    Args:
+        scenario: A scenario.Scenario.
+
+    Returns:
+        Its Robot (robots.planar.PlanarRobot or robots.described.DescribedRobot).
+
+    Raises:
+        ConfigError: Naming the first invalid setting."""
     return robot_type(scenario)(scenario)
 
 
 def robots_of(scenarios: Sequence) -> List[Robot]:
-    """The Robot of each trial of a batch (robot_of), all of one type with one
-    number of joints: the trials share one diagram (ConfigError otherwise)."""
+    """Makes the Robot of each trial of a batch (robot_of).
+
+    Args:
+        scenarios: The batch's trials.
+
+    Returns:
+        Their Robots, all of one type with one number of joints.
+
+    Raises:
+        ConfigError: The trials' robots differ in type or number of joints."""
     robots = [robot_of(scenario) for scenario in scenarios]
     kinds = {(type(robot).__name__, robot.num_joints) for robot in robots}
     if len(kinds) > 1:
