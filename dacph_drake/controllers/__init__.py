@@ -26,10 +26,20 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Controller:
-    builder: str            # "module:function" returning a closed_loop.ClosedLoop
-    description: str        # one line, for --help
-    label: str = ""         # in legends (empty: the registered name)
-    color: str = "C7"       # in figures (matplotlib colour and line style)
+    """A registered controller.
+
+    Args:
+        builder: "module:function" of a function that takes the scenarios and
+            returns a closed_loop.ClosedLoop.
+        description: One line, for --help.
+        label: Its name in legends (empty: the registered name).
+        color: Its matplotlib colour in figures.
+        linestyle: Its matplotlib line style in figures.
+    """
+    builder: str
+    description: str
+    label: str = ""
+    color: str = "C7"
     linestyle: str = "-."
 
 
@@ -52,7 +62,16 @@ REFERENCE, BASELINE = "dac", "model-based"
 
 
 def require_controller(name: str) -> Controller:
-    """The registered controller ``name`` (ConfigError listing the names otherwise)."""
+    """Looks up a registered controller.
+
+    Args:
+        name: A name of REGISTRY.
+
+    Returns:
+        Its Controller.
+
+    Raises:
+        ConfigError: Listing the registered names."""
     require_one_of("controller", name, REGISTRY)
     return REGISTRY[name]
 

@@ -1,13 +1,16 @@
 """DAC-pH (the paper's controller) and its learning ablation: the robot's LHS
 controller with chi from the RHS loop and the learner's excitation, the port
 observer, the regression filter, the learner and the RHS integrator."""
-from typing import Dict
+from typing import Dict, Optional
+
+from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.network import ExportedNetwork
 from dacph_drake.scenario import Scenario
+from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import LearnerTrial, RhsLearner
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.regression_filter import RegressionFilter
@@ -53,18 +56,32 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
     return build_dac_diagram(*scenarios, learning=False)
 
 
-def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs, learning: bool,
-                identifier=None) -> Dict[str, object]:
-    """The DAC controller's RHS side: the port observer, the regression filter
-    (regularized mode), the learner and the RHS integrator, wired to the LHS
-    controller ``lhs`` (its outputs ``reduced_model`` and ``tau_request``, its input
-    ``chi``) and to the controller's inputs q, qdot; exports ``u``,
-    ``tau_observed``, ``rhs_log``, ``learner_log``, ``estimates``. The gain rule
-    (eq. 48) uses each trial's robot's LHS rates (robots.Robot.GainRuleRates); the
-    RHS period is checked for the largest c they allow (gain_rule.check_rhs_period).
-    With the LHS's InertialIdentifier ``identifier``, the learner also watches the
-    model the observer uses (Learner.model_change). Each system serves every
-    trial of the loop. Returns the named systems."""
+def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
+                learning: bool, identifier: Optional[InertialIdentifier] = None
+                ) -> Dict[str, object]:
+    """Adds the DAC controller's RHS side to a controller's diagram.
+
+    The port observer, the regression filter (regularized mode), the learner and the
+    RHS integrator, wired to the LHS controller and to the controller's inputs q,
+    qdot; exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``,
+    ``estimates``. The gain rule (eq. 48) uses each trial's robot's LHS rates
+    (robots.Robot.GainRuleRates); the RHS period is checked for the largest c they
+    allow (gain_rule.check_rhs_period). Each system serves every trial of the loop.
+
+    Args:
+        loop: The loop being built.
+        controller: The controller's ControllerBuilder.
+        lhs: The LHS controller (its outputs ``reduced_model`` and ``tau_request``,
+            its input ``chi``).
+        learning: False keeps the learner's initial weights (dac-nominal).
+        identifier: The LHS's InertialIdentifier, if any: the learner then watches
+            the model the observer uses (Learner.model_change).
+
+    Returns:
+        The added systems by name.
+
+    Raises:
+        ConfigError: The RHS period cannot realize the gain rule's largest rate."""
     scenario, model = loop.scenario, loop.model
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
     rates = [robot.GainRuleRates() for robot in loop.robots]

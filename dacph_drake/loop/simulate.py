@@ -6,10 +6,12 @@ import signal
 import threading
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context
 
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
@@ -17,6 +19,7 @@ from dacph_drake.loop.progress import progress_bar
 from dacph_drake.loop.run_store import (LockRun, RunResult, prepare_out_dir,
                                         require_one_scenario, save_run)
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
+from dacph_drake.loop.closed_loop import ClosedLoop
 from dacph_drake.scenario import Scenario
 
 
@@ -290,12 +293,20 @@ def _Freeze(plant, plant_context, coordinates: ArmCoordinates, q0) -> None:
                                                                    velocities]))
 
 
-def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
-    """Advances ``simulator`` to ``duration`` in steps of MONITOR_PERIOD of simulated
-    time; after each, ``check(t)`` gives the reason to stop (or None) and
-    ``after_chunk(last)`` runs (last: the final step). Returns why the run stopped
-    early (a RuntimeError of the simulation, such as a failed callback, included),
-    or "" when it reached ``duration``."""
+def advance_in_chunks(simulator: Simulator, duration: float,
+                      check: Callable[[float], Optional[str]],
+                      after_chunk: Callable[[bool], None]) -> str:
+    """Advances a simulator in steps of MONITOR_PERIOD of simulated time.
+
+    Args:
+        simulator: The Drake Simulator.
+        duration: Where to stop [s].
+        check: ``check(t)`` after each step: the reason to stop, or None.
+        after_chunk: ``after_chunk(last)`` after each step (last: the final one).
+
+    Returns:
+        Why the run stopped early (a RuntimeError of the simulation, such as a failed
+        callback, included), or "" when it reached ``duration``."""
     context = simulator.get_context()
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
     for k in range(1, chunks + 1):
@@ -312,10 +323,19 @@ def advance_in_chunks(simulator, duration: float, check, after_chunk) -> str:
     return ""
 
 
-def collect_logs(loop, context) -> Dict[str, np.ndarray]:
-    """Every logger's samples of a closed_loop.ClosedLoop, with "time", cut to the samples all of them hold: a run stopped
-    inside the loggers' publish at one instant (SIGINT, a failed callback) has some
-    loggers one sample ahead of the others."""
+def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
+    """Collects every logger's samples of a closed loop.
+
+    They are cut to the samples all loggers hold: a run stopped inside the loggers'
+    publish at one instant (SIGINT, a failed callback) has some loggers one sample
+    ahead of the others.
+
+    Args:
+        loop: The closed_loop.ClosedLoop.
+        context: Its simulator's root context.
+
+    Returns:
+        Signal name -> samples (T x k), with "time"."""
     logs, times = {}, None
     for name, logger in loop.loggers.items():
         log = logger.FindLog(context)
@@ -327,12 +347,22 @@ def collect_logs(loop, context) -> Dict[str, np.ndarray]:
     return logs
 
 
-def trial_logs(loop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
+def trial_logs(loop: ClosedLoop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
                trial: int, final_time: float) -> Dict[str, np.ndarray]:
-    """One trial's part of a batch's logs (collect_logs), up to ``final_time``:
-    its plant state in the layout of a plant of its own (its Robot's model's
-    plant: [positions, velocities]; ``coordinates``: the trial's in the batch's
-    plant, plant.trial_coordinates) and its share of every stacked signal."""
+    """Takes one trial's part of a batch's logs (collect_logs).
+
+    Args:
+        loop: The batch's closed_loop.ClosedLoop.
+        logs: The batch's logs.
+        coordinates: The trial's coordinates in the batch's plant
+            (plant.trial_coordinates).
+        trial: The trial's index.
+        final_time: The trial's last time [s] (a trial that stopped early is cut).
+
+    Returns:
+        Its logs: its plant state in the layout of a plant of its own (its Robot's
+        model's plant: [positions, velocities]) and its share of every stacked
+        signal."""
     nq, count = loop.plant.num_positions(), loop.trials
     kept = logs["time"] <= final_time
     solo = ArmCoordinates.FromPlant(loop.robots[trial].model.plant)
