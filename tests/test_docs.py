@@ -67,22 +67,24 @@ def test_the_site_builds_in_strict_mode(tmp_path):
 
 # Modules whose every public class and function is in Google style; the rest of the
 # package is being converted.
-GOOGLE_STYLE_MODULES = ("loop.simulate", "controllers", "controllers.dac",
-                        "controllers.model_based")
+GOOGLE_STYLE_MODULES = ("loop", "loop.simulate", "loop.closed_loop", "loop.run_store",
+                        "loop.files", "loop.progress", "loop.simulator", "controllers",
+                        "controllers.dac", "controllers.model_based")
 
 
 def _documents_its_arguments(function) -> list:
     """The parameters of ``function`` (a class: its constructor's) that its
-    docstring's Args section does not name."""
+    docstring's Args section (a dataclass's: Attributes) does not name."""
     doc = inspect.getdoc(function) or ""
     parameters = [("*" + name if p.kind is p.VAR_POSITIONAL else name)
                   for name, p in inspect.signature(function).parameters.items()
                   if name not in ("self", "cls")]
     if not parameters:
         return []
-    if "\nArgs:\n" not in doc:
+    section = next((s for s in ("\nArgs:\n", "\nAttributes:\n") if s in doc), None)
+    if section is None:
         return parameters
-    arguments = doc.split("\nArgs:\n")[1]
+    arguments = doc.split(section)[1]
     return [name for name in parameters
             if not re.search(rf"^    {re.escape(name)}:", arguments, re.M)]
 

@@ -13,7 +13,7 @@ from typing import Callable, Dict, List, Sequence, Tuple
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from dacph_drake.errors import ConfigError
@@ -27,13 +27,25 @@ from dacph_drake.systems.disturbance import DisturbanceSource
 
 @dataclass
 class ClosedLoop:
-    """A built closed loop of a batch of trials (one: a single run): its diagram,
-    the parts a user reads, and CreateSimulator() to run it with the scenarios'
-    settings. Every signal is the trials' signals stacked in trial order."""
+    """A built closed loop of a batch of trials (one: a single run).
+
+    CreateSimulator() runs it with the scenarios' settings. Every signal is the
+    trials' signals stacked in trial order.
+
+    Attributes:
+        diagram: The Drake diagram.
+        scenarios: Each trial's scenario, as built.
+        robots: Each trial's Robot (robots.robots_of(scenarios)).
+        plant: The ground-truth MultibodyPlant.
+        scene_graph: Its SceneGraph.
+        loggers: Signal name -> its VectorLogSink.
+        systems: System name -> the system (the ground truth's and the
+            controller's).
+    """
     diagram: Diagram
-    scenarios: List[Scenario]       # each trial's scenario, as built
-    robots: List[Robot]             # robots.robots_of(scenarios)
-    plant: object                   # the ground-truth MultibodyPlant
+    scenarios: List[Scenario]
+    robots: List[Robot]
+    plant: object
     scene_graph: object
     loggers: Dict[str, VectorLogSink] = field(default_factory=dict)
     systems: Dict[str, object] = field(default_factory=dict)
@@ -83,9 +95,15 @@ class ControllerBuilder:
         self.builder = DiagramBuilder()
         self._inputs = set()
 
-    def Input(self, port, signal: str) -> None:
-        """Feeds ``port`` from the controller's input ``signal`` (a plant signal: q,
-        qdot, base_pose, base_velocity), exported on first use."""
+    def Input(self, port: InputPort, signal: str) -> None:
+        """Feeds an internal input port from one of the controller's inputs.
+
+        The controller's input is exported on first use; several internal ports may
+        read one signal.
+
+        Args:
+            port: An input port of a system in ``builder``.
+            signal: A plant signal: q, qdot, base_pose or base_velocity."""
         if signal in self._inputs:
             self.builder.ConnectInput(signal, port)
         else:

@@ -10,8 +10,17 @@ LOG_REDRAW_PERIOD = 60.0        # [s] between redraws when stderr is not interac
 
 def progress_bar(total: float, desc: str, unit: str, enabled: bool = True,
                  initial: float = 0) -> tqdm:
-    """A tqdm bar on stderr counting ``unit`` from ``initial`` to ``total``; a no-op
-    bar (same methods) unless ``enabled``."""
+    """Makes a progress bar on stderr.
+
+    Args:
+        total: Where it ends.
+        desc: Its label.
+        unit: What it counts.
+        enabled: False gives a no-op bar with the same methods.
+        initial: Where it starts.
+
+    Returns:
+        The tqdm bar."""
     interactive = tqdm.__module__ == "tqdm.notebook" or sys.stderr.isatty()
     return tqdm(total=total, initial=initial, desc=desc, unit=unit, disable=not enabled,
                 file=sys.stderr, dynamic_ncols=True,

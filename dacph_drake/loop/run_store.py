@@ -10,7 +10,7 @@ import platform
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List
+from typing import IO, Dict, List, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -22,26 +22,52 @@ from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
 
 @dataclass
 class RunResult:
+    """The result of one run (loop.simulate.simulate, simulate_batch).
+
+    Attributes:
+        controller: The controller's registered name.
+        status: "ok", "diverged", "interrupted" or, in a checkpoint of a run still
+            going, "incomplete".
+        reason: Why the run stopped early ("" when it did not).
+        final_time: The simulated time reached [s].
+        wall_time: The wall time of the simulation [s] (a batch's share per trial).
+        logs: Signal name -> samples (T x k), with "time".
+        peak_memory_mib: This process's peak memory so far [MiB] (ru_maxrss).
+        duration: The duration asked for [s].
+    """
     controller: str
-    status: str                    # "ok", "diverged", "interrupted" or, in a
-    #                                checkpoint of a run still going, "incomplete"
+    status: str
     reason: str
     final_time: float
     wall_time: float
-    logs: Dict[str, np.ndarray] = field(default_factory=dict)   # name -> (T, k); "time"
-    peak_memory_mib: float = float("nan")    # of this process so far (ru_maxrss)
-    duration: float = float("nan")           # the duration asked for [s]
+    logs: Dict[str, np.ndarray] = field(default_factory=dict)
+    peak_memory_mib: float = float("nan")
+    duration: float = float("nan")
 
 
 def scenario_fingerprint(scenario: Scenario) -> str:
-    """A hash of every setting of ``scenario`` (its YAML form): run.json records it,
-    so that report() can refuse runs of different scenarios in one directory."""
+    """Hashes every setting of a scenario (its YAML form).
+
+    run.json records it, so that report() can refuse runs of different scenarios in
+    one directory.
+
+    Args:
+        scenario: The scenario.
+
+    Returns:
+        16 hexadecimal digits."""
     return scenario_fingerprints(scenario)[0]
 
 
 def scenario_fingerprints(scenario: Scenario) -> List[str]:
-    """scenario_fingerprint and the fingerprints the same settings had in the older
-    layouts a saved run may come from (scenario.saved_forms)."""
+    """Lists a scenario's fingerprints in every layout a saved run may come from.
+
+    Args:
+        scenario: The scenario.
+
+    Returns:
+        scenario_fingerprint's, then those of the older layouts
+        (scenario_files.saved_forms)."""
     return [hashlib.sha256(text.encode()).hexdigest()[:16]
             for text in saved_forms(scenario)]
 
@@ -62,9 +88,18 @@ def versions() -> Dict[str, str]:
     return out
 
 
-def prepare_out_dir(out_dir) -> Path:
-    """Creates ``out_dir`` and checks that it is a writable directory, before any
-    simulation time is spent (ConfigError naming the path otherwise)."""
+def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
+    """Creates a run directory and checks it is writable, before any simulation.
+
+    Args:
+        out_dir: The directory (created with its parents if missing).
+
+    Returns:
+        It, as a Path.
+
+    Raises:
+        ConfigError: It is a file, cannot be created or is not writable (naming
+            the path)."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out = {str(out)!r} is an existing file; allowed: a "
@@ -80,9 +115,18 @@ def prepare_out_dir(out_dir) -> Path:
     return out
 
 
-def LockRun(out: Path, controller: str):
-    """An exclusive lock on out/.run_CONTROLLER.lock, held while the run simulates
-    and saves (ConfigError when another process holds it)."""
+def LockRun(out: Path, controller: str) -> IO:
+    """Takes the exclusive lock of a controller's run in a directory.
+
+    Args:
+        out: The run directory.
+        controller: The controller's name: the lock is out/.run_CONTROLLER.lock.
+
+    Returns:
+        The open lock file; closing it releases the lock.
+
+    Raises:
+        ConfigError: Another process holds it."""
     lock = open(out / f".run_{controller}.lock", "w")
     try:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -93,9 +137,19 @@ def LockRun(out: Path, controller: str):
     return lock
 
 
-def require_run_files(run_dir, controllers) -> Path:
-    """ConfigError naming the first file that ``save_run`` would have written for
-    ``controllers`` and that run_dir lacks (scenario.yaml, logs_C.npz, run_C.json)."""
+def require_run_files(run_dir: Union[str, Path], controllers: Sequence[str]) -> Path:
+    """Requires the files save_run writes for some controllers.
+
+    Args:
+        run_dir: The run directory.
+        controllers: The controllers' names.
+
+    Returns:
+        run_dir, as a Path.
+
+    Raises:
+        ConfigError: Naming the first file missing (scenario.yaml, logs_C.npz,
+            run_C.json), or run_dir is not a directory."""
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise ConfigError(f"{str(run_dir)!r} is not a directory; allowed: a run "
@@ -109,10 +163,20 @@ def require_run_files(run_dir, controllers) -> Path:
     return run_dir
 
 
-def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = True
-             ) -> Path:
-    """Writes logs_C.npz, scenario.yaml and run_C.json into out_dir, each replaced
-    atomically (a reader or a crash never sees half a file)."""
+def save_run(result: RunResult, scenario: Scenario, out_dir: Union[str, Path],
+             compress: bool = True) -> Path:
+    """Saves a run: logs_C.npz, scenario.yaml and run_C.json.
+
+    Each file is replaced atomically: a reader or a crash never sees half a file.
+
+    Args:
+        result: The run.
+        scenario: Its scenario.
+        out_dir: The run directory (created if missing).
+        compress: Compress the logs (checkpoints do not, for speed).
+
+    Returns:
+        out_dir, as a Path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with replaced_atomically(out / f"logs_{result.controller}.npz") as path, \
@@ -134,11 +198,19 @@ def save_run(result: RunResult, scenario: Scenario, out_dir, compress: bool = Tr
 
 
 def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
-    """ConfigError when ``out`` holds a run that a run of ``controller`` on
-    ``scenario`` would leave beside runs of another scenario (report() then
-    refuses the directory): another controller's run_C.json whose scenario
-    fingerprint is not ``scenario``'s, or a run of the layout before one run
-    layout (run.json, logs.npz)."""
+    """Refuses a directory where a new run would sit beside another scenario's.
+
+    report() refuses such a directory, so it is refused before the run.
+
+    Args:
+        out: The run directory.
+        scenario: The new run's scenario.
+        controller: The new run's controller.
+
+    Raises:
+        ConfigError: ``out`` holds another controller's run_C.json whose scenario
+            fingerprint is not ``scenario``'s, or a run of the older layout
+            (run.json, logs.npz)."""
     if (out / "run.json").is_file() or (out / "logs.npz").is_file():
         raise ConfigError(f"--out = {str(out)!r} holds a run of the older spatial "
                           "layout (run.json, logs.npz); allowed: a directory without it")
@@ -158,16 +230,36 @@ def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None
                 "scenario in one directory), or another directory")
 
 
-def load_run(run_dir, controller: str):
-    """(logs, scenario, run.json contents) of ``controller``'s run saved in run_dir
-    (ConfigError naming a missing or damaged file)."""
+def load_run(run_dir: Union[str, Path], controller: str
+             ) -> Tuple[Dict[str, np.ndarray], Scenario, Dict]:
+    """Loads a saved run.
+
+    Args:
+        run_dir: The run directory.
+        controller: The run's controller.
+
+    Returns:
+        (logs, scenario, run_C.json's contents).
+
+    Raises:
+        ConfigError: Naming a missing or damaged file."""
     run_dir = require_run_files(run_dir, [controller])
     scenario = load_scenario(run_dir / "scenario.yaml")
     return load_logs(run_dir, controller), scenario, load_run_meta(run_dir, controller)
 
 
-def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
-    """logs_CONTROLLER.npz of run_dir (ConfigError naming it when damaged)."""
+def load_logs(run_dir: Union[str, Path], controller: str) -> Dict[str, np.ndarray]:
+    """Loads a run's logs (logs_CONTROLLER.npz).
+
+    Args:
+        run_dir: The run directory.
+        controller: The run's controller.
+
+    Returns:
+        Signal name -> samples.
+
+    Raises:
+        ConfigError: Naming the file when it is damaged."""
     path = Path(run_dir) / f"logs_{controller}.npz"
     try:
         with np.load(path) as data:
@@ -177,8 +269,18 @@ def load_logs(run_dir, controller: str) -> Dict[str, np.ndarray]:
                           "logs file saved by dacph simulate") from e
 
 
-def load_run_meta(run_dir, controller: str) -> Dict:
-    """run_CONTROLLER.json of run_dir (ConfigError naming it when damaged)."""
+def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
+    """Loads a run's record (run_CONTROLLER.json).
+
+    Args:
+        run_dir: The run directory.
+        controller: The run's controller.
+
+    Returns:
+        Its contents.
+
+    Raises:
+        ConfigError: Naming the file when it is damaged."""
     path = Path(run_dir) / f"run_{controller}.json"
     try:
         return json.loads(path.read_text())

@@ -4,6 +4,7 @@ import copyreg
 
 from pydrake.systems.analysis import (ApplySimulatorConfig, Simulator,
                                       SimulatorConfig)
+from pydrake.systems.framework import Diagram
 
 from dacph_drake.errors import (ConfigError, require_in_range, require_nonnegative,
                                 require_one_of)
@@ -18,18 +19,30 @@ ERROR_CONTROLLED_SCHEMES = ("runge_kutta3", "runge_kutta5")
 
 def FixedStepConfig(integration_scheme: str = "runge_kutta2",
                     step: float = 2.5e-4) -> SimulatorConfig:
-    """Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator,
-    as fast as the machine allows (target_realtime_rate 0).
+    """Makes Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator.
 
     Fixed steps because the closed loop's discrete updates stop the integrator at
-    every RHS sample anyway (the step taken is min(step, periods.rhs))."""
+    every RHS sample anyway (the step taken is min(step, periods.rhs)); as fast as
+    the machine allows (target_realtime_rate 0).
+
+    Args:
+        integration_scheme: Drake's scheme name (runge_kutta2, 3 or 5).
+        step: The largest step [s].
+
+    Returns:
+        The SimulatorConfig."""
     return SimulatorConfig(integration_scheme=integration_scheme, max_step_size=step,
                            use_error_control=False, target_realtime_rate=0.0)
 
 
 def validate_simulator_config(config: SimulatorConfig) -> None:
-    """ConfigError naming the first simulator.* setting a closed loop cannot run
-    (a scenario's ``simulator:``)."""
+    """Requires a simulator configuration a closed loop can run.
+
+    Args:
+        config: A scenario's ``simulator:`` (Drake's SimulatorConfig).
+
+    Raises:
+        ConfigError: Naming the first simulator.* setting a closed loop cannot run."""
     require_one_of("simulator.integration_scheme", config.integration_scheme,
                    INTEGRATION_SCHEMES)
     require_in_range("simulator.max_step_size", config.max_step_size, 1e-7, 1.0, "s")
@@ -50,8 +63,15 @@ def validate_simulator_config(config: SimulatorConfig) -> None:
                           "would add samples between them)")
 
 
-def MakeSimulator(diagram, config: SimulatorConfig) -> Simulator:
-    """A Simulator for ``diagram`` with ``config`` applied."""
+def MakeSimulator(diagram: Diagram, config: SimulatorConfig) -> Simulator:
+    """Makes a Simulator for a diagram with a configuration applied.
+
+    Args:
+        diagram: The diagram.
+        config: The simulator configuration (validate_simulator_config).
+
+    Returns:
+        The Simulator."""
     simulator = Simulator(diagram)
     ApplySimulatorConfig(config, simulator)
     return simulator
