@@ -8,7 +8,7 @@ import signal
 import sys
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
-from typing import Optional
+from typing import Callable, Iterator, Optional, Tuple
 
 from dacph_drake.errors import ConfigError
 
@@ -18,8 +18,16 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"
 class InProcessExecutor(Executor):
     """Runs each submitted call at once, in this process."""
 
-    def submit(self, fn, /, *args, **kwargs) -> Future:
-        """Runs fn(*args, **kwargs) now and returns its finished Future."""
+    def submit(self, fn: Callable, /, *args: object, **kwargs: object) -> Future:
+        """Runs a call now, in this process.
+
+        Args:
+            fn: The function.
+            *args: Its positional arguments.
+            **kwargs: Its keyword arguments.
+
+        Returns:
+            Its finished Future (its result or its exception)."""
         future = Future()
         try:
             future.set_result(fn(*args, **kwargs))
@@ -29,17 +37,30 @@ class InProcessExecutor(Executor):
 
 
 def local_process_pool(workers: int) -> ProcessPoolExecutor:
-    """``workers`` fresh processes ('spawn': no forked copy of this process's torch or
-    Drake threads), each with one thread for OpenMP, MKL and OpenBLAS, and each
-    ending with this process even when it is killed."""
+    """Makes a process pool for a sweep.
+
+    Its workers are fresh processes ('spawn': no forked copy of this process's
+    torch or Drake threads), each with one thread for OpenMP, MKL and OpenBLAS, and
+    each ending with this process even when it is killed.
+
+    Args:
+        workers: The number of worker processes.
+
+    Returns:
+        The pool."""
     return ProcessPoolExecutor(max_workers=workers,
                                mp_context=multiprocessing.get_context("spawn"),
                                initializer=_prepare_worker, initargs=(os.getpid(),))
 
 
 def stop_local_pool(pool: ProcessPoolExecutor) -> None:
-    """Shuts ``pool`` down without waiting for the trials it is running: kills its
-    workers and cancels the queued trials (an interrupted sweep returns at once)."""
+    """Shuts a pool down without waiting for the trials it is running.
+
+    Its workers are killed and the queued trials cancelled, so an interrupted sweep
+    returns at once.
+
+    Args:
+        pool: The pool (local_process_pool)."""
     if hasattr(pool, "terminate_workers"):      # Python >= 3.14
         pool.terminate_workers()
         return
@@ -67,11 +88,20 @@ def default_workers() -> int:
 
 
 @contextmanager
-def dask_executor(address: str, workers: Optional[int] = None):
-    """(executor, number of worker slots) on the Dask cluster at ``address``
-    (``Client(address).get_executor()``), or on a new LocalCluster of ``workers``
-    single-threaded worker processes when address is "local". Each worker must have
-    one thread: torch's random state and thread settings are per process."""
+def dask_executor(address: str, workers: Optional[int] = None
+                  ) -> Iterator[Tuple[Executor, int]]:
+    """Opens a Dask executor for a sweep.
+
+    Each worker must have one thread: torch's random state and thread settings are
+    per process.
+
+    Args:
+        address: The scheduler's address (``Client(address).get_executor()``), or
+            "local" for a new LocalCluster of single-threaded worker processes.
+        workers: The LocalCluster's worker processes (default: one per core).
+
+    Yields:
+        (the executor, the number of worker slots)."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as e:

@@ -81,8 +81,14 @@ DESCRIBED_BATCH_SIZE = 16
 
 
 def batch_size_for(definition: SweepDefinition) -> int:
-    """The sweep's batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a
-    planar arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
+    """Chooses a sweep's trials per diagram.
+
+    Args:
+        definition: The sweep.
+
+    Returns:
+        Its batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a planar
+        arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
     from dacph_drake.scenario import PlanarArm
     if definition.sweep.batch_size > 0:
         return definition.sweep.batch_size

@@ -17,7 +17,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Union
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import replaced_atomically
@@ -27,9 +27,16 @@ from dacph_drake.scenario_files import save_scenario
 ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 
 
-def read_rows(out_dir) -> Dict[int, Dict]:
-    """trial id -> row of every complete line of OUT/rows.jsonl (a truncated last
-    line, left by a kill during a write, is ignored)."""
+def read_rows(out_dir: Union[str, Path]) -> Dict[int, Dict]:
+    """Reads a sweep's rows.
+
+    A truncated last line, left by a kill during a write, is ignored.
+
+    Args:
+        out_dir: The sweep's directory (its rows.jsonl).
+
+    Returns:
+        Trial id -> row of every complete line."""
     rows, _ = _parse_rows(Path(out_dir) / ROWS)
     return rows
 
@@ -52,8 +59,18 @@ def _parse_rows(path: Path):
     return rows, complete
 
 
-def read_manifest(out_dir, definition: SweepDefinition) -> Dict:
-    """OUT/manifest.json, after checking that ``definition`` created OUT."""
+def read_manifest(out_dir: Union[str, Path], definition: SweepDefinition) -> Dict:
+    """Reads a sweep's manifest.json, after checking which sweep created it.
+
+    Args:
+        out_dir: The sweep's directory.
+        definition: The sweep that must have created it.
+
+    Returns:
+        The manifest.
+
+    Raises:
+        ConfigError: The directory holds no sweep, or another sweep's."""
     path = Path(out_dir) / MANIFEST
     if not path.exists():
         raise ConfigError(f"{out_dir} holds no sweep ({MANIFEST} is missing); allowed: a "
@@ -68,10 +85,16 @@ def read_manifest(out_dir, definition: SweepDefinition) -> Dict:
 
 
 class RowStore:
-    """Opens (creating or resuming) a sweep's output directory for one session."""
+    """A sweep's output directory, opened (created or resumed) for one session.
 
-    def __init__(self, out_dir, definition: SweepDefinition, versions: Dict[str, str],
-                 executor: str):
+    Args:
+        out_dir: The directory.
+        definition: The sweep (a directory holding another sweep is refused).
+        versions: The library versions of the session (run_store.versions).
+        executor: A label of the executor, for the manifest."""
+
+    def __init__(self, out_dir: Union[str, Path], definition: SweepDefinition,
+                 versions: Dict[str, str], executor: str):
         self.out = Path(out_dir)
         self.out.mkdir(parents=True, exist_ok=True)
         self._fd = os.open(self.out / ROWS, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
@@ -129,5 +152,11 @@ def _write_atomically(path: Path, text: str) -> None:
 
 
 def sorted_rows(rows: Dict[int, Dict]) -> List[Dict]:
-    """The rows in trial order."""
+    """Orders rows by trial.
+
+    Args:
+        rows: Trial id -> row.
+
+    Returns:
+        The rows in trial order."""
     return [rows[t] for t in sorted(rows)]

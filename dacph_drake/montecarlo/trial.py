@@ -11,30 +11,51 @@ from dacph_drake.scenario import Scenario
 
 @dataclass
 class Trial:
-    """What a worker receives (picklable, no Drake objects)."""
+    """What a worker receives (picklable, no Drake objects).
+
+    Attributes:
+        trial: The trial's id.
+        seed: Its seed (definition.trial_seed).
+        scenario: Its sampled scenario.
+        sampled: The sampled values, by distribution name.
+        controllers: The controllers to run.
+        log_dir: Save each run's logs under log_dir/trial_NNNNN (None: not saved).
+    """
     trial: int
     seed: int
     scenario: Scenario
     sampled: Dict[str, object]
     controllers: List[str]
-    log_dir: Optional[str] = None   # save each run's logs under log_dir/trial_NNNNN
+    log_dir: Optional[str] = None
 
 
 def run_trial(task: Trial) -> Dict:
-    """run_trials of one trial: its row."""
+    """Runs one trial (run_trials of a batch of one).
+
+    Args:
+        task: The trial.
+
+    Returns:
+        Its row."""
     return run_trials([task])[0]
 
 
 def run_trials(tasks: List[Trial]) -> List[Dict]:
-    """Runs each controller on a batch of trials, as one diagram per controller
-    (loop.simulate.simulate_batch: each trial's run is its solo run), and returns
-    each trial's row: trial, seed, sampled, status ("ok" or "failed"), reason,
-    wall_time [s] (its share of the batch's) and runs (per controller: status
-    "ok" | "diverged" | "error", reason, final_time, wall_time, metrics). A
-    trial's own failure never raises: an invalid sampled scenario (ConfigError)
-    is recorded for it alone, a divergence stops it alone, and a batch whose run
-    raises is run again trial by trial, so that an exception is recorded with its
-    reason for the trial that raised it."""
+    """Runs each controller on a batch of trials, one diagram per controller.
+
+    Each trial's run is its solo run (loop.simulate.simulate_batch). A trial's own
+    failure never raises: an invalid sampled scenario (ConfigError) is recorded for
+    it alone, a divergence stops it alone, and a batch whose run raises is run
+    again trial by trial, so that an exception is recorded with its reason for the
+    trial that raised it.
+
+    Args:
+        tasks: The batch's trials.
+
+    Returns:
+        Each trial's row: trial, seed, sampled, status ("ok" or "failed"), reason,
+        wall_time in s (its share of the batch's) and runs (per controller: status
+        "ok", "diverged" or "error", reason, final_time, wall_time, metrics)."""
     import torch
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()
@@ -96,8 +117,15 @@ def _run_batch(tasks: List[Trial], controller: str, runs: Dict) -> None:
 
 
 def failed_row(task: Trial, reason: str, wall_time: Optional[float] = None) -> Dict:
-    """The row of a trial whose controllers did not run (an invalid sample, or a
-    worker that died running it)."""
+    """Makes the row of a trial whose controllers did not run.
+
+    Args:
+        task: The trial.
+        reason: Why (an invalid sample, or a worker that died running it).
+        wall_time: The time spent on it [s], if known.
+
+    Returns:
+        Its row, status "failed"."""
     return {"trial": task.trial, "seed": task.seed, "sampled": task.sampled,
             "status": "failed", "reason": reason, "wall_time": wall_time, "runs": {}}
 
