@@ -1,6 +1,7 @@
 """Error types shared by the package, and the checks that raise them."""
 import dataclasses
 import math
+from typing import Iterable
 
 
 class ConfigError(ValueError):
@@ -8,25 +9,58 @@ class ConfigError(ValueError):
 
 
 def require_positive(name: str, value: float, unit: str = "") -> None:
-    """Raises ConfigError unless ``value`` is a finite number > 0."""
+    """Requires a finite number > 0.
+
+    Args:
+        name: The setting's name, for the message.
+        value: Its value.
+        unit: Its unit, for the message.
+
+    Raises:
+        ConfigError: Naming the setting and what is allowed."""
     _require(name, value, value > 0, f"> 0{(' ' + unit) if unit else ''}")
 
 
 def require_nonnegative(name: str, value: float, unit: str = "") -> None:
-    """Raises ConfigError unless ``value`` is a finite number >= 0."""
+    """Requires a finite number >= 0.
+
+    Args:
+        name: The setting's name, for the message.
+        value: Its value.
+        unit: Its unit, for the message.
+
+    Raises:
+        ConfigError: Naming the setting and what is allowed."""
     _require(name, value, value >= 0, f">= 0{(' ' + unit) if unit else ''}")
 
 
 def require_in_range(name: str, value: float, low: float, high: float,
                      unit: str = "") -> None:
-    """Raises ConfigError unless low <= value <= high."""
+    """Requires a finite number in [low, high].
+
+    Args:
+        name: The setting's name, for the message.
+        value: Its value.
+        low: The smallest allowed value.
+        high: The largest allowed value.
+        unit: Its unit, for the message.
+
+    Raises:
+        ConfigError: Naming the setting and what is allowed."""
     _require(name, value, low <= value <= high,
              f"in [{low:g}, {high:g}]{(' ' + unit) if unit else ''}")
 
 
-def require_one_of(name: str, value, allowed) -> None:
-    """Raises ConfigError unless ``value`` is one of ``allowed`` (names, listed in
-    the message)."""
+def require_one_of(name: str, value: object, allowed: Iterable[str]) -> None:
+    """Requires one of a set of names.
+
+    Args:
+        name: The setting's name, for the message.
+        value: Its value.
+        allowed: The allowed names, listed in the message.
+
+    Raises:
+        ConfigError: Naming the setting and the allowed names."""
     if value not in allowed:
         raise ConfigError(f"{name} = {value!r}; allowed: {', '.join(allowed)}")
 
@@ -41,11 +75,19 @@ def _require(name: str, value: float, ok: bool, allowed: str) -> None:
         raise ConfigError(f"{name} = {value!r} is out of range; allowed: {allowed}")
 
 
-def require_finite_numbers(name: str, value) -> None:
-    """Raises ConfigError naming the first entry of ``value`` (a dataclass, a list or a
-    number, walked recursively; ``name`` is its dotted path) that is a NaN or an
-    infinity, or a string where a number belongs. Fields whose value is a string
-    by design (names, modes) are left to their own checks."""
+def require_finite_numbers(name: str, value: object) -> None:
+    """Requires every number of a setting, walked recursively, to be finite.
+
+    Fields whose value is a string by design (names, modes) are left to their own
+    checks.
+
+    Args:
+        name: The setting's dotted path, for the message.
+        value: A dataclass, a list or a number.
+
+    Raises:
+        ConfigError: Naming the first entry that is a NaN or an infinity, or a
+            string where a number belongs."""
     if dataclasses.is_dataclass(value):
         for f in dataclasses.fields(value):
             if f.type is not str:

@@ -71,15 +71,19 @@ GOOGLE_STYLE_MODULES = ("loop", "loop.simulate", "loop.closed_loop", "loop.run_s
                         "loop.files", "loop.progress", "loop.simulator", "controllers",
                         "controllers.dac", "controllers.model_based", "montecarlo",
                         "montecarlo.runner", "montecarlo.executors", "montecarlo.store",
-                        "montecarlo.trial")
+                        "montecarlo.trial", "errors")
 
 
 def _documents_its_arguments(function) -> list:
     """The parameters of ``function`` (a class: its constructor's) that its
     docstring's Args section (a dataclass's: Attributes) does not name."""
     doc = inspect.getdoc(function) or ""
+    try:
+        signature = inspect.signature(function)
+    except ValueError:              # a built-in's subclass, e.g. ConfigError
+        return []
     parameters = [("*" + name if p.kind is p.VAR_POSITIONAL else name)
-                  for name, p in inspect.signature(function).parameters.items()
+                  for name, p in signature.parameters.items()
                   if name not in ("self", "cls")]
     if not parameters:
         return []
