@@ -1,8 +1,11 @@
 """The RHS gain rule (paper eqs. 45-48, docs/equations.md E45-E48) and its discrete-time
 realizability check."""
+from typing import Tuple, Union
+
 import numpy as np
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.scenario import Periods
 
 # With the observer's one-sample delay the discrete RHS loop per mode is
 # z^2 - z + g = 0, g = h k_p lambda_p; its roots are real (well damped) for g <= 1/4.
@@ -13,28 +16,56 @@ STABILITY_MARGIN = 0.05
 
 
 def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float) -> float:
-    """Eq. (48): c > 2 Td^2 lambda_max(K_d) / inf_q lambda_min(M) (1 + ln(beta_hat) / 5)."""
+    """The RHS decay rate's lower bound of eq. (48).
+
+    c_min = 2 Td^2 lambda_max(K_d) / inf_q lambda_min(M) (1 + ln(beta_hat) / 5).
+
+    Args:
+        Td: The time-scale separation factor T_d.
+        Kd_max: lambda_max(K_d) of the LHS damping.
+        lambda_min_M: inf_q lambda_min(M).
+        beta_hat: The learner's uncertainty estimate (values below 1 count as 1;
+            an array gives one bound per entry).
+
+    Returns:
+        c_min [1/s]."""
     return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(np.maximum(beta_hat, 1.0)) / 5)
 
 
 def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
-    """Eq. (48) for an LHS damping scaled to the inertia, K_d = damping_rate M(q)
-    (scenario.AttitudeGains): the paper's fastest LHS sliding rate
-    2 lambda_max(K_d) / inf_q lambda_min(M) bounds dV/dt = -s^T K_d s against
-    V = s^T M s / 2; with K_d = damping_rate M it is exactly 2 damping_rate
-    (dV/dt = -2 damping_rate V), so c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5)
-    whatever the arm's inertia: a light wrist no longer asks for a fast RHS loop."""
+    """Eq. (48) for an LHS damping scaled to the inertia, K_d = damping_rate M(q).
+
+    The paper's fastest LHS sliding rate 2 lambda_max(K_d) / inf_q lambda_min(M)
+    bounds dV/dt = -s^T K_d s against V = s^T M s / 2; with K_d = damping_rate M it
+    is exactly 2 damping_rate (dV/dt = -2 damping_rate V), so
+    c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5) whatever the arm's inertia: a
+    light wrist no longer asks for a fast RHS loop (scenario.AttitudeGains).
+
+    Args:
+        Td: The time-scale separation factor T_d.
+        damping_rate: The LHS's damping rate [1/s].
+        beta_hat: The learner's uncertainty estimate.
+
+    Returns:
+        c_min [1/s]."""
     return c_lower_bound(Td, damping_rate, 1.0, beta_hat)
 
 
-def integral_gains(B_hat: np.ndarray, c):
-    """k_p = c / Re(lambda_hat_p) and the DIC check.
+def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
+                   ) -> Tuple[np.ndarray, np.ndarray, Union[bool, np.ndarray]]:
+    """The decentralized integral gains k_p = c / Re(lambda_hat_p) and the DIC check.
 
     The eigenvalue paired with channel p is the one nearest B_hat[p, p] (for the
     near-diagonal B of a decentralized arm the modes are the channels), taken in
     channel order from those not yet paired.
-    Returns (k, eigenvalues, dic_ok): dic_ok is det(B_hat) != 0 and Re(lambda_p) > 0.
-    A stack of matrices (trials, n, n), with c per trial, gives each trial's.
+
+    Args:
+        B_hat: The estimated input matrix (n x n), or a stack (trials, n, n).
+        c: The decay rate [1/s] (per trial for a stack).
+
+    Returns:
+        (k, the paired eigenvalues, dic_ok), each trial's for a stack, where dic_ok
+        says det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
     """
     n = B_hat.shape[-1]
     stack = np.reshape(B_hat, (-1, n, n))
@@ -57,31 +88,51 @@ def integral_gains(B_hat: np.ndarray, c):
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
-    """The discrete RHS loop's state matrix with the port's true input matrix B and
-    the integrator's gains K (analysis.rhs_loop, the state (u_I, tau_obs)):
-    A = [[I, -h K], [B, 0]]; per decoupled mode its polynomial is z^2 - z + h k_p
-    lambda_p."""
+    """The discrete RHS loop's state matrix (analysis.rhs_loop).
+
+    With the state (u_I, tau_obs), A = [[I, -h K], [B, 0]]; per decoupled mode its
+    polynomial is z^2 - z + h k_p lambda_p.
+
+    Args:
+        B: The port's true input matrix (n x n).
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+
+    Returns:
+        A (2n x 2n)."""
     n = B.shape[0]
     return np.block([[np.eye(n), -period * np.diag(K)], [B, np.zeros((n, n))]])
 
 
 def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
                           radius: float) -> bool:
-    """Whether the loop with the gains K of a new estimate keeps its spectral radius
-    within ``radius`` if the truth were the estimate in use B_in_use: the evidence
-    that makes the integrator adopt an estimate far from the one in use
-    (RhsIntegrator) may be wrong (a filtered window that still holds a change's
-    transient), and a jump that would destabilize the loop in that case is
-    refused; one that only slows it is not."""
+    """Checks a new estimate's gains against the estimate in use as the truth.
+
+    The evidence that makes the integrator adopt an estimate far from the one in
+    use (RhsIntegrator) may be wrong (a filtered window that still holds a change's
+    transient): a jump that would destabilize the loop in that case is refused; one
+    that only slows it is not.
+
+    Args:
+        B_in_use: The estimate in use, taken as the truth.
+        K: The new estimate's gains.
+        period: The RHS period h [s].
+        radius: The largest spectral radius allowed.
+
+    Returns:
+        Whether the loop's spectral radius stays within ``radius``."""
     return bool(np.max(np.abs(np.linalg.eigvals(loop_matrix(B_in_use, K, period))))
                 <= radius)
 
 
-def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float):
-    """The bounded-learning-error condition made operational: every paired
-    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the anchor's
-    ``nominal`` (B0's, or those of the estimate in use: Rhs.trust_anchor),
-    1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <= trust_ratio.
+def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float
+                 ) -> Union[bool, np.ndarray]:
+    """Checks the bounded-learning-error condition, made operational.
+
+    Every paired eigenvalue of B_hat must lie within a factor ``trust_ratio`` of the
+    anchor's ``nominal`` (B0's, or those of the estimate in use:
+    Rhs.trust_anchor), 1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <=
+    trust_ratio.
 
     Why: the discrete RHS loop of mode p has the loop gain
     g_p = h k_p lambda~_p = h c lambda~_p / Re(lambda_hat_p); it is stable for g_p < 1
@@ -95,15 +146,29 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float):
     lambda~_p / lambda_hat_p in [0.45, 4.2]), while an estimate that follows the
     truth away from B0 is no longer refused.
 
-    Stacked eigenvalues (trials, n) give each trial's answer."""
+    Args:
+        paired: B_hat's paired eigenvalues (n), or a stack (trials, n).
+        nominal: The anchor's eigenvalues.
+        trust_ratio: The allowed factor.
+
+    Returns:
+        Whether they are within it (a bool, or one per trial for a stack)."""
     ratio = paired.real / np.asarray(nominal, float)
     within = np.all((ratio >= 1.0 / trust_ratio) & (ratio <= trust_ratio), axis=-1)
     return bool(within) if within.ndim == 0 else within
 
 
-def check_period_order(periods) -> None:
-    """Refuses periods that break the time-scale separation (RHS faster than LHS,
-    LHS no slower than the learner's sampling, sampling no slower than training)."""
+def check_period_order(periods: Periods) -> None:
+    """Refuses periods that break the time-scale separation.
+
+    The RHS must be faster than the LHS, the LHS no slower than the learner's
+    sampling, the sampling no slower than training.
+
+    Args:
+        periods: The scenario's periods.
+
+    Raises:
+        ConfigError: Naming the two periods out of order."""
     order = [("rhs", periods.rhs), ("lhs", periods.lhs),
              ("learner_sample", periods.learner_sample), ("learner", periods.learner)]
     for (fast, h_fast), (slow, h_slow) in zip(order, order[1:]):
@@ -117,12 +182,21 @@ def check_period_order(periods) -> None:
                           f"periods.lhs = {periods.lhs:g} s")
 
 
-def check_rhs_period(periods, c_nominal: float, c_largest: float,
+def check_rhs_period(periods: Periods, c_nominal: float, c_largest: float,
                      beta_max: float) -> None:
-    """Refuses an RHS period that cannot realize the largest decay rate the integrator
-    may run, ``c_largest`` = (1 + c_margin) c_min(beta_max) [1/s], with a well-damped
-    discrete loop (g = h c <= 1/4, see WELL_DAMPED_LOOP_GAIN); ``c_nominal`` is the
-    rate at beta_hat = 1, where every run starts."""
+    """Refuses an RHS period that cannot realize the integrator's largest decay rate.
+
+    The loop must stay well damped, g = h c <= 1/4 (WELL_DAMPED_LOOP_GAIN).
+
+    Args:
+        periods: The scenario's periods.
+        c_nominal: The rate at beta_hat = 1, where every run starts [1/s].
+        c_largest: The largest rate the integrator may run,
+            (1 + c_margin) c_min(beta_max) [1/s].
+        beta_max: rhs.beta_max, for the message.
+
+    Raises:
+        ConfigError: Naming periods.rhs and the largest period allowed."""
     bound = WELL_DAMPED_LOOP_GAIN / c_largest
     if periods.rhs > bound:
         raise ConfigError(
