@@ -11,7 +11,7 @@ The output layers start at zero with biases vec(B0 / F) and softplus^-1(D0): the
 nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
 network) unless the learner's ``coupling`` setting is "inertia".
 """
-from typing import List, Sequence
+from typing import List, Optional, Sequence
 
 import numpy as np
 import torch
@@ -20,8 +20,8 @@ from dacph_drake.kernels.network import evaluate_networks
 from dacph_drake.scenario import LEARNER_COUPLINGS
 
 
-def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
-    """The coupling scale F (n x n) of B_hat = F o mat(W_B h_B + b_B):
+def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarray:
+    """The coupling scale F (n x n) of B_hat = F o mat(W_B h_B + b_B).
 
         "uniform": F_ij = 1 (the paper's network)
         "inertia": F_ij = min(1, m_i / m_j),  m = ``joint_inertias`` (diag M(q0))
@@ -31,7 +31,17 @@ def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
     Why: an error delta in B_ij adds delta u_j to joint i's torque; where u_j is a
     shoulder's N m and joint i a wrist of 1e-3 kg m^2, no in-band data bound delta
     tightly enough (docs/results/spatial.md). Couplings into heavier joints and
-    the diagonal keep F = 1."""
+    the diagonal keep F = 1.
+
+    Args:
+        coupling: "uniform" or "inertia" (the learner's ``coupling`` setting).
+        joint_inertias: diag M(q0), m above.
+
+    Returns:
+        F.
+
+    Raises:
+        ValueError: An unknown ``coupling``."""
     m = np.asarray(joint_inertias, float)
     if coupling == "uniform":
         return np.ones((len(m), len(m)))
@@ -40,19 +50,42 @@ def coupling_factors(coupling: str, joint_inertias) -> np.ndarray:
     raise ValueError(f"coupling = {coupling!r}; allowed: {', '.join(LEARNER_COUPLINGS)}")
 
 
-def port_torque(B, D, u, qdot):
-    """The RHS's port torque tau = B u - D qdot for samples (torch): B of shape
-    (..., n, n), D, u and qdot (..., n), the leading axes broadcast (one (n, n) B
-    for all samples, or a trial's per sample)."""
+def port_torque(B: torch.Tensor, D: torch.Tensor, u: torch.Tensor,
+                qdot: torch.Tensor) -> torch.Tensor:
+    """The RHS's port torque tau = B u - D qdot for samples (torch).
+
+    The leading axes broadcast: one (n, n) B for all samples, or a trial's per
+    sample.
+
+    Args:
+        B: Shape (..., n, n).
+        D: The diagonal of D, shape (..., n).
+        u: Shape (..., n).
+        qdot: Shape (..., n).
+
+    Returns:
+        tau, shape (..., n)."""
     return torch.einsum("...ij,...j->...i", B, u) - D * qdot
 
 
 class RhsNetwork(torch.nn.Module):
-    """The physics-informed RHS network of one trial (module docstring): two tanh MLPs
-    on X = (q, p / p_scale) and the output layers of B_hat and D_hat, starting at the
-    constant prior (B0, D0), seeded by ``seed``; ``coupling`` is F."""
-    def __init__(self, n: int, hidden: List[int], B0, D0, momentum_scale: float,
-                 seed: int, coupling: np.ndarray = None):
+    """The physics-informed RHS network of one trial (module docstring).
+
+    Two tanh MLPs on X = (q, p / p_scale) and the output layers of B_hat and D_hat,
+    starting at the constant prior (B0, D0).
+
+    Args:
+        n: The number of joints.
+        hidden: The MLPs' hidden layer widths.
+        B0: The prior B (n x n).
+        D0: The prior diag D (n); entries below 1e-6 count as 1e-6.
+        momentum_scale: p_scale.
+        seed: The seed of the initial weights (torch's global generator is left
+            as it was).
+        coupling: F (coupling_factors; None: all ones).
+    """
+    def __init__(self, n: int, hidden: List[int], B0: np.ndarray, D0: Sequence[float],
+                 momentum_scale: float, seed: int, coupling: Optional[np.ndarray] = None):
         super().__init__()
         generator_state = torch.random.get_rng_state()
         torch.manual_seed(seed)
@@ -106,7 +139,12 @@ class StackedRhsNetworks(torch.nn.Module):
     (RhsNetwork.export's order; each trial initialized as its own RhsNetwork:
     ``networks``), the layers views of it, evaluated with batched matrix
     products: one forward and backward pass trains them all, each trial's
-    gradient its own row."""
+    gradient its own row.
+
+    Args:
+        networks: Each trial's RhsNetwork, alike but for their weights and
+            coupling scales.
+    """
 
     def __init__(self, networks: List[RhsNetwork]):
         super().__init__()
@@ -172,12 +210,19 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 
 
 class ExportedNetwork:
-    """RhsNetwork evaluated from its exported parameter vector (with the same
-    coupling scale F, default all ones) by a compiled kernel
-    (kernels.network.evaluate_networks)."""
+    """RhsNetwork evaluated from its exported parameter vector by a compiled kernel.
+
+    The kernel is kernels.network.evaluate_networks.
+
+    Args:
+        n: The number of joints.
+        hidden: The MLPs' hidden layer widths.
+        momentum_scale: p_scale.
+        coupling: F (coupling_factors; None: all ones).
+    """
 
     def __init__(self, n: int, hidden: List[int], momentum_scale: float,
-                 coupling: np.ndarray = None):
+                 coupling: Optional[np.ndarray] = None):
         self.n = n
         self._momentum_scale = momentum_scale
         self.coupling = np.ones((n, n)) if coupling is None else np.asarray(coupling, float)
@@ -214,8 +259,12 @@ class ExportedNetwork:
 
 
 class NetworkStack:
-    """The exported networks of a batch's trials (ExportedNetwork, one per trial,
-    alike but for their coupling scales), evaluated in one compiled call."""
+    """The exported networks of a batch's trials, evaluated in one compiled call.
+
+    Args:
+        networks: Each trial's ExportedNetwork, alike but for their coupling
+            scales.
+    """
 
     def __init__(self, networks: Sequence[ExportedNetwork]):
         self._hidden = networks[0]._hidden

@@ -71,7 +71,8 @@ GOOGLE_STYLE_MODULES = ("loop", "loop.simulate", "loop.closed_loop", "loop.run_s
                         "loop.files", "loop.progress", "loop.simulator", "controllers",
                         "controllers.dac", "controllers.model_based", "montecarlo",
                         "montecarlo.runner", "montecarlo.executors", "montecarlo.store",
-                        "montecarlo.trial", "errors", "gain_rule")
+                        "montecarlo.trial", "errors", "gain_rule",
+                        "network")
 
 
 def _documents_its_arguments(function) -> list:
