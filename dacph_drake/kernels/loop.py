@@ -182,7 +182,7 @@ def stack_packs(packs) -> "tuple[np.ndarray, np.ndarray]":
     return np.concatenate(packs).astype(float), offsets
 
 
-# true_torques' and spatial_true_torque's verdict on each trial (TrueRhsSystem).
+# true_torques' and spatial_true_torques' verdict on each trial (TrueRhsSystem).
 RUNNING, STOPPED, NON_FINITE, RUNAWAY = 0, 1, 2, 3
 
 
@@ -267,19 +267,9 @@ def _planar_verdict(x, indices, n, tau, bound):
 
 
 @njit(cache=True)
-def _packed_torque(t, q, p, qdot, u, disturbance_model, packed):
-    """B~ u - D~ qdot + d(t) with the uncertainty's arguments packed as
-    pack_true_rhs packs them after the robot's."""
-    n = u.shape[0]
-    tau = np.empty(n)
-    _torque_into(t, q, p, qdot, u, disturbance_model, packed, np.empty((n, n)),
-                 np.empty(n), tau)
-    return tau
-
-
-@njit(cache=True)
 def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
-    """_packed_torque written into ``tau``, with B (n x n) and D (n) as work arrays."""
+    """tau = B~ u - D~ qdot + d(t) written into ``tau`` (B and D: work arrays), with
+    the uncertainty's arguments packed as pack_true_rhs packs them after the robot's."""
     n = u.shape[0]
     _matrices_into(t, q, p, packed, B, D)
     for i in range(n):

@@ -389,22 +389,6 @@ def base_pose_and_twist(base_subspace, base_pose, base_velocity):
 
 
 @njit(cache=True)
-def joint_momenta(base_subspace, parent, joint, X_PFs, axes, X_MCs, below, masses,
-                  moments, inertias, base_poses, base_velocities, q, qdot):
-    """p (trials, n): each trial's joint rows of H(q) v, the momentum conjugate to
-    its joints (at zero momentum M(q) qdot), on its tree (X_PFs[i], axes[i],
-    X_MCs[i], the bodies' inertias masses[i], moments[i], inertias[i]) at its
-    base pose and twist (base_pose_and_twist) and joint state (joint_momentum)."""
-    trials, n = q.shape[0], q.shape[1]
-    out = np.zeros((trials, n))
-    for i in range(trials):
-        out[i] = joint_momentum(base_subspace, parent, joint, X_PFs[i], axes[i],
-                                X_MCs[i], below, masses[i], moments[i], inertias[i],
-                                base_poses[i], base_velocities[i], q[i], qdot[i])
-    return out
-
-
-@njit(cache=True)
 def body_twist_into(V, omega_B, v_B, S, qdot, below, node):
     """V = (omega; v_O) of body ``node``: the base's twist (omega_B; v_B) plus
     S_k qdot_k of every joint k that moves it (about the base's origin, in its
