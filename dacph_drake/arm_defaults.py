@@ -30,7 +30,7 @@ by them, with signs alternating over the joints as the paper's two:
 The other sections are those of the shipped spatial scenarios (satellite_6dof):
 scenario.SATELLITE_PHASES, described_arm_periods, described_arm_rhs and
 described_arm_learner."""
-from typing import Optional, Sequence
+from typing import TYPE_CHECKING, Optional, Sequence
 
 import numpy as np
 
@@ -39,15 +39,31 @@ from dacph_drake.scenario import (SATELLITE_PHASES, DescribedArm, Disturbance,
                                   described_arm_learner, described_arm_periods,
                                   described_arm_rhs)
 
+if TYPE_CHECKING:
+    from dacph_drake.dynamics.floating_model import FloatingBaseModel
+
 DAMPING_RATE = 2.0              # [1/s] D0_j / M_j: a free joint's speed decays over 0.5 s
 MIN_AMPLITUDE = 0.1             # [rad] the amplitude the scales assume for a still reference
 
 
 def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                  task: Optional[EndEffectorAttitude] = None) -> Scenario:
-    """The scenario of ``robot`` tracking ``task`` (default EndEffectorAttitude())
-    from ``q0`` (default: every joint at 0, or at the middle of its limits where 0
-    lies outside them), its per-joint settings sized by the module's rule."""
+    """The scenario of an arm, its per-joint settings sized by the module's rule.
+
+    Args:
+        robot: The arm's robot section.
+        q0: The initial joint angles [rad] (default: every joint at 0, or at the
+            middle of its limits where 0 lies outside them).
+        task: The task it tracks (default EndEffectorAttitude()).
+
+    Returns:
+        The scenario (unsized where q0 does not have one entry per joint: its
+            validation names q0's length).
+
+    Raises:
+        ConfigError: The robot section's assembly settings are invalid
+            (DescribedArm.ValidateAssembly) or its description cannot be
+            loaded."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
     from dacph_drake.robots.description import MakeRobotPlant
     robot.ValidateAssembly()
@@ -67,9 +83,15 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     return scenario
 
 
-def rest_configuration(model) -> np.ndarray:
-    """Every joint at 0, or at the middle of its position limits where 0 lies
-    outside them."""
+def rest_configuration(model: "FloatingBaseModel") -> np.ndarray:
+    """The arm's rest configuration.
+
+    Args:
+        model: The arm's model.
+
+    Returns:
+        q [rad]: every joint at 0, or at the middle of its position limits where 0
+            lies outside them."""
     plant, q = model.plant, np.zeros(model.num_joints)
     lower = plant.GetPositionLowerLimits()[model.coordinates.joint_q]
     upper = plant.GetPositionUpperLimits()[model.coordinates.joint_q]
@@ -83,8 +105,14 @@ def _alternating(n: int, first: float = 1.0) -> np.ndarray:
 
 
 def sized_uncertainty(inertia: np.ndarray, rate: float) -> Uncertainty:
-    """The ground truth's RHS of joints with inertias ``inertia`` [kg m^2] moving at
-    ``rate`` [rad/s] (module docstring)."""
+    """The ground truth's RHS sized to the joints (module docstring).
+
+    Args:
+        inertia: The joints' inertias M_j [kg m^2].
+        rate: The reference's peak angular rate w [rad/s].
+
+    Returns:
+        The Uncertainty section."""
     n = len(inertia)
     D0 = DAMPING_RATE * inertia
     p = inertia * rate
@@ -105,8 +133,14 @@ def sized_uncertainty(inertia: np.ndarray, rate: float) -> Uncertainty:
 
 
 def sized_disturbance(torque: np.ndarray) -> Disturbance:
-    """d(t) on joints whose inertial torque at the reference's peak acceleration is
-    ``torque`` [N m] (module docstring)."""
+    """The disturbance d(t) sized to the joints (module docstring).
+
+    Args:
+        torque: The joints' inertial torques tau_j at the reference's peak
+            acceleration [N m].
+
+    Returns:
+        The Disturbance section."""
     n, largest = len(torque), float(np.max(torque))
     return Disturbance(
         lf_offset=(_alternating(n, 0.3) * torque).tolist(),

@@ -13,17 +13,29 @@ import dataclasses
 import logging
 import typing
 from dataclasses import dataclass, field
-from typing import List
+from pathlib import Path
+from typing import Any, Callable, List, Optional, Sequence, Type, TypeVar, Union
 
 import yaml
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 
 from dacph_drake.errors import ConfigError, require_in_range, require_positive
 
+_Schema = TypeVar("_Schema")
+
 
 @dataclass
 class BaseParams:
-    """The spacecraft base: a uniform-thickness square plate of side ``size``."""
+    """The spacecraft base: a uniform-thickness square plate of side ``size``.
+
+    Attributes:
+        mass: The base's mass m [kg], > 0.
+        inertia: Its inertia I about its centre of mass, z axis [kg m^2], with
+            0 < I <= m a^2 / 2 (RobotParams.Validate).
+        size: The side a of the square [m], > 0.
+        shoulder_offset: The base centre to the shoulder joint, along the base x
+            axis [m], in [size / 2, 100 size] (the shoulder sits on or outside the
+            base's side)."""
     mass: float = 2.0               # [kg]
     inertia: float = 0.02           # about its centre of mass, z axis [kg m^2]
     size: float = 0.245             # side of the square [m]
@@ -32,7 +44,17 @@ class BaseParams:
 
 @dataclass
 class LinkParams:
-    """One link: a slender lamina of ``length`` x ``width`` in the plane."""
+    """One link: a slender lamina of ``length`` x ``width`` in the plane.
+
+    Attributes:
+        mass: The link's mass m [kg], > 0.
+        length: Its proximal joint to the next joint (or the end effector) l [m],
+            > 0.
+        inertia: Its inertia I about its centre of mass, z axis [kg m^2], with
+            0 < I <= m (c (l - c) + w^2 / 4) (link_inertia_bound).
+        com: The proximal joint to the centre of mass c, along x [m], in
+            [0, length].
+        width: Its extent w across the link (geometry, inertia bound) [m], > 0."""
     mass: float = 1.0               # [kg]
     length: float = 0.3464          # joint to next joint (or end effector) [m]
     inertia: float = 0.01           # about its centre of mass, z axis [kg m^2]
@@ -46,7 +68,11 @@ def _paper_links() -> List[LinkParams]:
 
 @dataclass
 class RobotParams:
-    """A planar free-floating arm with ``len(links)`` revolute joints."""
+    """A planar free-floating arm with ``len(links)`` revolute joints.
+
+    Attributes:
+        base: The base (BaseParams).
+        links: The links from the shoulder out (LinkParams), at least one."""
     base: BaseParams = field(default_factory=BaseParams)
     links: List[LinkParams] = field(default_factory=_paper_links)
 
@@ -55,7 +81,7 @@ class RobotParams:
         return len(self.links)
 
     def Validate(self, name: str = "robot") -> None:
-        """Raises ConfigError naming the first invalid field and its allowed range.
+        """Checks every field against its allowed range.
 
         Inertia bounds (mass confined to the body's outline):
           link:  0 < I <= m (c (l - c) + w^2 / 4)   ("rod bound": the along-link part
@@ -64,6 +90,12 @@ class RobotParams:
           base:  0 < I <= m a^2 / 2                 (all mass in the square's corners).
         The 3D lamina tensor built from these satisfies the triangle inequality
         Ixx + Iyy >= Izz (see dynamics/plant.py) exactly because of the bound.
+
+        Args:
+            name: The robot's setting path, for the messages (e.g. robot.truth).
+
+        Raises:
+            ConfigError: Naming the first invalid field and its allowed range.
         """
         b = self.base
         require_positive(f"{name}.base.mass", b.mass, "kg")
@@ -89,28 +121,58 @@ class RobotParams:
 
 
 def link_inertia_bound(link: LinkParams) -> float:
-    """Largest central inertia of mass confined to the link's l x w rectangle with
-    its centre of mass at ``com``: m (c (l - c) + w^2 / 4)."""
+    """The largest central inertia of a link's mass (the rod bound).
+
+    Of mass confined to the link's l x w rectangle with its centre of mass at
+    ``com``: m (c (l - c) + w^2 / 4).
+
+    Args:
+        link: The link.
+
+    Returns:
+        The bound [kg m^2]."""
     return link.mass * (link.com * (link.length - link.com) + link.width**2 / 4)
 
 
 def load_robot(path: str) -> RobotParams:
-    """Loads and validates a RobotParams YAML file."""
+    """Loads and validates a RobotParams YAML file.
+
+    Args:
+        path: The YAML file.
+
+    Returns:
+        The validated robot.
+
+    Raises:
+        ConfigError: The file cannot be read, does not fit RobotParams, or holds a
+            field out of range."""
     robot = load_yaml_dataclass(path, RobotParams)
     robot.Validate()
     return robot
 
 
 def save_robot(robot: RobotParams, path: str) -> None:
-    """Writes ``robot`` as typed YAML to ``path``."""
+    """Writes a robot as typed YAML (load_robot reads it back).
+
+    Args:
+        robot: The robot.
+        path: The file to write."""
     with open(path, "w") as f:
         f.write(yaml_dump_typed(robot))
 
 
-def read_yaml(path):
-    """The parsed YAML file (tagged mappings as _TaggedMapping), {} when empty;
-    ConfigError naming the file for malformed YAML (with its line and column) or a
-    file that cannot be read."""
+def read_yaml(path: Union[str, Path]) -> Any:
+    """Reads a YAML file as plain Python values.
+
+    Args:
+        path: The file.
+
+    Returns:
+        The parsed YAML file (tagged mappings as _TaggedMapping), {} when empty.
+
+    Raises:
+        ConfigError: Naming the file for malformed YAML (with its line and column)
+            or a file that cannot be read."""
     try:
         with open(path, encoding="utf-8") as f:
             raw = yaml.load(f, Loader=_TaggedLoader)
@@ -124,15 +186,29 @@ def read_yaml(path):
     return raw if raw is not None else {}
 
 
-def load_yaml_dataclass(path: str, schema, noted_defaults=(), migrate=None,
-                        defaults=None):
-    """yaml_load_typed with one-line errors that name the file: malformed YAML (with
-    its line and column), a value of the wrong kind (naming the setting), unknown
-    keys. Each top-level section in ``noted_defaults`` that the file leaves out is
-    named in a logged warning (it takes the schema's default). ``migrate(raw, path)``,
-    if given, returns the parsed file with settings of an older layout moved to
-    their current place (or None when there is nothing to move). ``defaults``: the
-    schema object whose settings the file's replace (default: the schema's own)."""
+def load_yaml_dataclass(path: str, schema: Type[_Schema],
+                        noted_defaults: Sequence[str] = (),
+                        migrate: Optional[Callable[[Any, str], Any]] = None,
+                        defaults: Optional[_Schema] = None) -> _Schema:
+    """yaml_load_typed with one-line errors that name the file.
+
+    Args:
+        path: The YAML file.
+        schema: The dataclass it holds.
+        noted_defaults: The top-level sections that, where the file leaves them
+            out, are named in a logged warning (they take the schema's default).
+        migrate: ``migrate(raw, path)``, if given, returns the parsed file with
+            settings of an older layout moved to their current place (or None when
+            there is nothing to move).
+        defaults: The schema object whose settings the file's replace (default:
+            the schema's own).
+
+    Returns:
+        The loaded object.
+
+    Raises:
+        ConfigError: Malformed YAML (with its line and column), a value of the
+            wrong kind (naming the setting), unknown keys."""
     raw = read_yaml(path)
     migrated = migrate(raw, path) if migrate is not None else None
     raw = migrated if migrated is not None else raw

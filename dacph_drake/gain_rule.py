@@ -65,7 +65,7 @@ def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
 
     Returns:
         (k, the paired eigenvalues, dic_ok), each trial's for a stack, where dic_ok
-        says det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
+            says det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
     """
     n = B_hat.shape[-1]
     stack = np.reshape(B_hat, (-1, n, n))

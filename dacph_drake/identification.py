@@ -10,6 +10,7 @@ laid out as [q, p, qdot, u, tau_obs] (PortSample). The learner fits the network'
 B_hat(x), D_hat(x) (network.RhsNetwork) to a window of such samples.
 """
 from dataclasses import dataclass
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -19,8 +20,13 @@ from dacph_drake.scenario import Learner
 
 
 class PortSample:
-    """Column layout of a port sample [q, p, qdot, u, tau_obs] (n entries each); the
-    band-pass acts on the ``regressed`` part [qdot, u, tau_obs]."""
+    """The column layout of a port sample [q, p, qdot, u, tau_obs] (n entries each).
+
+    The band-pass acts on the ``regressed`` part [qdot, u, tau_obs].
+
+    Args:
+        n: The number of joints.
+    """
 
     def __init__(self, n: int):
         self.q, self.p = slice(0, n), slice(n, 2 * n)
@@ -38,7 +44,15 @@ class BandPassCascade:
 
     ``high_sections`` high-pass sections at ``low`` Hz, then ``low_sections``
     low-pass sections at ``high`` Hz. The state is one row per section (the
-    low-pass memory of that section), so it can live in a Drake Context."""
+    low-pass memory of that section), so it can live in a Drake Context.
+
+    Args:
+        low: The high-pass sections' corner frequency f [Hz].
+        high: The low-pass sections' corner frequency f [Hz].
+        high_sections: The number of high-pass sections.
+        low_sections: The number of low-pass sections.
+        period: The sample period h [s].
+    """
 
     def __init__(self, low: float, high: float, high_sections: int, low_sections: int,
                  period: float):
@@ -50,9 +64,15 @@ class BandPassCascade:
     def num_sections(self) -> int:
         return len(self.gains)
 
-    def Step(self, state: np.ndarray, x: np.ndarray):
-        """(next state, output) for one input sample x; state has shape
-        (num_sections, len(x))."""
+    def Step(self, state: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """Filters one input sample.
+
+        Args:
+            state: The cascade's state (num_sections, len(x)).
+            x: The input sample.
+
+        Returns:
+            (next state, output)."""
         state = state.copy()
         y = np.asarray(x, float)
         for i, (a, high) in enumerate(zip(self.gains, self.is_high_pass)):
@@ -61,7 +81,13 @@ class BandPassCascade:
         return state, y
 
     def Filter(self, x: np.ndarray) -> np.ndarray:
-        """The filtered sequence of the rows of x, from a zero state."""
+        """Filters a sequence from a zero state.
+
+        Args:
+            x: The sequence, one sample per row.
+
+        Returns:
+            The filtered sequence (x's shape)."""
         state = np.zeros((self.num_sections, x.shape[1]))
         out = np.empty_like(x, dtype=float)
         for k, row in enumerate(x):
@@ -70,11 +96,20 @@ class BandPassCascade:
 
 
 class PortEvidence:
-    """The second moments of the regressed part z = [qdot, u, tau_obs] of port
+    """Port samples' second moments with exponential forgetting.
+
+    The second moments of the regressed part z = [qdot, u, tau_obs] of port
     samples with exponential forgetting, G <- a G + z z^T (a = exp(-h / window) per
     sample period h), as a vector [vec(G) (3n x 3n), sum of weights] that can live
-    in a Drake Context; Residual(B, D) is then sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2
-    for any constant B, diagonal D, with no samples kept."""
+    in a Drake Context; Residual(B, D) is then
+    sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2 for any constant B, diagonal D, with
+    no samples kept.
+
+    Args:
+        n: The number of joints.
+        sample_period: The sample period h [s].
+        window: The forgetting's time constant [s].
+    """
 
     def __init__(self, n: int, sample_period: float, window: float):
         self.n = n
@@ -83,8 +118,15 @@ class PortEvidence:
         self._layout = PortSample(n)
 
     def Update(self, state: np.ndarray, sample: np.ndarray) -> np.ndarray:
-        """The statistics after one more PortSample ``sample`` (stacked: states
-        (trials, size) and samples (trials, PortSample size), each trial's)."""
+        """The statistics after one more port sample.
+
+        Args:
+            state: The statistics (size), or each trial's stacked (trials, size).
+            sample: The PortSample, or each trial's stacked (trials, PortSample
+                size).
+
+        Returns:
+            The new statistics (state's shape)."""
         m = 3 * self.n
         z = np.asarray(sample, float)[..., self._layout.regressed]
         out = self.decay * state
@@ -94,7 +136,15 @@ class PortEvidence:
         return out
 
     def Residual(self, state: np.ndarray, B: np.ndarray, D: np.ndarray) -> float:
-        """sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2 (per unit weight)."""
+        """The weighted residual sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2.
+
+        Args:
+            state: The statistics (size).
+            B: The input matrix (n x n).
+            D: The damping's diagonal (n).
+
+        Returns:
+            The residual per unit weight."""
         n, m = self.n, 3 * self.n
         A = np.hstack([np.diag(D), -B, np.eye(n)])        # residual = A z
         G = state[:m * m].reshape(m, m)
@@ -102,17 +152,28 @@ class PortEvidence:
 
     @staticmethod
     def Weight(state: np.ndarray) -> float:
-        """The samples' total weight (in samples)."""
+        """The samples' total weight.
+
+        Args:
+            state: The statistics (size).
+
+        Returns:
+            The weight (in samples)."""
         return float(state[-1])
 
 
 @dataclass
 class FitStatistics:
-    """Of the current network on the weighted window: loss = sum w ||r||^2 (r the
-    residual of the port relation), nominal_loss the same for (B0, D0), and
-    beta_hat = 1 + RMS residual / RMS tau (the gain rule's uncertainty estimate).
-    For a batch (RhsIdentifier.StatisticsOfTrials) each field holds every
-    trial's."""
+    """The fit of the current network on the weighted window.
+
+    For a batch (RhsIdentifier.StatisticsOfTrials) each field holds every trial's.
+
+    Attributes:
+        loss: sum w ||r||^2, r the residual of the port relation.
+        nominal_loss: The same for (B0, D0).
+        beta_hat: 1 + RMS residual / RMS tau (the gain rule's uncertainty
+            estimate).
+    """
     loss: float
     nominal_loss: float
     beta_hat: float
@@ -141,17 +202,38 @@ class RhsIdentifier:
     (Adam is elementwise, so these are independent optimizers), so one forward and
     backward pass fits every trial; the ...OfTrials methods take the trials'
     windows stacked (trials, samples, 1 + PortSample size), which share their
-    sample times. The networks and Adam's moments are this object's state."""
+    sample times. The networks and Adam's moments are this object's state.
+
+    Args:
+        n: The number of joints.
+        settings: The learner's settings.
+        B0: The prior B (n x n).
+        D0: The prior diag D (n).
+        seed: The seed of the network's initial weights.
+        coupling: The network's coupling scale F (network.coupling_factors; None:
+            all ones).
+    """
 
     def __init__(self, n: int, settings: Learner, B0: np.ndarray, D0: np.ndarray,
-                 seed: int, coupling: np.ndarray = None):
+                 seed: int, coupling: Optional[np.ndarray] = None):
         self._Build(n, settings, [B0], [D0], [seed], [coupling])
 
     @classmethod
-    def ForTrials(cls, n: int, settings: Learner, B0s, D0s, seeds, couplings
-                  ) -> "RhsIdentifier":
-        """An identifier of one network per trial (B0s, D0s, seeds, couplings: the
-        trials')."""
+    def ForTrials(cls, n: int, settings: Learner, B0s: Sequence[np.ndarray],
+                  D0s: Sequence[np.ndarray], seeds: Sequence[int],
+                  couplings: Sequence[Optional[np.ndarray]]) -> "RhsIdentifier":
+        """Makes an identifier of one network per trial.
+
+        Args:
+            n: The number of joints.
+            settings: The learner's settings.
+            B0s: Each trial's prior B (n x n).
+            D0s: Each trial's prior diag D (n).
+            seeds: Each trial's seed of its network's initial weights.
+            couplings: Each trial's coupling scale F (None: all ones).
+
+        Returns:
+            The identifier."""
         self = object.__new__(cls)
         self._Build(n, settings, B0s, D0s, seeds, couplings)
         return self
@@ -180,9 +262,19 @@ class RhsIdentifier:
         return (data[..., 0], sample[..., L.q], sample[..., L.p], sample[..., L.qdot],
                 sample[..., L.u], sample[..., L.tau])
 
-    def Weights(self, times: torch.Tensor, t_now: float, window_starts):
-        """The samples' weights (trials, samples), normalized to sum 1 per trial
-        (uniform in plain mode)."""
+    def Weights(self, times: torch.Tensor, t_now: float, window_starts: Sequence[float]
+                ) -> torch.Tensor:
+        """The samples' weights, normalized to sum 1 per trial.
+
+        Uniform in plain mode.
+
+        Args:
+            times: The samples' times (trials, samples) [s].
+            t_now: The current time [s].
+            window_starts: Each trial's window start [s] (zero weight before it).
+
+        Returns:
+            The weights (trials, samples)."""
         if not self._regularized:
             w = torch.ones_like(times)
         else:
@@ -215,7 +307,9 @@ class RhsIdentifier:
 
     def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float,
                     trial: int = 0) -> np.ndarray:
-        """The constant B that, with the current D_hat(x), minimizes the regularized
+        """The constant B that best fits a trial's window with the current D_hat.
+
+        The constant B that, with the current D_hat(x), minimizes the regularized
         loss on the window (the loss restricted to B_hat independent of x): row i by
         weighted ridge least squares of tau_i + D_hat_i(x) qdot_i on u, each B_ij
         held to its prior B0_ij with the loss's weight rho E_ij divided by F_ij^2 for
@@ -226,7 +320,16 @@ class RhsIdentifier:
         arm's shoulder into its forearm roll made the attitude error 6x the
         learner-off loop's). D is left to Adam: on heavy joints it is hardly in the
         data (a fitted D ended the 6-DOF arm's disturbance phase at 2.3 times the
-        prior's error). ``rows``: trial ``trial``'s window."""
+        prior's error).
+
+        Args:
+            rows: Trial ``trial``'s window (samples, 1 + PortSample size).
+            t_now: The current time [s].
+            window_start: The window's start [s] (zero weight before it).
+            trial: The trial.
+
+        Returns:
+            B (n x n)."""
         times, q, p, qdot, u, tau = self._Split(rows[None])
         w = self.Weights(times, t_now, [window_start])[0].numpy()
         with torch.no_grad():
@@ -250,30 +353,54 @@ class RhsIdentifier:
 
     def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float,
                   trial: int = 0) -> None:
-        """Sets trial ``trial``'s B_hat to the constant fit of its window ``rows``
+        """Restarts a trial's B_hat at the constant fit of its window.
+
+        Sets trial ``trial``'s B_hat to the constant fit of its window ``rows``
         (ConstantFit: B's output layer with zero weights and the bias that gives
         it) and restarts Adam's moments of that layer (only: fresh moments make
         Adam's next steps about lr on every parameter they concern, which would
         kick D_hat too): after a hold the new relation's best constant B, not the
-        old estimate, is where Adam starts."""
+        old estimate, is where Adam starts.
+
+        Args:
+            rows: The trial's window (samples, 1 + PortSample size).
+            t_now: The current time [s].
+            window_start: The window's start [s].
+            trial: The trial."""
         self.network.set_constant_B(trial, self.ConstantFit(rows, t_now, window_start,
                                                             trial))
         head = self.network.head_B_columns
         self._m[trial, head] = self._v[trial, head] = self._steps[trial, head] = 0.0
 
     def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> bool:
-        """FitTrials of a batch of one: whether its steps were kept."""
+        """FitTrials of a batch of one.
+
+        Args:
+            rows: The window (samples, 1 + PortSample size).
+            t_now: The current time [s].
+            window_start: The window's start [s].
+
+        Returns:
+            Whether its steps were kept."""
         return bool(self.FitTrials(rows[None], t_now, [window_start], np.array([True]))[0])
 
-    def FitTrials(self, rows: np.ndarray, t_now: float, window_starts,
+    def FitTrials(self, rows: np.ndarray, t_now: float, window_starts: Sequence[float],
                   fitting: np.ndarray) -> np.ndarray:
-        """settings.steps_per_update Adam steps of the trials ``fitting`` (a mask)
-        on their windows ``rows`` (trials, samples, width); in regularized mode with
-        settings.step_guard = G > 0 a trial's steps are undone when its window's
-        loss after them exceeds G times its value before them, L_after > G L_before
-        (Learner.step_guard: the network's parameters go back, Adam's moments keep
-        the gradients seen). Returns which trials' steps were kept (False for the
-        others)."""
+        """Takes settings.steps_per_update Adam steps of some trials.
+
+        Each on its window. In regularized mode with settings.step_guard = G > 0 a
+        trial's steps are undone when its window's loss after them exceeds G times
+        its value before them, L_after > G L_before (Learner.step_guard: the
+        network's parameters go back, Adam's moments keep the gradients seen).
+
+        Args:
+            rows: The trials' windows (trials, samples, width).
+            t_now: The current time [s].
+            window_starts: Each trial's window start [s].
+            fitting: Which trials to fit (a mask, (trials,)).
+
+        Returns:
+            Which trials' steps were kept (False for the others)."""
         trials = np.flatnonzero(fitting)
         kept = np.zeros(len(fitting), bool)
         if not len(trials):
@@ -320,16 +447,33 @@ class RhsIdentifier:
 
     def Statistics(self, rows: np.ndarray, t_now: float,
                    window_start: float = -np.inf) -> FitStatistics:
-        """FitStatistics of a batch of one (StatisticsOfTrials), as floats."""
+        """FitStatistics of a batch of one (StatisticsOfTrials).
+
+        Args:
+            rows: The window (samples, 1 + PortSample size).
+            t_now: The current time [s].
+            window_start: The window's start [s].
+
+        Returns:
+            The FitStatistics, as floats."""
         stats = self.StatisticsOfTrials(rows[None], t_now, [window_start])
         return FitStatistics(*(float(x[0]) for x in (stats.loss, stats.nominal_loss,
                                                      stats.beta_hat)))
 
     def StatisticsOfTrials(self, rows: np.ndarray, t_now: float,
-                           window_starts) -> FitStatistics:
-        """FitStatistics of each trial on its window ``rows`` (weighted by recency
-        in regularized mode; by default the samples before a change included: they
-        show the stale model's misfit); fields of shape (trials,)."""
+                           window_starts: Sequence[float]) -> FitStatistics:
+        """FitStatistics of each trial on its window.
+
+        Weighted by recency in regularized mode; by default the samples before a
+        change included: they show the stale model's misfit.
+
+        Args:
+            rows: The trials' windows (trials, samples, width).
+            t_now: The current time [s].
+            window_starts: Each trial's window start [s].
+
+        Returns:
+            The FitStatistics, fields of shape (trials,)."""
         times, q, p, qdot, u, tau = self._Split(rows)
         w = self.Weights(times, t_now, window_starts)
         with torch.no_grad():
@@ -342,16 +486,32 @@ class RhsIdentifier:
                              beta_hat=1.0 + np.sqrt(loss / np.maximum(signal, 1e-300)))
 
     def RelativeResiduals(self, rows: np.ndarray) -> np.ndarray:
-        """sqrt(sum ||r||^2 / sum ||tau||^2) of each trial's network on its rows
-        (trials, samples, width)."""
+        """Each trial's relative residual on its rows.
+
+        sqrt(sum ||r||^2 / sum ||tau||^2) of each trial's network.
+
+        Args:
+            rows: The trials' rows (trials, samples, width).
+
+        Returns:
+            The residuals (trials,)."""
         _, q, p, qdot, u, tau = self._Split(rows)
         with torch.no_grad():
             residual = tau - port_torque(*self.network(q, p), u, qdot)
             return torch.sqrt(torch.sum(residual**2, (1, 2)) / torch.clamp(
                 torch.sum(tau**2, (1, 2)), min=1e-300)).numpy()
 
-    def Estimate(self, q: np.ndarray, p: np.ndarray, trial: int = 0):
-        """(B_hat (n x n), diag D_hat (n,)) of trial ``trial`` at one state."""
+    def Estimate(self, q: np.ndarray, p: np.ndarray, trial: int = 0
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """A trial's estimate at one state.
+
+        Args:
+            q: The joint angles (n) [rad].
+            p: The port's momentum (n).
+            trial: The trial.
+
+        Returns:
+            (B_hat (n x n), diag D_hat (n,))."""
         with torch.no_grad():
             B, D = self.network(torch.as_tensor(q)[None, None],
                                 torch.as_tensor(p)[None, None], [trial])
@@ -363,14 +523,22 @@ class RhsIdentifier:
 
 
 class ChangeDetector:
-    """Flags an abrupt change of the port relation. Its state is a vector (so it can
-    live in a Drake Context): [hold_until, window_start, count, history (H)], the
-    history holding the last H relative residuals of the newest samples.
+    """Flags an abrupt change of the port relation.
+
+    Its state is a vector (so it can live in a Drake Context): [hold_until,
+    window_start, count, history (H)], the history holding the last H relative
+    residuals of the newest samples.
 
     Update(state, t, e_new): while t < hold_until nothing happens; otherwise, when
     at least MIN_HISTORY residuals are known and e_new > ratio * median(history) and
     e_new > floor, a change is detected: hold_until = window_start = t + hold and the
-    history restarts; else e_new joins the history."""
+    history restarts; else e_new joins the history.
+
+    Args:
+        ratio: The jump over the history's median that is a change.
+        floor: The smallest residual that is a change.
+        hold: How long training pauses after a change [s].
+    """
 
     HISTORY = 30
     MIN_HISTORY = 5
@@ -380,29 +548,67 @@ class ChangeDetector:
 
     @classmethod
     def InitialState(cls, hold_until: float = -np.inf) -> np.ndarray:
-        """No history; with ``hold_until`` > 0, as if a change had been detected at
-        t = 0 (holding, window from hold_until)."""
+        """The state at the start: no history.
+
+        Args:
+            hold_until: When > 0, as if a change had been detected at t = 0
+                (holding, window from hold_until) [s].
+
+        Returns:
+            The state."""
         return np.concatenate([[hold_until, hold_until, 0.0], np.zeros(cls.HISTORY)])
 
     @staticmethod
     def Holding(state: np.ndarray, t: float) -> bool:
+        """Whether training holds at time t after a change.
+
+        Args:
+            state: The detector's state.
+            t: The time [s].
+
+        Returns:
+            t < hold_until."""
         return t < state[0]
 
     @staticmethod
     def WindowStart(state: np.ndarray) -> float:
+        """The start of the window after the last change.
+
+        Args:
+            state: The detector's state.
+
+        Returns:
+            window_start [s]."""
         return float(state[1])
 
     def Changed(self, state: np.ndarray, t: float) -> np.ndarray:
-        """The state after a change known at time t (not detected from the residual):
-        hold_until = window_start = t + hold, the history restarts."""
+        """The state after a change known at time t (not detected from the residual).
+
+        hold_until = window_start = t + hold, the history restarts.
+
+        Args:
+            state: The detector's state.
+            t: The change's time [s].
+
+        Returns:
+            The new state."""
         state = state.copy()
         state[0] = state[1] = t + self._hold
         state[2] = 0.0
         return state
 
     def Update(self, state: np.ndarray, t: float, e_new: float) -> np.ndarray:
-        """The state after the newest samples' relative residual ``e_new`` at time t
-        (see the class docstring)."""
+        """The state after the newest samples' relative residual.
+
+        See the class docstring.
+
+        Args:
+            state: The detector's state.
+            t: The time [s].
+            e_new: The newest samples' relative residual.
+
+        Returns:
+            The new state."""
         state = state.copy()
         if t < state[0] or not np.isfinite(e_new):
             return state
@@ -418,8 +624,15 @@ class ChangeDetector:
 
 
 def NewestRows(rows: np.ndarray, t_now: float, period: float) -> np.ndarray:
-    """The rows sampled in the last ``period`` before t_now (along the next-to-last
-    axis: a batch's windows (trials, samples, width), which share their sample
-    times, or one window)."""
+    """The rows sampled in the last ``period`` before t_now.
+
+    Args:
+        rows: A batch's windows (trials, samples, width), which share their sample
+            times, or one window (samples, width); the time in column 0.
+        t_now: The current time [s].
+        period: How far back to take the rows [s].
+
+    Returns:
+        Those rows, along the next-to-last axis."""
     times = rows.reshape((-1,) + rows.shape[-2:])[0, :, 0]       # the first window's
     return rows[..., times > t_now - period + 1e-12, :]

@@ -3,7 +3,13 @@
 
 
 class LhsLog:
-    """lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]."""
+    """The columns of the LHS controller's log.
+
+    lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)].
+
+    Args:
+        n: The number of joints.
+    """
 
     def __init__(self, n: int):
         self.s = slice(0, n)
@@ -12,7 +18,13 @@ class LhsLog:
 
 
 class RhsLog:
-    """rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted]."""
+    """The columns of the RHS integrator's log.
+
+    rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted].
+
+    Args:
+        n: The number of joints.
+    """
 
     def __init__(self, n: int):
         self.e_tau, self.e_norm, self.chi = slice(0, n), n, n + 1
@@ -22,13 +34,18 @@ class RhsLog:
 
 
 class RhsState:
-    """The RHS integrator's two discrete-state groups (RhsIntegrator; read by index in
-    kernels.loop.integrator_sample):
+    """The RHS integrator's two discrete-state groups (RhsIntegrator).
+
+    Read by index in kernels.loop.integrator_sample:
 
     fast, every RHS period:  [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]
     model, every model period: [vec(B_hat^-1) (n*n), D_hat (n), K (n), c, c_min,
                                 dic_ok, trusted]
-    rhs_log = [fast e_tau .. chi, model K .. trusted] (RhsLog)."""
+    rhs_log = [fast e_tau .. chi, model K .. trusted] (RhsLog).
+
+    Args:
+        n: The number of joints.
+    """
 
     def __init__(self, n: int):
         self.u_I, self.e_tau = slice(0, n), slice(n, 2 * n)

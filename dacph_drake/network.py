@@ -11,13 +11,14 @@ The output layers start at zero with biases vec(B0 / F) and softplus^-1(D0): the
 nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
 network) unless the learner's ``coupling`` setting is "inertia".
 """
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
 
 from dacph_drake.kernels.network import evaluate_networks
-from dacph_drake.scenario import LEARNER_COUPLINGS
+from dacph_drake.dynamics import ReducedModel
+from dacph_drake.scenario import LEARNER_COUPLINGS, Learner
 
 
 def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarray:
@@ -100,28 +101,54 @@ class RhsNetwork(torch.nn.Module):
         self.set_constant(B0, np.maximum(np.asarray(D0, float), 1e-6))
         torch.random.set_rng_state(generator_state)
 
-    def set_constant(self, B, D) -> None:
-        """Output layers with zero weights and the biases that make B_hat = B (n x n)
-        and D_hat = diag(D) (D > 0) at every state."""
+    def set_constant(self, B: np.ndarray, D: Sequence[float]) -> None:
+        """Sets the output layers to a constant B_hat and D_hat.
+
+        Zero weights and the biases that make B_hat = B and D_hat = diag(D) at every
+        state.
+
+        Args:
+            B: The constant B_hat (n x n).
+            D: The constant diag D_hat (n), each > 0."""
         self.set_constant_B(B)
         with torch.no_grad():
             self.head_D.weight.zero_()
             self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(np.asarray(D, float)))))
 
-    def set_constant_B(self, B) -> None:
-        """B's output layer with zero weights and the bias that makes B_hat = B (n x n)
-        at every state; D_hat unchanged."""
+    def set_constant_B(self, B: np.ndarray) -> None:
+        """Sets B's output layer to a constant B_hat; D_hat unchanged.
+
+        Zero weights and the bias that makes B_hat = B at every state.
+
+        Args:
+            B: The constant B_hat (n x n)."""
         with torch.no_grad():
             self.head_B.weight.zero_()
             self.head_B.bias.copy_(torch.as_tensor(
                 (np.asarray(B, float) / self.coupling.numpy()).reshape(-1)))
 
-    def features(self, q, p):
-        """X = (q, p / p_scale), the MLPs' input."""
+    def features(self, q: torch.Tensor, p: torch.Tensor) -> torch.Tensor:
+        """The MLPs' input X = (q, p / p_scale).
+
+        Args:
+            q: The joint angles, shape (m, n) [rad].
+            p: The momenta, shape (m, n) [kg m^2/s].
+
+        Returns:
+            X, shape (m, 2n)."""
         return torch.cat([q, p / self.momentum_scale], dim=-1)
 
-    def forward(self, q, p):
-        """(B_hat, D_hat diagonal) for a batch: shapes (m, n, n), (m, n)."""
+    def forward(self, q: torch.Tensor, p: torch.Tensor
+                ) -> Tuple[torch.Tensor, torch.Tensor]:
+        """The estimates B_hat and D_hat for a batch of states.
+
+        Args:
+            q: The joint angles, shape (m, n) [rad].
+            p: The momenta, shape (m, n) [kg m^2/s].
+
+        Returns:
+            The pair of B_hat, shape (m, n, n), and D_hat's diagonal, shape
+                (m, n)."""
         X = self.features(q, p)
         B = self.head_B(self.body_B(X)).reshape(-1, self.n, self.n) * self.coupling
         D = torch.nn.functional.softplus(self.head_D(self.body_D(X)))
@@ -163,9 +190,19 @@ class StackedRhsNetworks(torch.nn.Module):
         head_B = self._views[-4:-2]
         self.head_B_columns = slice(head_B[0][0].start, head_B[1][0].stop)
 
-    def forward(self, q, p, trials=None):
-        """(B_hat (t, m, n, n), D_hat (t, m, n)) of the trials ``trials`` (all by
-        default; t of them) at their samples q, p of shape (t, m, n)."""
+    def forward(self, q: torch.Tensor, p: torch.Tensor,
+                trials: Optional[Union[Sequence[int], torch.Tensor]] = None
+                ) -> Tuple[torch.Tensor, torch.Tensor]:
+        """The estimates of some trials at their samples.
+
+        Args:
+            q: The joint angles, shape (t, m, n) [rad].
+            p: The momenta, shape (t, m, n) [kg m^2/s].
+            trials: The trials' indices (all by default; t of them).
+
+        Returns:
+            The pair of B_hat, shape (t, m, n, n), and D_hat's diagonal, shape
+                (t, m, n)."""
         flat = self.flat if trials is None else self.flat[trials]
         params = [flat[:, columns].reshape((-1,) + shape) for columns, shape in self._views]
         coupling = self.coupling if trials is None else self.coupling[trials]
@@ -181,9 +218,15 @@ class StackedRhsNetworks(torch.nn.Module):
         D = torch.nn.functional.softplus(_dense(W_D, b_D, hD))
         return B, D
 
-    def set_constant_B(self, trial: int, B) -> None:
-        """Trial ``trial``'s B output layer with zero weights and the bias that makes
-        B_hat = B (n x n) at every state (RhsNetwork.set_constant_B)."""
+    def set_constant_B(self, trial: int, B: np.ndarray) -> None:
+        """Sets one trial's B output layer to a constant B_hat.
+
+        Zero weights and the bias that makes B_hat = B at every state
+        (RhsNetwork.set_constant_B).
+
+        Args:
+            trial: The trial's index.
+            B: The constant B_hat (n x n)."""
         (weight, _), (bias, _) = self._views[-4:-2]
         with torch.no_grad():
             self.flat[trial, weight] = 0.0
@@ -240,18 +283,36 @@ class ExportedNetwork:
         self._hidden = np.asarray(hidden, np.int64)
 
     @staticmethod
-    def ForLearner(settings, model, q0) -> "ExportedNetwork":
-        """The evaluator of the network that a learner with ``settings``
-        (scenario.Learner) trains for ``model`` (num_joints, MassMatrix), its
-        coupling scale from diag M(q0) (coupling_factors): the learner and every
-        system reading its ``weights`` port build their own from the same
-        settings."""
+    def ForLearner(settings: Learner, model: ReducedModel, q0: Sequence[float]
+                   ) -> "ExportedNetwork":
+        """The evaluator of the network that a learner trains.
+
+        The learner and every system reading its ``weights`` port build their own
+        from the same settings.
+
+        Args:
+            settings: The learner's settings (scenario.Learner).
+            model: The controller's model (num_joints, MassMatrix).
+            q0: The initial joint angles [rad]: the coupling scale comes from
+                diag M(q0) (coupling_factors).
+
+        Returns:
+            The evaluator."""
         return ExportedNetwork(model.num_joints, settings.hidden, settings.momentum_scale,
                                coupling_factors(settings.coupling, np.diag(
                                    model.MassMatrix(np.asarray(q0, float)))))
 
-    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
-        """(B_hat (n x n), D_hat diagonal (n,)) at one state."""
+    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """The estimates at one state.
+
+        Args:
+            weights: The exported parameters (RhsNetwork.export), shape (size,).
+            q: The joint angles (n) [rad].
+            p: The momenta (n) [kg m^2/s].
+
+        Returns:
+            The pair of B_hat (n x n) and D_hat's diagonal (n,)."""
         B, D = evaluate_networks(
             self._hidden, self._momentum_scale, np.asarray(weights, float)[None],
             np.asarray(q, float)[None], np.asarray(p, float)[None], self.coupling[None])
@@ -271,8 +332,17 @@ class NetworkStack:
         self._momentum_scale = networks[0]._momentum_scale
         self._coupling = np.array([network.coupling for network in networks])
 
-    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray):
-        """(B_hat (trials, n, n), D_hat (trials, n)) of trial i at weights[i] and
-        (q[i], p[i])."""
+    def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """The estimates of every trial, trial i at weights[i] and (q[i], p[i]).
+
+        Args:
+            weights: Each trial's exported parameters, shape (trials, size).
+            q: Each trial's joint angles, shape (trials, n) [rad].
+            p: Each trial's momenta, shape (trials, n) [kg m^2/s].
+
+        Returns:
+            The pair of B_hat, shape (trials, n, n), and D_hat's diagonal, shape
+                (trials, n)."""
         return evaluate_networks(self._hidden, self._momentum_scale, weights, q, p,
                                  self._coupling)

@@ -4,7 +4,7 @@ their validation and the built-in scenarios; scenario_files reads and writes the
 (YAML with ``pydrake.common.yaml.yaml_load_typed``)."""
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
@@ -20,8 +20,17 @@ from dacph_drake.loop.simulator import FixedStepConfig, validate_simulator_confi
 
 @dataclass
 class Phases:
-    """Durations [s]: warm-up (B0, D0 only), then (1) linear uncertainty, (2) plus
-    nonlinear uncertainty, (3) plus the external disturbance d(t)."""
+    """The run's phases, whose durations add up to its length.
+
+    Durations [s]: warm-up (B0, D0 only), then (1) linear uncertainty, (2) plus
+    nonlinear uncertainty, (3) plus the external disturbance d(t).
+
+    Attributes:
+        warmup: The warm-up on the nominal RHS (B0, D0 only) [s], >= 0.
+        linear: Phase 1, the linear uncertainty [s], >= 0.
+        nonlinear: Phase 2, plus the nonlinear uncertainty [s], >= 0.
+        disturbance: Phase 3, plus the external disturbance d(t) [s], >= 0. The
+            four together must be > 0 and at least periods.log."""
     warmup: float = 60.0
     linear: float = 480.0
     nonlinear: float = 480.0
@@ -46,10 +55,26 @@ class Phases:
 
 @dataclass
 class LhsGains:
-    """Sliding-mode LHS controller (docs/equations.md E23-E25): K_d = Kd I, Lambda, epsilon of
-    chi tanh(s / epsilon), eta of xi = -eta grad U. A run must start where the task
-    Jacobian's singular value ||D(q0)|| is at least min_task_singular_value (the
-    paper's arm has 0.61 to 1.21 over all q)."""
+    """The planar arm's sliding-mode LHS controller gains (task.gains).
+
+    Sliding-mode LHS controller (docs/equations.md E23-E25): K_d = Kd I, Lambda,
+    epsilon of chi tanh(s / epsilon), eta of xi = -eta grad U. A run must start
+    where the task Jacobian's singular value ||D(q0)|| is at least
+    min_task_singular_value (the paper's arm has 0.61 to 1.21 over all q).
+
+    Attributes:
+        Kd: The damping K_d = Kd I of the sliding variable s [N m s], > 0.
+        Lambda: The task error's gain in nu = D^+ (alpha_d_dot - Lambda alpha~) + ...
+            [1/s], > 0.
+        epsilon: The boundary layer of chi tanh(s / epsilon) [rad/s], > 0.
+        eta: The null-space gain of xi = -eta grad U, > 0.
+        chi_model_based: The fixed chi of the model-based baseline [N m], >= 0
+            (the DAC loops take chi from the RHS loop).
+        min_task_singular_value: The smallest ||D(q0)|| a run may start at, in
+            [0, 10].
+        boundary_rate: The rate that sizes the boundary layer with chi [1/s],
+            >= 0: chi tanh(s / phi), phi = epsilon + chi / (boundary_rate
+            inf lambda_min(M)); 0: phi = epsilon (the paper's)."""
     Kd: float = 0.5
     Lambda: float = 1.0
     epsilon: float = 0.2
@@ -62,7 +87,9 @@ class LhsGains:
 
 @dataclass
 class InertiaIdentification:
-    """The DAC loops' identification of the bodies' inertial parameters from momentum
+    """The DAC loops' identification of the inertial parameters (section inertia).
+
+    The DAC loops' identification of the bodies' inertial parameters from momentum
     conservation (systems/inertial_identifier.py; docs/results/model-error.md): from
     ``start`` [s] on, the LHS controller, and through it the port observer and the
     learner's samples, use the parameters that the measured base and joint motion
@@ -82,7 +109,18 @@ class InertiaIdentification:
     prior_weight is small because the simulated rates carry no noise: on the 6-DOF
     arm the directions that fix M lie 1e-11 to 1e-8 below the best-informed one
     (at 1e-8 its identified M stayed 10 % off the truth's, up to the scale; at
-    1e-12, 4e-4)."""
+    1e-12, 4e-4).
+
+    Attributes:
+        identify: Whether the DAC loops identify the parameters (False: the
+            controller keeps nominal_robot).
+        prior_weight: The share of the average information below which a direction
+            stays at nominal_robot's, in [1e-14, 1].
+        start: When the identified parameters replace the nominal ones [s], >= 0.
+        duration: How long the identification refines them before the estimate is
+            kept [s], > 0.
+        change_threshold: The relative change of M(q) (an entry against
+            sqrt(M_ii M_jj)) that restarts the learner's window, in [0, 1]."""
     identify: bool = True
     prior_weight: float = 1e-12
     start: float = 0.2              # [s]
@@ -92,10 +130,20 @@ class InertiaIdentification:
 
 @dataclass
 class Potential:
-    """Null-space artificial potential field U(q) (Khatib's FIRAS form
+    """The planar arm's null-space potential field (robot.potential).
+
+    Null-space artificial potential field U(q) (Khatib's FIRAS form
     U = k / 2 (1 / rho - 1 / rho0)^2 for rho < rho0):
     links against the base square (sample points along each link, clearance rho in
-    metres) and each joint k >= 2 against folding (rho = pi - |q_k| in radians)."""
+    metres) and each joint k >= 2 against folding (rho = pi - |q_k| in radians).
+
+    Attributes:
+        base_gain: k for the link-base clearance [J m^2], > 0.
+        base_margin: rho0 of the link-base clearance [m], > 0.
+        fold_gain: k for folding [J rad^2], > 0.
+        fold_margin: rho0 of folding [rad], in [1e-3, pi].
+        points_per_link: The sample points along each link, an integer in
+            [1, 100]."""
     base_gain: float = 1e-3         # k for link-base clearance [J m^2]
     base_margin: float = 0.06       # rho0 [m]
     fold_gain: float = 1e-3         # k for folding [J rad^2]
@@ -105,16 +153,34 @@ class Potential:
 
 @dataclass
 class Reference:
-    """alpha_d(t) = alpha(0) + sum_i amplitudes[i] sin(2 pi t / periods[i]) [rad]."""
+    """The planar end effector's reference angle (task.reference).
+
+    alpha_d(t) = alpha(0) + sum_i amplitudes[i] sin(2 pi t / periods[i]) [rad].
+
+    Attributes:
+        amplitudes: The sines' amplitudes [rad], as many as periods.
+        periods: The sines' periods [s], each > 0."""
     amplitudes: List[float] = field(default_factory=lambda: [0.3, 0.1])
     periods: List[float] = field(default_factory=lambda: [30.0, 11.0])
 
 
 @dataclass
 class AttitudeReference:
-    """R_d(t) = R_d(0) Rot(axis, amplitude sin(2 pi t / period)) (a body-fixed
+    """The end effector's reference attitude (task.reference of EndEffectorAttitude).
+
+    R_d(t) = R_d(0) Rot(axis, amplitude sin(2 pi t / period)) (a body-fixed
     axis), with R_d(0) the end effector's attitude at q0 turned by
-    ``initial_error`` [rad] about ``initial_error_axis`` (world frame)."""
+    ``initial_error`` [rad] about ``initial_error_axis`` (world frame).
+
+    Attributes:
+        axis: The body-fixed axis of the oscillation, a non-zero 3-vector (its
+            length does not matter).
+        amplitude: The oscillation's amplitude [rad], >= 0.
+        period: The oscillation's period [s], > 0.
+        initial_error: The angle R_d(0) is turned from the attitude at q0 [rad],
+            in [0, pi].
+        initial_error_axis: The world-frame axis of that turn, a non-zero
+            3-vector."""
     axis: List[float] = field(default_factory=lambda: [0.0, 0.6, 0.8])
     amplitude: float = 0.4          # [rad]
     period: float = 8.0             # [s]
@@ -122,13 +188,27 @@ class AttitudeReference:
     initial_error_axis: List[float] = field(default_factory=lambda: [0.6, 0.0, 0.8])
 
     def Start(self, R_WE0: RotationMatrix) -> RotationMatrix:
-        """R_d(0) from the end effector's attitude at the start."""
+        """The reference's start R_d(0).
+
+        Args:
+            R_WE0: The end effector's attitude at the start (q0).
+
+        Returns:
+            R_d(0), R_WE0 turned by initial_error about initial_error_axis."""
         axis = np.asarray(self.initial_error_axis, float)
         return RotationMatrix(AngleAxis(self.initial_error,
                                         axis / np.linalg.norm(axis))) @ R_WE0
 
-    def At(self, R_d0: RotationMatrix, t: float):
-        """(R_d(t), omega_d(t) in the world frame [rad/s])."""
+    def At(self, R_d0: RotationMatrix, t: float
+           ) -> Tuple[RotationMatrix, np.ndarray]:
+        """The reference attitude and its angular velocity at a time.
+
+        Args:
+            R_d0: The reference's start R_d(0) (Start).
+            t: The time [s].
+
+        Returns:
+            The pair of R_d(t) and omega_d(t) in the world frame (3,) [rad/s]."""
         axis = np.asarray(self.axis, float) / np.linalg.norm(self.axis)
         w = 2 * np.pi / self.period
         phi, phi_dot = self.amplitude * np.sin(w * t), self.amplitude * w * np.cos(w * t)
@@ -138,7 +218,9 @@ class AttitudeReference:
 
 @dataclass
 class AttitudeGains:
-    """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi with a damped pseudo-inverse
+    """The attitude controller's gains (task.gains of EndEffectorAttitude).
+
+    nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi with a damped pseudo-inverse
     (``task_damping`` mu), and the sliding-mode law
 
         tau = M nu_dot + C' nu - damping_rate M s - chi tanh(diag(M) s / phi),
@@ -152,7 +234,18 @@ class AttitudeGains:
     boundary_rate [1/s] to any joint's rate, whatever chi and the inertia (the
     paper's fixed tanh(s / epsilon) would add chi / (epsilon M_ii), a stiff sampled
     loop for a 5e-4 kg m^2 wrist or a large chi). chi comes from the RHS loop in DAC
-    (its bound on ||e_tau||) and is ``chi_model_based`` in the baseline."""
+    (its bound on ||e_tau||) and is ``chi_model_based`` in the baseline.
+
+    Attributes:
+        Lambda: The attitude error's gain in nu [1/s], > 0.
+        damping_rate: The damping K_d = damping_rate M(q) [1/s], > 0, with
+            damping_rate * periods.lhs <= 0.5 (the sampled loop stays well
+            damped).
+        task_damping: mu of the damped pseudo-inverse D^+ [-], >= 0.
+        epsilon: The boundary layer's thickness at chi = 0 [N m s], > 0.
+        boundary_rate: The most the boundary layer's slope adds to a joint's rate
+            [1/s], > 0, with (damping_rate + boundary_rate) * periods.lhs <= 0.5.
+        chi_model_based: The fixed chi of the model-based baseline [N m], >= 0."""
     Lambda: float = 2.0             # [1/s]
     damping_rate: float = 20.0      # [1/s]
     task_damping: float = 1e-3      # mu [-]
@@ -163,29 +256,55 @@ class AttitudeGains:
 
 @dataclass
 class Rhs:
-    """RHS integrator (docs/equations.md E48): k_p = c / Re(lambda_hat_p), c filtered towards
-    (1 + c_margin) c_min with time constant c_time_constant; chi = peak of ||e_tau||
-    with exponential forgetting over chi_window, never below chi_floor. A learned B_hat
-is used only if it passes the DIC check and its eigenvalues lie within trust_ratio of
-those of the trust band's anchor (the paper's bounded learning error, see
-gain_rule.within_trust): ``trust_anchor`` "in_use" (default), the estimate the loop
-runs on, so that the band moves with every accepted estimate and refuses only a
-sudden jump, while the estimate stays within trust_ratio^2 of B0 overall; "prior",
-B0 (the band of earlier releases, which refuses correct estimates wherever B0 is
-far from the truth). An estimate outside the band is still
-accepted on evidence: when, on the learner's port samples of the last
-``evidence_window`` seconds, its port relation leaves at most ``evidence_ratio``
-times the residual of the estimate in use (0: never). The gain rule reads
-min(beta_hat, beta_max): periods.rhs is checked at build time for the largest c
-that this allows, so the discrete loop never runs past the bound it was built for.
-``gain_rule`` "paper" (default): c follows (1 + c_margin) c_min(beta_hat) (eq. 48);
-"well_damped": c = 1 / (4 periods.rhs), the fastest decay whose discrete loop with
-the estimate right is still well damped (at least the paper's rule's c: the period
-check at build time guarantees it). With the estimate in use off by a factor r,
-lambda~ = r lambda_hat, the loop stays certified (analysis.rhs_loop) for
-Td lambda_LHS / c <= r <= 0.9025 / (h c); the faster c moves that band towards
-weaker actuators, [0.39, 3.6] against the paper rule's [0.46, 4.2] at beta_hat = 1
-on the paper's arm."""
+    """The RHS integrator's settings: its gain rule, chi and the trust band (rhs).
+
+    RHS integrator (docs/equations.md E48): k_p = c / Re(lambda_hat_p), c filtered
+    towards (1 + c_margin) c_min with time constant c_time_constant; chi = peak of
+    ||e_tau|| with exponential forgetting over chi_window, never below chi_floor. A
+    learned B_hat is used only if it passes the DIC check and its eigenvalues lie
+    within trust_ratio of those of the trust band's anchor (the paper's bounded
+    learning error, see gain_rule.within_trust): ``trust_anchor`` "in_use"
+    (default), the estimate the loop runs on, so that the band moves with every
+    accepted estimate and refuses only a sudden jump, while the estimate stays
+    within trust_ratio^2 of B0 overall; "prior", B0 (the band of earlier releases,
+    which refuses correct estimates wherever B0 is far from the truth). An estimate
+    outside the band is still accepted on evidence: when, on the learner's port
+    samples of the last ``evidence_window`` seconds, its port relation leaves at
+    most ``evidence_ratio`` times the residual of the estimate in use (0: never).
+    The gain rule reads min(beta_hat, beta_max): periods.rhs is checked at build
+    time for the largest c that this allows, so the discrete loop never runs past
+    the bound it was built for. ``gain_rule`` "paper" (default): c follows
+    (1 + c_margin) c_min(beta_hat) (eq. 48); "well_damped": c = 1 / (4 periods.rhs),
+    the fastest decay whose discrete loop with the estimate right is still well
+    damped (at least the paper's rule's c: the period check at build time
+    guarantees it). With the estimate in use off by a factor r,
+    lambda~ = r lambda_hat, the loop stays certified (analysis.rhs_loop) for
+    Td lambda_LHS / c <= r <= 0.9025 / (h c); the faster c moves that band towards
+    weaker actuators, [0.39, 3.6] against the paper rule's [0.46, 4.2] at
+    beta_hat = 1 on the paper's arm.
+
+    Attributes:
+        Td: The time-scale separation factor T_d of eq. (48), > 0.
+        c_margin: c's target is (1 + c_margin) c_min, >= 0.
+        c_time_constant: The time constant of c's filter [s], > 0.
+        chi_window: The forgetting time of chi's peak of ||e_tau|| [s], > 0.
+        chi_floor: chi's lower bound [N m], > 0.
+        chi_initial: chi at the start [N m], > 0.
+        observer_noise: The standard deviation of the tau_obs measurement noise
+            [N m], >= 0 (0: none).
+        trust_ratio: B_hat is accepted only if its eigenvalues lie within this
+            factor of the anchor's (gain_rule.within_trust), in [1, 10].
+        trust_anchor: The trust band's anchor, one of TRUST_ANCHORS: "in_use" (the
+            estimate in use) or "prior" (B0).
+        evidence_ratio: An estimate outside the band is accepted if its residual on
+            the port samples is at most this times the in-use one's, in [0, 1]
+            (0: never).
+        evidence_window: The forgetting time of those samples' statistics [s],
+            > 0.
+        beta_max: The largest beta_hat the gain rule uses, in [1, 1e6]: the RHS
+            period is sized for c_min(beta_max), see RhsIntegrator.
+        gain_rule: How c is chosen, one of GAIN_RULES: "paper" or
+            "well_damped"."""
     Td: float = 2.0
     c_margin: float = 0.1
     c_time_constant: float = 1.0    # [s]
@@ -209,11 +328,18 @@ on the paper's arm."""
 class Periods:
     """Discrete update periods [s] (docs/equations.md, SPEC settings): rhs < lhs < learner.
 
-    rhs: the integrator and the observer's sampling; lhs: the sliding-mode
-    controller and the observer's M, C' refresh; learner_sample: the learner's data
-    sampling and the RHS loop's refresh of B_hat(x), D_hat(x) and K at the current
-    state (they change on the seconds scale of the arm's motion and when the
-    learner publishes); learner: a training step; log: the loggers."""
+    Each > 0, with rhs < lhs <= learner_sample <= learner (the time-scale
+    separation, gain_rule.check_period_order); rhs is also checked against the
+    gain rule when a diagram is built (gain_rule.check_rhs_period).
+
+    Attributes:
+        rhs: The integrator and the observer's sampling [s].
+        lhs: The sliding-mode controller and the observer's M, C' refresh [s].
+        learner: A training step [s].
+        learner_sample: The learner's data sampling and the RHS loop's refresh of
+            B_hat(x), D_hat(x) and K at the current state (they change on the
+            seconds scale of the arm's motion and when the learner publishes) [s].
+        log: The loggers [s], at most the run's duration."""
     rhs: float = 2.5e-4
     lhs: float = 1e-3
     learner: float = 0.1
@@ -223,10 +349,16 @@ class Periods:
 
 @dataclass
 class ActuatorFault:
-    """An actuator fault: from ``time`` [s] on, the actuator of joint ``joint``
-    (1-based, the paper's q_joint) delivers ``gain`` times the torque it did
-    before (row ``joint`` of B~ is multiplied by ``gain``; faults on one joint
-    compound)."""
+    """An actuator fault of the ground truth (an entry of uncertainty.faults).
+
+    From ``time`` [s] on, the actuator of joint ``joint`` (1-based, the paper's
+    q_joint) delivers ``gain`` times the torque it did before (row ``joint`` of B~
+    is multiplied by ``gain``; faults on one joint compound).
+
+    Attributes:
+        time: When the fault starts [s], >= 0.
+        joint: The joint, an integer in [1, n] (1-based).
+        gain: The factor on the actuator's torque [-], in [1e-2, 1e2]."""
     time: float = 0.0               # [s]
     joint: int = 1                  # 1 .. n
     gain: float = 0.5               # [-]
@@ -234,7 +366,9 @@ class ActuatorFault:
 
 @dataclass
 class Uncertainty:
-    """Ground-truth RHS (docs/equations.md E19, SPEC settings):
+    """The ground truth's RHS: the nominal B0, D0 and their uncertainty by phase.
+
+    Ground-truth RHS (docs/equations.md E19, SPEC settings):
     B~ = diag(g(t)) (B0 + Delta B), D~ = D0 + Delta D with
     Delta D(p) = diag(D_offset + D_linear * p)            [linear phase on]
                + diag(D_quadratic * p * p)                [nonlinear phase on]
@@ -243,7 +377,24 @@ class Uncertainty:
     each group multiplied by linear_scale / nonlinear_scale, and the actuators'
     gains g_j(t) = B_scale[j] times the gain of every fault on joint j whose time
     has come (from t = 0, warm-up included: a motor constant off its datasheet,
-    an actuator that degrades in orbit). B_scale empty: 1 for every joint."""
+    an actuator that degrades in orbit). B_scale empty: 1 for every joint.
+
+    Every vector has one entry per joint (n), every matrix is n x n.
+
+    Attributes:
+        B0: The diagonal of the nominal B0 (n), each > 0.
+        D0: The diagonal of the nominal D0 (n), each >= 0.
+        D_offset: Delta D's constant diagonal (n).
+        D_linear: Delta D's diagonal per unit of momentum p (n).
+        D_quadratic: Delta D's diagonal per unit of p^2 (n).
+        B_linear: Delta B's diagonal diag(B_linear @ q), n x n [1/rad].
+        B_quadratic: Delta B's diagonal per unit of p^2 (n).
+        B_q1_squared: Delta B's term B_q1_squared q1^2, n x n.
+        linear_scale: The factor on the linear group, >= 0.
+        nonlinear_scale: The factor on the nonlinear group, >= 0.
+        B_scale: The actuators' gains, one per joint, each in [1e-2, 1e2], or none
+            (all 1).
+        faults: The actuator faults (ActuatorFault), none by default."""
     B0: List[float] = field(default_factory=lambda: [1.0, 1.0])     # diagonal
     D0: List[float] = field(default_factory=lambda: [0.1, 0.1])     # diagonal
     D_offset: List[float] = field(default_factory=lambda: [0.02, 0.05])
@@ -262,9 +413,21 @@ class Uncertainty:
 
 @dataclass
 class Disturbance:
-    """d(t) = d_LF + d_HF from ``start`` (default: start of phase 3), times ``scale``:
+    """The external disturbance d(t) acting on the port.
+
+    d(t) = d_LF + d_HF from ``start`` (default: start of phase 3), times ``scale``:
     d_LF = lf_offset + lf_amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), ...]
-    d_HF = hf_amplitude sin(2 pi hf_frequency t) hf_direction      [N m]"""
+    d_HF = hf_amplitude sin(2 pi hf_frequency t) hf_direction      [N m]
+
+    Attributes:
+        start: When d starts [s]; negative: at the start of phase 3.
+        scale: The factor on d, >= 0.
+        lf_offset: d_LF's constant part, one per joint [N m].
+        lf_amplitude: d_LF's amplitudes, one per joint [N m].
+        lf_frequency: d_LF's frequencies f_j, one per joint [Hz].
+        hf_amplitude: d_HF's amplitude [N m].
+        hf_frequency: d_HF's frequency [Hz], >= 0.
+        hf_direction: d_HF's direction, one entry per joint."""
     start: float = -1.0             # [s]; negative: start of phase 3
     scale: float = 1.0
     lf_offset: List[float] = field(default_factory=lambda: [0.03, -0.02])
@@ -371,7 +534,48 @@ class Learner:
     (network.coupling_factors): "uniform" (the paper) or "inertia", where the
     coupling from a heavy joint j into a light joint i is scaled by
     min(1, m_i / m_j), m = diag M(q0). For arms whose joint inertias lie decades
-    apart (the spatial robots' shipped scenarios use it; docs/results/spatial.md)."""
+    apart (the spatial robots' shipped scenarios use it; docs/results/spatial.md).
+
+    Attributes:
+        mode: One of LEARNER_MODES: "regularized" or "plain" (the paper's).
+        hidden: The MLPs' hidden layer widths, at least one, each in [1, 4096].
+        learning_rate: Adam's learning rate, > 0.
+        window: The training samples kept (at periods.learner_sample), an integer
+            in [2, 10^6].
+        steps_per_update: Adam steps per learner period, an integer in
+            [0, 10^4].
+        momentum_scale: p is divided by this in the features [kg m^2/s], > 0.
+        beta1: Adam's beta_1, in [0, 0.999999].
+        beta2: Adam's beta_2, in [0, 0.999999].
+        eps: Adam's epsilon, > 0.
+        band: The band-pass filter's [low, high] corner frequencies [Hz]: low in
+            [0, the Nyquist frequency of periods.learner_sample] (0: no
+            high-pass), high in [low, that Nyquist frequency].
+        band_sections: The band-pass filter's [high-pass, low-pass] section
+            counts, each in [0, 16].
+        forgetting: The samples' forgetting time [s], > 0.
+        prior_weight: rho, the prior's weight in the loss, >= 0.
+        change_ratio: The jump of the relative residual over its recent median
+            that counts as a change, in [1, 10^6].
+        change_floor: The relative residual a change must also exceed, >= 0.
+        change_hold: How long training pauses after a change [s], >= 0.
+        start_hold: How long training waits at the start [s], >= 0 (0: train from
+            t = 0, earlier releases).
+        min_window: The samples a fit needs after the start or a change [s], in
+            [0, window * periods.learner_sample] (0: fit from the second sample,
+            earlier releases).
+        warm_start: Whether the first fit starts from the window's best constant
+            B (False: Adam continues from the old estimate).
+        model_change: Whether a new LHS model counts as a change (False: the LHS
+            model's changes are not changes).
+        step_guard: G, the loss growth that undoes an update's steps: 0 (off) or
+            in [1, 10^12].
+        prior_fallback: Whether the prior (B0, D0) is published while it fits
+            better than the network.
+        coupling: One of LEARNER_COUPLINGS: "uniform" or "inertia"
+            (network.coupling_factors).
+        prior_scale: One of LEARNER_PRIOR_SCALES: "pooled" or "per_input"
+            (identification.RhsIdentifier)."""
     mode: str = "regularized"
     hidden: List[int] = field(default_factory=lambda: [16, 8])
     learning_rate: float = 1e-2
@@ -400,29 +604,48 @@ class Learner:
 
 @dataclass
 class Excitation:
-    """A persistently exciting port request for the learner (DAC only): the LHS
-    adds tau_pe(t) = amplitude sin(2 pi f_j t) to channel j of tau_c^r, with f_j
+    """A persistently exciting port request for the learner (DAC only).
+
+    The LHS adds tau_pe(t) = amplitude sin(2 pi f_j t) to channel j of tau_c^r, with f_j
     spread geometrically over ``frequencies`` = [f_first, f_last] in Hz
     (f_j = f_first (f_last / f_first)^(j / (n - 1))). amplitude = 0 switches it off.
 
     Why: under the slow reference the data inform B only weakly, and from phase 3
     on the low-frequency disturbance shares the reference's band; a small request
     inside the learner's band, away from both, makes B and D identifiable
-    (docs/concepts/identifiability.md)."""
+    (docs/concepts/identifiability.md).
+
+    Attributes:
+        amplitude: The request's amplitude [N m], >= 0 (0: off).
+        frequencies: The first and last frequency, [f_first, f_last], in Hz:
+            f_first in [1e-3, the Nyquist frequency of periods.lhs], f_last in
+            [f_first, that Nyquist frequency]; with learner.mode "regularized" and
+            an amplitude > 0, both inside learner.band."""
     amplitude: float = 2e-4         # [N m]
     frequencies: List[float] = field(default_factory=lambda: [3.1, 4.3])   # [Hz]
 
     def Frequencies(self, n: int) -> np.ndarray:
-        """f_j for joints j = 0 .. n-1 [Hz]."""
+        """The excitation's frequency on each joint.
+
+        Args:
+            n: The number of joints.
+
+        Returns:
+            f_j for joints j = 0 .. n-1 [Hz]."""
         first, last = self.frequencies
         return first * (last / first) ** (np.arange(n) / max(n - 1, 1))
 
 
 @dataclass
 class Stress:
-    """A deliberately wrong learner, for verification (``dacph verify``): from time
-    ``start`` on, the RHS integrator uses B_hat_scale * B_hat in place of the
-    learner's B_hat (1 = the learner's estimate, no stress)."""
+    """A deliberately wrong learner, for verification (``dacph verify``).
+
+    From time ``start`` on, the RHS integrator uses B_hat_scale * B_hat in place of
+    the learner's B_hat (1 = the learner's estimate, no stress).
+
+    Attributes:
+        B_hat_scale: The factor on the learner's B_hat, > 0 (1: no stress).
+        start: When the stress starts [s], >= 0."""
     B_hat_scale: float = 1.0
     start: float = 0.0              # [s]
 
@@ -435,16 +658,28 @@ class Stress:
 
 @dataclass
 class PlanarArm:
-    """robot: a planar n-link arm on a free base (arm_parameters.RobotParams): ``truth`` is
-    the ground truth, ``nominal`` the controller's model of it (their difference is
-    the controller's model error), ``potential`` the null-space potential keeping
-    the links off the base and unfolded. Its task: EndEffectorAngle."""
+    """robot: a planar n-link arm on a free base (arm_parameters.RobotParams).
+
+    Its task: EndEffectorAngle.
+
+    Attributes:
+        truth: The ground truth (RobotParams).
+        nominal: The controller's model of it (their difference is the
+            controller's model error), with as many links as ``truth``.
+        potential: The null-space potential keeping the links off the base and
+            unfolded (Potential)."""
     truth: RobotParams = field(default_factory=RobotParams)
     nominal: RobotParams = field(default_factory=RobotParams)
     potential: Potential = field(default_factory=Potential)
 
     def Validate(self) -> int:
-        """ConfigError naming the first invalid setting; returns the joint count."""
+        """Checks the robot section's settings.
+
+        Returns:
+            The joint count.
+
+        Raises:
+            ConfigError: Naming the first invalid setting."""
         self.truth.Validate("robot.truth")
         self.nominal.Validate("robot.nominal")
         n = self.truth.num_links
@@ -464,10 +699,14 @@ class PlanarArm:
     SAMPLED_SETTINGS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
                         "base_mass_scale", "base_inertia_scale")
 
-    def ApplyRobotSample(self, sampled) -> None:
-        """A sweep trial's sampled ground truth (montecarlo.definition): per link
-        mass (and inertia), length (com, width; inertia by its square) and inertia
-        factors, the base's mass (and inertia) and inertia factors."""
+    def ApplyRobotSample(self, sampled: Dict[str, object]) -> None:
+        """Applies a sweep trial's sampled ground truth (montecarlo.definition).
+
+        Args:
+            sampled: The trial's sampled settings by name (SAMPLED_SETTINGS taken):
+                per link mass (and inertia), length (com, width; inertia by its
+                square) and inertia factors, the base's mass (and inertia) and
+                inertia factors."""
         links = self.truth.links
         for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
             link.mass *= f
@@ -483,10 +722,15 @@ class PlanarArm:
         self.truth.base.mass *= f
         self.truth.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
 
-    def ApplyModelErrorSample(self, links, base, num_joints: int) -> None:
-        """The controller's model error of a sweep trial: ``links`` (one factor per
-        link, or None) and ``base`` (or None) multiply the nominal robot's masses
-        and inertias."""
+    def ApplyModelErrorSample(self, links: Optional[Sequence[float]],
+                              base: Optional[float], num_joints: int) -> None:
+        """Applies the controller's model error of a sweep trial.
+
+        Args:
+            links: One factor per link on the nominal robot's link masses and
+                inertias, or None.
+            base: The factor on the nominal base's mass and inertia, or None.
+            num_joints: The number of joints (not needed by a planar arm)."""
         for link, f in zip(self.nominal.links, links or []):
             link.mass *= f
             link.inertia *= f
@@ -494,8 +738,16 @@ class PlanarArm:
             self.nominal.base.mass *= base
             self.nominal.base.inertia *= base
 
-    def SizedDefaults(self, q0, task) -> Optional["Scenario"]:
-        """None: a planar arm's defaults are Scenario's own (the paper's)."""
+    def SizedDefaults(self, q0: Optional[Sequence[float]],
+                      task: Optional["EndEffectorAngle"]) -> Optional["Scenario"]:
+        """The scenario a file naming this robot starts from.
+
+        Args:
+            q0: The file's q0 (None where it leaves it out).
+            task: The file's task (None where it leaves it out).
+
+        Returns:
+            None, since a planar arm's defaults are Scenario's own (the paper's)."""
         return None
 
     # The older file layouts that can express a scenario of this robot
@@ -505,10 +757,16 @@ class PlanarArm:
 
 @dataclass
 class ClearancePotential:
-    """The null-space potential of a described arm
-    (robots.clearance_potential.BaseClearancePotential): U = gain / 2 sum_k max(0, margin -
-    phi_k)^2 over the link-base signed distances, xi = -eta grad U; gain = 0
-    switches it off."""
+    """The null-space potential of a described arm (robot.potential).
+
+    robots.clearance_potential.BaseClearancePotential:
+    U = gain / 2 sum_k max(0, margin - phi_k)^2 over the link-base signed distances,
+    xi = -eta grad U; gain = 0 switches it off.
+
+    Attributes:
+        gain: The potential's gain, >= 0 (0: off).
+        margin: The clearance below which the potential acts [m], > 0.
+        eta: The null-space gain of xi = -eta grad U [1/s], >= 0."""
     gain: float = 1.0
     margin: float = 0.1             # [m]
     eta: float = 20.0               # [1/s]
@@ -521,12 +779,19 @@ EFFORT_LIMITS = ("saturate", "ignore")         # DescribedArm.effort_limits
 
 @dataclass
 class ArmBase:
-    """robot.base: the free-floating body an arm's own description is mounted on,
-    a uniform box of ``mass`` [kg] and ``size`` [m] (its inertia and its collision
+    """robot.base: the free-floating body an arm's own description is mounted on.
+
+    A uniform box of ``mass`` [kg] and ``size`` [m] (its inertia and its collision
     shape, which the clearance potential keeps the links from), the arm's root
-    frame welded to it at ``mount`` = [x, y, z] in m, [roll, pitch, yaw] in rad, in the
-    box's centre frame. ``mass`` 0: no base is added, the description is the whole
-    robot (its root body is the free base)."""
+    frame welded to it at ``mount`` = [x, y, z] in m, [roll, pitch, yaw] in rad, in
+    the box's centre frame. ``mass`` 0: no base is added, the description is the
+    whole robot (its root body is the free base).
+
+    Attributes:
+        mass: The box's mass [kg], >= 0 (0: no base).
+        size: The box's sides along x, y, z [m], each > 0.
+        mount: The root frame's pose in the box's centre frame, [x, y, z] in m
+            and [roll, pitch, yaw] in rad (6 finite numbers)."""
     mass: float = 0.0               # [kg]
     size: List[float] = field(default_factory=lambda: [1.0, 1.0, 1.0])      # [m]
     mount: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
@@ -534,43 +799,66 @@ class ArmBase:
 
 @dataclass
 class EndEffectorFrame:
-    """robot.end_effector: the frame whose attitude the task tracks, ``offset`` [m]
-    from the description's frame ``frame``; ``frame`` empty: the description's own
-    frame named end_effector."""
+    """robot.end_effector: the frame whose attitude the task tracks.
+
+    ``offset`` [m] from the description's frame ``frame``; ``frame`` empty: the
+    description's own frame named end_effector.
+
+    Attributes:
+        frame: The description's frame it is fixed to ("": the frame named
+            end_effector).
+        offset: Its offset from that frame, x, y, z [m] (3 finite numbers)."""
     frame: str = ""
     offset: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])     # [m]
 
 
 @dataclass
 class DescribedArm:
-    """robot: !DescribedArm, an arm from a description file (``description``: a
-    shipped name, description.SPATIAL_ROBOTS, or a .urdf/.sdf path), on the free
-    base ``base`` (ArmBase; by default the description's root body is the base),
-    tracking the attitude of ``end_effector`` (EndEffectorFrame). ``package_paths``:
-    folders holding ROS packages (a package.xml) whose package:// URIs the
-    description uses, besides those on ROS_PACKAGE_PATH; ``packages``: package name
-    -> folder, for the URIs whose package name is not the one its package.xml
-    declares (example-robot-data's files use package://example-robot-data/ while
-    its package.xml is example_robot_descriptions). ``joint_damping``: what
-    becomes of the description's joint damping (URDF <dynamics damping>), which acts
-    in the ground truth beside the port's D~: "keep" counts it in the ground truth's
-    logged D~ (true_matrices), so that the D errors compare against what acts;
-    "zero" removes it (a logged note), as the planar arms have none.
-    ``joint_limits``: the description's joint position limits, which the ground
-    truth does not enforce: "stop" refuses a q0 outside them and stops a run that
-    leaves them with a named reason; "ignore" leaves them unchecked.
-    ``effort_limits``: the URDF's joint effort limits (<limit effort>): "saturate"
-    clips each actuator's command u_j to them in the ground truth and logs where it
-    did (the log ``saturated``, the metric ``effort_saturated_share``); "ignore"
-    leaves u as the controller sent it.
-    ``locked_joints``: joints welded at a position (name: [rad] or [m]): a
-    gripper's and any other joint that is not the arm's. Every prismatic joint is
-    locked, at its position here or 0 (a logged note names them).
-    ``nominal_inertia_scale`` is the controller's model error: one factor per body
-    with mass in the description's order (base first;
-    inertial_parameters.InertialParameters), by which the controller's model
-    multiplies that body's mass and rotational inertia (its centre of mass stays);
-    empty: the description's own inertias. Its task: EndEffectorAttitude."""
+    """robot: !DescribedArm, an arm from a description file.
+
+    On the free base ``base`` (by default the description's root body is the
+    base), tracking the attitude of ``end_effector``. Its task:
+    EndEffectorAttitude.
+
+    Attributes:
+        description: A shipped name (description.SPATIAL_ROBOTS) or a .urdf/.sdf
+            path.
+        base: The free base (ArmBase; by default the description's root body is
+            the base).
+        end_effector: The frame whose attitude the task tracks
+            (EndEffectorFrame).
+        package_paths: Folders holding ROS packages (a package.xml) whose
+            package:// URIs the description uses, besides those on
+            ROS_PACKAGE_PATH; each must be a folder.
+        packages: Package name -> folder, for the URIs whose package name is not
+            the one its package.xml declares (example-robot-data's files use
+            package://example-robot-data/ while its package.xml is
+            example_robot_descriptions); each must be a folder.
+        joint_damping: What becomes of the description's joint damping (URDF
+            ``<dynamics damping>``), which acts in the ground truth beside the
+            port's D~, one of JOINT_DAMPING: "keep" counts it in the ground
+            truth's logged D~ (true_matrices), so that the D errors compare against
+            what acts; "zero" removes it (a logged note), as the planar arms have
+            none.
+        locked_joints: Joints welded at a position (name: [rad] or [m], finite):
+            a gripper's and any other joint that is not the arm's. Every prismatic
+            joint is locked, at its position here or 0 (a logged note names them).
+        joint_limits: The description's joint position limits, which the ground
+            truth does not enforce, one of JOINT_LIMITS: "stop" refuses a q0
+            outside them and stops a run that leaves them with a named reason;
+            "ignore" leaves them unchecked.
+        effort_limits: The URDF's joint effort limits (``<limit effort>``), one of
+            EFFORT_LIMITS: "saturate" clips each actuator's command u_j to them in
+            the ground truth and logs where it did (the log ``saturated``, the
+            metric ``effort_saturated_share``); "ignore" leaves u as the
+            controller sent it.
+        nominal_inertia_scale: The controller's model error: one factor per body
+            with mass in the description's order (base first;
+            inertial_parameters.InertialParameters), each in [0.1, 10], by which
+            the controller's model multiplies that body's mass and rotational
+            inertia (its centre of mass stays); empty: the description's own
+            inertias.
+        potential: The null-space potential (ClearancePotential)."""
     description: str = "satellite_6dof"
     base: ArmBase = field(default_factory=ArmBase)
     end_effector: EndEffectorFrame = field(default_factory=EndEffectorFrame)
@@ -584,8 +872,11 @@ class DescribedArm:
     potential: ClearancePotential = field(default_factory=ClearancePotential)
 
     def ValidateAssembly(self) -> None:
-        """ConfigError naming the first invalid setting of how the robot is put
-        together (base, mount, end effector, package paths), before it is parsed."""
+        """Checks how the robot is put together, before it is parsed.
+
+        Raises:
+            ConfigError: Naming the first invalid setting of how the robot is put
+                together (base, mount, end effector, package paths)."""
         require_one_of("robot.joint_damping", self.joint_damping, JOINT_DAMPING)
         require_one_of("robot.joint_limits", self.joint_limits, JOINT_LIMITS)
         require_one_of("robot.effort_limits", self.effort_limits, EFFORT_LIMITS)
@@ -611,8 +902,13 @@ class DescribedArm:
                                   "allowed: the folder package://NAME/ stands for")
 
     def Validate(self, num_bodies: int) -> None:
-        """ConfigError naming the first invalid setting (``num_bodies``: the
-        description's bodies with mass)."""
+        """Checks the settings that depend on the parsed description.
+
+        Args:
+            num_bodies: The description's bodies with mass.
+
+        Raises:
+            ConfigError: Naming the first invalid setting."""
         if len(self.nominal_inertia_scale) not in (0, num_bodies):
             raise ConfigError(f"robot.nominal_inertia_scale has "
                               f"{len(self.nominal_inertia_scale)} entries; allowed: "
@@ -623,21 +919,40 @@ class DescribedArm:
         require_positive("robot.potential.margin", self.potential.margin, "m")
         require_nonnegative("robot.potential.eta", self.potential.eta, "1/s")
 
-    def SizedDefaults(self, q0, task) -> "Scenario":
-        """The scenario whose settings a file naming this robot starts from: every
-        per-joint setting sized to the arm (arm_defaults.arm_scenario; ``q0`` and
-        ``task`` None where the file leaves them out)."""
+    def SizedDefaults(self, q0: Optional[Sequence[float]],
+                      task: Optional["EndEffectorAttitude"]) -> "Scenario":
+        """The scenario whose settings a file naming this robot starts from.
+
+        Every per-joint setting sized to the arm (arm_defaults.arm_scenario).
+
+        Args:
+            q0: The file's q0 [rad] (None where the file leaves it out).
+            task: The file's task (None where the file leaves it out).
+
+        Returns:
+            The sized scenario."""
         from dacph_drake.arm_defaults import arm_scenario
         return arm_scenario(self, q0, task)
 
     SAMPLED_SETTINGS = ()           # a description has no link parameters to sample
 
-    def ApplyRobotSample(self, sampled) -> None:
-        """Nothing: the ground truth is the description's."""
+    def ApplyRobotSample(self, sampled: Dict[str, object]) -> None:
+        """Nothing: the ground truth is the description's.
 
-    def ApplyModelErrorSample(self, links, base, num_joints: int) -> None:
-        """nominal_inertia_scale = [base, links...] (1 where not sampled; one link
-        per joint)."""
+        Args:
+            sampled: The trial's sampled settings by name (none taken)."""
+
+    def ApplyModelErrorSample(self, links: Optional[Sequence[float]],
+                              base: Optional[float], num_joints: int) -> None:
+        """Applies the controller's model error of a sweep trial.
+
+        nominal_inertia_scale = [base, links...] (1 where not sampled; one link
+        per joint).
+
+        Args:
+            links: One factor per link, or None.
+            base: The base's factor, or None.
+            num_joints: The number of joints (the links when ``links`` is None)."""
         if links is not None or base is not None:
             self.nominal_inertia_scale = ([1.0 if base is None else base]
                                           + list(links or [1.0] * num_joints))
@@ -648,13 +963,24 @@ class DescribedArm:
 
 @dataclass
 class EndEffectorAngle:
-    """task: the planar end effector's absolute angle alpha = theta0 + sum q tracks
-    ``reference`` under the sliding-mode LHS controller with ``gains``."""
+    """task: the planar end effector's absolute angle alpha = theta0 + sum q.
+
+    It tracks ``reference`` under the sliding-mode LHS controller with ``gains``.
+
+    Attributes:
+        reference: The reference angle alpha_d(t) (Reference).
+        gains: The LHS controller's gains (LhsGains)."""
     reference: Reference = field(default_factory=Reference)
     gains: LhsGains = field(default_factory=LhsGains)
 
     def Validate(self, periods: Periods) -> None:
-        """ConfigError naming the first gain or reference setting out of range."""
+        """Checks the gains and the reference.
+
+        Args:
+            periods: The scenario's periods (not needed by this task).
+
+        Raises:
+            ConfigError: Naming the first gain or reference setting out of range."""
         for name in ("Kd", "Lambda", "epsilon", "eta"):
             require_positive(f"task.gains.{name}", getattr(self.gains, name))
         require_nonnegative("task.gains.chi_model_based", self.gains.chi_model_based,
@@ -671,13 +997,25 @@ class EndEffectorAngle:
 
 @dataclass
 class EndEffectorAttitude:
-    """task: !EndEffectorAttitude, the end effector's 3D attitude tracks
-    ``reference`` under the AttitudeController with ``gains``."""
+    """task: !EndEffectorAttitude, the end effector's 3D attitude.
+
+    It tracks ``reference`` under the AttitudeController with ``gains``.
+
+    Attributes:
+        reference: The reference attitude R_d(t) (AttitudeReference).
+        gains: The attitude controller's gains (AttitudeGains)."""
     reference: AttitudeReference = field(default_factory=AttitudeReference)
     gains: AttitudeGains = field(default_factory=AttitudeGains)
 
     def Validate(self, periods: Periods) -> None:
-        """ConfigError naming the first gain or reference setting out of range."""
+        """Checks the gains and the reference.
+
+        Args:
+            periods: The scenario's periods (the gains' rates against
+                periods.lhs).
+
+        Raises:
+            ConfigError: Naming the first gain or reference setting out of range."""
         r, g = self.reference, self.gains
         require_positive("task.reference.period", r.period, "s")
         require_nonnegative("task.reference.amplitude", r.amplitude, "rad")
@@ -707,10 +1045,38 @@ class EndEffectorAttitude:
 
 @dataclass(eq=False)
 class Scenario:
-    """Every setting of a closed-loop run: the robot and its task (typed sections,
-    see PlanarArm, DescribedArm, EndEffectorAngle, EndEffectorAttitude), the
-    initial joint angles, and the sections every robot shares. The run lasts as
-    long as the phases."""
+    """Every setting of a closed-loop run.
+
+    The robot and its task (typed sections, see PlanarArm, DescribedArm,
+    EndEffectorAngle, EndEffectorAttitude), the initial joint angles, and the
+    sections every robot shares. The run lasts as long as the phases.
+
+    Attributes:
+        robot: The robot: PlanarArm (the default) or DescribedArm (YAML tag
+            !DescribedArm).
+        task: The task its LHS controller tracks: EndEffectorAngle with a
+            PlanarArm, EndEffectorAttitude (!EndEffectorAttitude) with a
+            DescribedArm.
+        q0: The initial joint angles [rad], one per joint, finite (the robot
+            checks it further: a planar arm's clear of the base and of the task's
+            singularities, a described arm's within its joint limits where
+            robot.joint_limits is "stop").
+        phases: The phases' durations (Phases).
+        inertia: The identification of the inertial parameters
+            (InertiaIdentification).
+        rhs: The RHS integrator (Rhs).
+        periods: The discrete update periods (Periods).
+        uncertainty: The ground truth's RHS (Uncertainty).
+        disturbance: The external disturbance d(t) (Disturbance).
+        learner: The learner (Learner).
+        excitation: The learner's excitation (Excitation).
+        stress: A deliberately wrong learner, for verification (Stress).
+        simulator: Drake's simulator settings for the ground truth's continuous
+            state (SimulatorConfig; loop.simulator.validate_simulator_config
+            says what a closed loop can run). The step taken is
+            min(max_step_size, periods.rhs): the RHS samples end every step.
+        seed: The learner's initialization and the observer's noise, an integer
+            in [0, 2^32 - 1]."""
     robot: Union[PlanarArm, DescribedArm] = field(default_factory=PlanarArm)
     task: Union[EndEffectorAngle, EndEffectorAttitude] = field(
         default_factory=EndEffectorAngle)
@@ -745,17 +1111,26 @@ class Scenario:
                 else self.phases.disturbance_start)
 
     def Validate(self) -> None:
-        """Raises ConfigError naming the first invalid setting and its allowed range
-        (the robot and its task through robots.robot_of, which builds the robot;
-        the RHS period is checked against the gain rule when a diagram is built:
-        gain_rule.check_rhs_period)."""
+        """Checks every setting.
+
+        The robot and its task through robots.robot_of, which builds the robot;
+        the RHS period is checked against the gain rule when a diagram is built
+        (gain_rule.check_rhs_period).
+
+        Raises:
+            ConfigError: Naming the first invalid setting and its allowed range."""
         from dacph_drake.robots import robot_of
         validate_seed(self.seed)
         robot_of(self)
 
     def ValidateShared(self, n: int) -> None:
-        """ConfigError naming the first invalid setting of the sections every robot
-        shares, for a robot with ``n`` joints (robots.robot_of calls it)."""
+        """Checks the sections every robot shares (robots.robot_of calls it).
+
+        Args:
+            n: The robot's number of joints.
+
+        Raises:
+            ConfigError: Naming the first invalid setting of those sections."""
         _require_length("q0", self.q0, n)
         require_finite_numbers("q0", list(self.q0))
         self.task.Validate(self.periods)
@@ -772,8 +1147,14 @@ class Scenario:
         require_finite_numbers("", self)
 
 
-def validate_seed(seed) -> None:
-    """ConfigError unless ``seed`` is an integer in [0, 2^32 - 1]."""
+def validate_seed(seed: object) -> None:
+    """Requires a valid seed.
+
+    Args:
+        seed: The scenario's seed.
+
+    Raises:
+        ConfigError: Unless ``seed`` is an integer in [0, 2^32 - 1]."""
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise ConfigError(f"seed = {seed!r} is not an integer; allowed: an integer in "
                           "[0, 2^32 - 1]")
@@ -781,15 +1162,29 @@ def validate_seed(seed) -> None:
 
 
 def validate_phases(phases: Phases) -> None:
-    """ConfigError unless every phase duration is >= 0."""
+    """Requires phase durations that can run.
+
+    Args:
+        phases: The scenario's phases.
+
+    Raises:
+        ConfigError: Unless every phase duration is >= 0."""
     for name in ("warmup", "linear", "nonlinear", "disturbance"):
         require_nonnegative(f"phases.{name}", getattr(phases, name), "s")
 
 
-def validate_port_settings(scenario, n: int) -> None:
-    """ConfigError naming the first invalid setting of the port's RHS chain (rhs,
-    stress, periods, uncertainty, disturbance, learner, excitation) of a scenario
-    with ``n`` joints."""
+def validate_port_settings(scenario: Scenario, n: int) -> None:
+    """Checks the settings of the port's RHS chain.
+
+    The sections rhs, stress, periods, uncertainty, disturbance, learner and
+    excitation.
+
+    Args:
+        scenario: The scenario.
+        n: Its robot's number of joints.
+
+    Raises:
+        ConfigError: Naming the first invalid setting of the port's RHS chain."""
     from dacph_drake.gain_rule import check_period_order
     require_positive("rhs.Td", scenario.rhs.Td)
     require_nonnegative("rhs.c_margin", scenario.rhs.c_margin)
@@ -951,10 +1346,16 @@ def described_arm_learner() -> Learner:
 
 
 def six_dof_uncertainty(scale: float = 1.0) -> Uncertainty:
-    """The ground truth's RHS of satellite_6dof, the paper's form sized to each
-    joint: dampings and momentum terms scaled to the joint's inertia and momentum
-    (shoulder p ~ 0.8, wrist p ~ 0.02 kg m^2/s on the shipped reference); both
-    groups times ``scale``."""
+    """The ground truth's RHS of satellite_6dof, the paper's form sized to each joint.
+
+    Dampings and momentum terms scaled to the joint's inertia and momentum
+    (shoulder p ~ 0.8, wrist p ~ 0.02 kg m^2/s on the shipped reference).
+
+    Args:
+        scale: The factor on both groups (linear_scale and nonlinear_scale).
+
+    Returns:
+        The Uncertainty section."""
     pair = np.array([[-0.1, 0.0], [0.05, 0.15]])
     coupling = np.zeros((6, 6))
     coupling[:2, :2] = [[0.0, -0.1], [0.4, 0.0]]
@@ -969,7 +1370,13 @@ def six_dof_uncertainty(scale: float = 1.0) -> Uncertainty:
 
 
 def six_dof_disturbance(scale: float = 1.0) -> Disturbance:
-    """The shipped 6-DOF arm's disturbance d(t), times ``scale``."""
+    """The shipped 6-DOF arm's disturbance d(t).
+
+    Args:
+        scale: The factor on d(t) (Disturbance.scale).
+
+    Returns:
+        The Disturbance section."""
     return Disturbance(
         scale=scale, lf_offset=[0.03, -0.02, 0.02, -0.002, 0.002, -0.001],
         lf_amplitude=[0.02, 0.02, 0.01, 0.002, 0.002, 0.001],

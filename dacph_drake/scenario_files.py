@@ -14,7 +14,7 @@ import logging
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import List, Optional, Tuple, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
@@ -65,9 +65,29 @@ ADDED_SECTION_DEFAULTS = (
 
 @dataclass(eq=False)
 class PlanarLayoutV1:
-    """A planar scenario's fields as they stood before the robot: and task: sections,
-    in their order (the YAML text, hence a saved run's fingerprint, follows it): a
-    frozen record of that format, never edited."""
+    """A planar scenario's fields as they stood before the robot: and task: sections.
+
+    In their order (the YAML text, hence a saved run's fingerprint, follows it): a
+    frozen record of that format, never edited.
+
+    Attributes:
+        robot: The ground truth (now robot.truth).
+        nominal_robot: The controller's model (now robot.nominal).
+        q0: The initial joint angles [rad].
+        phases: The phases (scenario.Phases).
+        lhs: The LHS controller's gains (now task.gains).
+        potential: The null-space potential (now robot.potential).
+        inertia: The inertial identification (scenario.InertiaIdentification).
+        reference: The reference angle (now task.reference).
+        rhs: The RHS integrator (scenario.Rhs).
+        periods: The periods (scenario.Periods).
+        uncertainty: The ground truth's RHS (scenario.Uncertainty).
+        disturbance: The disturbance (scenario.Disturbance).
+        learner: The learner (scenario.Learner).
+        excitation: The excitation (scenario.Excitation).
+        stress: The stress (scenario.Stress).
+        simulator: Drake's simulator settings.
+        seed: The seed."""
     robot: RobotParams = field(default_factory=RobotParams)
     nominal_robot: RobotParams = field(default_factory=RobotParams)
     q0: List[float] = field(default_factory=lambda: [0.3, 1.0])
@@ -90,14 +110,27 @@ class PlanarLayoutV1:
 
     @staticmethod
     def From(scenario: Scenario) -> "PlanarLayoutV1":
+        """The same settings in this layout.
+
+        Args:
+            scenario: A planar arm's scenario.
+
+        Returns:
+            Its settings in this layout."""
         return PlanarLayoutV1(
             robot=scenario.robot.truth, nominal_robot=scenario.robot.nominal,
             q0=scenario.q0, phases=scenario.phases, lhs=scenario.task.gains,
             potential=scenario.robot.potential, inertia=scenario.inertia,
             reference=scenario.task.reference, **_shared(scenario))
 
-    def ToScenario(self, path=None) -> Scenario:
-        """The Scenario this file layout describes."""
+    def ToScenario(self, path: Optional[Union[str, Path]] = None) -> Scenario:
+        """The Scenario this file layout describes.
+
+        Args:
+            path: The file read (not needed by this layout).
+
+        Returns:
+            The Scenario."""
         return Scenario(
             robot=PlanarArm(truth=self.robot, nominal=self.nominal_robot,
                             potential=self.potential),
@@ -125,8 +158,34 @@ class PlanarLayoutV1:
 
 @dataclass(eq=False)
 class SpatialLayoutV1:
-    """A described arm's scenario (SpatialScenario) as it stood, with its defaults: a
-    frozen record of that format, never edited."""
+    """A described arm's scenario (SpatialScenario) as it stood, with its defaults.
+
+    A frozen record of that format, never edited.
+
+    Attributes:
+        robot: The description's name (now robot.description).
+        q0: The initial joint angles [rad].
+        duration: The run's duration [s] (now the phases' end).
+        reference: The reference attitude (now task.reference).
+        gains: The attitude controller's gains (now task.gains).
+        potential: The clearance potential (now robot.potential).
+        nominal_inertia_scale: The controller's model error (now
+            robot.nominal_inertia_scale).
+        inertia: The inertial identification (scenario.InertiaIdentification).
+        phases: The phases (scenario.Phases).
+        uncertainty: The ground truth's RHS (scenario.Uncertainty).
+        disturbance: The disturbance (scenario.Disturbance).
+        rhs: The RHS integrator (scenario.Rhs).
+        learner: The learner (scenario.Learner), as it stood then.
+        excitation: The excitation (scenario.Excitation).
+        stress: The stress (scenario.Stress).
+        rhs_period: Now periods.rhs [s].
+        lhs_period: Now periods.lhs [s].
+        learner_sample_period: Now periods.learner_sample [s].
+        learner_period: Now periods.learner [s].
+        log_period: Now periods.log [s].
+        simulator: Drake's simulator settings.
+        seed: The seed."""
     robot: str = "satellite_6dof"
     q0: List[float] = field(default_factory=lambda: [0.3, -0.8, 1.6, 0.2, 0.6, -0.3])
     duration: float = 8.0
@@ -155,9 +214,20 @@ class SpatialLayoutV1:
     KEYS = ("duration", "gains", "nominal_inertia_scale", "rhs_period", "lhs_period",
             "learner_sample_period", "learner_period", "log_period")
 
-    def ToScenario(self, path) -> Scenario:
-        """The scenario of these settings; the run lasts as long as the phases, so a
-        duration other than their end stretches (or shortens) the last phase."""
+    def ToScenario(self, path: Union[str, Path]) -> Scenario:
+        """The scenario of these settings.
+
+        The run lasts as long as the phases, so a duration other than their end
+        stretches (or shortens) the last phase.
+
+        Args:
+            path: The file read, for the message.
+
+        Returns:
+            The Scenario.
+
+        Raises:
+            ConfigError: The duration ends before phase 3 starts."""
         phases = self.phases
         if self.duration != phases.end:
             if self.duration < phases.disturbance_start:
@@ -185,9 +255,17 @@ def _shared(settings, periods: bool = True):
     return {name: getattr(settings, name) for name in names}
 
 
-def load_older_layout(path) -> Optional[Scenario]:
-    """The scenario of a file in an older layout (with a logged note naming it), or
-    None for a file of the current layout."""
+def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
+    """Reads a scenario file of an older layout, with a logged note naming it.
+
+    Args:
+        path: The scenario file.
+
+    Returns:
+        Its scenario, or None for a file of the current layout.
+
+    Raises:
+        ConfigError: The file cannot be read or does not fit its layout."""
     raw = read_yaml(path)
     if not isinstance(raw, dict):
         return None
@@ -275,11 +353,23 @@ def _migrate_file(raw, path):
     return source if source is not raw else None
 
 
-def move_integration_scheme(raw, path):
-    """Files saved before the scenario embedded Drake's SimulatorConfig have a
+def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dict]:
+    """Moves a top-level integration_scheme: into the simulator: section.
+
+    Files saved before the scenario embedded Drake's SimulatorConfig have a
     top-level ``integration_scheme: X``: it is read as ``simulator:
     {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
-    settings it implied; the rest are the simulator's defaults (FixedStepConfig)."""
+    settings it implied; the rest are the simulator's defaults (FixedStepConfig).
+
+    Args:
+        raw: The parsed scenario file.
+        path: The file, for the messages.
+
+    Returns:
+        The parsed file with the key moved, or None when it has no such key.
+
+    Raises:
+        ConfigError: The file sets both integration_scheme: and simulator:."""
     if not (isinstance(raw, dict) and "integration_scheme" in raw):
         return None
     if "simulator" in raw:
@@ -298,13 +388,20 @@ def move_integration_scheme(raw, path):
 
 
 def saved_forms(scenario: Scenario) -> List[str]:
-    """The YAML texts a saved run of ``scenario`` may have been fingerprinted from:
-    its current form, without the settings added to the current layout since it
+    """The YAML texts a saved run of a scenario may have been fingerprinted from.
+
+    Its current form, without the settings added to the current layout since it
     was introduced where they are at their defaults (ADDED_TO_CURRENT_LAYOUT: a
     setting added at its default leaves a fingerprint as it was), and the forms
     of the same settings in the layouts before (the robot section's
     OLDER_LAYOUTS: a planar arm's scenario before the robot: and task: sections,
-    and before that the top-level integration_scheme:)."""
+    and before that the top-level integration_scheme:).
+
+    Args:
+        scenario: The scenario.
+
+    Returns:
+        The texts, the current form first."""
     return [_without_lines(yaml_dump_typed(scenario), _added_lines())] + [
         form for layout in scenario.robot.OLDER_LAYOUTS
         for form in globals()[layout].From(scenario).SavedForms()]

@@ -36,6 +36,7 @@ m = sup_q max_i M_ii (M_ii >= lambda):
 EnvelopeConstants holds either form; envelope_bounds uses it.
 """
 from dataclasses import asdict, dataclass
+from typing import Tuple, Union
 
 import numpy as np
 
@@ -44,12 +45,23 @@ KAPPA = 0.2785          # max_x x (1 - tanh x)
 
 @dataclass
 class EnvelopeConstants:
-    """The envelope's constants (module docstring): rate_slow and rate_fast (the
-    paper's), the damping part of the lower rate (``damping_low``), Young's weights
-    for e_tau (``young_e``) and for the excitation (``young_a``), and the boundary
-    layer: its effective thickness for the slack, Layer(chi) = layer_base +
-    layer_per_chi chi, and the lower bound's tanh rate, TanhRate(chi) =
-    2 slope_scale chi / Layer(chi)."""
+    """The envelope's constants (module docstring).
+
+    The boundary layer's effective thickness for the slack is Layer(chi) =
+    layer_base + layer_per_chi chi, and the lower bound's tanh rate is
+    TanhRate(chi) = 2 slope_scale chi / Layer(chi).
+
+    Attributes:
+        rate_slow: The paper's upper-bound rate r_slow [1/s].
+        rate_fast: The paper's lower-bound rate r_fast [1/s].
+        damping_low: The damping part of the lower rate [1/s].
+        young_e: Young's weight for e_tau.
+        young_a: Young's weight for the excitation.
+        n: The number of joints.
+        layer_base: The boundary layer's effective thickness at chi = 0.
+        layer_per_chi: d Layer / d chi.
+        slope_scale: The lower-bound tanh rate is 2 slope_scale chi / Layer(chi).
+    """
     rate_slow: float
     rate_fast: float
     damping_low: float
@@ -64,9 +76,22 @@ class EnvelopeConstants:
     def ForConstantDamping(Kd_min: float, Kd_max: float, lambda_min_M: float,
                            lambda_max_M: float, epsilon: float, n: int,
                            layer_per_chi: float = 0.0) -> "EnvelopeConstants":
-        """The planar LHS: K_d between Kd_min and Kd_max, tanh(s / phi) with
-        phi = epsilon + layer_per_chi chi (lhs.boundary_rate; 0: the paper's
-        tanh(s / epsilon))."""
+        """The planar LHS's constants.
+
+        K_d between Kd_min and Kd_max, tanh(s / phi) with phi = epsilon +
+        layer_per_chi chi (lhs.boundary_rate; 0: the paper's tanh(s / epsilon)).
+
+        Args:
+            Kd_min: lambda_min(K_d).
+            Kd_max: lambda_max(K_d).
+            lambda_min_M: inf_q lambda_min(M).
+            lambda_max_M: sup_q lambda_max(M).
+            epsilon: The boundary layer's thickness at chi = 0.
+            n: The number of joints.
+            layer_per_chi: d phi / d chi (0: the paper's tanh(s / epsilon)).
+
+        Returns:
+            The envelope's constants."""
         return EnvelopeConstants(
             rate_slow=2 * Kd_min / lambda_max_M, rate_fast=2 * Kd_max / lambda_min_M,
             damping_low=3 * Kd_max / lambda_min_M, young_e=Kd_max, young_a=Kd_min,
@@ -77,8 +102,21 @@ class EnvelopeConstants:
     def ForInertiaScaled(damping_rate: float, lambda_min_M: float,
                          max_diagonal_M: float, epsilon: float, boundary_rate: float,
                          n: int) -> "EnvelopeConstants":
-        """The spatial LHS: K_d = damping_rate M, tanh(M_ii s_i / phi),
-        phi = epsilon + chi / boundary_rate (the slack's layer is phi / lambda)."""
+        """The spatial LHS's constants.
+
+        K_d = damping_rate M, tanh(M_ii s_i / phi), phi = epsilon + chi /
+        boundary_rate (the slack's layer is phi / lambda).
+
+        Args:
+            damping_rate: The LHS's damping rate r [1/s].
+            lambda_min_M: inf_q lambda_min(M) (lambda).
+            max_diagonal_M: sup_q max_i M_ii (m).
+            epsilon: The boundary layer's thickness at chi = 0.
+            boundary_rate: The boundary rate b [1/s].
+            n: The number of joints.
+
+        Returns:
+            The envelope's constants."""
         r, lam = damping_rate, lambda_min_M
         return EnvelopeConstants(
             rate_slow=2 * r, rate_fast=2 * r, damping_low=3 * r, young_e=r * lam,
@@ -86,17 +124,44 @@ class EnvelopeConstants:
             layer_per_chi=1.0 / (boundary_rate * lam),
             slope_scale=max_diagonal_M / lam**2)
 
-    def Layer(self, chi):
-        """The boundary layer phi = layer_base + layer_per_chi chi at the RHS bound chi."""
+    def Layer(self, chi: Union[float, np.ndarray]) -> Union[float, np.ndarray]:
+        """The boundary layer phi = layer_base + layer_per_chi chi.
+
+        Args:
+            chi: The RHS bound chi (a scalar or an array).
+
+        Returns:
+            phi, chi's shape."""
         return self.layer_base + self.layer_per_chi * chi
 
-    def TanhRate(self, chi):
-        """2 chi / epsilon / lambda (planar), 2 (chi / phi) m / lambda (spatial)."""
+    def TanhRate(self, chi: Union[float, np.ndarray]) -> Union[float, np.ndarray]:
+        """The lower bound's tanh rate [1/s].
+
+        2 chi / epsilon / lambda (planar), 2 (chi / phi) m / lambda (spatial).
+
+        Args:
+            chi: The RHS bound chi (a scalar or an array).
+
+        Returns:
+            The rate, chi's shape."""
         return 2 * self.slope_scale * chi / self.Layer(chi)
 
 
 @dataclass
 class EnvelopeCheck:
+    """The outcome of check_envelope.
+
+    Attributes:
+        rate_slow: The paper's upper-bound rate [1/s].
+        rate_fast: The paper's lower-bound rate [1/s].
+        rate_low: The lower-bound rate with the tanh and e_tau terms [1/s].
+        samples_checked: The intervals with ||e_tau|| <= chi at both ends.
+        fraction_inside: The fraction of those on which V stays in the envelope.
+        worst_violation: max (V - bound) / bound over the intervals.
+        worst_time: When the worst violation was [s].
+        ok: Whether fraction_inside reaches the required fraction.
+        reason: Why not ok ("" when ok).
+    """
     rate_slow: float                # the paper's upper-bound rate [1/s]
     rate_fast: float                # the paper's lower-bound rate [1/s]
     rate_low: float                 # lower-bound rate with the tanh and e_tau terms
@@ -107,15 +172,26 @@ class EnvelopeCheck:
     ok: bool
     reason: str
 
-    def as_dict(self):
+    def as_dict(self) -> dict:
         """This check as a plain dict (for JSON)."""
         return asdict(self)
 
 
 def envelope_bounds(V: np.ndarray, dt: np.ndarray, e_norm: np.ndarray, chi: np.ndarray,
-                    constants: EnvelopeConstants, excitation_norm: float = 0.0):
-    """(lower, upper) bound for V[1:] from V[:-1] over the steps dt (module
-    docstring); ``excitation_norm`` is a, the bound on ||tau_pe||."""
+                    constants: EnvelopeConstants, excitation_norm: float = 0.0
+                    ) -> Tuple[np.ndarray, np.ndarray]:
+    """The envelope's (lower, upper) bound for V[1:] from V[:-1] (module docstring).
+
+    Args:
+        V: V = s^T M s / 2 at the logged samples (T).
+        dt: The steps between them [s] (T - 1).
+        e_norm: ||e_tau|| at the samples (T).
+        chi: The RHS bound chi at the samples (T).
+        constants: The envelope's constants.
+        excitation_norm: a, the bound on ||tau_pe|| (0 without excitation).
+
+    Returns:
+        (lower, upper), each T - 1."""
     a, c = excitation_norm, constants
     r_slow = c.rate_slow / (2 if a > 0 else 1)
     r_low = c.damping_low + c.TanhRate(chi[:-1])
@@ -127,23 +203,57 @@ def envelope_bounds(V: np.ndarray, dt: np.ndarray, e_norm: np.ndarray, chi: np.n
     return lower, upper
 
 
-def check_lyapunov_envelope(t, V, e_norm, chi, Kd_min: float, Kd_max: float,
+def check_lyapunov_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray,
+                            chi: np.ndarray, Kd_min: float, Kd_max: float,
                             lambda_min_M: float, lambda_max_M: float, epsilon: float,
                             n: int, required_fraction: float = 0.99,
                             excitation_norm: float = 0.0) -> EnvelopeCheck:
-    """check_envelope for the planar LHS (EnvelopeConstants.ForConstantDamping)."""
+    """check_envelope for the planar LHS (EnvelopeConstants.ForConstantDamping).
+
+    Args:
+        t: The logged times [s] (T).
+        V: V = s^T M s / 2 at them (T).
+        e_norm: ||e_tau|| at them (T).
+        chi: The RHS bound chi at them (T).
+        Kd_min: lambda_min(K_d).
+        Kd_max: lambda_max(K_d).
+        lambda_min_M: inf_q lambda_min(M).
+        lambda_max_M: sup_q lambda_max(M).
+        epsilon: The boundary layer's thickness.
+        n: The number of joints.
+        required_fraction: The fraction of the intervals that must be inside.
+        excitation_norm: The bound a on the excitation's ||tau_pe|| (0 without
+            excitation).
+
+    Returns:
+        The check's outcome."""
     return check_envelope(t, V, e_norm, chi, EnvelopeConstants.ForConstantDamping(
         Kd_min, Kd_max, lambda_min_M, lambda_max_M, epsilon, n), required_fraction,
         excitation_norm)
 
 
-def check_envelope(t, V, e_norm, chi, constants: EnvelopeConstants,
+def check_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray, chi: np.ndarray,
+                   constants: EnvelopeConstants,
                    required_fraction: float = 0.99,
                    excitation_norm: float = 0.0) -> EnvelopeCheck:
-    """Fraction of the logged intervals (where ||e_tau|| <= chi) on which V stays
+    """Checks V against the envelope.
+
+    Fraction of the logged intervals (where ||e_tau|| <= chi) on which V stays
     inside the envelope, and the worst relative violation; ``ok`` when the fraction
-    reaches ``required_fraction``. ``excitation_norm``: the bound a on the
-    excitation's ||tau_pe|| (0 without excitation)."""
+    reaches ``required_fraction``.
+
+    Args:
+        t: The logged times [s] (T).
+        V: V = s^T M s / 2 at them (T).
+        e_norm: ||e_tau|| at them (T).
+        chi: The RHS bound chi at them (T).
+        constants: The envelope's constants.
+        required_fraction: The fraction of the intervals that must be inside.
+        excitation_norm: The bound a on the excitation's ||tau_pe|| (0 without
+            excitation).
+
+    Returns:
+        The check's outcome."""
     t, V, e_norm, chi = map(np.asarray, (t, V, e_norm, chi))
     lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants,
                                    excitation_norm)

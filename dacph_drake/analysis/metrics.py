@@ -10,7 +10,13 @@ from dacph_drake.scenario import Scenario
 
 
 def rms(x: np.ndarray) -> float:
-    """Root mean square over time of a scalar signal, or of the norm of a vector one."""
+    """Root mean square over time of a scalar signal, or of the norm of a vector one.
+
+    Args:
+        x: The signal: one value per sample (T), or one vector per row (T x k).
+
+    Returns:
+        The RMS (nan for an empty signal)."""
     x = np.asarray(x, float)
     if x.ndim > 1:
         x = np.linalg.norm(x, axis=1)
@@ -18,7 +24,14 @@ def rms(x: np.ndarray) -> float:
 
 
 def relative_error_rms(estimate: np.ndarray, truth: np.ndarray) -> float:
-    """time-RMS of ||estimate(t) - truth(t)|| / ||truth(t)|| (Frobenius on rows)."""
+    """time-RMS of ||estimate(t) - truth(t)|| / ||truth(t)|| (Frobenius on rows).
+
+    Args:
+        estimate: The estimate, one row per sample (T x k).
+        truth: The truth, laid out as ``estimate``.
+
+    Returns:
+        The RMS of the relative error."""
     ratio = (np.linalg.norm(estimate - truth, axis=1)
              / np.maximum(np.linalg.norm(truth, axis=1), 1e-300))
     return rms(ratio)
@@ -29,24 +42,47 @@ FAULT_WINDOW = 2.0      # [s] before and after an actuator fault (run_metrics)
 
 
 def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
-    """Masks of the three uncertainty phases (docs/equations.md, SPEC settings): linear, plus nonlinear,
-    plus disturbance (the last from phases.disturbance_start to the end)."""
+    """Masks of the three uncertainty phases (docs/equations.md, SPEC settings).
+
+    The phases are linear, plus nonlinear, plus disturbance (the last from
+    phases.disturbance_start to the end).
+
+    Args:
+        scenario: The scenario (its phases).
+        t: The logged times [s] (T).
+
+    Returns:
+        Phase name (PHASES) -> boolean mask over t."""
     p = scenario.phases
     edges = [p.linear_start, p.nonlinear_start, p.disturbance_start, np.inf]
     return {name: (t >= lo) & (t < hi) for name, lo, hi in zip(PHASES, edges, edges[1:])}
 
 
 def nominal_estimates(scenario: Scenario) -> np.ndarray:
-    """The prior (B0, D0) laid out as the ``estimates`` log: [vec(B0), diag(D0)]."""
+    """The prior (B0, D0) laid out as the ``estimates`` log: [vec(B0), diag(D0)].
+
+    Args:
+        scenario: The scenario (its uncertainty's B0 and D0).
+
+    Returns:
+        [vec(B0), diag(D0)] (n * n + n)."""
     return np.concatenate([np.diag(scenario.uncertainty.B0).reshape(-1),
                            scenario.uncertainty.D0])
 
 
 def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarray:
-    """k(t): the total mass of the identified bodies (the logged
-    ``inertial_parameters``, InertialIdentifier) over the true robot's
-    (``total_mass``), the common factor momentum data leave to the prior (1 without
-    an identifier)."""
+    """k(t): the identified bodies' total mass over the true robot's.
+
+    The total mass of the identified bodies (the logged ``inertial_parameters``,
+    InertialIdentifier) over the true robot's, the common factor momentum data
+    leave to the prior (1 without an identifier).
+
+    Args:
+        logs: The run's logs (RunResult.logs).
+        total_mass: The true robot's total mass [kg].
+
+    Returns:
+        k at every logged sample (T)."""
     from dacph_drake.dynamics.inertial_parameters import MASS, PER_BODY
     if "inertial_parameters" not in logs:
         return np.ones(len(logs["time"]))
@@ -55,15 +91,25 @@ def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarr
 
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray, total_mass: float) -> Dict[str, float]:
-    """Learning's own value over the samples ``mask``: the time-RMS
-    relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and of the nominal
-    prior (B0, D0), their ratio (below 1: learning beats the prior), the share of
-    samples whose B_hat the RHS integrator rejected (DIC or trust band), and the
-    share where the learner's beta_hat exceeded rhs.beta_max, so that the gain rule
-    ran on beta_max instead (RhsIntegrator). With an inertial identifier in the loop,
-    also the identified scale k (identified_scale, mean) and the ratios against
-    k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the same;
-    ``total_mass``: the ground truth's)."""
+    """Learning's own value over the samples ``mask``.
+
+    The time-RMS relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and
+    of the nominal prior (B0, D0), their ratio (below 1: learning beats the prior),
+    the share of samples whose B_hat the RHS integrator rejected (DIC or trust
+    band), and the share where the learner's beta_hat exceeded rhs.beta_max, so
+    that the gain rule ran on beta_max instead (RhsIntegrator). With an inertial
+    identifier in the loop, also the identified scale k (identified_scale, mean)
+    and the ratios against k B~, k D~ (``*_error_ratio_scaled``, the prior's error
+    against the same).
+
+    Args:
+        logs: The run's logs (RunResult.logs).
+        scenario: The scenario it ran.
+        mask: The samples to average over (boolean, T).
+        total_mass: The ground truth's total mass [kg].
+
+    Returns:
+        Metric name -> value."""
     n = len(scenario.q0)
     truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
@@ -172,8 +218,17 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
 
 
 def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str, float]:
-    """The paper's headline numbers: tracking-error reduction 1 - e_DAC / e_MB and
-    control-effort increase effort_DAC / effort_MB - 1."""
+    """The paper's headline numbers.
+
+    Tracking-error reduction 1 - e_DAC / e_MB and control-effort increase
+    effort_DAC / effort_MB - 1.
+
+    Args:
+        dac: The DAC run's metrics (run_metrics).
+        model_based: The model-based run's metrics (run_metrics).
+
+    Returns:
+        Metric name -> value."""
     return {
         "tracking_error_reduction": 1 - dac["tracking_error_rms"]
         / model_based["tracking_error_rms"],

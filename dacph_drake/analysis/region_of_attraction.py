@@ -42,18 +42,28 @@ from pydrake.systems.analysis import (RegionOfAttraction,
                                       RegionOfAttractionOptions)
 from pydrake.systems.primitives import SymbolicVectorSystem
 
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 
 
 @dataclass
 class RegionCertificate:
+    """A region-of-attraction certificate {V(s) <= rho} of the sliding dynamics.
+
+    Attributes:
+        q: The frozen configuration q [rad].
+        rho: The certified level of V = s^T M s / 2 [J].
+        radius: A ball ||s|| <= radius inside the region [rad/s].
+        assumptions: The polynomial model's assumptions (part of the certificate).
+        skipped: Why no certificate was computed (the budget), or "".
+    """
     q: list
     rho: float                      # level of V = s^T M s / 2 [J]
     radius: float                   # a ball ||s|| <= radius inside the region [rad/s]
     assumptions: str
     skipped: str = ""               # why no certificate was computed (budget), or ""
 
-    def as_dict(self):
+    def as_dict(self) -> dict:
         """This certificate as a plain dict (for JSON)."""
         return asdict(self)
 
@@ -71,7 +81,19 @@ REGION_BUDGET = 300.0
 def sliding_region_of_attraction(model: ReducedOrderModel, q: np.ndarray, Kd: float,
                                  chi: float, epsilon: float,
                                  budget: float = REGION_BUDGET) -> RegionCertificate:
-    """The planar LHS: K_d = Kd I, tanh(s / epsilon)."""
+    """The planar LHS's certificate: K_d = Kd I, tanh(s / epsilon).
+
+    Args:
+        model: The controller's reduced model.
+        q: The frozen configuration [rad] (n).
+        Kd: The LHS damping K_d = Kd I.
+        chi: The robust term's gain chi.
+        epsilon: The boundary layer's thickness.
+        budget: The wall time the sums-of-squares program may take [s].
+
+    Returns:
+        The certificate (with no region, rho and radius nan, and the reason in
+            ``skipped`` when the program did not finish within ``budget``)."""
     n = model.num_joints
     M = model.Evaluate(q, np.zeros(n)).M
     Gamma = [model.Evaluate(q, np.eye(n)[k]).C for k in range(n)]
@@ -84,11 +106,20 @@ SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust te
                        "V = s^T M(q) s / 2")
 
 
-def attitude_region_of_attraction(model, q: np.ndarray, damping_rate: float
-                                  ) -> RegionCertificate:
-    """A spatial arm's LHS (``model``: floating_model.FloatingBaseModel) with
-    K_d = damping_rate M(q), for every chi: the homogeneous certificate (module
-    docstring)."""
+def attitude_region_of_attraction(model: FloatingBaseModel, q: np.ndarray,
+                                  damping_rate: float) -> RegionCertificate:
+    """A spatial arm's LHS's certificate, for every chi.
+
+    The LHS has K_d = damping_rate M(q); the certificate is the homogeneous one
+    (module docstring).
+
+    Args:
+        model: The arm's model (floating_model.FloatingBaseModel).
+        q: The frozen configuration [rad] (n).
+        damping_rate: The LHS's damping rate [1/s].
+
+    Returns:
+        The certificate."""
     n = model.num_joints
     M = model.MassMatrix(q)
     Gamma = np.array([model.Coriolis(q, np.eye(n)[k]) for k in range(n)])
@@ -104,10 +135,20 @@ def attitude_region_of_attraction(model, q: np.ndarray, damping_rate: float
 
 
 def cubic_maximum_on_sphere(T: np.ndarray) -> float:
-    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c, by sums of
-    squares: the least gamma with gamma - c(w) = sigma(w) + lambda(w) (|w|^2 - 1),
-    sigma SOS (degree 4), lambda any polynomial of degree 2 (Clarabel), raised by
-    the solver's tolerance (1e-7 relative)."""
+    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c.
+
+    By sums of squares: the least gamma with gamma - c(w) = sigma(w) + lambda(w)
+    (|w|^2 - 1), sigma SOS (degree 4), lambda any polynomial of degree 2
+    (Clarabel), raised by the solver's tolerance (1e-7 relative).
+
+    Args:
+        T: The cubic form's coefficients (n x n x n).
+
+    Returns:
+        gamma.
+
+    Raises:
+        RuntimeError: The sums-of-squares program failed."""
     n = T.shape[0]
     program = MathematicalProgram()
     w = program.NewIndeterminates(n, "w")

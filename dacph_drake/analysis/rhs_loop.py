@@ -25,7 +25,15 @@ from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:
-    """The closed discrete RHS loop: input tau_c^r, output e_tau, time_period h."""
+    """The closed discrete RHS loop: input tau_c^r, output e_tau, time_period h.
+
+    Args:
+        B: The port's input matrix (n x n).
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+
+    Returns:
+        The loop as a discrete LinearSystem."""
     n = B.shape[0]
     A = loop_matrix(B, K, period)
     B_in = np.vstack([period * np.diag(K), np.zeros((n, n))])
@@ -35,6 +43,21 @@ def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem
 
 @dataclass
 class RhsLoopCheck:
+    """The RHS loop's certificate at one operating point (check_rhs_loop).
+
+    Attributes:
+        spectral_radius: The discrete loop's spectral radius.
+        margin: 1 - spectral radius.
+        decay_rate: -ln(spectral radius) / h [1/s].
+        lyapunov_P_min_eigenvalue: The least eigenvalue of the Lyapunov certificate
+            P (nan when the radius check failed).
+        lyapunov_residual: ||A^T P A - P + I|| / ||P||.
+        dic_ok: det B != 0 and Re(lambda_p) > 0.
+        sigma_rhs: min_p k_p Re(lambda_p) [1/s].
+        separation: sigma_rhs / lambda_LHS (eq. 45).
+        ok: Whether every check passed.
+        reason: Why not ("; "-separated; "" when ok).
+    """
     spectral_radius: float
     margin: float                  # 1 - spectral radius
     decay_rate: float              # -ln(spectral radius) / h [1/s]
@@ -46,19 +69,30 @@ class RhsLoopCheck:
     ok: bool
     reason: str
 
-    def as_dict(self):
+    def as_dict(self) -> dict:
         """This check as a plain dict (for JSON)."""
         return asdict(self)
 
 
 def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: float,
                    Td: float) -> RhsLoopCheck:
-    """The RHS loop's certificate at one operating point:
+    """The RHS loop's certificate at one operating point.
+
     - the linearized discrete loop has spectral radius <= 1 - STABILITY_MARGIN and
       RealDiscreteLyapunovEquation(A, I) gives P > 0;
     - DIC: det B != 0 and Re(lambda_p) > 0 for the eigenvalues of B;
     - time-scale separation: sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS,
-      lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45)."""
+      lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45).
+
+    Args:
+        B: The port's input matrix (n x n): the learner's B_hat or the truth's B~.
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+        lambda_lhs: The LHS rate lambda_LHS [1/s] (eq. 45).
+        Td: The time-scale separation factor T_d.
+
+    Returns:
+        The certificate (``ok``: every check passed)."""
     _, paired, dic_ok = integral_gains(B, 1.0)
     A = rhs_loop_system(B, K, period).A()
     radius = float(np.max(np.abs(np.linalg.eigvals(A))))

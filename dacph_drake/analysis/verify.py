@@ -41,7 +41,15 @@ from dacph_drake.scenario import Scenario  # noqa: E402
 
 @dataclass
 class LoopSeries:
-    """Checks of the RHS loop over a run (one row per learner update)."""
+    """Checks of the RHS loop over a run (one row per learner update).
+
+    Attributes:
+        time: The checked samples' times [s].
+        margin: Each check's margin 1 - spectral radius.
+        separation: Each check's sigma_RHS / lambda_LHS.
+        failures: The failed checks, as "t = ...: reason".
+        failure_times: The failed checks' times [s].
+    """
     time: List[float] = field(default_factory=list)
     margin: List[float] = field(default_factory=list)
     separation: List[float] = field(default_factory=list)
@@ -90,9 +98,16 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
 
 @dataclass
 class LhsSide:
-    """What the checks need of a run's LHS: V = s^T M s / 2 and ||s(0)|| from its
-    log, the envelope's constants, the LHS rate lambda_LHS of eq. (45) and the
-    region-of-attraction certificate at q0."""
+    """What the checks need of a run's LHS.
+
+    Attributes:
+        V: V = s^T M s / 2 at every logged sample (from its log) [J].
+        s0_norm: ||s(0)|| (from its log) [rad/s].
+        constants: The envelope's constants.
+        lambda_lhs: The LHS rate lambda_LHS of eq. (45) [1/s].
+        region: The region-of-attraction certificate at q0 (RegionCertificate).
+        settings: The LHS's settings, for the report.
+    """
     V: np.ndarray
     s0_norm: float
     constants: EnvelopeConstants
@@ -101,10 +116,20 @@ class LhsSide:
     settings: Dict
 
 
-def verify_logs(logs: Dict[str, np.ndarray], scenario, run_meta: Dict,
-                out_dir=None, region_budget: float = REGION_BUDGET) -> Dict:
-    """All checks on the logs of a DAC run of ``scenario``; writes verification.{md,json} and plots into out_dir when
-    given. Returns the report dictionary (``ok`` is the verdict)."""
+def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
+                out_dir: Optional[Union[str, Path]] = None,
+                region_budget: float = REGION_BUDGET) -> Dict:
+    """All checks on the logs of a DAC run of ``scenario``.
+
+    Args:
+        logs: The run's logs (RunResult.logs).
+        scenario: The scenario it ran.
+        run_meta: The run's metadata (its "status", "reason", "final_time").
+        out_dir: Where verification.{md,json} and the plots go; None: not written.
+        region_budget: Wall-time budget [s] of the region-of-attraction search.
+
+    Returns:
+        The report dictionary (``ok`` is the verdict)."""
     n = len(scenario.q0)
     lhs = robot_of(scenario).VerifyLhs(logs, region_budget)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)

@@ -2,6 +2,7 @@
 import argparse
 import logging
 import sys
+from typing import Optional, Sequence
 
 import numpy as np
 
@@ -248,9 +249,14 @@ def _AddSimulateArguments(command) -> None:
     _AddLiveViewing(command)
 
 
-def main(argv=None) -> int:
-    """The ``dacph`` command line: parses ``argv`` (default: sys.argv) and runs the
-    command; returns the exit status (2 for bad input, with one line naming it)."""
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """The ``dacph`` command line: parses ``argv`` and runs the command.
+
+    Args:
+        argv: The arguments after the program's name (default: sys.argv[1:]).
+
+    Returns:
+        The exit status (2 for bad input, with one line naming it)."""
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     free = commands.add_parser(

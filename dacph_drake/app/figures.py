@@ -20,7 +20,7 @@ every axis carries one unit, legends sit outside the data. A series with more
 samples than the figure has pixel columns is drawn as its min/max envelope per
 column, so fast ripple shows as the band it fills, not as overdrawn lines."""
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Tuple, Union
 
 import matplotlib
 
@@ -77,11 +77,24 @@ def _phase_handles(scenario: Scenario) -> List[Patch]:
             for text, start, end, color in _phase_spans(scenario) if end > start]
 
 
-def envelope(t: np.ndarray, y: np.ndarray, xlim, columns: int = COLUMNS):
-    """(t, low, high) of y(t) inside xlim: the samples themselves (low = high = y)
-    when there are at most 2 ``columns`` of them, else the min and max of y over each
-    of ``columns`` equal time intervals, at the interval's centre. NaNs (for
-    example non-positive values masked for a log axis) are left out of min/max."""
+def envelope(t: np.ndarray, y: np.ndarray, xlim: Tuple[float, float],
+             columns: int = COLUMNS) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The min/max envelope of y(t) inside xlim.
+
+    The samples themselves (low = high = y) when there are at most 2 ``columns`` of
+    them, else the min and max of y over each of ``columns`` equal time intervals,
+    at the interval's centre. NaNs (for example non-positive values masked for a
+    log axis) are left out of min/max.
+
+    Args:
+        t: The sample times [s] (T, increasing).
+        y: The signal at them (T).
+        xlim: The time window (start, end) [s].
+        columns: The number of intervals (about one per pixel column).
+
+    Returns:
+        (t, low, high), the intervals' centres [s] (or the samples' times) and y's
+            min and max over each."""
     inside = (t >= xlim[0]) & (t <= xlim[1])
     t, y = t[inside], y[inside]
     if len(t) <= 2 * columns:
@@ -316,9 +329,17 @@ def _panel_attitude(runs: Dict[str, Logs], scenario):
     return fig
 
 
-def zoom_window(scenario: Scenario):
-    """(c)'s window: from shortly before the nonlinear terms switch on to a twelfth
-    of phase 2 after (40 s of the paper's 480 s phase)."""
+def zoom_window(scenario: Scenario) -> Tuple[float, float]:
+    """(c)'s window around the switch-on of the nonlinear terms.
+
+    From shortly before the nonlinear terms switch on to a twelfth of phase 2 after
+    (40 s of the paper's 480 s phase).
+
+    Args:
+        scenario: The scenario (its phases).
+
+    Returns:
+        (start, end) [s]."""
     start, length = scenario.phases.nonlinear_start, scenario.phases.nonlinear
     return (start - length / 48, start + length / 12)
 
@@ -328,10 +349,18 @@ TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f
                "e_attitude_dac_vs_model_based": _panel_attitude}
 
 
-def make_panels(runs: Dict[str, Logs], scenario) -> Dict[str, object]:
-    """The panels as matplotlib figures, by name: DAC_PANELS of the DAC run
-    (runs["dac"]) and the robot's task panels comparing every run in ``runs``
-    (controller -> logs)."""
+def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
+    """The panels as matplotlib figures, by name.
+
+    DAC_PANELS of the DAC run (runs["dac"]) and the robot's task panels comparing
+    every run in ``runs``.
+
+    Args:
+        runs: Controller -> the logs of its run (one of them DAC's).
+        scenario: The scenario the runs ran.
+
+    Returns:
+        Panel name -> matplotlib figure."""
     dac = runs[REFERENCE]
     figures = {name: figure for name, figure in zip(DAC_PANELS, (
         _panel_a(dac, scenario), _entries(dac, scenario),
@@ -343,9 +372,17 @@ def make_panels(runs: Dict[str, Logs], scenario) -> Dict[str, object]:
     return figures
 
 
-def plot_panels(runs: Dict[str, Logs], scenario, out_dir) -> List[Path]:
-    """Writes the panels (make_panels; PNG and PDF) into out_dir; returns their
-    paths."""
+def plot_panels(runs: Dict[str, Logs], scenario: Scenario,
+                out_dir: Union[str, Path]) -> List[Path]:
+    """Writes the panels (make_panels; PNG and PDF) into out_dir.
+
+    Args:
+        runs: Controller -> the logs of its run (one of them DAC's).
+        scenario: The scenario the runs ran.
+        out_dir: The folder for the files (created if missing).
+
+    Returns:
+        The files' paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []

@@ -2,9 +2,12 @@
 drive the arm; the total momentum must stay at zero and the kinetic energy must equal
 the work done by the torques."""
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
-from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import (Context, ContinuousState, DiagramBuilder,
+                                       LeafSystem)
 from pydrake.systems.primitives import Sine
 
 from dacph_drake.dynamics.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
@@ -14,34 +17,68 @@ from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
 
 
 class WorkMeter(LeafSystem):
-    """Continuous state W with dW/dt = tau^T qdot: the work done by the joint torques."""
+    """Continuous state W with dW/dt = tau^T qdot: the work done by the joint torques.
 
-    def __init__(self, plant):
+    Inputs ``tau`` (the plant's actuation) and ``state`` (the plant's).
+
+    Args:
+        plant: The free-floating arm (finalized).
+    """
+
+    def __init__(self, plant: MultibodyPlant):
         super().__init__()
         self._joint_v = plant.num_positions() + ArmCoordinates.FromPlant(plant).joint_v
         self._tau = self.DeclareVectorInputPort("tau", plant.num_actuators())
         self._state = self.DeclareVectorInputPort("state", plant.num_multibody_states())
         self.DeclareContinuousState(1)
 
-    def DoCalcTimeDerivatives(self, context, derivatives):
-        """d/dt W = tau . qdot, the power the joint torques put in."""
+    def DoCalcTimeDerivatives(self, context: Context,
+                              derivatives: ContinuousState) -> None:
+        """d/dt W = tau . qdot, the power the joint torques put in.
+
+        Args:
+            context: This system's context.
+            derivatives: Where d/dt W goes."""
         power = self._tau.Eval(context) @ self._state.Eval(context)[self._joint_v]
         derivatives.get_mutable_vector().SetAtIndex(0, power)
 
 
 @dataclass
 class FreeFlightResult:
+    """The outcome of run_free_flight.
+
+    Attributes:
+        max_momentum: max over samples of |(h_A_z, h_L_x, h_L_y)|_inf.
+        kinetic_energy: The kinetic energy at the end [J].
+        work: The work done by the torques [J].
+        min_clearance: The smallest signed distance between non-adjacent bodies
+            [m].
+    """
     max_momentum: float     # max over samples of |(h_A_z, h_L_x, h_L_y)|_inf
     kinetic_energy: float   # [J] at the end
     work: float             # [J] done by the torques
     min_clearance: float    # [m] smallest signed distance between non-adjacent bodies
 
 
-def run_free_flight(robot: RobotParams, duration: float, amplitudes, frequencies,
-                    q0, integration_scheme="runge_kutta3", step=2.5e-4,
-                    time_step=0.0) -> FreeFlightResult:
-    """Simulates ``duration`` seconds from rest at joint angles ``q0``; with
-    ``time_step`` > 0 the plant is Drake's discrete one (then W is not tracked)."""
+def run_free_flight(robot: RobotParams, duration: float, amplitudes: Sequence[float],
+                    frequencies: Sequence[float], q0: Sequence[float],
+                    integration_scheme: str = "runge_kutta3", step: float = 2.5e-4,
+                    time_step: float = 0.0) -> FreeFlightResult:
+    """Simulates ``duration`` seconds of free flight from rest.
+
+    Args:
+        robot: The arm.
+        duration: The simulated time [s].
+        amplitudes: The torques' amplitudes a_k [N m] (n).
+        frequencies: The torques' frequencies w_k [rad/s] (n).
+        q0: The initial joint angles [rad] (n).
+        integration_scheme: The fixed-step integrator (FixedStepConfig).
+        step: Its step [s].
+        time_step: > 0: the plant is Drake's discrete one with this step [s] (then
+            W is not tracked).
+
+    Returns:
+        The momentum, energy, work and clearance."""
     n = robot.num_links
     builder = DiagramBuilder()
     plant, scene_graph = AddFreeFloatingArm(builder, robot, time_step)

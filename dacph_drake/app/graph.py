@@ -3,15 +3,28 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
+from typing import TYPE_CHECKING, List, Union
+
+if TYPE_CHECKING:
+    from pydrake.systems.framework import Diagram
 
 _ID = re.compile(r"(digraph _|clusters|cluster|\bs)(\d+)")
 
 
-def diagram_graphviz(diagram, max_depth: int = 2) -> str:
-    """Drake's Graphviz source of ``diagram`` (two levels deep: the controller
-    sub-diagram shows its systems) with its process-specific system ids
-    renumbered in order of appearance and its edges sorted (Drake lists them in no
-    fixed order), so equal diagrams give equal text."""
+def diagram_graphviz(diagram: "Diagram", max_depth: int = 2) -> str:
+    """Drake's Graphviz source of ``diagram``, the same text for equal diagrams.
+
+    Its process-specific system ids are renumbered in order of appearance and its
+    edges sorted (Drake lists them in no fixed order), so equal diagrams give
+    equal text.
+
+    Args:
+        diagram: The diagram.
+        max_depth: How many levels deep (2: the controller sub-diagram shows its
+            systems).
+
+    Returns:
+        The Graphviz source."""
     ids = {}
 
     def renumber(match):
@@ -40,8 +53,18 @@ def _dot() -> str:
     return dot
 
 
-def render_diagram(diagram, stem) -> list:
-    """Writes stem.dot, stem.svg and stem.png; returns their paths."""
+def render_diagram(diagram: "Diagram", stem: Union[str, Path]) -> List[Path]:
+    """Writes stem.dot, stem.svg and stem.png.
+
+    Args:
+        diagram: The diagram.
+        stem: The files' path without suffix (its folder is created if missing).
+
+    Returns:
+        The files' paths.
+
+    Raises:
+        RuntimeError: Graphviz's ``dot`` program is not installed."""
     dot = _dot()
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
@@ -55,8 +78,19 @@ def render_diagram(diagram, stem) -> list:
     return paths
 
 
-def diagram_svg(diagram, max_depth: int = 2) -> str:
-    """The diagram's graph as SVG text (for a notebook:
-    IPython.display.SVG(diagram_svg(loop.diagram)))."""
+def diagram_svg(diagram: "Diagram", max_depth: int = 2) -> str:
+    """The diagram's graph as SVG text.
+
+    For a notebook: IPython.display.SVG(diagram_svg(loop.diagram)).
+
+    Args:
+        diagram: The diagram.
+        max_depth: How many levels deep (diagram_graphviz).
+
+    Returns:
+        The SVG text.
+
+    Raises:
+        RuntimeError: Graphviz's ``dot`` program is not installed."""
     return subprocess.run([_dot(), "-Tsvg"], input=diagram_graphviz(diagram, max_depth),
                           capture_output=True, text=True, check=True).stdout

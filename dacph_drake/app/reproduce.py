@@ -7,7 +7,7 @@ import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Union
 
 
 from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduce()
@@ -26,6 +26,15 @@ REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
 
 @dataclass(frozen=True)
 class TableRow:
+    """One row of the metrics table: this project's value beside the paper's.
+
+    Attributes:
+        key: A key of the metrics dictionaries (flat_metrics).
+        label: The row's label.
+        unit: The value's unit ("%", "-", "samples" or a physical unit).
+        paper: The paper's value, where it reports one.
+        target: "<= x" / ">= x": the issue's acceptance bound ("": none).
+    """
     key: str            # a key of the metrics dictionaries
     label: str
     unit: str
@@ -63,9 +72,16 @@ PAPER_ROWS = (
 
 @dataclass(frozen=True)
 class AblationRow:
-    """One row of the ablation table: ``key`` "CONTROLLER.NAME" is looked up as
-    "CONTROLLER.phaseK.NAME" for each phase; ``over`` divides it by the same phase's
-    value of another key (a ratio row)."""
+    """One row of the ablation table.
+
+    Attributes:
+        key: "CONTROLLER.NAME", looked up as "CONTROLLER.phaseK.NAME" for each
+            phase.
+        label: The row's label.
+        unit: The value's unit.
+        over: Another key: the row is the ratio of ``key`` to it in the same phase
+            (None: no ratio).
+    """
     key: str
     label: str
     unit: str
@@ -73,10 +89,17 @@ class AblationRow:
 
 
 def ablation_rows(metrics: Dict[str, Dict[str, float]]) -> List[AblationRow]:
-    """The ablation table's rows for the controllers that ran (``metrics`` by
-    controller, in the registry's order): every controller's tracking error; for
-    every controller with an RHS loop (a chi) its e_tau, DAC's over it, and its
-    chi; then the learner's rows of DAC."""
+    """The ablation table's rows for the controllers that ran.
+
+    Every controller's tracking error; for every controller with an RHS loop (a
+    chi) its e_tau, DAC's over it, and its chi; then the learner's rows of DAC.
+
+    Args:
+        metrics: Controller -> its run's metrics (run_metrics), for the controllers
+            that ran.
+
+    Returns:
+        The rows, in the registry's order of the controllers."""
     ran = [c for c in CONTROLLERS if c in metrics]
     rhs_loop = [c for c in ran if f"{PHASES[0]}.chi_rms" in metrics[c]]
     label = {c: "DAC" if c == REFERENCE else c for c in ran}
@@ -104,7 +127,15 @@ LEARNER_ROWS = (
 
 
 def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
-    """{"dac": {...}, "model-based": {...}} -> comparison keys plus "dac.x" keys."""
+    """{"dac": {...}, "model-based": {...}} -> comparison keys plus "dac.x" keys.
+
+    Args:
+        metrics: Controller -> its run's metrics (run_metrics); "dac" and
+            "model-based" required.
+
+    Returns:
+        The comparison's metrics, DAC's estimation errors, and every controller's
+            metrics as "CONTROLLER.NAME"."""
     out = dict(comparison(metrics["dac"], metrics["model-based"]))
     out["estimation_error_B"] = metrics["dac"]["estimation_error_B"]
     out["estimation_error_D"] = metrics["dac"]["estimation_error_D"]
@@ -114,15 +145,28 @@ def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
 
 
 def metrics_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """One row per TableRow with this project's value beside the paper's."""
+    """One row per TableRow with this project's value beside the paper's.
+
+    Args:
+        metrics: Controller -> its run's metrics (run_metrics).
+
+    Returns:
+        The rows (metric, key, unit, paper, this_project, target)."""
     flat = flat_metrics(metrics)
     return [{"metric": r.label, "key": r.key, "unit": r.unit, "paper": r.paper,
              "this_project": flat[r.key], "target": r.target} for r in PAPER_ROWS]
 
 
 def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """The ablation_rows whose controllers ran, one value per phase (time-RMS
-    relative errors: metrics.learning_metrics)."""
+    """The ablation_rows whose controllers ran, one value per phase.
+
+    The errors are time-RMS relative errors (metrics.learning_metrics).
+
+    Args:
+        metrics: Controller -> its run's metrics (run_metrics).
+
+    Returns:
+        The rows (metric, key, over, unit, phases: one value per phase)."""
     flat = {f"{c}.{k}": v for c, values in metrics.items() for k, v in values.items()}
     rows = []
     for r in ablation_rows(metrics):
@@ -142,8 +186,14 @@ def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
 
 
 def ablation_markdown(rows: List[Dict], title: str) -> str:
-    """A Markdown table (under ``title``) of per-phase ablation ``rows``
-    (metric, phase 1, phase 2, phase 3)."""
+    """A Markdown table of per-phase ablation rows.
+
+    Args:
+        rows: The rows (ablation_table): metric, phase 1, phase 2, phase 3.
+        title: The table's heading.
+
+    Returns:
+        The Markdown text."""
     lines = [f"## {title}", "", "| metric | phase 1 (linear) | phase 2 (+ nonlinear) | "
              "phase 3 (+ disturbance) |", "|---|---|---|---|"]
     for row in rows:
@@ -156,9 +206,16 @@ def ablation_markdown(rows: List[Dict], title: str) -> str:
 NOT_REACHED = "n/a (phase not reached)"
 
 
-def format_value(value, unit: str, missing: str = "n/a") -> str:
-    """``value`` with its unit (4 significant digits); None: "not reported"; NaN
-    (no samples to compute it from): ``missing``."""
+def format_value(value: Optional[float], unit: str, missing: str = "n/a") -> str:
+    """``value`` with its unit (4 significant digits).
+
+    Args:
+        value: The value; None: "not reported".
+        unit: Its unit ("%": shown in percent; "samples": a count; "-": none).
+        missing: The text for NaN (no samples to compute it from).
+
+    Returns:
+        The text."""
     if value is None:
         return "not reported"
     if value != value:
@@ -171,8 +228,15 @@ def format_value(value, unit: str, missing: str = "n/a") -> str:
 
 
 def table_markdown(rows: List[Dict], title: str) -> str:
-    """A Markdown table (under ``title``) of ``rows`` (metric, the paper's value, this
-    project's, the target)."""
+    """A Markdown table of the metrics table's rows.
+
+    Args:
+        rows: The rows (metrics_table): metric, the paper's value, this project's,
+            the target.
+        title: The table's heading.
+
+    Returns:
+        The Markdown text."""
     lines = [f"## {title}", "", "| metric | paper | this project | target |",
              "|---|---|---|---|"]
     for row in rows:
@@ -184,9 +248,19 @@ def table_markdown(rows: List[Dict], title: str) -> str:
 
 def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                                runs: Dict[str, Dict]) -> None:
-    """ConfigError unless every run (its run_CONTROLLER.json) was made from
-    ``scenario`` (the directory's scenario.yaml) and for the same duration. Runs
-    saved before run.json recorded these are not checked."""
+    """Requires that the runs of a directory belong together.
+
+    Runs saved before run.json recorded the scenario's fingerprint and the
+    duration are not checked.
+
+    Args:
+        run_dir: The run directory (for the messages).
+        scenario: The directory's scenario (its scenario.yaml).
+        runs: Controller -> its run's metadata (its run_CONTROLLER.json).
+
+    Raises:
+        ConfigError: A run was made from another scenario, or the runs have
+            different durations."""
     fingerprints = scenario_fingerprints(scenario)
     for controller, run in runs.items():
         if run.get("scenario_fingerprint", fingerprints[0]) not in fingerprints:
@@ -201,10 +275,22 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                           "allowed: runs of one duration in one directory")
 
 
-def report(run_dir) -> Dict:
-    """Panels and tables for a directory holding the runs (as ``reproduce`` or
-    ``dacph simulate`` calls leave it: dac and model-based, and dac-nominal for the
-    ablation). Writes figures/, metrics.md, ablation.md and metrics.json."""
+def report(run_dir: Union[str, Path]) -> Dict:
+    """Panels and tables for a directory holding the runs.
+
+    Writes figures/, metrics.md, ablation.md and metrics.json.
+
+    Args:
+        run_dir: The directory, as ``reproduce`` or ``dacph simulate`` calls leave
+            it: dac and model-based, and dac-nominal for the ablation.
+
+    Returns:
+        The summary written to metrics.json (scenario, duration, runs, table,
+            ablation, metrics, figures, versions).
+
+    Raises:
+        ConfigError: A required file is missing, or the runs do not belong
+            together (check_runs_belong_together)."""
     run_dir = require_run_files(run_dir, REQUIRED)
     scenario = load_scenario(run_dir / "scenario.yaml")
     controllers = [c for c in CONTROLLERS
@@ -239,10 +325,23 @@ def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
                     checkpoint_seconds=CHECKPOINT_SECONDS).status
 
 
-def reproduce(scenario: Scenario, out_dir, progress: bool = True, jobs: int = 1) -> Dict:
-    """Runs the CONTROLLERS on ``scenario`` into out_dir (logs, scenario.yaml,
-    run_*.json with versions and seed), then writes the panels and the tables.
-    jobs > 1 runs them in that many processes (no progress bars)."""
+def reproduce(scenario: Scenario, out_dir: Union[str, Path], progress: bool = True,
+              jobs: int = 1) -> Dict:
+    """Runs the CONTROLLERS on ``scenario``, then writes the panels and the tables.
+
+    Args:
+        scenario: The scenario.
+        out_dir: Where the runs go (logs, scenario.yaml, run_*.json with versions
+            and seed) and the report (report).
+        progress: Show progress bars (with jobs 1).
+        jobs: Run the controllers in this many processes (above 1: no progress
+            bars).
+
+    Returns:
+        The report's summary (report).
+
+    Raises:
+        ValueError: jobs is not between 1 and the number of controllers."""
     if jobs not in range(1, len(CONTROLLERS) + 1):
         raise ValueError(f"jobs = {jobs!r}; allowed: 1 to {len(CONTROLLERS)}")
     out = Path(out_dir)

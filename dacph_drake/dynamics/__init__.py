@@ -7,13 +7,31 @@ import numpy as np
 
 
 class ReducedModel(Protocol):
-    """The controller's reduced model of a free-floating arm at zero momentum
-    (reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel
-    for described ones): M(q) qdot = p is the port's momentum."""
+    """The controller's reduced model of a free-floating arm at zero momentum.
+
+    reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel
+    for described ones: M(q) qdot = p is the port's momentum.
+
+    Attributes:
+        num_joints: The number of the arm's joints n.
+    """
     num_joints: int
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """p = M(q) qdot."""
+        """The port's momentum p = M(q) qdot.
+
+        Args:
+            q: The joint angles (n) [rad].
+            qdot: The joint rates (n) [rad/s].
+
+        Returns:
+            p (n)."""
 
     def MassMatrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q), the reduced mass matrix (n x n)."""
+        """The reduced mass matrix M(q).
+
+        Args:
+            q: The joint angles (n) [rad].
+
+        Returns:
+            M(q) (n x n)."""

@@ -21,13 +21,24 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel
 
 @dataclass
 class InertiaBound:
-    lambda_min: float           # the bound used: (1 - safety_margin) * smallest_found
-    smallest_found: float       # min over the starts' local minima [kg m^2]
-    argmin: np.ndarray          # the joint angles where it was found [rad]
+    """The result of search_inertia_bound.
+
+    Attributes:
+        lambda_min: The bound used: (1 - safety_margin) * smallest_found [kg m^2].
+        smallest_found: The minimum over the starts' local minima [kg m^2].
+        argmin: The joint angles where it was found [rad].
+        starts: The number of starts.
+        starts_at_minimum: The starts whose local minimum is within 0.1 % of it.
+        safety_margin: The relative margin taken off smallest_found.
+        seconds: The wall time of the search [s].
+    """
+    lambda_min: float
+    smallest_found: float
+    argmin: np.ndarray
     starts: int
-    starts_at_minimum: int      # starts whose local minimum is within 0.1 % of it
+    starts_at_minimum: int
     safety_margin: float
-    seconds: float              # wall time of the search
+    seconds: float
 
 
 _CACHE = {}
@@ -36,9 +47,21 @@ _CACHE = {}
 def search_inertia_bound(model: FloatingBaseModel, starts: int = 24,
                          safety_margin: float = 0.05, seed: int = 0,
                          iterations: int = 200) -> InertiaBound:
-    """The gain rule's inf_q lambda_min(M) of ``model``'s arm (see the module
-    docstring), cached per robot (its mass matrix at fixed probe configurations
-    identifies it) and settings within a process."""
+    """The gain rule's inf_q lambda_min(M) of a model's arm (see the module docstring).
+
+    Cached per robot (its mass matrix at fixed probe configurations identifies it)
+    and settings within a process.
+
+    Args:
+        model: The arm's reduced model.
+        starts: The number of descents, from random joint angles.
+        safety_margin: The bound is the smallest minimum found times
+            (1 - safety_margin).
+        seed: The seed of the starts.
+        iterations: The most steps of each descent.
+
+    Returns:
+        The bound and how it was found."""
     probe = np.random.default_rng(12345).uniform(-np.pi, np.pi, (3, model.num_joints))
     key = (hashlib.sha256(np.concatenate([model.MassMatrix(q).ravel() for q in probe]
                                          ).tobytes()).hexdigest(),

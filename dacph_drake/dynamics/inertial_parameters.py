@@ -30,6 +30,9 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import (BodyIndex, JacobianWrtVariable, SpatialInertia,
                                     UnitInertia)
+from pydrake.systems.framework import Context
+
+from dacph_drake.dynamics.kinematic_tree import KinematicTree
 
 PER_BODY = 10
 MASS, MOMENT, INERTIA = 0, slice(1, 4), slice(4, 10)
@@ -53,10 +56,16 @@ def _inertia_regressor(w: np.ndarray) -> np.ndarray:
 
 
 class InertialParameters:
-    """The parameter layout of a finalized plant's bodies (every body with mass but
-    the world, in body index order; a massless frame body, such as a URDF's tool
-    link, carries none) and the maps above, evaluated on a context of that plant
-    (its kinematics only: the maps do not read the context's own inertias)."""
+    """The parameter layout of a finalized plant's bodies and the maps above.
+
+    The layout holds every body with mass but the world, in body index order (a
+    massless frame body, such as a URDF's tool link, carries none); the maps are
+    evaluated on a context of that plant (its kinematics only: the maps do not read
+    the context's own inertias).
+
+    Args:
+        plant: The finalized plant.
+    """
 
     def __init__(self, plant: MultibodyPlant):
         self.plant = plant
@@ -66,11 +75,23 @@ class InertialParameters:
         self.size = PER_BODY * len(self.bodies)
 
     def body_slice(self, k: int) -> slice:
-        """The columns of body ``k``'s ten parameters in pi."""
+        """The columns of a body's ten parameters in pi.
+
+        Args:
+            k: The body's position in the layout (0-based).
+
+        Returns:
+            The slice of its columns."""
         return slice(PER_BODY * k, PER_BODY * (k + 1))
 
-    def FromContext(self, context) -> np.ndarray:
-        """pi of the inertias the plant holds in ``context``."""
+    def FromContext(self, context: Context) -> np.ndarray:
+        """pi of the inertias the plant holds in a context.
+
+        Args:
+            context: A context of the plant.
+
+        Returns:
+            pi (size)."""
         pi = np.zeros(self.size)
         for k, body in enumerate(self.bodies):
             M = body.CalcSpatialInertiaInBodyFrame(context)
@@ -83,11 +104,20 @@ class InertialParameters:
         return pi
 
     def SpatialInertias(self, pi: np.ndarray) -> List[SpatialInertia]:
-        """One Drake SpatialInertia per body, unchecked: an identified pi is exact
-        only in the directions the motion informs (a planar arm's out-of-plane
-        inertias stay at the prior while its in-plane one moves, which may break
-        the triangle inequality of a body that does not exist), so the identifier
-        checks the mass matrix the controller will use instead."""
+        """One Drake SpatialInertia per body, unchecked.
+
+        An identified pi is exact only in the directions the motion informs (a
+        planar arm's out-of-plane inertias stay at the prior while its in-plane one
+        moves, which may break the triangle inequality of a body that does not
+        exist), so the identifier checks the mass matrix the controller will use
+        instead.
+
+        Args:
+            pi: The bodies' parameters (size).
+
+        Returns:
+            The bodies' spatial inertias about their origins, in their frames, in
+                layout order."""
         out = []
         for k in range(len(self.bodies)):
             block = pi[self.body_slice(k)]
@@ -99,15 +129,27 @@ class InertialParameters:
         return out
 
 
-    def Nodes(self, tree) -> np.ndarray:
-        """The node of each body of this layout in ``tree``
-        (kinematic_tree.KinematicTree), in layout order: where the compiled
-        kernels (kernels.identification) put each body's parameters."""
+    def Nodes(self, tree: KinematicTree) -> np.ndarray:
+        """The node of each body of this layout in a kinematic tree.
+
+        Where the compiled kernels (kernels.identification) put each body's
+        parameters.
+
+        Args:
+            tree: The plant's kinematic_tree.KinematicTree.
+
+        Returns:
+            The nodes, in layout order."""
         node_of = {int(body.index()): node for node, body in enumerate(tree.bodies)}
         return np.array([node_of[int(body.index())] for body in self.bodies])
 
-    def Apply(self, context, pi: np.ndarray) -> None:
-        """Sets the plant's bodies in ``context`` to the inertias pi."""
+    def Apply(self, context: Context, pi: np.ndarray) -> None:
+        """Sets the plant's bodies in a context to the inertias pi.
+
+        Args:
+            context: A context of the plant.
+            pi: The bodies' parameters (size).
+        """
         for body, M in zip(self.bodies, self.SpatialInertias(pi)):
             body.SetSpatialInertiaInBodyFrame(context, M)
 
@@ -116,9 +158,15 @@ class InertialParameters:
         V = self.plant.EvalBodySpatialVelocityInWorld(context, body)
         return X.rotation().matrix(), X.translation(), V.rotational(), V.translational()
 
-    def MomentumRegressor(self, context) -> np.ndarray:
-        """Y (6 x size), [L about the world origin; P] = Y pi, at the positions and
-        velocities of ``context``."""
+    def MomentumRegressor(self, context: Context) -> np.ndarray:
+        """The momentum regressor Y: [L about the world origin; P] = Y pi.
+
+        Args:
+            context: A context of the plant, whose positions and velocities are
+                used.
+
+        Returns:
+            Y (6 x size)."""
         Y = np.zeros((6, self.size))
         for k, body in enumerate(self.bodies):
             R, o, omega, v = self._Kinematics(context, body)
@@ -131,11 +179,18 @@ class InertialParameters:
             block[:3, INERTIA] = R @ _inertia_regressor(R.T @ omega)
         return Y
 
-    def MassMatrixBasis(self, context) -> np.ndarray:
-        """H_j (size x nv x nv): H(q) = sum_j pi_j H_j at the positions of
-        ``context``. With the body's Jacobian rotated into its frame, a = R^T J_w,
+    def MassMatrixBasis(self, context: Context) -> np.ndarray:
+        """The mass matrix's basis H_j: H(q) = sum_j pi_j H_j.
+
+        With the body's Jacobian rotated into its frame, a = R^T J_w,
         b = R^T J_v (rows a_x, a_y, a_z, ...): H_m = b^T b, H_h_i = a^T S(e_i) b + its
-        transpose, H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on."""
+        transpose, H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on.
+
+        Args:
+            context: A context of the plant, whose positions are used.
+
+        Returns:
+            H_j (size x nv x nv)."""
         nv = self.plant.num_velocities()
         world = self.plant.world_frame()
         out = np.zeros((self.size, nv, nv))
@@ -157,10 +212,19 @@ class InertialParameters:
 
 
 def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
-    """A size for every parameter of the prior pi0, by body: its mass m, m r for
-    the first moments and m r^2 for the inertia entries, r = sqrt(I_max / m) its
-    radius of gyration about its origin. They weigh the prior term of
-    identify_parameters so that a relative error counts alike in every entry."""
+    """A size for every parameter of the prior pi0, by body.
+
+    The body's mass m, m r for the first moments and m r^2 for the inertia
+    entries, r = sqrt(I_max / m) its radius of gyration about its origin. They
+    weigh the prior term of identify_parameters so that a relative error counts
+    alike in every entry.
+
+    Args:
+        parameters: The parameter layout.
+        pi0: The prior (parameters.size).
+
+    Returns:
+        The scales (parameters.size)."""
     scales = np.empty(parameters.size)
     for k in range(len(parameters.bodies)):
         block = pi0[parameters.body_slice(k)]
@@ -173,7 +237,9 @@ def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
 
 def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                         prior_weight: float) -> np.ndarray:
-    """argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to
+    """The inertial parameters the momentum samples identify, regularized by the prior.
+
+    argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to
     pi0^T S^-2 pi = pi0^T S^-2 pi0,  A = sum_k Y_k^T Y_k the ``information`` of the
     momentum samples (Y_k pi~ = 0 for the truth), S the prior's scales and
     r = prior_weight trace(S A S) / size: the data determine every direction they
@@ -186,7 +252,16 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
     a quarter of the robot's mass.
 
     Stacked arguments (information (trials, size, size), pi0 and scales (trials,
-    size)) solve one problem per trial; pi0 where r is not > 0 (no information)."""
+    size)) solve one problem per trial.
+
+    Args:
+        information: A = sum_k Y_k^T Y_k (size x size), or a stack.
+        pi0: The prior (size), or a stack.
+        scales: S, the prior's scales (prior_scales), or a stack.
+        prior_weight: The prior's weight relative to the average information.
+
+    Returns:
+        pi (size), or a stack; pi0 where r is not > 0 (no information)."""
     information, pi0 = np.asarray(information, float), np.asarray(pi0, float)
     S2 = np.asarray(scales, float)**2
     size = pi0.shape[-1]

@@ -15,10 +15,12 @@ the order of the reduced model's q. The bodies' inertias are not part of the tre
 (they change with the controller's inertial parameters): Inertias(plant, context)
 reads them."""
 from dataclasses import dataclass
+from typing import Tuple
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import BodyIndex, RevoluteJoint
+from pydrake.multibody.tree import BodyIndex, Frame, RevoluteJoint
+from pydrake.systems.framework import Context
 
 from dacph_drake.dynamics.plant import ArmCoordinates
 
@@ -29,21 +31,46 @@ def _Matrix(X) -> np.ndarray:
 
 @dataclass
 class KinematicTree:
-    bodies: list                # the plant's bodies, node order
-    base_subspace: np.ndarray   # (6, base velocities)
-    parent: np.ndarray          # (nodes,) parent node, -1 for the base
-    joint: np.ndarray           # (nodes,) the joint moving the node (0..n-1), -1: a weld
-    X_PF: np.ndarray            # (nodes, 4, 4)
-    axis: np.ndarray            # (nodes, 3) unit axis in F (zero for a weld)
-    X_MC: np.ndarray            # (nodes, 4, 4)
-    below: np.ndarray           # (n, nodes) True where joint k moves the node
-    joint_below: np.ndarray     # (n, n) True where joint k moves joint j's axis (j != k)
-    joint_node: np.ndarray      # (n,) the node each joint moves
+    """A free-floating plant's kinematic tree as arrays (see the module docstring).
+
+    Attributes:
+        bodies: The plant's bodies, in node order.
+        base_subspace: The base velocities' motion subspace (6, base velocities).
+        parent: Each node's parent node (nodes,), -1 for the base.
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent's frame (nodes, 4, 4).
+        axis: Each joint's unit axis in F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4).
+        below: True where joint k moves the node (n, nodes).
+        joint_below: True where joint k moves joint j's axis (j != k) (n, n).
+        joint_node: The node each joint moves (n,).
+    """
+    bodies: list
+    base_subspace: np.ndarray
+    parent: np.ndarray
+    joint: np.ndarray
+    X_PF: np.ndarray
+    axis: np.ndarray
+    X_MC: np.ndarray
+    below: np.ndarray
+    joint_below: np.ndarray
+    joint_node: np.ndarray
 
     @staticmethod
     def FromPlant(plant: MultibodyPlant) -> "KinematicTree":
-        """The tree of a finalized free-floating plant whose moving joints are its
-        free base and revolute joints (description.PopulateFromDescription)."""
+        """The tree of a finalized free-floating plant.
+
+        Args:
+            plant: A finalized plant whose moving joints are its free base and
+                revolute joints (description.PopulateFromDescription).
+
+        Returns:
+            Its tree.
+
+        Raises:
+            ValueError: The base joint is neither free nor planar, a body other than
+                the base is on the world, or a joint is neither revolute nor a weld.
+        """
         coordinates = ArmCoordinates.FromPlant(plant)
         joint_of_velocity = {int(v): j for j, v in enumerate(coordinates.joint_v)}
         inboard = {}
@@ -120,10 +147,15 @@ class KinematicTree:
         return (self.base_subspace, self.parent, self.joint, self.X_PF, self.axis,
                 self.X_MC, self.below, self.joint_below)
 
-    def Inertias(self, context):
-        """(mass (nodes,), first moment m c (nodes, 3), rotational inertia about the
-        body's origin (nodes, 3, 3)), in each body's frame, as the plant holds them
-        in ``context``."""
+    def Inertias(self, context: Context) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The bodies' inertias, as the plant holds them in a context.
+
+        Args:
+            context: A context of the plant.
+
+        Returns:
+            (mass (nodes,), first moment m c (nodes, 3), rotational inertia about
+                the body's origin (nodes, 3, 3)), in each body's frame."""
         nodes = len(self.bodies)
         mass, moment, inertia = np.zeros(nodes), np.zeros((nodes, 3)), np.zeros((nodes, 3, 3))
         for node, body in enumerate(self.bodies):
@@ -133,9 +165,14 @@ class KinematicTree:
             inertia[node] = M.CalcRotationalInertia().CopyToFullMatrix3()
         return mass, moment, inertia
 
-    def Node(self, frame):
-        """(node, X_CF (4 x 4)) of a plant frame: its body's node and its pose in
-        that body."""
+    def Node(self, frame: Frame) -> Tuple[int, np.ndarray]:
+        """Where a plant frame sits in the tree.
+
+        Args:
+            frame: A frame of the plant.
+
+        Returns:
+            (node, X_CF (4 x 4)), its body's node and its pose in that body."""
         body = frame.body()
         node = next(k for k, b in enumerate(self.bodies) if b.index() == body.index())
         return node, _Matrix(frame.GetFixedPoseInBodyFrame())

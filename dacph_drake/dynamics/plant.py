@@ -12,16 +12,16 @@ drifts to ~1e-5. The discrete controllers already stop the integrator at every R
 sample, so the continuous plant costs no more steps than a discrete one would.
 """
 from dataclasses import dataclass
-from typing import List, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.geometry import Box, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
-from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PlanarJoint,
-                                    RevoluteJoint, RotationalInertia, SpatialInertia,
-                                    WeldJoint, default_model_instance)
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, ModelInstanceIndex,
+                                    PlanarJoint, RevoluteJoint, RotationalInertia,
+                                    SpatialInertia, WeldJoint, default_model_instance)
+from pydrake.systems.framework import Context, DiagramBuilder, System
 from pydrake.systems.primitives import Selector, SelectorParams
 
 from dacph_drake.arm_parameters import RobotParams
@@ -33,12 +33,24 @@ GEOMETRY_DEPTH = 0.05  # extent of the boxes along z [m]; does not enter the dyn
 
 
 def joint_name(k: int) -> str:
-    """Name of the k-th arm joint, k = 0 .. n-1 (the paper's q_{k+1})."""
+    """Name of the k-th arm joint (the paper's q_{k+1}).
+
+    Args:
+        k: The joint's index, k = 0 .. n-1.
+
+    Returns:
+        Its name, q1, q2, ..."""
     return f"q{k + 1}"
 
 
 def link_name(k: int) -> str:
-    """The name of the planar arm's link ``k`` (0-based): link1, link2, ..."""
+    """The name of a planar arm's link.
+
+    Args:
+        k: The link's index (0-based).
+
+    Returns:
+        Its name, link1, link2, ..."""
     return f"link{k + 1}"
 
 
@@ -46,26 +58,46 @@ def link_name(k: int) -> str:
 class ArmCoordinates:
     """Where the base and the joints sit in a plant's q and v vectors.
 
-    ``base_v`` lists the base joint's velocities in the world frame (a PlanarJoint's
-    vx, vy, omega0; a free base's omega_W, v_W), ``joint_v`` the arm's joint rates
-    qdot; likewise ``base_q`` / ``joint_q``. ``base_origin`` is the base joint's
-    coordinates at the origin (zeros; a free base's identity quaternion).
+    Attributes:
+        base_q: The indices of the base joint's positions in q.
+        base_v: The indices of the base joint's velocities in v, in the world frame
+            (a PlanarJoint's vx, vy, omega0; a free base's omega_W, v_W).
+        joint_q: The indices of the arm's joint angles q in q.
+        joint_v: The indices of the arm's joint rates qdot in v.
+        base_origin: The base joint's coordinates at the origin (zeros; a free
+            base's identity quaternion).
+        plant_positions: The number of the whole plant's positions (a batch's:
+            every trial's).
     """
     base_q: np.ndarray
     base_v: np.ndarray
     joint_q: np.ndarray
     joint_v: np.ndarray
     base_origin: np.ndarray
-    plant_positions: int        # the whole plant's (a batch's: every trial's)
+    plant_positions: int
 
     @staticmethod
-    def FromPlant(plant: MultibodyPlant, instance=None) -> "ArmCoordinates":
-        """The layout of a finalized free-floating plant (of its model ``instance``,
-        one trial's arm in a batch's plant; default: the whole plant): the base
-        joint is the one joint on the world (the planar arms' PlanarJoint: x, y,
-        theta0; a robot from a file's quaternion floating joint: qw, qx, qy, qz, x,
-        y, z and omega_W, v_W), the arm's joints are the actuated ones, in actuator
-        order. Indices are into the whole plant's q and v."""
+    def FromPlant(plant: MultibodyPlant, instance: Optional[ModelInstanceIndex] = None
+                  ) -> "ArmCoordinates":
+        """The layout of a finalized free-floating plant.
+
+        The base joint is the one joint on the world (the planar arms' PlanarJoint:
+        x, y, theta0; a robot from a file's quaternion floating joint: qw, qx, qy,
+        qz, x, y, z and omega_W, v_W), the arm's joints are the actuated ones, in
+        actuator order. Indices are into the whole plant's q and v.
+
+        Args:
+            plant: The finalized free-floating plant.
+            instance: The model instance whose layout to give (one trial's arm in a
+                batch's plant; default: the whole plant).
+
+        Returns:
+            The layout.
+
+        Raises:
+            ValueError: The plant (or instance) has not exactly one joint on the
+                world.
+        """
         among = () if instance is None else (instance,)
         on_world = [plant.get_joint(i) for i in plant.GetJointIndices(*among)
                     if plant.get_joint(i).parent_body().index()
@@ -88,9 +120,16 @@ class ArmCoordinates:
 
     @staticmethod
     def ForPlanarArm(num_joints: int) -> "ArmCoordinates":
-        """The layout AddFreeFloatingArm and MakeArmPlant give an arm of
-        ``num_joints`` links (the base's x, y, theta0 first), for reading logged
-        plant states without a plant."""
+        """The layout AddFreeFloatingArm and MakeArmPlant give a planar arm.
+
+        The base's x, y, theta0 come first; for reading logged plant states without
+        a plant.
+
+        Args:
+            num_joints: The arm's number of links (and joints).
+
+        Returns:
+            The layout."""
         joints = np.arange(3, 3 + num_joints)
         return ArmCoordinates(base_q=np.arange(3), base_v=np.arange(3), joint_q=joints,
                               joint_v=joints, base_origin=np.zeros(3),
@@ -104,9 +143,16 @@ class ArmCoordinates:
     def num_positions(self) -> int:
         return len(self.base_q) + len(self.joint_q)
 
-    def Positions(self, q, base_pose=None) -> np.ndarray:
-        """The plant's position vector with the joints at ``q`` and the base at
-        ``base_pose`` (the base joint's coordinates; default: base_origin)."""
+    def Positions(self, q: np.ndarray, base_pose: Optional[np.ndarray] = None
+                  ) -> np.ndarray:
+        """The plant's position vector.
+
+        Args:
+            q: The joint angles (n) [rad].
+            base_pose: The base joint's coordinates (default: base_origin).
+
+        Returns:
+            The plant's positions, the joints at q and the base at base_pose."""
         positions = np.zeros(self.num_positions)
         positions[self.base_q] = self.base_origin if base_pose is None else base_pose
         positions[self.joint_q] = q
@@ -120,17 +166,29 @@ class ArmCoordinates:
         return np.concatenate([self.base_q[2:3], nq + self.base_v, self.joint_q,
                                nq + self.joint_v]).astype(np.int64)
 
-    def Split(self, x: np.ndarray):
-        """(base_pose, q, base_velocity, qdot) of plant state(s) x = [positions,
-        velocities] (the last axis)."""
+    def Split(self, x: np.ndarray
+              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The parts of plant state(s).
+
+        Args:
+            x: Plant state(s) [positions, velocities] (the last axis).
+
+        Returns:
+            (base_pose, q, base_velocity, qdot)."""
         v = x[..., self.plant_positions:]
         return (x[..., self.base_q], x[..., self.joint_q], v[..., self.base_v],
                 v[..., self.joint_v])
 
 
 def trial_coordinates(plant: MultibodyPlant) -> List[ArmCoordinates]:
-    """Each trial's ArmCoordinates in a batch's plant (AddFreeFloatingArms: one
-    model instance per trial, in trial order); a plant of one arm is one trial."""
+    """Each trial's ArmCoordinates in a batch's plant.
+
+    Args:
+        plant: The batch's plant (AddFreeFloatingArms: one model instance per trial,
+            in trial order); a plant of one arm is one trial.
+
+    Returns:
+        The trials' layouts, in trial order."""
     instances = [plant.GetModelInstanceByName(TRIAL_INSTANCE.format(i))
                  for i in range(plant.num_model_instances())
                  if plant.HasModelInstanceNamed(TRIAL_INSTANCE.format(i))]
@@ -139,14 +197,30 @@ def trial_coordinates(plant: MultibodyPlant) -> List[ArmCoordinates]:
     return [ArmCoordinates.FromPlant(plant, instance) for instance in instances]
 
 
-def SetArmAtRest(plant: MultibodyPlant, plant_context, q0) -> None:
-    """SetArmsAtRest of a plant of one arm."""
+def SetArmAtRest(plant: MultibodyPlant, plant_context: Context, q0: np.ndarray
+                 ) -> None:
+    """SetArmsAtRest of a plant of one arm.
+
+    Args:
+        plant: The plant of one arm.
+        plant_context: Its context, set in place.
+        q0: The joint angles [rad].
+    """
     SetArmsAtRest(plant, plant_context, [q0])
 
 
-def SetArmsAtRest(plant: MultibodyPlant, plant_context, q0s) -> None:
-    """Every trial's base at the origin, its joints at its q0 (``q0s``, one per
-    trial), everything at rest (zero momentum): the initial state of every run."""
+def SetArmsAtRest(plant: MultibodyPlant, plant_context: Context,
+                  q0s: Sequence[np.ndarray]) -> None:
+    """Sets the initial state of every run.
+
+    Every trial's base at the origin, its joints at its q0, everything at rest
+    (zero momentum).
+
+    Args:
+        plant: The batch's plant.
+        plant_context: Its context, set in place.
+        q0s: Each trial's joint angles q0 [rad], in trial order.
+    """
     positions = np.zeros(plant.num_positions())
     for coordinates, q0 in zip(trial_coordinates(plant), q0s, strict=True):
         positions[coordinates.base_q] = coordinates.base_origin
@@ -158,10 +232,17 @@ def SetArmsAtRest(plant: MultibodyPlant, plant_context, q0s) -> None:
 STATE_SIGNALS = ("base_pose", "q", "base_velocity", "qdot")    # AddStateSplitter's
 
 
-def FixStateInputs(system, context, x: np.ndarray) -> None:
-    """Fixes the state inputs that ``system`` has to the plant state x of a planar
-    arm: ``state`` to x itself, STATE_SIGNALS to its parts (a system tested alone,
-    without a plant and a splitter)."""
+def FixStateInputs(system: System, context: Context, x: np.ndarray) -> None:
+    """Fixes the state inputs that a system has to the plant state x of a planar arm.
+
+    ``state`` to x itself, STATE_SIGNALS to its parts (a system tested alone,
+    without a plant and a splitter).
+
+    Args:
+        system: The system.
+        context: Its context.
+        x: The plant state [positions, velocities].
+    """
     if system.HasInputPort("state"):
         system.GetInputPort("state").FixValue(context, x)
     num_joints = (len(x) - 6) // 2
@@ -171,14 +252,22 @@ def FixStateInputs(system, context, x: np.ndarray) -> None:
 
 
 def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector:
-    """The plant state as named signals, for every system that reads it: a Selector
-    (Drake C++, no Python call per evaluation) named "state_splitter", fed by the
-    plant's state, with outputs ``base_pose`` (the base joint's coordinates: x, y,
-    theta0 for the planar arms; qw, qx, qy, qz, x, y, z for a free base from a
-    description file), ``q`` (joint angles), ``base_velocity`` (vx, vy, omega0, or
-    omega_W, v_W, in the world frame) and ``qdot`` (joint rates), each the trials'
-    signals stacked in trial order (trial_coordinates), built from ArmCoordinates:
-    the one place that knows the state's layout."""
+    """The plant state as named signals, for every system that reads it.
+
+    A Selector (Drake C++, no Python call per evaluation) named "state_splitter",
+    fed by the plant's state, with outputs ``base_pose`` (the base joint's
+    coordinates: x, y, theta0 for the planar arms; qw, qx, qy, qz, x, y, z for a
+    free base from a description file), ``q`` (joint angles), ``base_velocity``
+    (vx, vy, omega0, or omega_W, v_W, in the world frame) and ``qdot`` (joint
+    rates), each the trials' signals stacked in trial order (trial_coordinates),
+    built from ArmCoordinates: the one place that knows the state's layout.
+
+    Args:
+        builder: The builder it is added to.
+        plant: The (batch's) plant, in ``builder``.
+
+    Returns:
+        The splitter."""
     trials = trial_coordinates(plant)
     nq = plant.num_positions()
 
@@ -202,25 +291,42 @@ def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector
 
 def AddFreeFloatingArm(builder: DiagramBuilder, robot: RobotParams,
                        time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """AddFreeFloatingArms of one arm."""
+    """AddFreeFloatingArms of one arm.
+
+    Args:
+        builder: The builder the plant is added to.
+        robot: The arm.
+        time_step: The plant's time step [s] (0: continuous).
+
+    Returns:
+        (plant, scene_graph)."""
     return AddFreeFloatingArms(builder, [robot], time_step)
 
 
 def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
                         time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized plant of a batch of trials, one arm per trial (``robots``,
-    each the model instance TRIAL_INSTANCE.format(i), side by side at the origin:
-    without contact they do not interact; one arm: the default model instance, as
-    a plant of one arm has it), with visual geometry registered with a
-    SceneGraph (for Meshcat), to ``builder``; continuous unless ``time_step`` > 0.
-    Each arm's state evolves exactly as in a plant of its own (bit for bit,
-    tests/test_batch.py), at a fraction of the cost per arm (scripts/bench_sweep.py).
+    """Adds the finalized plant of a batch of trials, one arm per trial.
+
+    Each arm is the model instance TRIAL_INSTANCE.format(i), side by side at the
+    origin: without contact they do not interact; one arm: the default model
+    instance, as a plant of one arm has it. Visual geometry is registered with a
+    SceneGraph (for Meshcat). Each arm's state evolves exactly as in a plant of its
+    own (bit for bit, tests/test_batch.py), at a fraction of the cost per arm
+    (scripts/bench_sweep.py).
 
     No collision geometry: the arm in free flight never touches its base in a
     runnable scenario (the potential field keeps it off), and contact queries cost
     30 % of the plant's derivative evaluation. A run is stopped with a named reason
     when the links' kinematic clearance from the base reaches zero
-    (run._Simulate), and the start is checked (diagrams._RequireRunnableStart)."""
+    (run._Simulate), and the start is checked (diagrams._RequireRunnableStart).
+
+    Args:
+        builder: The builder the plant is added to.
+        robots: Each trial's arm, in trial order.
+        time_step: The plant's time step [s]; continuous unless > 0.
+
+    Returns:
+        (plant, scene_graph)."""
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=time_step)
     for i, robot in enumerate(robots):
         robot.Validate()
@@ -233,14 +339,26 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
 
 def AddClonedArms(builder: DiagramBuilder, sources: Sequence[MultibodyPlant]
                   ) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized continuous plant of a batch of trials whose arms are the
-    finalized plants ``sources`` (one per trial: an arm from a description file,
-    robots.description.ParsedDescription), each copied into the model instance
-    TRIAL_INSTANCE.format(i): its bodies with their default inertias, its revolute
-    joints (axis, damping) and welds in the same order, its actuators (effort limit,
-    rotor inertia, gear ratio), the free base on the quaternion floating joint
-    Finalize gives it; no geometry (no contact, as in AddFreeFloatingArms) and
-    zero gravity. Each copy's dynamics are its source's."""
+    """Adds the finalized continuous plant of a batch of trials with cloned arms.
+
+    Each source is copied into the model instance TRIAL_INSTANCE.format(i): its
+    bodies with their default inertias, its revolute joints (axis, damping) and
+    welds in the same order, its actuators (effort limit, rotor inertia, gear
+    ratio), the free base on the quaternion floating joint Finalize gives it; no
+    geometry (no contact, as in AddFreeFloatingArms) and zero gravity. Each copy's
+    dynamics are its source's.
+
+    Args:
+        builder: The builder the plant is added to.
+        sources: The trials' arms as finalized plants (one per trial: an arm from
+            a description file, robots.description.ParsedDescription).
+
+    Returns:
+        (plant, scene_graph).
+
+    Raises:
+        ValueError: A source has a joint that is neither revolute nor a weld.
+    """
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
     for i, source in enumerate(sources):
         instance = plant.AddModelInstance(TRIAL_INSTANCE.format(i))
@@ -286,7 +404,13 @@ def _ClonedFrame(plant: MultibodyPlant, body, frame):
 
 
 def MakeArmPlant(robot: RobotParams) -> MultibodyPlant:
-    """A finalized arm plant without geometry, for a controller's internal model."""
+    """A finalized arm plant without geometry, for a controller's internal model.
+
+    Args:
+        robot: The arm.
+
+    Returns:
+        The plant."""
     robot.Validate()
     plant = MultibodyPlant(time_step=0.0)
     _PopulateArm(plant, robot, default_model_instance())
@@ -339,26 +463,50 @@ def _RegisterGeometry(plant: MultibodyPlant, robot: RobotParams, bodies: List) -
         plant.RegisterVisualGeometry(body, X_BG, shape, body.name() + "_visual", rgba)
 
 
-def total_momentum(plant: MultibodyPlant, context) -> np.ndarray:
-    """[h_A_z, h_L_x, h_L_y]: the system's angular momentum about the world origin
-    and its linear momentum (paper eq. for h_L, h_A); the other three components of
-    a planar system's spatial momentum are identically zero."""
+def total_momentum(plant: MultibodyPlant, context: Context) -> np.ndarray:
+    """The planar system's total momentum.
+
+    The system's angular momentum about the world origin and its linear momentum
+    (paper eq. for h_L, h_A); the other three components of a planar system's
+    spatial momentum are identically zero.
+
+    Args:
+        plant: The plant.
+        context: Its context.
+
+    Returns:
+        [h_A_z, h_L_x, h_L_y]."""
     h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
     return np.array([h.rotational()[2], h.translational()[0], h.translational()[1]])
 
 
-def joint_damping(plant: MultibodyPlant, joint_v) -> np.ndarray:
-    """The damping [N m s/rad] of the joints whose velocities are ``joint_v`` (the
-    description's, which Drake applies in the plant's dynamics)."""
+def joint_damping(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
+    """The joints' damping.
+
+    The description's, which Drake applies in the plant's dynamics.
+
+    Args:
+        plant: The plant.
+        joint_v: The joints' velocity indices (ArmCoordinates.joint_v).
+
+    Returns:
+        The damping of each joint [N m s/rad]."""
     by_velocity = {plant.get_joint(j).velocity_start(): plant.get_joint(j)
                    for j in plant.GetJointIndices()
                    if plant.get_joint(j).num_velocities() == 1}
     return np.array([by_velocity[int(v)].default_damping() for v in joint_v])
 
 
-def effort_limits(plant: MultibodyPlant, joint_v) -> np.ndarray:
-    """The effort limit [N m] of the actuator of each joint whose velocity is in
-    ``joint_v`` (inf where it has none)."""
+def effort_limits(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
+    """The effort limits of the joints' actuators.
+
+    Args:
+        plant: The plant.
+        joint_v: The joints' velocity indices (ArmCoordinates.joint_v).
+
+    Returns:
+        The effort limit [N m] of the actuator of each joint (inf where it has
+            none)."""
     by_velocity = {plant.get_joint_actuator(a).joint().velocity_start():
                    plant.get_joint_actuator(a).effort_limit()
                    for a in plant.GetJointActuatorIndices()}

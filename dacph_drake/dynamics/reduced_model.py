@@ -29,24 +29,27 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.autodiffutils import ExtractGradient, InitializeAutoDiff
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import JacobianWrtVariable
+from pydrake.multibody.tree import Frame, JacobianWrtVariable
 
+from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.dynamics.plant import ArmCoordinates, END_EFFECTOR, link_name
 
 @dataclass(slots=True)
 class ReducedDynamics:
-    """The reduced model at one state (q, qdot), paper symbols:
+    """The reduced model at one state (q, qdot), in the paper's symbols.
 
-    M        M(q), n x n, symmetric positive definite
-    Mdot     dM/dt = sum_k dM/dq_k qdot_k
-    dM       dM[k] = dM/dq_k, shape (n, n, n)
-    C        C'(q, p) in Christoffel form, C_ij = sum_k Gamma_ijk qdot_k with
-             Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2, so that
-             Mdot - 2 C' is skew-symmetric
-    dH_dq    dH/dq at fixed p = -(Mdot - C') qdot = -(1/2) qdot^T (dM/dq_i) qdot
-    D        task Jacobian D(q), 1 x n as a vector: alpha_dot = D qdot
-    dD       dD[k] = dD/dq_k, shape (n, n)
-    base_velocity_map   -H_bb^-1 H_bm, 3 x n: (vx, vy, omega0) = map @ qdot, at theta0 = 0
+    Attributes:
+        M: M(q), n x n, symmetric positive definite.
+        Mdot: dM/dt = sum_k dM/dq_k qdot_k.
+        dM: dM[k] = dM/dq_k, shape (n, n, n).
+        C: C'(q, p) in Christoffel form, C_ij = sum_k Gamma_ijk qdot_k with
+            Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2, so that
+            Mdot - 2 C' is skew-symmetric.
+        dH_dq: dH/dq at fixed p = -(Mdot - C') qdot = -(1/2) qdot^T (dM/dq_i) qdot.
+        D: The task Jacobian D(q), 1 x n as a vector: alpha_dot = D qdot.
+        dD: dD[k] = dD/dq_k, shape (n, n).
+        base_velocity_map: -H_bb^-1 H_bm, 3 x n: (vx, vy, omega0) = map @ qdot, at
+            theta0 = 0.
     """
     M: np.ndarray
     Mdot: np.ndarray
@@ -59,9 +62,17 @@ class ReducedDynamics:
 
 
 class ReducedOrderModel:
-    """Evaluates the reduced model of ``plant``, an arm built by dynamics/plant.py.
+    """Evaluates the reduced model of a planar arm's plant.
 
     One scratch context is made here and reused by every evaluation.
+
+    Args:
+        plant: An arm built by dynamics/plant.py.
+
+    Raises:
+        ValueError: The plant's velocities are not in dynamics/plant.py's layout,
+            or its mass matrix is not a trigonometric sum over consecutive joint
+            angle ranges (not a planar chain of revolute joints).
     """
 
     def __init__(self, plant: MultibodyPlant):
@@ -95,13 +106,19 @@ class ReducedOrderModel:
         kernels (kernels.arm)."""
         return self._coefficients, self._ranges
 
-    def CoefficientBasis(self, parameters) -> np.ndarray:
-        """The trigonometric coefficients as a linear function of the bodies'
-        inertial parameters (inertial_parameters.InertialParameters ``parameters``
-        of this model's plant): coefficients(pi) = tensordot(pi, basis, 1), basis of
-        shape (parameters.size, N*N, 1 + 2R). H(q) is linear in pi and the fit is a
-        linear operator on its samples, so this is exact: at the plant's own
-        parameters it gives trigonometric_representation's coefficients."""
+    def CoefficientBasis(self, parameters: InertialParameters) -> np.ndarray:
+        """The trigonometric coefficients, linear in the bodies' inertial parameters.
+
+        coefficients(pi) = tensordot(pi, basis, 1). H(q) is linear in pi and the
+        fit is a linear operator on its samples, so this is exact: at the plant's
+        own parameters it gives trigonometric_representation's coefficients.
+
+        Args:
+            parameters: The inertial_parameters.InertialParameters of this model's
+                plant.
+
+        Returns:
+            The basis, of shape (parameters.size, N*N, 1 + 2R)."""
         context = self._plant.CreateDefaultContext()
         samples = []
         for q in self._fit_samples:
@@ -110,11 +127,20 @@ class ReducedOrderModel:
         samples = np.array(samples)                                    # (S, P, N*N)
         return np.einsum("rs,spe->per", self._fit_operator, samples)
 
-    def WithInertialParameters(self, parameters, pi: np.ndarray) -> "ReducedOrderModel":
-        """A copy of this model whose bodies have the inertial parameters pi
-        (``parameters``: the InertialParameters layout of this model's plant), e.g.
-        an InertialIdentifier's estimate: its M, C', D are those the LHS controller
-        evaluated with them. Its plant and GJMs stay this model's."""
+    def WithInertialParameters(self, parameters: InertialParameters, pi: np.ndarray
+                               ) -> "ReducedOrderModel":
+        """A copy of this model whose bodies have the inertial parameters pi.
+
+        Its M, C', D are those the LHS controller evaluated with them. Its plant and
+        GJMs stay this model's.
+
+        Args:
+            parameters: The InertialParameters layout of this model's plant.
+            pi: The bodies' inertial parameters, e.g. an InertialIdentifier's
+                estimate.
+
+        Returns:
+            The copy."""
         copy = object.__new__(ReducedOrderModel)
         copy.__dict__.update(self.__dict__)
         copy._coefficients = np.tensordot(pi, self.CoefficientBasis(parameters), 1)
@@ -184,12 +210,25 @@ class ReducedOrderModel:
         return float(np.max(np.abs(self._MassMatrixAndDerivatives(q)[1:] - dH_ad)))
 
     def MassMatrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm."""
+        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm.
+
+        Args:
+            q: The joint angles (n) [rad].
+
+        Returns:
+            M(q) (n x n)."""
         H = self._MassMatrixAndDerivatives(q)[0]
         return H[3:, 3:] - H[:3, 3:].T @ np.linalg.solve(H[:3, :3], H[:3, 3:])
 
     def Evaluate(self, q: np.ndarray, qdot: np.ndarray) -> ReducedDynamics:
-        """M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base velocity map at (q, qdot)."""
+        """M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base velocity map at (q, qdot).
+
+        Args:
+            q: The joint angles (n) [rad].
+            qdot: The joint rates (n) [rad/s].
+
+        Returns:
+            The reduced model at (q, qdot)."""
         n = self._num_joints
         H_and_dH = self._MassMatrixAndDerivatives(q)
         H = H_and_dH[0]
@@ -212,15 +251,32 @@ class ReducedOrderModel:
                                base_velocity_map=-A)
 
     def BaseVelocity(self, q_full: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """(vx, vy, omega0) in the world frame implied by zero momentum:
-        qdot0 = -H_bb^-1 H_bm qdot at the full configuration (base pose included)."""
+        """The base velocity implied by zero momentum.
+
+        qdot0 = -H_bb^-1 H_bm qdot at the full configuration (base pose included).
+
+        Args:
+            q_full: The plant's positions (base pose included).
+            qdot: The joint rates (n) [rad/s].
+
+        Returns:
+            (vx, vy, omega0) in the world frame."""
         H = self._FullMassMatrix(q_full)
         return -np.linalg.solve(H[:3, :3], H[:3, 3:] @ qdot)
 
-    def GeneralizedJacobian(self, q_full: np.ndarray, frame, p_FoP_F=np.zeros(3)
-                            ) -> np.ndarray:
-        """Generalized Jacobian J_bar = J_k - H_k H_q0^-1 H_q (6 x n) of point P fixed
-        in ``frame``: [omega; v] of P in the world (Drake's order) = J_bar qdot."""
+    def GeneralizedJacobian(self, q_full: np.ndarray, frame: Frame,
+                            p_FoP_F: np.ndarray = np.zeros(3)) -> np.ndarray:
+        """Generalized Jacobian J_bar = J_k - H_k H_q0^-1 H_q of a point P.
+
+        [omega; v] of P in the world (Drake's order) = J_bar qdot.
+
+        Args:
+            q_full: The plant's positions (base pose included).
+            frame: The frame P is fixed in.
+            p_FoP_F: P's position in ``frame`` [m].
+
+        Returns:
+            J_bar (6 x n)."""
         H = self._FullMassMatrix(q_full)
         J = self._plant.CalcJacobianSpatialVelocity(
             self._context, JacobianWrtVariable.kV, frame, p_FoP_F,
@@ -228,27 +284,58 @@ class ReducedOrderModel:
         return J[:, 3:] - J[:, :3] @ np.linalg.solve(H[:3, :3], H[:3, 3:])
 
     def EndEffectorJacobian(self, q_full: np.ndarray) -> np.ndarray:
-        """GJM of the end effector (6 x n); its omega_z row is D(q)."""
+        """GJM of the end effector; its omega_z row is D(q).
+
+        Args:
+            q_full: The plant's positions (base pose included).
+
+        Returns:
+            J_bar (6 x n)."""
         return self.GeneralizedJacobian(q_full, self._ee_frame)
 
     def LinkJacobians(self, q_full: np.ndarray) -> list:
-        """GJM of each link's centre of mass, [J_bar_1, ..., J_bar_n]."""
+        """GJM of each link's centre of mass.
+
+        Args:
+            q_full: The plant's positions (base pose included).
+
+        Returns:
+            [J_bar_1, ..., J_bar_n], each 6 x n."""
         return [self.GeneralizedJacobian(q_full, body.body_frame(),
                                          body.default_com())
                 for body in self._link_bodies]
 
     def EndEffectorAngle(self, q_full: np.ndarray) -> float:
-        """alpha = theta0 + q1 + ... + qn (unwrapped absolute angle in the plane) at
-        the plant positions q_full."""
+        """alpha = theta0 + q1 + ... + qn, the end effector's angle in the plane.
+
+        Args:
+            q_full: The plant's positions.
+
+        Returns:
+            alpha, the unwrapped absolute angle in the plane [rad]."""
         theta0 = q_full[self._coordinates.base_q[2]]
         return float(theta0 + np.sum(q_full[self._coordinates.joint_q]))
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """p = M(q) qdot."""
+        """p = M(q) qdot.
+
+        Args:
+            q: The joint angles (n) [rad].
+            qdot: The joint rates (n) [rad/s].
+
+        Returns:
+            p (n)."""
         return self.MassMatrix(q) @ qdot
 
     def Hamiltonian(self, q: np.ndarray, p: np.ndarray) -> float:
-        """H(q, p) = p^T M^-1(q) p / 2."""
+        """H(q, p) = p^T M^-1(q) p / 2.
+
+        Args:
+            q: The joint angles (n) [rad].
+            p: The momentum (n).
+
+        Returns:
+            The kinetic energy H [J]."""
         return 0.5 * float(p @ np.linalg.solve(self.MassMatrix(q), p))
 
 
@@ -257,12 +344,19 @@ _MASS_MATRIX_BOUNDS = {}      # (trigonometric coefficients, grid) -> bounds
 
 def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                        ) -> "tuple[float, float]":
-    """(inf_q lambda_min(M), sup_q lambda_max(M)) over a uniform grid of joint angles
-    in [-pi, pi)^n: the paper's lambda_min_min(M) and lambda_max_max(M).
+    """The paper's lambda_min_min(M) and lambda_max_max(M).
 
-    The grid search takes ~0.1 s and every diagram build and verification asks for
-    it, so it runs once per distinct robot in a process: the model's fitted
-    coefficients determine M(q) entirely and serve as the key."""
+    Over a uniform grid of joint angles in [-pi, pi)^n. The grid search takes
+    ~0.1 s and every diagram build and verification asks for it, so it runs once
+    per distinct robot in a process: the model's fitted coefficients determine M(q)
+    entirely and serve as the key.
+
+    Args:
+        model: The arm's reduced model.
+        samples_per_joint: The grid's points per joint.
+
+    Returns:
+        (inf_q lambda_min(M), sup_q lambda_max(M)) over the grid."""
     key = (model._coefficients.tobytes(), model._coefficients.shape, samples_per_joint)
     if key not in _MASS_MATRIX_BOUNDS:
         _MASS_MATRIX_BOUNDS[key] = _GridMassMatrixBounds(model, samples_per_joint)

@@ -5,6 +5,8 @@ motion, at a configuration the compiled reduced model (kernels/spatial.py) was
 evaluated at; and the base's attitude turned along the motion (the secondary
 motion's central difference). tests/test_kernels.py checks the rates against the
 central difference of the rates themselves along the motion."""
+from typing import Tuple
+
 import numpy as np
 from numba import njit
 
@@ -14,8 +16,14 @@ from dacph_drake.kernels.spatial import (_cross, _rotation, _skew, christoffel,
 
 
 @njit(cache=True)
-def quaternion_rotation(quaternion):
-    """R of a (w, x, y, z) quaternion (normalized here)."""
+def quaternion_rotation(quaternion: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a quaternion.
+
+    Args:
+        quaternion: (w, x, y, z) (normalized here).
+
+    Returns:
+        R (3 x 3)."""
     w, x, y, z = quaternion / np.sqrt(np.sum(quaternion * quaternion))
     return np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -24,8 +32,14 @@ def quaternion_rotation(quaternion):
 
 
 @njit(cache=True)
-def rotation_quaternion(R):
-    """The (w, x, y, z) quaternion of R with w >= 0 (Shepperd's method)."""
+def rotation_quaternion(R: np.ndarray) -> np.ndarray:
+    """The quaternion of a rotation matrix, with w >= 0 (Shepperd's method).
+
+    Args:
+        R: The rotation matrix (3 x 3).
+
+    Returns:
+        (w, x, y, z)."""
     trace = R[0, 0] + R[1, 1] + R[2, 2]
     out = np.empty(4)
     if trace >= max(R[0, 0], R[1, 1], R[2, 2]):
@@ -50,9 +64,16 @@ def rotation_quaternion(R):
 
 
 @njit(cache=True)
-def turned(quaternion, rotation_vector):
-    """The quaternion of the attitude ``quaternion`` turned by ``rotation_vector``
-    (world frame), sign as rotation_quaternion gives it."""
+def turned(quaternion: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
+    """An attitude turned by a rotation vector in the world frame.
+
+    Args:
+        quaternion: The attitude (w, x, y, z).
+        rotation_vector: The turn, axis times angle (3) [rad], in the world frame.
+
+    Returns:
+        The turned attitude's quaternion (w, x, y, z), sign as
+            rotation_quaternion gives it."""
     angle = np.sqrt(np.sum(rotation_vector * rotation_vector))
     R = quaternion_rotation(quaternion)
     if angle > 0:
@@ -61,12 +82,28 @@ def turned(quaternion, rotation_vector):
 
 
 @njit(cache=True)
-def reference_rates(D, D_dot, r, r_dot, xi, xi_dot, damping):
-    """nu = D^+ r + (I - D^+ D) xi, D^+ = D^T G^-1, G = D D^T + mu^2 I
+def reference_rates(D: np.ndarray, D_dot: np.ndarray, r: np.ndarray, r_dot: np.ndarray,
+                    xi: np.ndarray, xi_dot: np.ndarray, damping: float
+                    ) -> Tuple[np.ndarray, np.ndarray]:
+    """The reference joint rates nu and their rate.
+
+    nu = D^+ r + (I - D^+ D) xi, D^+ = D^T G^-1, G = D D^T + mu^2 I
     (tasks.attitude.reference_rates with r = omega_d - Lambda e), and its rate
 
         nu_dot = dD^+ (r - D xi) + D^+ (r_dot - D_dot xi - D xi_dot) + xi_dot,
-        dD^+ = D_dot^T G^-1 - D^T G^-1 (D_dot D^T + D D_dot^T) G^-1."""
+        dD^+ = D_dot^T G^-1 - D^T G^-1 (D_dot D^T + D D_dot^T) G^-1.
+
+    Args:
+        D: The task Jacobian (3 x n).
+        D_dot: Its rate along the motion (3 x n).
+        r: The task rate asked for, omega_d - Lambda e (3) [rad/s].
+        r_dot: Its rate (3) [rad/s^2].
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate (n) [rad/s^2].
+        damping: The damped pseudo-inverse's mu.
+
+    Returns:
+        (nu, nu_dot) (n each)."""
     G = matmul(D, D.T)
     for i in range(3):
         G[i, i] += damping * damping
@@ -84,9 +121,20 @@ def reference_rates(D, D_dot, r, r_dot, xi, xi_dot, damping):
 
 
 @njit(cache=True)
-def desired_attitude(R_d0, axis, amplitude, omega, t):
-    """(R_d(t), omega_d(t), omega_d_dot(t)) of scenario.AttitudeReference.At
-    (``axis`` unit, ``omega`` = 2 pi / period)."""
+def desired_attitude(R_d0: np.ndarray, axis: np.ndarray, amplitude: float, omega: float,
+                     t: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The reference attitude of scenario.AttitudeReference.At and its rates.
+
+    Args:
+        R_d0: The reference's starting attitude (3 x 3).
+        axis: The unit axis of the oscillation, in R_d0's frame (3).
+        amplitude: The oscillation's amplitude [rad].
+        omega: Its angular frequency 2 pi / period [rad/s].
+        t: The time [s].
+
+    Returns:
+        (R_d(t) (3 x 3), omega_d(t) (3) [rad/s], omega_d_dot(t) (3) [rad/s^2]),
+            the rates in the world frame."""
     phi = amplitude * np.sin(omega * t)
     phi_dot = amplitude * omega * np.cos(omega * t)
     phi_ddot = -omega * omega * phi
@@ -95,12 +143,17 @@ def desired_attitude(R_d0, axis, amplitude, omega, t):
 
 
 @njit(cache=True)
-def task_rates(base_subspace, parent, joint, joint_below, evaluation, qdot, quaternion,
-               omega_base, t, reference, end_effector, xi, xi_dot, Lambda, damping):
-    """(nu, nu_dot, e, R_d) at a configuration whose compiled model ``evaluation``
-    (FloatingBaseModel.Evaluate with derivatives: M, dM, A, dA, X, S) is given, the
-    base's attitude ``quaternion`` and time t; nu_dot is the exact rate along the
-    motion (joints at qdot, the base turning at ``omega_base``, the reference at t):
+def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+               joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+               quaternion: np.ndarray, omega_base: np.ndarray, t: float,
+               reference: tuple, end_effector: tuple, xi: np.ndarray,
+               xi_dot: np.ndarray, Lambda: float, damping: float
+               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The reference joint rates, their exact rate and the attitude error.
+
+    At a configuration whose compiled model ``evaluation`` is given; nu_dot is the
+    exact rate along the motion (joints at qdot, the base turning at
+    ``omega_base``, the reference at t):
 
         D = R_WB D_B,  D_B = sum over the end effector's joints of a_j e_j^T - S_b A
         D_dot = [omega_b]x D + R_WB (sum_j (w_j x a_j) e_j^T - S_b A_dot),
@@ -109,9 +162,30 @@ def task_rates(base_subspace, parent, joint, joint_below, evaluation, qdot, quat
 
     (a_j joint j's axis in the base frame, (eta, epsilon) the quaternion of
     R_err = R_WE R_d^T, omega_E = omega_b + R_WB sum_j a_j qdot_j the end
-    effector's angular velocity). ``reference``: (R_d0, unit axis, amplitude,
-    2 pi / period); ``end_effector``: (node, R_CE, its frame's rotation in the
-    node's body); ``xi_dot`` the rate of the secondary motion xi."""
+    effector's angular velocity).
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        joint_below: True where joint k moves joint j's axis, j != k (n, n).
+        evaluation: The compiled model at the configuration
+            (FloatingBaseModel.Evaluate with derivatives: M, dM, A, dA, X, S).
+        qdot: The joint rates (n) [rad/s].
+        quaternion: The base's attitude (w, x, y, z).
+        omega_base: The base's angular velocity omega_b (3) [rad/s], world frame.
+        t: The time [s].
+        reference: (R_d0, unit axis, amplitude, 2 pi / period) (desired_attitude).
+        end_effector: (node, R_CE): the end effector's node and its frame's
+            rotation in the node's body.
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate (n) [rad/s^2].
+        Lambda: The attitude error's gain Lambda [1/s].
+        damping: The damped pseudo-inverse's mu (reference_rates).
+
+    Returns:
+        (nu (n), nu_dot (n), e (3), R_d (3 x 3))."""
     A, dA, X, S = evaluation[2], evaluation[3], evaluation[4], evaluation[5]
     n, nb = qdot.shape[0], base_subspace.shape[1]
     node, R_CE = end_effector
@@ -158,14 +232,33 @@ def task_rates(base_subspace, parent, joint, joint_below, evaluation, qdot, quat
 
 
 @njit(cache=True)
-def attitude_update(tree, q, qdot, quaternion, omega_base, t, reference,
-                    end_effector, xi, xi_dot, gains, chi, excitation):
-    """One AttitudeController update (its docstring states the law) from the
-    compiled model at q (kernels.spatial.reduced_model with derivatives; ``tree``:
-    FloatingBaseModel.kernel_tree): nu, nu_dot and e there (task_rates), xi the secondary motion and xi_dot its rate along the motion,
-    ``gains`` = (Lambda, task_damping, damping_rate, epsilon, boundary_rate),
-    ``excitation`` = (amplitude, 2 pi f_1, ..., 2 pi f_n). Returns (tau, M, C',
-    [e, |e|, ||s||, V], the quaternion of R_d)."""
+def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np.ndarray,
+                    omega_base: np.ndarray, t: float, reference: tuple,
+                    end_effector: tuple, xi: np.ndarray, xi_dot: np.ndarray,
+                    gains: np.ndarray, chi: float, excitation: np.ndarray) -> tuple:
+    """One AttitudeController update (its docstring states the law).
+
+    From the compiled model at q (kernels.spatial.reduced_model with derivatives):
+    nu, nu_dot and e there (task_rates).
+
+    Args:
+        tree: The model's kernel arguments (FloatingBaseModel.kernel_tree).
+        q: The joint angles (n) [rad].
+        qdot: The joint rates (n) [rad/s].
+        quaternion: The base's attitude (w, x, y, z).
+        omega_base: The base's angular velocity (3) [rad/s], world frame.
+        t: The time [s].
+        reference: (R_d0, unit axis, amplitude, 2 pi / period) (desired_attitude).
+        end_effector: (node, R_CE) (task_rates).
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate along the motion (n) [rad/s^2].
+        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate).
+        chi: The robust term's gain chi (input ``chi``: in DAC the RHS loop's
+            bound on ||e_tau||) [N m].
+        excitation: (amplitude, 2 pi f_1, ..., 2 pi f_n) of tau_pe.
+
+    Returns:
+        (tau, M, C', [e, |e|, ||s||, V], the quaternion of R_d)."""
     base_subspace, parent, joint, joint_below = tree[0], tree[1], tree[2], tree[7]
     evaluation = reduced_model(tree[0], tree[1], tree[2], tree[3], tree[4], tree[5],
                                tree[6], tree[7], tree[8], tree[9], tree[10], q, True)

@@ -27,10 +27,37 @@ PER_BODY = 10           # inertial_parameters.PER_BODY: [m, h (3), I (6)] per bo
 
 
 @njit(cache=True)
-def momentum_regressor(base_subspace, parent, joint, X_PF, axis, X_MC, below, nodes,
-                       base_pose, base_velocity, q, qdot):
-    """Y (6 x 10 bodies) with [L about the world origin; P] = Y pi at the state
-    (inertial_parameters.InertialParameters.MomentumRegressor, compiled)."""
+def momentum_regressor(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                       X_PF: np.ndarray, axis: np.ndarray, X_MC: np.ndarray,
+                       below: np.ndarray, nodes: np.ndarray, base_pose: np.ndarray,
+                       base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
+                       ) -> np.ndarray:
+    """The momentum regressor Y at the state: [L about the world origin; P] = Y pi.
+
+    inertial_parameters.InertialParameters.MomentumRegressor, compiled.
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
+            [m].
+        axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        nodes: The node of each body that carries parameters (bodies,), in
+            InertialParameters.bodies order (InertialParameters.Nodes).
+        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
+            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base joint's velocities in the world: a planar
+            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
+        q: The joint angles (n) [rad].
+        qdot: The joint rates (n) [rad/s].
+
+    Returns:
+        Y (6 x 10 bodies)."""
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     R_WB, p_WB, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
     Y = np.zeros((6, PER_BODY * nodes.shape[0]))
@@ -99,10 +126,41 @@ def _body_block(Y, c, R, o, omega, v):
 
 
 @njit(cache=True)
-def add_momentum_information(base_subspace, parent, joint, X_PFs, axes, X_MCs, below,
-                             nodes, base_poses, base_velocities, q, qdot, information):
-    """information[i] += vec(Y_i^T Y_i) for every trial i (momentum_regressor at
-    its row of base_poses, base_velocities, q, qdot, on its tree), in place."""
+def add_momentum_information(base_subspace: np.ndarray, parent: np.ndarray,
+                             joint: np.ndarray, X_PFs: np.ndarray, axes: np.ndarray,
+                             X_MCs: np.ndarray, below: np.ndarray, nodes: np.ndarray,
+                             base_poses: np.ndarray, base_velocities: np.ndarray,
+                             q: np.ndarray, qdot: np.ndarray,
+                             information: np.ndarray) -> None:
+    """information[i] += vec(Y_i^T Y_i) for every trial i, in place.
+
+    Y_i is momentum_regressor at its row of base_poses, base_velocities, q, qdot,
+    on its tree.
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PFs: Each trial's X_PF, each inboard joint's frame F in its parent body's
+            frame (trials, nodes, 4, 4) [m].
+        axes: Each trial's axis, each joint's unit axis in its frame F
+            (trials, nodes, 3) (zero for a weld).
+        X_MCs: Each trial's X_MC, each body's frame C in its joint's moving frame M
+            (trials, nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        nodes: The node of each body that carries parameters (bodies,), in
+            InertialParameters.bodies order (InertialParameters.Nodes).
+        base_poses: Each trial's base joint positions (trials, base positions)
+            (momentum_regressor's base_pose).
+        base_velocities: Each trial's base joint velocities in the world
+            (trials, nb) (momentum_regressor's base_velocity).
+        q: Each trial's joint angles (trials, n) [rad].
+        qdot: Each trial's joint rates (trials, n) [rad/s].
+        information: Each trial's information, vec(sum Y^T Y) row-major
+            (trials, size * size), size = 10 bodies; added to in place.
+    """
     size = PER_BODY * nodes.shape[0]
     for i in range(q.shape[0]):
         Y = momentum_regressor(base_subspace, parent, joint, X_PFs[i], axes[i], X_MCs[i],
@@ -117,12 +175,45 @@ def add_momentum_information(base_subspace, parent, joint, X_PFs, axes, X_MCs, b
 
 
 @njit(cache=True)
-def reduced_mass_matrices(base_subspace, parent, joint, X_PFs, axes, X_MCs, below,
-                          joint_below, masses, moments, inertias, nodes, pis, q):
-    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm of every trial i with its parameter-
-    carrying bodies at pis[i] and the other nodes at masses[i], moments[i],
-    inertias[i] (spatial.reduced_model; non-finite where H_bb is not positive
-    definite)."""
+def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
+                          joint: np.ndarray, X_PFs: np.ndarray, axes: np.ndarray,
+                          X_MCs: np.ndarray, below: np.ndarray, joint_below: np.ndarray,
+                          masses: np.ndarray, moments: np.ndarray, inertias: np.ndarray,
+                          nodes: np.ndarray, pis: np.ndarray, q: np.ndarray
+                          ) -> np.ndarray:
+    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm of every trial i.
+
+    Trial i's parameter-carrying bodies are at pis[i] and the other nodes at
+    masses[i], moments[i], inertias[i] (spatial.reduced_model).
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PFs: Each trial's X_PF, each inboard joint's frame F in its parent body's
+            frame (trials, nodes, 4, 4) [m].
+        axes: Each trial's axis, each joint's unit axis in its frame F
+            (trials, nodes, 3) (zero for a weld).
+        X_MCs: Each trial's X_MC, each body's frame C in its joint's moving frame M
+            (trials, nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        joint_below: True where joint k moves joint j's axis, j != k (n, n).
+        masses: Each trial's bodies' masses (trials, nodes) [kg] (KinematicTree.Inertias;
+            those of the nodes in ``nodes`` are replaced).
+        moments: Each trial's bodies' first moments m c about their origins, in
+            their frames (trials, nodes, 3) [kg m].
+        inertias: Each trial's bodies' rotational inertias about their origins,
+            in their frames (trials, nodes, 3, 3) [kg m^2].
+        nodes: The node of each body that carries parameters (bodies,), in
+            InertialParameters.bodies order (InertialParameters.Nodes).
+        pis: Each trial's inertial parameters (trials, 10 bodies), the
+            InertialParameters layout.
+        q: Each trial's joint angles (trials, n) [rad].
+
+    Returns:
+        M (trials, n, n), non-finite where H_bb is not positive definite."""
     trials, n = q.shape[0], q.shape[1]
     out = np.empty((trials, n, n))
     for i in range(trials):

@@ -5,6 +5,8 @@ weight (rows x columns, row-major) then its bias), evaluated as
 
     h_B = tanh-MLP_B(X), h_D = tanh-MLP_D(X),  X = (q, p / p_scale)
     B_hat = F o mat(W_B h_B + b_B),  D_hat = softplus(W_D h_D + b_D)."""
+from typing import Tuple
+
 import numpy as np
 from numba import njit
 
@@ -35,9 +37,26 @@ def _body(weights, offset, hidden, x, work):
 
 
 @njit(cache=True)
-def evaluate_networks(hidden, momentum_scale, weights, q, p, coupling):
-    """(B_hat (trials, n, n), D_hat (trials, n)) of trial i's network at
-    weights[i], its state (q[i], p[i]) and coupling scale F = coupling[i]."""
+def evaluate_networks(hidden: np.ndarray, momentum_scale: float, weights: np.ndarray,
+                      q: np.ndarray, p: np.ndarray, coupling: np.ndarray
+                      ) -> Tuple[np.ndarray, np.ndarray]:
+    """Every trial's B_hat and D_hat from its network.
+
+    Trial i's network at weights[i], its state (q[i], p[i]) and coupling scale
+    F = coupling[i].
+
+    Args:
+        hidden: The widths of the MLPs' hidden layers (layers,), int64 (both MLPs
+            alike).
+        momentum_scale: p_scale, the momentum's scale in the networks' input.
+        weights: Each trial's exported parameter vector (trials, size), in the
+            module docstring's order.
+        q: Each trial's joint angles (trials, n) [rad].
+        p: Each trial's momentum (trials, n).
+        coupling: Each trial's coupling scale F (trials, n, n).
+
+    Returns:
+        (B_hat (trials, n, n), D_hat (trials, n))."""
     trials, n = q.shape[0], q.shape[1]
     layers, widest = hidden.shape[0], 0
     for h in hidden:

@@ -1,5 +1,7 @@
 """The null-space potential U(q), grad U and Hess U qdot as one compiled kernel
 (reference: potential.BaseRepulsionPotential.Evaluate, which documents the model)."""
+from typing import Tuple
+
 import numpy as np
 from numba import njit
 
@@ -68,9 +70,21 @@ def _box_distance(P0, P1, half, g):
 
 
 @njit(cache=True)
-def min_clearance(q, geometry, link_of, fraction, radius):
-    """The smallest clearance rho_j = distance - radius[j] of the sample points
-    from the base (arguments as potential's)."""
+def min_clearance(q: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
+                  fraction: np.ndarray, radius: np.ndarray) -> float:
+    """The smallest clearance of the sample points from the base.
+
+    rho_j = distance - radius[j].
+
+    Args:
+        q: The joint angles (n) [rad].
+        geometry: (half base size, shoulder x, shoulder y, link lengths (n)) [m].
+        link_of: The link each sample point j lies on (points,).
+        fraction: How far along its link point j lies (points,), in link lengths.
+        radius: The half width of point j's link (points,) [m].
+
+    Returns:
+        min_j rho_j [m] (negative: a point inside the base)."""
     e, _, O, _ = _chain(q, np.zeros_like(q), geometry)
     lengths, g, smallest = geometry[3:], np.empty(2), np.inf
     for j in range(link_of.shape[0]):
@@ -83,11 +97,26 @@ def min_clearance(q, geometry, link_of, fraction, radius):
 
 
 @njit(cache=True)
-def potential(q, qdot, geometry, link_of, fraction, radius, gains):
-    """(U, grad U, Hess U qdot). ``geometry`` = [half base size, shoulder x,
-    shoulder y, link lengths (n)]; point j lies ``fraction[j]`` along link
-    ``link_of[j]`` with half width ``radius[j]``; ``gains`` = [base_gain,
-    base_margin, fold_gain, fold_margin]."""
+def potential(q: np.ndarray, qdot: np.ndarray, geometry: np.ndarray,
+              link_of: np.ndarray, fraction: np.ndarray, radius: np.ndarray,
+              gains: np.ndarray) -> Tuple[float, np.ndarray, np.ndarray]:
+    """The potential U, its gradient and its gradient's rate Hess U qdot.
+
+    Point j lies ``fraction[j]`` along link ``link_of[j]`` with half width
+    ``radius[j]`` (BaseRepulsionPotential.kernel_arguments).
+
+    Args:
+        q: The joint angles (n) [rad].
+        qdot: The joint rates (n) [rad/s].
+        geometry: (half base size, shoulder x, shoulder y, link lengths (n)) [m].
+        link_of: The link each sample point j lies on (points,).
+        fraction: How far along its link point j lies (points,), in link lengths.
+        radius: The half width of point j's link (points,) [m].
+        gains: (base_gain [J m^2], base_margin [m], fold_gain [J rad^2],
+            fold_margin [rad]) (scenario.Potential).
+
+    Returns:
+        (U [J], grad U (n), Hess U qdot (n))."""
     n = q.shape[0]
     lengths = geometry[3:]
     base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]

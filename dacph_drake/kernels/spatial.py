@@ -21,6 +21,8 @@ S_k x* (Ic_j S_j) when joint k moves joint j). The reduced model is then
 M = H_mm - H_bm^T A, A = H_bb^-1 H_bm, with
 dM_k = dH_mm - dH_bm^T A - A^T dH_bm + A^T dH_bb A (docs/equations.md E5-E9), and
 C' the Christoffel form of dM (floating_model.FloatingBaseModel.Coriolis)."""
+from typing import Tuple
+
 import numpy as np
 from numba import njit
 
@@ -47,10 +49,26 @@ def _skew(v):
 
 
 @njit(cache=True)
-def forward_kinematics(parent, joint, X_PF, axis, X_MC, q):
-    """(X_WC (nodes, 4, 4), S (n, 6)): every body's pose and every joint's motion
-    subspace, the base at the identity. The products are matmul's sums, written
-    into work arrays (no allocation per node)."""
+def forward_kinematics(parent: np.ndarray, joint: np.ndarray, X_PF: np.ndarray,
+                       axis: np.ndarray, X_MC: np.ndarray, q: np.ndarray
+                       ) -> Tuple[np.ndarray, np.ndarray]:
+    """Every body's pose and every joint's motion subspace, the base at the identity.
+
+    The products are matmul's sums, written into work arrays (no allocation per
+    node).
+
+    Args:
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
+            [m].
+        axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
+        q: The joint angles (n) [rad].
+
+    Returns:
+        (X_WC (nodes, 4, 4), S (n, 6)), S_j = (a_j; p_j x a_j) about the origin, in
+            world axes."""
     nodes, n = parent.shape[0], q.shape[0]
     X = np.empty((nodes, 4, 4))
     S = np.zeros((n, 6))
@@ -166,12 +184,40 @@ def _motion_cross_matrix(a, out):
 
 
 @njit(cache=True)
-def mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis, X_MC, below,
-                                joint_below, mass, moment, inertia, q, derivatives):
-    """(H (nb + n)^2, dH (n, nb + n, nb + n), X (nodes, 4, 4), S (n, 6)): the
-    plant's mass matrix in (base; joints) order at the base's identity pose, its
-    derivatives by q (zero unless ``derivatives``), the bodies' poses and the
-    joints' motion subspaces."""
+def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
+                                joint: np.ndarray, X_PF: np.ndarray, axis: np.ndarray,
+                                X_MC: np.ndarray, below: np.ndarray,
+                                joint_below: np.ndarray, mass: np.ndarray,
+                                moment: np.ndarray, inertia: np.ndarray, q: np.ndarray,
+                                derivatives: bool
+                                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
+                                           np.ndarray]:
+    """The plant's mass matrix at the base's identity pose, and its derivatives.
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
+            [m].
+        axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        joint_below: True where joint k moves joint j's axis, j != k (n, n).
+        mass: Each body's mass (nodes,) [kg] (zero: a massless body).
+        moment: Each body's first moment m c about its origin, in its frame
+            (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame
+            (nodes, 3, 3) [kg m^2].
+        q: The joint angles (n) [rad].
+        derivatives: Whether to compute dH (zero otherwise).
+
+    Returns:
+        (H (nb + n)^2, dH (n, nb + n, nb + n), X (nodes, 4, 4), S (n, 6)), the
+            plant's mass matrix in (base; joints) order, its derivatives by q
+            (dH[k] = dH/dq_k), the bodies' poses and the joints' motion subspaces."""
     n, nodes, nb = q.shape[0], parent.shape[0], base_subspace.shape[1]
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     I = _spatial_inertias(X, mass, moment, inertia)
@@ -281,12 +327,38 @@ def _cholesky_solve(A, B):
 
 
 @njit(cache=True)
-def reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_below,
-                  mass, moment, inertia, q, derivatives=True):
-    """(M, dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S): the
-    reduced model and what the Jacobians and their rates need, with
-    dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A) (dM, dA zero unless
-    ``derivatives``)."""
+def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                  X_PF: np.ndarray, axis: np.ndarray, X_MC: np.ndarray,
+                  below: np.ndarray, joint_below: np.ndarray, mass: np.ndarray,
+                  moment: np.ndarray, inertia: np.ndarray, q: np.ndarray,
+                  derivatives: bool = True) -> tuple:
+    """The reduced model and what the Jacobians and their rates need.
+
+    dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A).
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
+            [m].
+        axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        joint_below: True where joint k moves joint j's axis, j != k (n, n).
+        mass: Each body's mass (nodes,) [kg] (zero: a massless body).
+        moment: Each body's first moment m c about its origin, in its frame
+            (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame
+            (nodes, 3, 3) [kg m^2].
+        q: The joint angles (n) [rad].
+        derivatives: Whether to compute dM and dA (zero otherwise).
+
+    Returns:
+        (M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n),
+            X (nodes, 4, 4), S (n, 6)), X and S as forward_kinematics gives them."""
     n, nb = q.shape[0], base_subspace.shape[1]
     H, dH, X, S = mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis,
                                               X_MC, below, joint_below, mass, moment,
@@ -319,8 +391,15 @@ def reduced_model(base_subspace, parent, joint, X_PF, axis, X_MC, below, joint_b
 
 
 @njit(cache=True)
-def christoffel(dM, qdot):
-    """C'(q, qdot)_ij = sum_k (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qdot_k / 2."""
+def christoffel(dM: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+    """C'(q, qdot)_ij = sum_k (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qdot_k / 2.
+
+    Args:
+        dM: dM[k] = dM/dq_k (n, n, n).
+        qdot: The joint rates (n) [rad/s].
+
+    Returns:
+        C' (n, n)."""
     n = qdot.shape[0]
     C = np.zeros((n, n))
     for i in range(n):
@@ -333,9 +412,27 @@ def christoffel(dM, qdot):
 
 
 @njit(cache=True)
-def point_jacobian(base_subspace, parent, joint, X, S, A, node, p_W):
-    """J_bar (6, n) of the point p_W (world, the base at the identity) fixed in the
-    body ``node``: (omega; v) of the point = J_bar qdot at zero momentum."""
+def point_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                   X: np.ndarray, S: np.ndarray, A: np.ndarray, node: int,
+                   p_W: np.ndarray) -> np.ndarray:
+    """The generalized Jacobian J_bar of a point fixed in a body.
+
+    (omega; v) of the point = J_bar qdot at zero momentum.
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X: The bodies' poses (nodes, 4, 4) (forward_kinematics; unused here).
+        S: The joints' motion subspaces (n, 6) (forward_kinematics).
+        A: H_bb^-1 H_bm (nb, n) (reduced_model).
+        node: The body's node.
+        p_W: The point (3) [m], in the world, the base at the identity.
+
+    Returns:
+        J_bar (6, n)."""
     n, nb = S.shape[0], base_subspace.shape[1]
     J = np.zeros((6, nb + n))
     J[:, :nb] = base_subspace
@@ -353,12 +450,25 @@ def point_jacobian(base_subspace, parent, joint, X, S, A, node, p_W):
 
 
 @njit(cache=True)
-def base_pose_and_twist(base_subspace, base_pose, base_velocity):
-    """(R_WB, p_WB, omega_B, v_B): the base's pose and its twist in its own axes,
-    from its joint's positions and velocities: a planar joint's (x, y, theta) and
-    (vx, vy, omega) in the world, or a quaternion floating joint's
-    (qw, qx, qy, qz, x, y, z) and (omega, v) in the world (the quaternion
-    normalized, as Drake's RotationMatrix does)."""
+def base_pose_and_twist(base_subspace: np.ndarray, base_pose: np.ndarray,
+                        base_velocity: np.ndarray
+                        ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The base's pose and its twist in its own axes, from its joint's coordinates.
+
+    A planar joint's (x, y, theta) and (vx, vy, omega) in the world, or a
+    quaternion floating joint's (qw, qx, qy, qz, x, y, z) and (omega, v) in the
+    world (the quaternion normalized, as Drake's RotationMatrix does).
+
+    Args:
+        base_subspace: S_b (6, nb): its number of columns tells a planar base (3)
+            from a free one (6).
+        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
+            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base joint's velocities in the world: a planar
+            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
+
+    Returns:
+        (R_WB (3, 3), p_WB (3) [m], omega_B (3) [rad/s], v_B (3) [m/s])."""
     R, p = np.zeros((3, 3)), np.zeros(3)
     omega_W, v_W = np.zeros(3), np.zeros(3)
     if base_subspace.shape[1] == 3:
@@ -389,10 +499,23 @@ def base_pose_and_twist(base_subspace, base_pose, base_velocity):
 
 
 @njit(cache=True)
-def body_twist_into(V, omega_B, v_B, S, qdot, below, node):
-    """V = (omega; v_O) of body ``node``: the base's twist (omega_B; v_B) plus
-    S_k qdot_k of every joint k that moves it (about the base's origin, in its
-    axes)."""
+def body_twist_into(V: np.ndarray, omega_B: np.ndarray, v_B: np.ndarray,
+                    S: np.ndarray, qdot: np.ndarray, below: np.ndarray,
+                    node: int) -> None:
+    """V = (omega; v_O) of a body, written into V.
+
+    The base's twist (omega_B; v_B) plus S_k qdot_k of every joint k that moves it
+    (about the base's origin, in its axes).
+
+    Args:
+        V: The output (6), overwritten.
+        omega_B: The base's angular velocity in its axes (3) [rad/s].
+        v_B: The velocity of the base's origin in its axes (3) [m/s].
+        S: The joints' motion subspaces (n, 6) (forward_kinematics).
+        qdot: The joint rates (n) [rad/s].
+        below: True where joint k moves the node (n, nodes).
+        node: The body's node.
+    """
     for r in range(3):
         V[r], V[3 + r] = omega_B[r], v_B[r]
     for k in range(qdot.shape[0]):
@@ -402,9 +525,13 @@ def body_twist_into(V, omega_B, v_B, S, qdot, below, node):
 
 
 @njit(cache=True)
-def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
-                   moment, inertia, base_pose, base_velocity, q, qdot):
-    """p (n): the joint rows of H(q) v,
+def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                   X_PF: np.ndarray, axis: np.ndarray, X_MC: np.ndarray,
+                   below: np.ndarray, mass: np.ndarray, moment: np.ndarray,
+                   inertia: np.ndarray, base_pose: np.ndarray,
+                   base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
+                   ) -> np.ndarray:
+    """p (n), the joint rows of H(q) v.
 
         p_j = S_j . sum_{bodies C joint j moves} h_C,   h_C = (L_C; P_C),
         V_C = (omega; v_O) = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
@@ -413,7 +540,33 @@ def joint_momentum(base_subspace, parent, joint, X_PF, axis, X_MC, below, mass,
     (c the body's centre of mass, I_c its inertia about it in its own axes, R its
     orientation), everything about the base's origin in its axes (the base at
     the identity: p does not depend on the base's pose, only on its twist in its
-    own axes). Scalar loops: no allocation per body."""
+    own axes). Scalar loops: no allocation per body.
+
+    Args:
+        base_subspace: S_b, the base velocities' motion subspace (6, nb)
+            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
+            one).
+        parent: Each node's parent node (nodes,), -1 for the base (node 0).
+        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
+            [m].
+        axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
+        X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
+        below: True where joint k moves the node (n, nodes).
+        mass: Each body's mass (nodes,) [kg] (zero: a massless body).
+        moment: Each body's first moment m c about its origin, in its frame
+            (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame
+            (nodes, 3, 3) [kg m^2].
+        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
+            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base joint's velocities in the world: a planar
+            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
+        q: The joint angles (n) [rad].
+        qdot: The joint rates (n) [rad/s].
+
+    Returns:
+        p (n)."""
     n, nodes = q.shape[0], parent.shape[0]
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     _, _, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)

@@ -17,8 +17,8 @@ def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
 
     Yields:
         A temporary path beside ``path`` to write, its name + ".<pid>.tmp" (so that
-        writers in several processes, such as `dacph reproduce --jobs 3` saving the
-        one scenario.yaml of a run directory, never share one)."""
+            writers in several processes, such as `dacph reproduce --jobs 3` saving the
+            one scenario.yaml of a run directory, never share one)."""
     path = Path(path)
     temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
     yield temporary

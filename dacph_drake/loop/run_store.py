@@ -67,7 +67,7 @@ def scenario_fingerprints(scenario: Scenario) -> List[str]:
 
     Returns:
         scenario_fingerprint's, then those of the older layouts
-        (scenario_files.saved_forms)."""
+            (scenario_files.saved_forms)."""
     return [hashlib.sha256(text.encode()).hexdigest()[:16]
             for text in saved_forms(scenario)]
 

@@ -66,7 +66,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
 
     Returns:
         The run's RunResult: status ("ok", "diverged", "interrupted"), reason,
-        final time, wall time and logs.
+            final time, wall time and logs.
 
     Raises:
         ConfigError: A setting, the controller's name, the duration or out_dir is
@@ -306,7 +306,7 @@ def advance_in_chunks(simulator: Simulator, duration: float,
 
     Returns:
         Why the run stopped early (a RuntimeError of the simulation, such as a failed
-        callback, included), or "" when it reached ``duration``."""
+            callback, included), or "" when it reached ``duration``."""
     context = simulator.get_context()
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
     for k in range(1, chunks + 1):
@@ -361,8 +361,8 @@ def trial_logs(loop: ClosedLoop, logs: Dict[str, np.ndarray], coordinates: ArmCo
 
     Returns:
         Its logs: its plant state in the layout of a plant of its own (its Robot's
-        model's plant: [positions, velocities]) and its share of every stacked
-        signal."""
+            model's plant: [positions, velocities]) and its share of every stacked
+            signal."""
     nq, count = loop.plant.num_positions(), loop.trials
     kept = logs["time"] <= final_time
     solo = ArmCoordinates.FromPlant(loop.robots[trial].model.plant)

@@ -59,7 +59,43 @@ VectorDistribution = Union[(List[float], *VECTOR_TAGS.values(), float,
 
 @dataclass
 class Distributions:
-    """What each trial samples; None keeps the base scenario's value."""
+    """What each trial samples; None keeps the base scenario's value.
+
+    A per-link (or per-joint) setting takes a vector distribution with one entry per
+    link, a plain list, or a scalar distribution drawn for each link; the others a
+    scalar distribution (Drake's schema types, module docstring).
+
+    Attributes:
+        link_mass_scale: The ground truth's link mass and inertia, one factor per
+            link (planar arms only; the controllers keep nominal_robot).
+        link_length_scale: The ground truth's link length, com and width by f,
+            inertia by f^2, one factor per link (planar arms only).
+        link_inertia_scale: The ground truth's link inertia only, one factor per
+            link (planar arms only).
+        base_mass_scale: The ground truth's base mass and inertia (planar arms
+            only).
+        base_inertia_scale: The ground truth's base inertia only (planar arms
+            only).
+        delta_B_scale: The ground truth's B_linear, B_quadratic and B_q1_squared.
+        delta_D_scale: The ground truth's D_offset, D_linear and D_quadratic.
+        disturbance_scale: d(t)'s amplitude (disturbance.scale).
+        disturbance_frequency_scale: All of d's frequencies.
+        q0: The initial joint angles [rad], one per joint (replaces q0).
+        learner_seed: The scenario's seed: an integer >= 0, or !Deterministic or
+            !UniformDiscrete of such integers; None: the trial's own seed (see
+            trial_seed).
+        nominal_link_mass_scale: The controller's model error (the ground truth
+            keeps its robot): one factor per link on nominal_robot's link mass and
+            inertia (a spatial scenario: nominal_inertia_scale = [base, links...]).
+        nominal_base_mass_scale: The controller's model error: one factor on the
+            nominal base's mass and inertia.
+        actuator_gain_log10: x_j, one per joint: B~'s row j times 10^x_j
+            (uncertainty.B_scale).
+        fault_time: One actuator fault: from fault_time [s] on, joint fault_joint
+            (1-based) delivers fault_gain times its torque (uncertainty.faults; the
+            three go together: all or none).
+        fault_joint: The fault's joint (1-based, rounded to an integer).
+        fault_gain: The fault's factor on the joint's torque."""
     # Ground-truth robot (the controllers keep nominal_robot), one factor per link:
     link_mass_scale: Optional[VectorDistribution] = None     # mass and inertia
     link_length_scale: Optional[VectorDistribution] = None   # length, com, width by f,
@@ -92,6 +128,20 @@ class Distributions:
 
 @dataclass
 class Sweep:
+    """A sweep file's settings.
+
+    Attributes:
+        scenario: The base scenario, a built-in name (BUILT_IN_SCENARIOS: paper,
+            short, satellite_6dof, satellite_3dof) or a YAML path relative to the
+            sweep file.
+        trials: The number of trials, in [1, 10^6].
+        seed: The sweep's seed, an integer in [0, 2^32 - 1] (trial_seed).
+        controllers: The controllers run on each sample, one or more of
+            controllers.NAMES, each at most once.
+        distributions: What each trial samples (Distributions).
+        save_logs: Whether each run's logs are also written under OUT/logs/.
+        batch_size: Trials per diagram, in [0, 4096] (runner.batch_size_for; 0:
+            chosen by measurement); no trial's row depends on it."""
     scenario: str = "short"     # built-in name (paper, short) or YAML path, relative
     #                             to the sweep file
     trials: int = 10
@@ -105,21 +155,35 @@ class Sweep:
 
 @dataclass
 class SweepDefinition:
-    """A loaded, validated sweep with its base scenario."""
+    """A loaded, validated sweep with its base scenario.
+
+    Attributes:
+        sweep: The sweep file's settings.
+        scenario: The base scenario.
+        source: The sweep file.
+        text: The sweep file as written."""
     sweep: Sweep
     scenario: Scenario          # the base scenario
     source: Path                # the sweep file
     text: str                   # the sweep file as written
 
     def fingerprint(self) -> str:
-        """sha256 of the normalized sweep and base scenario: two definitions with the
-        same fingerprint sample and run the same trials."""
+        """The sha256 of the normalized sweep and base scenario.
+
+        Two definitions with the same fingerprint sample and run the same trials.
+
+        Returns:
+            The hex digest."""
         return self.fingerprints()[0]
 
     def fingerprints(self) -> List[str]:
-        """fingerprint() and the fingerprints of the same settings in the older
-        scenario layouts a saved sweep may come from (scenario.saved_forms);
-        batch_size is not part of them: it changes no trial's row."""
+        """The fingerprints a saved sweep of these settings may have.
+
+        batch_size is not part of them: it changes no trial's row.
+
+        Returns:
+            The fingerprint() and those of the same settings in the older
+                scenario layouts a saved sweep may come from (scenario.saved_forms)."""
         sweep = "".join(line for line in yaml_dump_typed(self.sweep).splitlines(True)
                         if not line.startswith("batch_size:"))
         return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
@@ -128,15 +192,31 @@ class SweepDefinition:
 
 @dataclass
 class TrialSample:
+    """One trial's sample.
+
+    Attributes:
+        trial: The trial id.
+        seed: The trial's seed (trial_seed).
+        scenario: The base scenario with the sample applied.
+        sampled: Setting -> its sampled value (a float, a list of floats, or an
+            int)."""
     trial: int
     seed: int
     scenario: Scenario               # the base scenario with the sample applied
     sampled: Dict[str, object]       # setting -> float, list of floats, or int
 
 
-def load_sweep(path) -> SweepDefinition:
-    """Loads and validates a sweep file; every error names the setting and what is
-    allowed."""
+def load_sweep(path: Union[str, Path]) -> SweepDefinition:
+    """Loads and validates a sweep file.
+
+    Args:
+        path: The sweep file.
+
+    Returns:
+        The sweep with its base scenario.
+
+    Raises:
+        ConfigError: Naming the invalid setting and what is allowed."""
     path = Path(path)
     try:
         raw = yaml_load(filename=str(path))
@@ -308,15 +388,32 @@ def _numbers_of(value) -> List[float]:
 
 
 def trial_seed(sweep_seed: int, trial: int) -> int:
-    """The seed of one trial, derived from (sweep seed, trial id) only (numpy's
-    SeedSequence): the sample and, unless learner_seed is sampled, the learner's
-    initialization and the observer's noise."""
+    """The seed of one trial, derived from (sweep seed, trial id) only.
+
+    numpy's SeedSequence; it seeds the sample and, unless learner_seed is sampled,
+    the learner's initialization and the observer's noise.
+
+    Args:
+        sweep_seed: The sweep's seed.
+        trial: The trial id.
+
+    Returns:
+        The seed, in [0, 2^32 - 1]."""
     return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0])
 
 
 def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
-    """The trial's scenario: the base scenario with every distribution sampled, in
-    the order of the Distributions fields, from a generator seeded by trial_seed."""
+    """Samples one trial's scenario.
+
+    The base scenario with every distribution sampled, in the order of the
+    Distributions fields, from a generator seeded by trial_seed.
+
+    Args:
+        definition: The sweep.
+        trial: The trial id.
+
+    Returns:
+        The trial's sample and scenario."""
     seed = trial_seed(definition.sweep.seed, trial)
     generator = RandomGenerator(seed)
     d = definition.sweep.distributions
@@ -348,9 +445,18 @@ def _sample_vector(value, n: int, generator: RandomGenerator) -> List[float]:
 
 
 def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scenario:
-    """A copy of ``base`` with the sampled settings applied (see the module's
-    docstring for what each one changes); scenario.seed = learner_seed if sampled,
-    else ``seed``."""
+    """Applies sampled settings to a copy of a scenario.
+
+    See the module's docstring for what each one changes.
+
+    Args:
+        base: The base scenario (left as it is).
+        sampled: Setting -> its sampled value (TrialSample.sampled).
+        seed: The trial's seed: scenario.seed = learner_seed if sampled, else
+            ``seed``.
+
+    Returns:
+        The copy with the sampled settings applied."""
     s = copy.deepcopy(base)
     s.robot.ApplyRobotSample(sampled)
     u = s.uncertainty

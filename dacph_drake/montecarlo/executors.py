@@ -24,7 +24,7 @@ class InProcessExecutor(Executor):
         Args:
             fn: The function.
             *args: Its positional arguments.
-            **kwargs: Its keyword arguments.
+            kwargs: Its keyword arguments.
 
         Returns:
             Its finished Future (its result or its exception)."""
@@ -101,7 +101,11 @@ def dask_executor(address: str, workers: Optional[int] = None
         workers: The LocalCluster's worker processes (default: one per core).
 
     Yields:
-        (the executor, the number of worker slots)."""
+        (the executor, the number of worker slots).
+
+    Raises:
+        ConfigError: Dask is not installed, or the cluster has no workers or
+            workers with several threads."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as e:

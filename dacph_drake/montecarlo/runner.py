@@ -88,7 +88,7 @@ def batch_size_for(definition: SweepDefinition) -> int:
 
     Returns:
         Its batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a planar
-        arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
+            arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
     from dacph_drake.scenario import PlanarArm
     if definition.sweep.batch_size > 0:
         return definition.sweep.batch_size

@@ -36,7 +36,10 @@ def read_rows(out_dir: Union[str, Path]) -> Dict[int, Dict]:
         out_dir: The sweep's directory (its rows.jsonl).
 
     Returns:
-        Trial id -> row of every complete line."""
+        Trial id -> row of every complete line.
+
+    Raises:
+        ConfigError: A complete line is not a JSON row, or a trial appears twice."""
     rows, _ = _parse_rows(Path(out_dir) / ROWS)
     return rows
 
@@ -91,7 +94,11 @@ class RowStore:
         out_dir: The directory.
         definition: The sweep (a directory holding another sweep is refused).
         versions: The library versions of the session (run_store.versions).
-        executor: A label of the executor, for the manifest."""
+        executor: A label of the executor, for the manifest.
+
+    Raises:
+        ConfigError: The directory is in use by another running sweep, holds
+            another sweep, or has rows but no manifest."""
 
     def __init__(self, out_dir: Union[str, Path], definition: SweepDefinition,
                  versions: Dict[str, str], executor: str):
@@ -134,7 +141,10 @@ class RowStore:
         _write_atomically(path, json.dumps(manifest, indent=2))
 
     def append(self, row: Dict) -> None:
-        """Persists one finished trial's row before returning."""
+        """Persists one finished trial's row before returning.
+
+        Args:
+            row: The trial's row (its "trial" entry the trial id)."""
         os.write(self._fd, (json.dumps(row, sort_keys=True) + "\n").encode())
         os.fsync(self._fd)
         self.rows[row["trial"]] = row

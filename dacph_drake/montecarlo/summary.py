@@ -4,7 +4,7 @@ rows as one flat table (Parquet); plots of the distributions and of a metric aga
 each sampled parameter."""
 import json
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Union
 
 import matplotlib
 
@@ -24,10 +24,16 @@ SENSITIVITY_METRIC = "tracking_error_rms"
 
 
 def flat_row(row: Dict) -> Dict:
-    """A row as one level of columns: trial, seed, status, reason, wall_time,
-    sampled.NAME (per-link settings: sampled.NAME[k]), CONTROLLER.status,
-    CONTROLLER.reason, CONTROLLER.final_time, CONTROLLER.wall_time,
-    CONTROLLER.METRIC."""
+    """A row as one level of columns.
+
+    Args:
+        row: A trial's row (rows.jsonl).
+
+    Returns:
+        Column -> value, the columns trial, seed, status, reason, wall_time,
+            sampled.NAME (per-link settings: sampled.NAME[k]), CONTROLLER.status,
+            CONTROLLER.reason, CONTROLLER.final_time, CONTROLLER.wall_time,
+            CONTROLLER.METRIC."""
     out = {k: row[k] for k in ("trial", "seed", "status", "reason", "wall_time")}
     for name, value in row["sampled"].items():
         if isinstance(value, list):
@@ -43,11 +49,23 @@ def flat_row(row: Dict) -> Dict:
 
 
 def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
-    """Success rates (a controller's: the fraction of finished trials in which it ran
+    """Summarizes a sweep's rows.
+
+    Success rates (a controller's: the fraction of finished trials in which it ran
     to the end), quantiles of each metric over its successful runs, and, when DAC and
     the model-based baseline both run, the paired comparison (metrics.comparison) on
     the trials where both succeeded: mean, median and a 95 % percentile-bootstrap
-    interval of the mean (resampling seeded with the sweep's seed)."""
+    interval of the mean (resampling seeded with the sweep's seed).
+
+    Args:
+        rows: The trials' rows, in trial order.
+        controllers: The controllers the sweep runs.
+        seed: The sweep's seed, for the bootstrap's resampling.
+
+    Returns:
+        The summary (summary.json's content; learning_summary under "learning"
+            with DAC, tracking_summary under "learning_in_tracking" with DAC and
+            dac-nominal)."""
     summary = {"trials": len(rows), "succeeded": sum(r["status"] == "ok" for r in rows),
                "controllers": {}, "paired": {},
                "failures": [{"trial": r["trial"], "reason": r["reason"]}
@@ -75,11 +93,19 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
 
 
 def learning_summary(rows: List[Dict]) -> Dict:
-    """Per phase, over the trials whose DAC run finished: how often the learned B and
+    """Summarizes how well DAC learned, per phase.
+
+    Per phase, over the trials whose DAC run finished: how often the learned B and
     D beat the nominal prior (learned / nominal error ratio <= 1), the ratios'
     median and 95 % quantile, and the share of samples whose B_hat the integrator
     rejected (the largest one, and how many trials exceed 5 %); with dac-nominal
-    runs, the median over trials of RMS e_tau with learning / without."""
+    runs, the median over trials of RMS e_tau with learning / without.
+
+    Args:
+        rows: The trials' rows.
+
+    Returns:
+        The number of trials and, per phase, those figures."""
     ok = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"]
     runs = [r["runs"]["dac"]["metrics"] for r in ok]
     nominal = [(r["runs"]["dac"]["metrics"], r["runs"]["dac-nominal"]["metrics"])
@@ -113,14 +139,22 @@ LARGE_ACTUATOR_ERROR = 2.0
 
 
 def tracking_summary(rows: List[Dict]) -> Dict:
-    """Over the trials where DAC ran to the end: how often it tracked better than
+    """Summarizes how often learning made DAC track better.
+
+    Over the trials where DAC ran to the end: how often it tracked better than
     dac-nominal, the same loop without learning (RMS tracking error over phases 2
     and 3, after the start-up transient that dominates phase 1 and is the same for
     both; a dac-nominal run that diverged counts as worse), in all of them and in
     those whose sampled actuator gains (actuator_gain_log10) are off by more than
     LARGE_ACTUATOR_ERROR on some joint, split by the direction of the largest
     error (weaker or stronger than the prior); and how many DAC runs did not
-    finish."""
+    finish.
+
+    Args:
+        rows: The trials' rows.
+
+    Returns:
+        Those counts and shares (None where no trial falls in the group)."""
     key = "tracking_error_rms_phases_2_3"
 
     def better(row) -> bool:
@@ -168,7 +202,13 @@ def _mean_interval(values, rng) -> Dict:
 
 
 def format_summary(summary: Dict) -> str:
-    """The summary as Markdown tables."""
+    """Formats a summary as Markdown tables.
+
+    Args:
+        summary: A summary (summarize).
+
+    Returns:
+        The Markdown text (summary.md)."""
     lines = [f"trials: {summary['trials']}, succeeded: {summary['succeeded']} "
              f"({100 * summary['success_rate']:.1f} %)"]
     lines += [f"{c}: ran to the end in {s['succeeded']} trials "
@@ -243,9 +283,22 @@ def _learning_rows(learning: Dict, scaled: str) -> List[str]:
     return rows
 
 
-def write_summary(out_dir, definition: SweepDefinition) -> Dict:
-    """From OUT/rows.jsonl: summary.json, summary.md, rows.parquet (with pyarrow)
-    and figures/. Returns the summary, with "parquet" saying where the table went."""
+def write_summary(out_dir: Union[str, Path], definition: SweepDefinition) -> Dict:
+    """Writes a sweep's summary files.
+
+    From OUT/rows.jsonl: summary.json, summary.md, rows.parquet (with pyarrow)
+    and figures/.
+
+    Args:
+        out_dir: The sweep's directory OUT.
+        definition: The sweep that created it.
+
+    Returns:
+        The summary, with "parquet" saying where the table went and "figures"
+            the figures' paths relative to OUT.
+
+    Raises:
+        ConfigError: The directory holds no sweep, or another sweep's."""
     out = Path(out_dir)
     read_manifest(out, definition)
     rows = sorted_rows(read_rows(out))
@@ -260,8 +313,14 @@ def write_summary(out_dir, definition: SweepDefinition) -> Dict:
 
 
 def write_parquet(flat: List[Dict], path: Path) -> str:
-    """Writes the flat rows to a Parquet file at ``path`` (pyarrow); returns a note
-    of what was written or why not."""
+    """Writes the flat rows to a Parquet file (pyarrow).
+
+    Args:
+        flat: The flat rows (flat_row).
+        path: The file to write.
+
+    Returns:
+        A note of what was written (the file's name) or why not."""
     try:
         import pyarrow
         import pyarrow.parquet
@@ -273,9 +332,19 @@ def write_parquet(flat: List[Dict], path: Path) -> str:
 
 
 def plot_sweep(flat: List[Dict], controllers: List[str], folder: Path) -> List[Path]:
-    """distributions.png: each plotted metric per controller (successful runs);
+    """Plots a sweep's metrics.
+
+    distributions.png: each plotted metric per controller (successful runs);
     sensitivity.png: SENSITIVITY_METRIC against each sampled parameter, failed
-    trials marked on the axis."""
+    trials marked on the axis.
+
+    Args:
+        flat: The flat rows (flat_row).
+        controllers: The controllers the sweep runs.
+        folder: The folder to write to (created if missing).
+
+    Returns:
+        The figures written."""
     folder.mkdir(parents=True, exist_ok=True)
     metrics = [m for m in PLOTTED_METRICS if any(f"{c}.{m}" in r for r in flat
                                                  for c in controllers)]

@@ -54,8 +54,8 @@ def run_trials(tasks: List[Trial]) -> List[Dict]:
 
     Returns:
         Each trial's row: trial, seed, sampled, status ("ok" or "failed"), reason,
-        wall_time in s (its share of the batch's) and runs (per controller: status
-        "ok", "diverged" or "error", reason, final_time, wall_time, metrics)."""
+            wall_time in s (its share of the batch's) and runs (per controller: status
+            "ok", "diverged" or "error", reason, final_time, wall_time, metrics)."""
     import torch
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()

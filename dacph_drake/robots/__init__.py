@@ -8,20 +8,38 @@ dispatches on them, returning an object with the Robot protocol below
 (loop.closed_loop), ``loop.simulate``, the metrics, the figures, ``dacph verify``
 and the animations use that protocol only."""
 import importlib
+from pathlib import Path
 from typing import (TYPE_CHECKING, Callable, Dict, List, Optional, Protocol, Sequence,
-                    Tuple)
+                    Tuple, Union)
 
 import numpy as np
 
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.errors import ConfigError
 
-if TYPE_CHECKING:
-    from dacph_drake.scenario import Scenario
+if TYPE_CHECKING:       # type names only: importing robots loads no Drake module
+    from pydrake.geometry import Meshcat, SceneGraph
+    from pydrake.multibody.plant import MultibodyPlant
+    from pydrake.systems.framework import DiagramBuilder
+
+    from dacph_drake.analysis.verify import LhsSide
+    from dacph_drake.loop.closed_loop import ClosedLoop, ControllerBuilder
+    from dacph_drake.robots import viewers
+    from dacph_drake.scenario import Excitation, Scenario
+    from dacph_drake.systems.true_rhs import TrueRhsSystem
 
 
 class Robot(Protocol):
-    """A robot and its task, as the loop builder and the tools use it."""
+    """A robot and its task, as the loop builder and the tools use it.
+
+    Attributes:
+        scenario: The scenario.Scenario it was made from.
+        num_joints: The number of the arm's joints n.
+        model: The controller's model (its inertias nominal).
+        lhs_name: The LHS controller's system name.
+        lhs_log: The name of its log output.
+        task_panels: figures.make_panels' panels of this task.
+    """
     scenario: object                # the scenario.Scenario it was made from
     num_joints: int
     model: ReducedModel             # the controller's model (its inertias nominal)
@@ -30,55 +48,131 @@ class Robot(Protocol):
     task_panels: Tuple[str, ...]    # figures.make_panels' panels of this task
 
     @classmethod
-    def AddGroundTruth(cls, builder, trials: Sequence["Robot"]) -> Tuple[object, object]:
-        """Adds the ground-truth MultibodyPlant ("plant") of a batch of ``trials``
-        (each trial's Robot; one: a single run) and its SceneGraph."""
+    def AddGroundTruth(cls, builder: "DiagramBuilder", trials: Sequence["Robot"]
+                       ) -> Tuple["MultibodyPlant", "SceneGraph"]:
+        """Adds the ground-truth plant of a batch and its SceneGraph.
+
+        The plant is a MultibodyPlant named "plant".
+
+        Args:
+            builder: The closed loop's builder.
+            trials: Each trial's Robot (one: a single run).
+
+        Returns:
+            (plant, scene_graph)."""
 
     @classmethod
-    def MakeTrueRhs(cls, plant, trials: Sequence["Robot"]):
-        """The port's true RHS system of the ``trials`` for their ``plant`` (inputs
-        u, state, disturbance_model; outputs tau, true_matrices; stacked)."""
+    def MakeTrueRhs(cls, plant: "MultibodyPlant", trials: Sequence["Robot"]
+                    ) -> "TrueRhsSystem":
+        """Makes the port's true RHS system of a batch.
+
+        Args:
+            plant: The trials' ground-truth plant (AddGroundTruth).
+            trials: Each trial's Robot.
+
+        Returns:
+            The system (inputs u, state, disturbance_model; outputs tau,
+                true_matrices; stacked)."""
 
     def RequireRunnableStart(self) -> None:
-        """ConfigError unless a run can start at the scenario's q0."""
+        """Requires that a run can start at the scenario's q0.
+
+        Raises:
+            ConfigError: Naming why it cannot."""
 
     def GainRuleRates(self) -> Tuple[float, float]:
-        """(lambda_max(K_d), inf_q lambda_min(M)) of the LHS for eq. (48)."""
+        """The LHS's rates for eq. (48).
+
+        Returns:
+            (lambda_max(K_d), inf_q lambda_min(M))."""
 
     @classmethod
-    def AddLhsController(cls, controller, trials: Sequence["Robot"], excitation,
-                         identify: bool) -> Dict:
-        """Adds the LHS controller of the ``trials`` (outputs tau_request,
-        reduced_model and its log; input chi; stacked) and, with ``identify``, an
-        InertialIdentifier feeding it, into the controller's builder; returns the
-        named systems."""
+    def AddLhsController(cls, controller: "ControllerBuilder", trials: Sequence["Robot"],
+                         excitation: "Excitation", identify: bool) -> Dict:
+        """Adds the LHS controller of a batch into the controller's builder.
+
+        The controller has outputs tau_request, reduced_model and its log, and
+        input chi; stacked.
+
+        Args:
+            controller: The controller's ControllerBuilder.
+            trials: Each trial's Robot.
+            excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
+            identify: Add an InertialIdentifier feeding the LHS controller.
+
+        Returns:
+            The named systems added (system name -> system)."""
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
-        """q -> why the joints are beyond the robot's position limits (or None),
-        for the run's monitor; None where the robot has no limits to check."""
+        """The check of the robot's position limits, for the run's monitor.
+
+        Returns:
+            q -> why the joints are beyond the limits (or None); None where the
+                robot has no limits to check."""
 
     def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
-        """q -> the ground truth's link-base clearance [m] for the run's monitor,
-        or None where the ground truth has no such measure."""
+        """The ground truth's link-base clearance, for the run's monitor.
 
-    def LiveView(self, loop, meshcat):
-        """An animation.LiveView drawing the loop's ground truth."""
+        Returns:
+            q -> the clearance [m], or None where the ground truth has no such
+                measure."""
 
-    def WriteAnimation(self, logs, out_html):
-        """A self-contained HTML replay of a run's logs."""
+    def LiveView(self, loop: "ClosedLoop", meshcat: "Meshcat") -> "viewers.LiveView":
+        """Makes a viewers.LiveView drawing the loop's ground truth.
 
-    def TaskSignals(self, logs) -> Tuple[np.ndarray, ...]:
-        """(tracking error, s, link-base clearance [m], base turn [rad]) over time."""
+        Args:
+            loop: The closed loop (of this robot) being simulated.
+            meshcat: The Meshcat to draw into.
 
-    def TaskMetrics(self, logs) -> Dict[str, float]:
-        """The task's own metrics beside metrics.run_metrics' shared ones."""
+        Returns:
+            The LiveView."""
+
+    def WriteAnimation(self, logs: Dict[str, np.ndarray], out_html: Union[str, Path]
+                       ) -> Path:
+        """Writes a self-contained HTML replay of a run's logs.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            out_html: The HTML file to write.
+
+        Returns:
+            The HTML file's path."""
+
+    def TaskSignals(self, logs: Dict[str, np.ndarray]) -> Tuple[np.ndarray, ...]:
+        """The task's signals over time, for metrics.run_metrics.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            (tracking error, s, link-base clearance [m], base turn [rad])."""
+
+    def TaskMetrics(self, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The task's own metrics beside metrics.run_metrics' shared ones.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            Metric name -> value."""
 
     def TotalMass(self) -> float:
-        """The ground truth's total mass [kg]."""
+        """The ground truth's total mass.
 
-    def VerifyLhs(self, logs, region_budget: float):
-        """analysis.verify.LhsSide: what dacph verify checks of this LHS (the
-        region of attraction's program stopped after region_budget seconds)."""
+        Returns:
+            The mass [kg]."""
+
+    def VerifyLhs(self, logs: Dict[str, np.ndarray], region_budget: float
+                  ) -> "LhsSide":
+        """What dacph verify checks of this LHS.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            region_budget: The wall time [s] after which the region of
+                attraction's program is stopped.
+
+        Returns:
+            The analysis.verify.LhsSide."""
 
 
 # Each robot section (scenario.PlanarArm, scenario.DescribedArm, by class name: the
@@ -89,10 +183,19 @@ _ROBOTS = {"PlanarArm": ("EndEffectorAngle", "dacph_drake.robots.planar:PlanarRo
                             "dacph_drake.robots.described:DescribedRobot")}
 
 
-def robot_type(scenario):
-    """The class of ``scenario``'s Robot (its class attributes, such as
-    task_panels, without building or validating it); ConfigError when the task is
-    not the one this robot tracks."""
+def robot_type(scenario: "Scenario") -> type:
+    """The class of a scenario's Robot, without building or validating it.
+
+    Its class attributes, such as task_panels, are then at hand.
+
+    Args:
+        scenario: A scenario.Scenario.
+
+    Returns:
+        robots.planar.PlanarRobot or robots.described.DescribedRobot.
+
+    Raises:
+        ConfigError: The task is not the one this robot tracks."""
     robot, given = type(scenario.robot).__name__, type(scenario.task).__name__
     task, path = _ROBOTS[robot]
     if given != task:

@@ -9,6 +9,8 @@ less the link's half width. The first term keeps every link off the base, the se
 keeps each elbow from folding onto the previous link. Gradient and Hessian are
 closed form; U does not depend on the base pose.
 """
+from typing import Tuple
+
 import numpy as np
 
 from dacph_drake.arm_parameters import RobotParams
@@ -28,9 +30,12 @@ def _firas(rho, k, rho0):
 
 
 class BaseRepulsionPotential:
-    """The planar arm's null-space potential U(q) of the module docstring, for
-    ``robot`` (the controller's nominal arm) with the gains and margins of
-    ``settings``."""
+    """The planar arm's null-space potential U(q) of the module docstring.
+
+    Args:
+        robot: The arm (the controller's nominal arm).
+        settings: The potential's gains and margins.
+    """
     def __init__(self, robot: RobotParams, settings: Potential):
         self._n = robot.num_links
         self._half_size = robot.base.size / 2
@@ -87,8 +92,16 @@ class BaseRepulsionPotential:
             dist[rows] = excess[rows, axis]
         return dist - self._radius, grad, hess
 
-    def Evaluate(self, q: np.ndarray, qdot: np.ndarray):
-        """(U, grad U, d/dt grad U = Hess U qdot) at (q, qdot)."""
+    def Evaluate(self, q: np.ndarray, qdot: np.ndarray
+                 ) -> Tuple[float, np.ndarray, np.ndarray]:
+        """The potential, its gradient and its gradient's rate at (q, qdot).
+
+        Args:
+            q: The joint angles (n) [rad].
+            qdot: The joint rates (n) [rad/s].
+
+        Returns:
+            (U [J], grad U (n), d/dt grad U = Hess U qdot (n))."""
         n, s = self._n, self._s
         grad, grad_dot = np.zeros(n), np.zeros(n)
         P, Pdot, O, Odot = self._Points(q, qdot)
@@ -120,6 +133,13 @@ class BaseRepulsionPotential:
         return U, grad, grad_dot
 
     def MinClearance(self, q: np.ndarray) -> float:
-        """Smallest clearance of the sample points from the base [m] (compiled:
-        kernels.potential.min_clearance)."""
+        """The smallest clearance of the sample points from the base.
+
+        Compiled: kernels.potential.min_clearance.
+
+        Args:
+            q: The joint angles (n) [rad].
+
+        Returns:
+            The clearance [m] (negative: a point inside the base)."""
         return min_clearance(np.asarray(q, float), *self._geometry)

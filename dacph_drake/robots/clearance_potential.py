@@ -14,6 +14,7 @@ momentum). The links joined by a joint to the base, or to a body welded to it (a
 arm's root mounted on it, scenario.ArmBase), are not measured against it: their
 joint sits on its surface (Drake filters the first kind itself)."""
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 from pydrake.geometry import (Box, Capsule, CollisionFilterDeclaration, Convex,
@@ -26,16 +27,33 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel
 
 @dataclass
 class Clearance:
+    """The potential's value at a configuration (BaseClearancePotential.Evaluate).
+
+    Attributes:
+        U: The potential [J-like units of gain * m^2].
+        gradient: dU/dq (n).
+        min_distance: The smallest link-base signed distance [m] (inf beyond the
+            query distance).
+    """
     U: float                # [J-like units of gain * m^2]
     gradient: np.ndarray    # dU/dq
     min_distance: float     # smallest link-base signed distance [m] (inf beyond query)
 
 
 class BaseClearancePotential:
-    """U(q) at a base pose for the robot ``parsed`` (description.ParsedDescription:
-    the plant and SceneGraph the ground truth runs on, queried in contexts of its
-    own with the collision geometry; module docstring), its Jacobians from ``model``
-    (the controller's model of the same description: the same body indices)."""
+    """U(q) at a base pose (module docstring).
+
+    Args:
+        parsed: The robot (description.ParsedDescription: the plant and SceneGraph
+            the ground truth runs on, queried in contexts of its own with the
+            collision geometry).
+        model: The controller's model of the same description (the same body
+            indices), which gives the Jacobians.
+        gain: The potential's gain.
+        margin: The distance below which a link-base pair is repelled [m].
+        query_distance: How far Evaluate looks for the nearest distance by default
+            [m] (at least ``margin``).
+    """
 
     def __init__(self, *, parsed: ParsedDescription, model: FloatingBaseModel,
                  gain: float, margin: float, query_distance: float = 1.0):
@@ -76,16 +94,28 @@ class BaseClearancePotential:
         return (self._model.plant.get_body(body.index()).body_frame(),
                 self._inspector.GetPoseInFrame(geometry))
 
-    def Evaluate(self, q, base_pose, query_distance=None) -> Clearance:
-        """U, its gradient and the nearest distance (inf beyond ``query_distance``,
-        default the one it was made with; U needs the margin only) at joints q and
-        the base pose (the model is evaluated at q only when a pair is within the
-        margin: the witness points' Jacobians). Where every link is certainly beyond the query distance (_Beyond), the
-        query is not made: its answer would be U = 0, a zero gradient and inf. The
-        query looks no further than the margin or the nearest distance's upper
-        bound (_NearestAtMost), whichever is larger: beyond it are neither pairs
-        within the margin nor the nearest one. A query made looks CERTIFY further
-        than that, so that the next calls can be answered from it."""
+    def Evaluate(self, q: np.ndarray, base_pose: np.ndarray,
+                 query_distance: Optional[float] = None) -> Clearance:
+        """U, its gradient and the nearest link-base distance at a configuration.
+
+        The model is evaluated at q only when a pair is within the margin (the
+        witness points' Jacobians). Where every link is certainly beyond the query
+        distance (_Beyond), the query is not made: its answer would be U = 0, a zero
+        gradient and inf. The query looks no further than the margin or the nearest
+        distance's upper bound (_NearestAtMost), whichever is larger: beyond it are
+        neither pairs within the margin nor the nearest one. A query made looks
+        CERTIFY further than that, so that the next calls can be answered from it.
+
+        Args:
+            q: The joint angles (n) [rad].
+            base_pose: The base's pose (qw, qx, qy, qz, x, y, z), the base joint's
+                coordinates.
+            query_distance: The distance beyond which the nearest distance is
+                reported as inf [m] (None: the one it was made with; U needs the
+                margin only).
+
+        Returns:
+            The Clearance."""
         query_distance = (self._query_distance if query_distance is None
                           else max(query_distance, self.margin))
         q = np.asarray(q, float)

@@ -5,9 +5,13 @@ the free base) tracking its end effector's 3D attitude
 controller's model evaluates in contexts of its own with its inertias scaled
 (floating_model.FloatingBaseModel) and the clearance potential queries with its
 collision geometry; and the AttitudeController."""
-from typing import Dict, Optional
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from pydrake.geometry import Meshcat, SceneGraph
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import ParsedDescription
@@ -16,11 +20,16 @@ from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameter
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.dynamics.plant import AddClonedArms, ArmCoordinates
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
+
+if TYPE_CHECKING:
+    from dacph_drake.analysis.verify import LhsSide
+    from dacph_drake.loop.closed_loop import ClosedLoop, ControllerBuilder
+    from dacph_drake.robots import viewers
 
 SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
 # Configurations sampled for sup_q max_i M_ii of the arm in VerifyLhs, and the
@@ -30,7 +39,15 @@ DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
 
 
 class DescribedRobot:
-    """robots.Robot for a scenario whose robot is a DescribedArm."""
+    """robots.Robot for a scenario whose robot is a DescribedArm.
+
+    Args:
+        scenario: The scenario (its robot a scenario.DescribedArm, its task a
+            scenario.EndEffectorAttitude).
+
+    Raises:
+        ConfigError: Naming the scenario's first invalid setting, or what its
+            description has that is not allowed."""
     lhs_name, lhs_log = "attitude_controller", "attitude_log"
     task_panels = ("e_attitude_dac_vs_model_based",)
 
@@ -48,41 +65,76 @@ class DescribedRobot:
                 arm.nominal_inertia_scale, PER_BODY))
 
     @property
-    def truth_plant(self):
-        """The ground truth's plant (its default context holds the description's
-        inertias; the controller's model evaluates it with its own)."""
+    def truth_plant(self) -> MultibodyPlant:
+        """The ground truth's plant.
+
+        Its default context holds the description's inertias; the controller's model
+        evaluates it with its own."""
         return self.parsed.plant
 
     @classmethod
-    def AddGroundTruth(cls, builder, trials):
-        """One trial: its parsed plant and SceneGraph (ParsedDescription.AddTo: the
+    def AddGroundTruth(cls, builder: DiagramBuilder, trials: Sequence["DescribedRobot"]
+                       ) -> Tuple[MultibodyPlant, SceneGraph]:
+        """Adds the ground-truth plant of a batch and its SceneGraph.
+
+        One trial: its parsed plant and SceneGraph (ParsedDescription.AddTo: the
         description is parsed once per diagram). A batch: one plant holding a copy
         of each trial's arm (plant.AddClonedArms), whose dynamics are the parsed
-        plant's bit for bit."""
+        plant's bit for bit.
+
+        Args:
+            builder: The closed loop's builder.
+            trials: Each trial's Robot (one: a single run).
+
+        Returns:
+            (plant, scene_graph).
+
+        Raises:
+            ConfigError: The trials' arms differ in their kinematic tree."""
         if len(trials) == 1:
             return trials[0].parsed.AddTo(builder)
         _RequireOneTree(trials)
         return AddClonedArms(builder, [trial.parsed.plant for trial in trials])
 
     @classmethod
-    def MakeTrueRhs(cls, plant, trials) -> SpatialTrueRhs:
+    def MakeTrueRhs(cls, plant: MultibodyPlant, trials: Sequence["DescribedRobot"]
+                    ) -> SpatialTrueRhs:
+        """Makes the port's true RHS of the trials' arms.
+
+        A systems.spatial_true_rhs.SpatialTrueRhs.
+
+        Args:
+            plant: The trials' ground-truth plant (AddGroundTruth).
+            trials: Each trial's Robot.
+
+        Returns:
+            The SpatialTrueRhs, with each trial's parsed plant, uncertainty and
+                phases."""
         return SpatialTrueRhs(plant=plant, arms=[trial.parsed.plant for trial in trials],
                               uncertainties=[t.scenario.uncertainty for t in trials],
                               phases=[t.scenario.phases for t in trials])
 
     def RequireRunnableStart(self) -> None:
-        """q0 within the description's joint limits (robot.joint_limits "stop");
-        the clearance at q0 is not checked yet (the reliability issue)."""
+        """Requires that a run can start at the scenario's q0.
+
+        q0 must lie within the description's joint limits (robot.joint_limits
+        "stop"); the clearance at q0 is not checked yet (the reliability issue).
+
+        Raises:
+            ConfigError: Naming the first joint beyond its limits."""
         violation = self.LimitViolation()
         reason = violation(np.asarray(self.scenario.q0, float)) if violation else None
         if reason:
             raise ConfigError(f"q0 = {list(self.scenario.q0)}: {reason}; allowed: a q0 "
                               "within the limits, or robot.joint_limits: ignore")
 
-    def LimitViolation(self):
-        """With robot.joint_limits "stop" and finite limits: q -> "joint NAME at X
-        rad beyond [LOWER, UPPER] rad" for the first joint out of its limits, or
-        None."""
+    def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
+        """The check of the description's joint limits, for the run's monitor.
+
+        Returns:
+            With robot.joint_limits "stop" and finite limits: q -> "joint NAME at X
+                rad beyond [LOWER, UPPER] rad" for the first joint out of its limits,
+                or None; otherwise None."""
         if self.scenario.robot.joint_limits != "stop":
             return None
         plant, coordinates = self.model.plant, self.model.coordinates
@@ -105,17 +157,33 @@ class DescribedRobot:
                     f"[{lower[k]:.4f}, {upper[k]:.4f}] rad")
         return violation
 
-    def GainRuleRates(self):
-        """K_d = damping_rate M(q): the LHS rate lambda_max(K_d) / inf
-        lambda_min(M) is damping_rate for every arm
-        (gain_rule.inertia_scaled_c_lower_bound)."""
+    def GainRuleRates(self) -> Tuple[float, float]:
+        """The LHS's rates for eq. (48), with K_d = damping_rate M(q).
+
+        The LHS rate lambda_max(K_d) / inf lambda_min(M) is damping_rate for every
+        arm (gain_rule.inertia_scaled_c_lower_bound).
+
+        Returns:
+            (damping_rate, 1.0)."""
         return self.scenario.task.gains.damping_rate, 1.0
 
     @classmethod
-    def AddLhsController(cls, controller, trials, excitation, identify: bool) -> Dict:
-        """The AttitudeController of the ``trials`` (each with its clearance
-        potential unless its gain is 0), fed by an InertialIdentifier
-        (scenario.inertia) with ``identify``."""
+    def AddLhsController(cls, controller: "ControllerBuilder",
+                         trials: Sequence["DescribedRobot"], excitation: Excitation,
+                         identify: bool) -> Dict:
+        """Adds the AttitudeController of the trials into the controller's builder.
+
+        Each trial has its clearance potential unless its gain is 0.
+
+        Args:
+            controller: The controller's ControllerBuilder.
+            trials: Each trial's Robot.
+            excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
+            identify: Feed the AttitudeController from an InertialIdentifier
+                (scenario.inertia).
+
+        Returns:
+            The named systems added (system name -> system)."""
         first = trials[0].scenario
         builder, arm = controller.builder, first.robot
         lhs = builder.AddNamedSystem(cls.lhs_name, AttitudeController(
@@ -142,26 +210,55 @@ class DescribedRobot:
                                        gain=arm.potential.gain, margin=arm.potential.margin)
                 if arm.potential.gain > 0 else None)
 
-    def Clearance(self):
-        """None: the clearance of a described arm is its AttitudeController's log."""
+    def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
+        """The ground truth's link-base clearance, for the run's monitor: none.
+
+        Returns:
+            None: the clearance of a described arm is its AttitudeController's
+                log."""
         return None
 
-    def LiveView(self, loop, meshcat):
-        """A SpatialViewer with R_d(t) from the loop's AttitudeController."""
+    def LiveView(self, loop: "ClosedLoop", meshcat: Meshcat) -> "viewers.LiveView":
+        """Makes a viewers.LiveView drawing the loop's ground truth.
+
+        Through a SpatialViewer, with R_d(t) from the loop's AttitudeController.
+
+        Args:
+            loop: The closed loop (of this robot) being simulated.
+            meshcat: The Meshcat to draw into.
+
+        Returns:
+            The LiveView."""
         from dacph_drake.robots.viewers import LiveView, SpatialViewer
         viewer = SpatialViewer(self.scenario.robot, meshcat)
         controller = loop.systems[self.lhs_name]
         return LiveView(loop.plant, meshcat, lambda root_context, x, t: viewer.Draw(
             x, controller.DesiredAttitude(t)[0]))
 
-    def WriteAnimation(self, logs, out_html):
-        """Writes the HTML replay of ``logs`` to ``out_html``."""
+    def WriteAnimation(self, logs: Dict[str, np.ndarray], out_html: Union[str, Path]
+                       ) -> Path:
+        """Writes a self-contained HTML replay of a run's logs.
+
+        Written by viewers.write_spatial_animation.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            out_html: The HTML file to write.
+
+        Returns:
+            The HTML file's path."""
         from dacph_drake.robots.viewers import write_spatial_animation
         return write_spatial_animation(self.scenario.robot, logs, out_html)
 
-    def TaskSignals(self, logs):
-        """|e|, ||s||, the signed link-base distance (attitude_log) and the angle
-        of the base's rotation from its start."""
+    def TaskSignals(self, logs: Dict[str, np.ndarray]) -> Tuple[np.ndarray, ...]:
+        """The task's signals over time, for metrics.run_metrics.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            (|e| [rad], ||s||, the signed link-base distance (attitude_log) [m],
+                the angle of the base's rotation from its start [rad])."""
         log, A = logs["attitude_log"], AttitudeLog()
         base_q = ArmCoordinates.FromPlant(self.model.plant).base_q
         quaternion = logs["state"][:, base_q[:4]]       # the free base's (w, x, y, z)
@@ -169,10 +266,18 @@ class DescribedRobot:
         cosine = np.clip(np.abs(quaternion @ quaternion[0]), 0.0, 1.0)
         return log[:, A.e_norm], log[:, A.s_norm], log[:, A.clearance], 2 * np.arccos(cosine)
 
-    def TaskMetrics(self, logs) -> Dict[str, float]:
-        """Attitude error |e| (final, RMS and max after SETTLING_TIME) [rad], the
-        smallest link-base distance [m] (nan without the potential, which measures
-        it) and the largest |spatial momentum| over the logged states."""
+    def TaskMetrics(self, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The task's own metrics beside metrics.run_metrics' shared ones.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            Metric name -> value: the attitude error |e| (final, RMS and max after
+                SETTLING_TIME) [rad], the smallest link-base distance [m] (nan without
+                the potential, which measures it), the largest |spatial momentum| over
+                the logged states and the share of samples with an actuator's command
+                clipped to its effort limit."""
         layout = AttitudeLog()
         t, error = logs["time"], logs["attitude_log"][:, layout.e_norm]
         settled = t >= SETTLING_TIME
@@ -201,16 +306,30 @@ class DescribedRobot:
                                        if "saturated" in logs and len(t) else nan)}
 
     def TotalMass(self) -> float:
-        """The ground truth's total mass [kg] (its bodies with mass)."""
+        """The ground truth's total mass (its bodies with mass).
+
+        Returns:
+            The mass [kg]."""
         return float(sum(body.default_mass()
                          for body in InertialParameters(self.truth_plant).bodies))
 
-    def VerifyLhs(self, logs, region_budget: float):
-        """The LHS with K_d = damping_rate M and the inertia-scaled boundary layer
+    def VerifyLhs(self, logs: Dict[str, np.ndarray], region_budget: float
+                  ) -> "LhsSide":
+        """What dacph verify checks of this LHS.
+
+        The LHS with K_d = damping_rate M and the inertia-scaled boundary layer
         (EnvelopeConstants.ForInertiaScaled), with the controller's model and, when
         it ran one, the inertial identifier's last estimate: the bounds of both.
-        The region of attraction is the homogeneous certificate (milliseconds for
-        any arm), so ``region_budget`` does not bind it."""
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            region_budget: The wall time [s] after which the region of
+                attraction's program is stopped; the region of attraction is the
+                homogeneous certificate (milliseconds for any arm), so it does not
+                bind it.
+
+        Returns:
+            The analysis.verify.LhsSide."""
         from dacph_drake.analysis.lyapunov_envelope import EnvelopeConstants
         from dacph_drake.analysis.region_of_attraction import (
             attitude_region_of_attraction)

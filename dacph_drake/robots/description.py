@@ -8,6 +8,7 @@ import logging
 import os
 import sysconfig
 from pathlib import Path
+from typing import Optional, Tuple, Union
 
 import numpy as np
 from pydrake.geometry import (Box, CollisionFilterDeclaration, GeometrySet,
@@ -18,7 +19,7 @@ from pydrake.multibody.parsing import PackageMap, Parser
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PrismaticJoint,
                                    RevoluteJoint, SpatialInertia)
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.framework import Context, DiagramBuilder
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
@@ -54,10 +55,21 @@ SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
                   "satellite_6dof": MODELS / "satellite_6dof.urdf"}
 
 
-def robot_description(name_or_path, package_map=None) -> Path:
-    """The description file of a shipped robot (SPATIAL_ROBOTS), a package:// URI
-    resolved through ``package_map`` (package_map_of) or a path to a .urdf / .sdf
-    file (ConfigError naming what is allowed otherwise)."""
+def robot_description(name_or_path: Union[str, Path],
+                      package_map: Optional[PackageMap] = None) -> Path:
+    """The description file a scenario's robot.description names.
+
+    Args:
+        name_or_path: A shipped robot's name (SPATIAL_ROBOTS), a package:// URI or a
+            path to a .urdf / .sdf file.
+        package_map: Resolves a package:// URI (package_map_of).
+
+    Returns:
+        The file's path.
+
+    Raises:
+        ConfigError: Naming what is allowed, for an unknown package or a path that
+            is no .urdf or .sdf file."""
     if str(name_or_path) in SPATIAL_ROBOTS:
         return SPATIAL_ROBOTS[str(name_or_path)]
     text = str(name_or_path)
@@ -80,13 +92,22 @@ def robot_description(name_or_path, package_map=None) -> Path:
 
 
 def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
-    """``package_map`` with the packages a described arm's package:// URIs may name:
-    robot.packages (name -> folder), the packages under robot.package_paths (their
-    package.xml), those on ROS_PACKAGE_PATH, and the ROS 2 way, the ament index of
-    every prefix on AMENT_PREFIX_PATH and of the prefix pip installs ROS packages
-    into (cmeel's, site-packages/cmeel.prefix: example-robot-data, whose
-    package.xml names itself example_robot_descriptions, is found there as
-    example-robot-data). The first place that names a package wins."""
+    """Adds the packages a described arm's package:// URIs may name to a package map.
+
+    They are robot.packages (name -> folder), the packages under
+    robot.package_paths (their package.xml), those on ROS_PACKAGE_PATH, and the
+    ROS 2 way, the ament index of every prefix on AMENT_PREFIX_PATH and of the
+    prefix pip installs ROS packages into (cmeel's, site-packages/cmeel.prefix:
+    example-robot-data, whose package.xml names itself example_robot_descriptions,
+    is found there as example-robot-data). The first place that names a package
+    wins.
+
+    Args:
+        arm: The scenario's robot section.
+        package_map: The map to add them to (changed in place).
+
+    Returns:
+        ``package_map``."""
     for name, folder in arm.packages.items():
         package_map.Add(name, str(folder))
     for folder in arm.package_paths:
@@ -104,9 +125,17 @@ def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
 
 
 def planar_arm_urdf(robot: RobotParams) -> str:
-    """The URDF of a planar arm (arm_parameters.RobotParams): the same bodies, inertias, joint
-    and frame names as plant.AddFreeFloatingArm builds directly (a planar joint
-    for the base, continuous z-axis joints, the end effector a massless link)."""
+    """The URDF of a planar arm.
+
+    The same bodies, inertias, joint and frame names as plant.AddFreeFloatingArm
+    builds directly (a planar joint for the base, continuous z-axis joints, the end
+    effector a massless link).
+
+    Args:
+        robot: The arm (arm_parameters.RobotParams).
+
+    Returns:
+        The URDF text."""
     def inertial(mass, com, ixx, iyy, izz):
         return (f'<inertial><origin xyz="{com!r} 0 0"/><mass value="{mass!r}"/>'
                 f'<inertia ixx="{ixx!r}" ixy="0" ixz="0" iyy="{iyy!r}" iyz="0" '
@@ -131,23 +160,41 @@ def planar_arm_urdf(robot: RobotParams) -> str:
     return "".join(parts)
 
 
-def described_arm(description) -> DescribedArm:
-    """A scenario's robot section (scenario.DescribedArm) as it is, or the section of
-    a bare description name or path (the description is the whole robot)."""
+def described_arm(description: Union[str, Path, DescribedArm]) -> DescribedArm:
+    """A described robot as a scenario's robot section.
+
+    Args:
+        description: A scenario's robot section (scenario.DescribedArm), or a bare
+            description name or path (the description is the whole robot).
+
+    Returns:
+        The section as it is, or the section of the bare description."""
     return (description if hasattr(description, "description")
             else DescribedArm(description=str(description)))
 
 
-def PopulateFromDescription(plant: MultibodyPlant, name_or_path) -> None:
-    """Parses the description into ``plant`` (not finalized): a shipped name, a
-    .urdf/.sdf path, a scenario.DescribedArm (the arm mounted on its base, its
-    end-effector frame added, package:// URIs resolved through its package_paths,
-    packages and ROS_PACKAGE_PATH, STL meshes read as OBJ: robots.meshes, its
-    locked joints welded), or a planar RobotParams through planar_arm_urdf. Each
-    revolute joint the description leaves unactuated is actuated (in its joint
+def PopulateFromDescription(plant: MultibodyPlant,
+                            name_or_path: Union[str, Path, DescribedArm, RobotParams]
+                            ) -> None:
+    """Parses a description into a plant.
+
+    Each revolute joint the description leaves unactuated is actuated (in its joint
     order, with the URDF's effort limit when robot.effort_limits is "saturate",
     else none); a moving joint of another kind is refused by name; gravity is
-    switched off."""
+    switched off.
+
+    Args:
+        plant: The plant (not finalized; left so).
+        name_or_path: A shipped name, a .urdf/.sdf path, a scenario.DescribedArm
+            (the arm mounted on its base, its end-effector frame added, package://
+            URIs resolved through its package_paths, packages and ROS_PACKAGE_PATH,
+            STL meshes read as OBJ: robots.meshes, its locked joints welded), or a
+            planar RobotParams through planar_arm_urdf.
+
+    Raises:
+        ConfigError: Naming what the description, or the robot section, has that
+            is not allowed (a file that does not parse, a moving joint that is not
+            revolute, no revolute joint, a missing end-effector frame, ...)."""
     efforts = {}
     if isinstance(name_or_path, RobotParams):
         name_or_path.Validate()
@@ -321,18 +368,27 @@ def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path)
 
 
 class ParsedDescription:
-    """A description parsed once (a shipped name, a path or a scenario.DescribedArm,
-    as PopulateFromDescription reads it): its finalized continuous ``plant``,
-    registered with its own ``scene_graph``, not yet in any diagram. One parse serves
+    """A description parsed once into a plant and its SceneGraph.
+
+    Its finalized continuous ``plant``, registered with its own ``scene_graph``, is
+    not yet in any diagram. One parse serves
     a whole closed loop: AddTo puts the pair into the loop's builder as the ground
     truth, the controller's model evaluates the same plant in contexts of its own
     (floating_model.FloatingBaseModel; its inertias are context parameters), and the
     clearance potential queries the collision geometry in its own SceneGraph context
     (ClearanceContexts). The collision geometry's proximity role is taken off the
     SceneGraph's model: the ground truth, like the planar one, has no contact (a
-    continuous plant would otherwise compute contact forces from it)."""
+    continuous plant would otherwise compute contact forces from it).
 
-    def __init__(self, name_or_path):
+    Args:
+        name_or_path: A shipped name, a path or a scenario.DescribedArm, as
+            PopulateFromDescription reads it.
+
+    Raises:
+        ConfigError: As PopulateFromDescription, or the robot has not one free
+            base with mass."""
+
+    def __init__(self, name_or_path: Union[str, Path, DescribedArm, RobotParams]):
         self.plant, self.scene_graph = MultibodyPlant(time_step=0.0), SceneGraph()
         self.plant.set_name("plant")        # names SceneGraph's plant_pose port
         self.scene_graph.set_name("scene_graph")
@@ -349,9 +405,19 @@ class ParsedDescription:
         self._added = False
 
     def AddTo(self, builder: DiagramBuilder) -> "tuple[MultibodyPlant, SceneGraph]":
-        """Adds the plant and its SceneGraph, connected as
-        AddMultibodyPlantSceneGraph connects them, to ``builder`` (once: a system
-        belongs to one diagram)."""
+        """Adds the plant and its SceneGraph to a diagram.
+
+        They are connected as AddMultibodyPlantSceneGraph connects them, once (a
+        system belongs to one diagram).
+
+        Args:
+            builder: The diagram's builder.
+
+        Returns:
+            (plant, scene_graph).
+
+        Raises:
+            RuntimeError: They are already in a diagram."""
         if self._added:
             raise RuntimeError("a ParsedDescription's plant is already in a diagram; "
                                "parse the description again for another one")
@@ -367,12 +433,17 @@ class ParsedDescription:
                         plant.get_geometry_query_input_port())
         return plant, scene_graph
 
-    def ClearanceContexts(self):
-        """(plant context, SceneGraph context) of the plant and its SceneGraph alone,
-        the collision geometry's proximity role given back in the latter with the
-        filters MultibodyPlant.Finalize declares (none between the bodies a joint
-        connects, none within a group of bodies welded together): set the plant's
-        positions, then UpdatePoses, then query."""
+    def ClearanceContexts(self) -> Tuple[Context, Context]:
+        """Contexts in which to query the collision geometry.
+
+        The collision geometry's proximity role is given back in the SceneGraph's
+        context, with the filters MultibodyPlant.Finalize declares (none between the
+        bodies a joint connects, none within a group of bodies welded together): set
+        the plant's positions, then UpdatePoses, then query.
+
+        Returns:
+            (plant context, SceneGraph context) of the plant and its SceneGraph
+                alone."""
         plant, context = self.plant, self.scene_graph.CreateDefaultContext()
         for geometry, properties in self._proximity.items():
             self.scene_graph.AssignRole(context, plant.get_source_id(), geometry,
@@ -393,25 +464,51 @@ class ParsedDescription:
         self.scene_graph.collision_filter_manager(context).Apply(filters)
         return plant.CreateDefaultContext(), context
 
-    def UpdatePoses(self, plant_context, scene_graph_context) -> None:
-        """The SceneGraph context's geometry poses from the plant context's
-        positions."""
+    def UpdatePoses(self, plant_context: Context, scene_graph_context: Context) -> None:
+        """Sets the SceneGraph context's geometry poses from the plant's positions.
+
+        Args:
+            plant_context: The plant's context (ClearanceContexts).
+            scene_graph_context: The SceneGraph's context (ClearanceContexts)."""
         self.scene_graph.get_source_pose_port(self.plant.get_source_id()).FixValue(
             scene_graph_context,
             self.plant.get_geometry_pose_output_port().Eval(plant_context))
 
 
-def AddRobotFromDescription(builder: DiagramBuilder, name_or_path
+def AddRobotFromDescription(builder: DiagramBuilder,
+                            name_or_path: Union[str, Path, DescribedArm, RobotParams]
                             ) -> "tuple[MultibodyPlant, SceneGraph]":
-    """The finalized continuous plant of the description, with its visual geometry
-    registered with a SceneGraph (for Meshcat), added to ``builder``
-    (ParsedDescription: no contact)."""
+    """Adds the finalized continuous plant of a description to a diagram.
+
+    Its visual geometry is registered with a SceneGraph (for Meshcat)
+    (ParsedDescription: no contact).
+
+    Args:
+        builder: The diagram's builder.
+        name_or_path: The description, as ParsedDescription takes it.
+
+    Returns:
+        (plant, scene_graph).
+
+    Raises:
+        ConfigError: As ParsedDescription."""
     return ParsedDescription(name_or_path).AddTo(builder)
 
 
-def MakeRobotPlant(name_or_path) -> MultibodyPlant:
-    """A finalized plant of the description without geometry, for a controller's
-    internal model."""
+def MakeRobotPlant(name_or_path: Union[str, Path, DescribedArm, RobotParams]
+                   ) -> MultibodyPlant:
+    """Makes a finalized plant of a description without geometry.
+
+    For a controller's internal model.
+
+    Args:
+        name_or_path: The description, as PopulateFromDescription takes it.
+
+    Returns:
+        The plant.
+
+    Raises:
+        ConfigError: As ParsedDescription."""
     plant = MultibodyPlant(time_step=0.0)
     PopulateFromDescription(plant, name_or_path)
     plant.Finalize()

@@ -18,9 +18,10 @@ import hashlib
 import re
 import tempfile
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as np
+from pydrake.multibody.parsing import PackageMap
 
 from dacph_drake.errors import ConfigError
 
@@ -29,10 +30,21 @@ _MESH = re.compile(r'(<mesh\s[^>]*filename\s*=\s*")([^"]+)(")')
 _COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
 
 
-def urdf_with_obj_meshes(path: Path, package_map) -> Optional[str]:
-    """The URDF text of ``path`` with its STL meshes and its collision .dae meshes
-    replaced by converted OBJs and its relative mesh paths made absolute, or None
-    when it names no mesh to convert."""
+def urdf_with_obj_meshes(path: Path, package_map: PackageMap) -> Optional[str]:
+    """A URDF's text with its meshes converted as the module docstring's rule says.
+
+    Args:
+        path: The URDF file.
+        package_map: Resolves its package:// mesh URIs.
+
+    Returns:
+        The text with its STL meshes and its collision .dae meshes replaced by
+            converted OBJs and its relative mesh paths made absolute, or None when it
+            names no mesh to convert.
+
+    Raises:
+        ConfigError: A mesh names an unknown package, or cannot be read or
+            converted (naming it)."""
     text = path.read_text(encoding="utf-8")
     collision = [match.span() for match in _COLLISION.finditer(text)]
 
@@ -87,8 +99,18 @@ def _ObjOf(mesh: Path) -> Path:
     return obj
 
 
-def stl_triangles(data: bytes, name) -> np.ndarray:
-    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII."""
+def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
+    """The triangles of an STL file's bytes, binary or ASCII.
+
+    Args:
+        data: The file's bytes.
+        name: The file's name, for the error message.
+
+    Returns:
+        The triangles (k, 3 vertices, xyz).
+
+    Raises:
+        ConfigError: The bytes are not an STL file."""
     if len(data) >= 84:
         count = int(np.frombuffer(data[80:84], "<u4")[0])
         if len(data) == 84 + 50 * count:                   # binary
@@ -103,9 +125,18 @@ def stl_triangles(data: bytes, name) -> np.ndarray:
     return np.array(vertices, dtype=float).reshape(-1, 3, 3)
 
 
-def dae_triangles(data: bytes, name) -> np.ndarray:
-    """The triangles (k, 3 vertices, xyz) [m] of a Collada file's bytes (module
-    docstring: its rule)."""
+def dae_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
+    """The triangles of a Collada file's bytes (module docstring: its rule).
+
+    Args:
+        data: The file's bytes.
+        name: The file's name, for the error message.
+
+    Returns:
+        The triangles (k, 3 vertices, xyz) [m].
+
+    Raises:
+        ConfigError: The bytes are not a Collada file, or hold no triangles."""
     import xml.etree.ElementTree as ElementTree
     try:
         root = ElementTree.fromstring(data)

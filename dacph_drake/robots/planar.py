@@ -3,9 +3,13 @@
 controller's closed-form reduced model with its compiled kernels
 (reduced_model.ReducedOrderModel), the kinematic base-repulsion potential, and the
 sliding-mode LhsController."""
-from typing import Dict
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from pydrake.geometry import Meshcat, SceneGraph
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
@@ -14,15 +18,27 @@ from dacph_drake.dynamics.plant import AddFreeFloatingArms, ArmCoordinates, Make
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.tasks.reference import OrientationReference
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
                                                 boundary_layer_per_chi)
 from dacph_drake.systems.true_rhs import TrueRhs
 
+if TYPE_CHECKING:
+    from dacph_drake.analysis.verify import LhsSide
+    from dacph_drake.loop.closed_loop import ClosedLoop, ControllerBuilder
+    from dacph_drake.robots import viewers
+
 
 class PlanarRobot:
-    """robots.Robot for a scenario whose robot is a PlanarArm."""
+    """robots.Robot for a scenario whose robot is a PlanarArm.
+
+    Args:
+        scenario: The scenario (its robot a scenario.PlanarArm, its task a
+            scenario.EndEffectorAngle).
+
+    Raises:
+        ConfigError: Naming the scenario's first invalid setting."""
     lhs_name, lhs_log = "lhs_controller", "lhs_log"
     task_panels = ("e_dac_vs_model_based", "f_inputs_and_states")
 
@@ -46,22 +62,45 @@ class PlanarRobot:
         return self._bounds
 
     @classmethod
-    def AddGroundTruth(cls, builder, trials):
-        """One plant of every trial's true arm (AddFreeFloatingArms)."""
+    def AddGroundTruth(cls, builder: DiagramBuilder, trials: Sequence["PlanarRobot"]
+                       ) -> Tuple[MultibodyPlant, SceneGraph]:
+        """Adds one plant of every trial's true arm (AddFreeFloatingArms).
+
+        Args:
+            builder: The closed loop's builder.
+            trials: Each trial's Robot (one: a single run).
+
+        Returns:
+            (plant, scene_graph)."""
         return AddFreeFloatingArms(builder, [t.scenario.robot.truth for t in trials])
 
     @classmethod
-    def MakeTrueRhs(cls, plant, trials) -> TrueRhs:
+    def MakeTrueRhs(cls, plant: MultibodyPlant, trials: Sequence["PlanarRobot"]
+                    ) -> TrueRhs:
+        """Makes the port's true RHS of the trials' arms (systems.true_rhs.TrueRhs).
+
+        Args:
+            plant: The trials' ground-truth plant (AddGroundTruth).
+            trials: Each trial's Robot.
+
+        Returns:
+            The TrueRhs, with each trial's truth, uncertainty and phases."""
         return TrueRhs(plant=plant, truths=[t.scenario.robot.truth for t in trials],
                        uncertainties=[t.scenario.uncertainty for t in trials],
                        phases=[t.scenario.phases for t in trials])
 
     def RequireRunnableStart(self) -> None:
-        """Every link of the ground-truth arm lies outside the base at q0 (clearance
-        of the link outline > 0, as robots.base_repulsion.BaseRepulsionPotential measures it),
-        and the controller's task Jacobian D(q0) (1 x n, d alpha / d qdot) is far
-        enough from singular for D+ = D^T / (D D^T): ||D(q0)|| >=
-        task.gains.min_task_singular_value."""
+        """Requires that a run can start at the scenario's q0.
+
+        Every link of the ground-truth arm lies outside the base at q0 (clearance of
+        the link outline > 0, as robots.base_repulsion.BaseRepulsionPotential
+        measures it), and the controller's task Jacobian D(q0) (1 x n,
+        d alpha / d qdot) is far enough from singular for D+ = D^T / (D D^T):
+        ||D(q0)|| >= task.gains.min_task_singular_value.
+
+        Raises:
+            ConfigError: q0 puts the arm into the base, or is near a singularity
+                of D."""
         scenario = self.scenario
         q0 = np.asarray(scenario.q0, float)
         clearance = self.Clearance()(q0)
@@ -77,15 +116,30 @@ class PlanarRobot:
                 f"(||D(q0)|| = {sigma:.3g}); allowed: a q0 with ||D(q0)|| >= "
                 f"task.gains.min_task_singular_value = {bound:g}")
 
-    def GainRuleRates(self):
-        """K_d = Kd I over the nominal robot's inf_q lambda_min(M)."""
+    def GainRuleRates(self) -> Tuple[float, float]:
+        """The LHS's rates for eq. (48): K_d = Kd I.
+
+        Returns:
+            (Kd, the nominal robot's inf_q lambda_min(M))."""
         return self.scenario.task.gains.Kd, self.mass_matrix_bounds[0]
 
     @classmethod
-    def AddLhsController(cls, controller, trials, excitation, identify: bool) -> Dict:
-        """The LhsController of the trials (each its nominal robot's potential,
-        theta0(0) = 0), fed by an InertialIdentifier (scenario.inertia) with
-        ``identify``."""
+    def AddLhsController(cls, controller: "ControllerBuilder",
+                         trials: Sequence["PlanarRobot"], excitation: Excitation,
+                         identify: bool) -> Dict:
+        """Adds the LhsController of the trials into the controller's builder.
+
+        Each trial has its nominal robot's potential, theta0(0) = 0.
+
+        Args:
+            controller: The controller's ControllerBuilder.
+            trials: Each trial's Robot.
+            excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
+            identify: Feed the LhsController from an InertialIdentifier
+                (scenario.inertia).
+
+        Returns:
+            The named systems added (system name -> system)."""
         scenario, builder = trials[0].scenario, controller.builder
         identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
             plants=[t.model.plant for t in trials], settings=scenario.inertia,
@@ -105,28 +159,59 @@ class PlanarRobot:
         return {cls.lhs_name: lhs, **({"inertial_identifier": identifier}
                                       if identify else {})}
 
-    def LimitViolation(self):
-        """None: the planar arm's joints turn freely."""
+    def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
+        """The check of the robot's position limits: none.
+
+        Returns:
+            None: the planar arm's joints turn freely."""
         return None                 # the planar arm's joints turn freely
 
-    def Clearance(self):
-        """q -> the smallest clearance of the true arm's links from the base [m]."""
+    def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
+        """The ground truth's link-base clearance, for the run's monitor.
+
+        Returns:
+            q -> the smallest clearance of the true arm's links from the base [m]."""
         return BaseRepulsionPotential(self.scenario.robot.truth,
                                       self.scenario.robot.potential).MinClearance
 
-    def LiveView(self, loop, meshcat):
-        """A LiveView of the planar loop in ``meshcat``."""
+    def LiveView(self, loop: "ClosedLoop", meshcat: Meshcat) -> "viewers.LiveView":
+        """Makes a viewers.LiveView drawing the loop's ground truth.
+
+        Made by LiveView.ForPlanarLoop.
+
+        Args:
+            loop: The closed loop (of this robot) being simulated.
+            meshcat: The Meshcat to draw into.
+
+        Returns:
+            The LiveView."""
         from dacph_drake.robots.viewers import LiveView
         return LiveView.ForPlanarLoop(loop, meshcat)
 
-    def WriteAnimation(self, logs, out_html):
-        """Writes the HTML replay of ``logs`` to ``out_html``."""
+    def WriteAnimation(self, logs: Dict[str, np.ndarray], out_html: Union[str, Path]
+                       ) -> Path:
+        """Writes a self-contained HTML replay of a run's logs.
+
+        Written by viewers.write_animation.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            out_html: The HTML file to write.
+
+        Returns:
+            The HTML file's path."""
         from dacph_drake.robots.viewers import write_animation
         return write_animation(self.scenario, logs, out_html)
 
-    def TaskSignals(self, logs):
-        """alpha~, s (n columns), the kinematic clearance of the ground truth and
-        theta0 - theta0(0)."""
+    def TaskSignals(self, logs: Dict[str, np.ndarray]) -> Tuple[np.ndarray, ...]:
+        """The task's signals over time, for metrics.run_metrics.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            (alpha~ [rad], s (n columns), the kinematic clearance of the ground
+                truth [m], theta0 - theta0(0) [rad])."""
         n = self.num_joints
         lhs, L = logs["lhs_log"], LhsLog(n)
         base_pose, q, _, _ = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
@@ -135,20 +220,42 @@ class PlanarRobot:
                 np.array([clearance(joints) for joints in q]),
                 base_pose[:, 2] - base_pose[0, 2])
 
-    def TaskMetrics(self, logs) -> Dict[str, float]:
-        """None beyond the common metrics (analysis.metrics) for the planar task."""
+    def TaskMetrics(self, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The task's own metrics beside metrics.run_metrics' shared ones: none.
+
+        None beyond the common metrics (analysis.metrics) for the planar task.
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+
+        Returns:
+            An empty dictionary."""
         return {}
 
     def TotalMass(self) -> float:
-        """The true arm's total mass [kg], base and links."""
+        """The true arm's total mass, base and links.
+
+        Returns:
+            The mass [kg]."""
         truth = self.scenario.robot.truth
         return truth.base.mass + sum(link.mass for link in truth.links)
 
-    def VerifyLhs(self, logs, region_budget: float):
-        """V is s^T M s / 2 with the M the controller ran on: the nominal robot's
+    def VerifyLhs(self, logs: Dict[str, np.ndarray], region_budget: float
+                  ) -> "LhsSide":
+        """What dacph verify checks of this LHS.
+
+        V is s^T M s / 2 with the M the controller ran on: the nominal robot's
         until the inertial identifier's start, the identified one's after it
         (logs["inertial_parameters"]); the envelope and eq. (45) take the inertia
-        bounds of both (the smallest inf lambda_min, the largest sup lambda_max)."""
+        bounds of both (the smallest inf lambda_min, the largest sup lambda_max).
+
+        Args:
+            logs: The run's logs (RunResult.logs).
+            region_budget: The wall time [s] after which the region of
+                attraction's program is stopped.
+
+        Returns:
+            The analysis.verify.LhsSide."""
         from dacph_drake.analysis.lyapunov_envelope import EnvelopeConstants
         from dacph_drake.analysis.region_of_attraction import sliding_region_of_attraction
         from dacph_drake.analysis.verify import LhsSide

@@ -7,20 +7,25 @@ import html
 import json
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Dict, Optional, Union
 
 import numpy as np
 from pydrake.geometry import (Box, Meshcat, MeshcatVisualizer,
                               MeshcatVisualizerParams, Rgba)
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import Context, DiagramBuilder
 
 from dacph_drake.robots.description import AddRobotFromDescription
 from dacph_drake.errors import require_positive
 from dacph_drake.log_layout import AttitudeLog, LhsLog
 from dacph_drake.dynamics.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import DescribedArm, Scenario
+
+if TYPE_CHECKING:
+    from dacph_drake.loop.closed_loop import ClosedLoop
 
 DESIRED_PATH = "/desired_orientation"
 MEASURED_PATH = "/measured_orientation"
@@ -34,8 +39,16 @@ OVERLAY_BACKGROUND = "#fffbe6"
 
 
 def playback_speedup(duration: float, max_playback: float) -> float:
-    """Simulated seconds per playback second: real time unless the run is longer
-    than max_playback."""
+    """The speed-up of a replay.
+
+    Real time unless the run is longer than max_playback.
+
+    Args:
+        duration: The run's simulated duration [s].
+        max_playback: The longest replay [s].
+
+    Returns:
+        Simulated seconds per playback second (at least 1)."""
     return max(1.0, duration / max_playback)
 
 
@@ -76,15 +89,22 @@ class _RobotViewer:
 
 
 class ArmViewer(_RobotViewer):
-    """The ground-truth planar arm in Meshcat, viewed top-down (the robot's plane),
-    with the desired end-effector direction alpha_d (wide red bar) and the measured
-    one alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both stay visible
-    when they agree). Draw() shows one plant state, live or into a recording."""
+    """The ground-truth planar arm in Meshcat, viewed top-down (the robot's plane).
+
+    It is drawn with the desired end-effector direction alpha_d (wide red bar) and
+    the measured one alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both
+    stay visible when they agree). Draw() shows one plant state, live or into a
+    recording.
+
+    Args:
+        scenario: The scenario (its robot.truth is drawn).
+        meshcat: The Meshcat to draw into.
+        view: The half-width of the square shown [m].
+        fps: The visualizer's publish rate [1/s].
+    """
 
     def __init__(self, scenario: Scenario, meshcat: Meshcat, view: float,
                  fps: float = 30.0):
-        """``view``: half-width of the square shown [m]; ``fps``: the
-        visualizer's publish rate."""
         super().__init__(meshcat, fps,
                          lambda builder: AddFreeFloatingArm(builder, scenario.robot.truth))
         self._coordinates = ArmCoordinates.ForPlanarArm(scenario.robot.truth.num_links)
@@ -97,13 +117,25 @@ class ArmViewer(_RobotViewer):
 
     @staticmethod
     def Reach(scenario: Scenario) -> float:
-        """Distance from the base's centre to the arm's stretched-out tip [m]."""
+        """The distance from the base's centre to the arm's stretched-out tip.
+
+        Args:
+            scenario: The scenario (its robot.truth).
+
+        Returns:
+            The distance [m]."""
         return (scenario.robot.truth.base.size / 2
                 + sum(link.length for link in scenario.robot.truth.links))
 
-    def Draw(self, x: np.ndarray, alpha_desired: float, time: float = None) -> None:
-        """Shows plant state ``x`` and alpha_d; with ``time``, as the frame of a
-        recording at that playback time."""
+    def Draw(self, x: np.ndarray, alpha_desired: float,
+             time: Optional[float] = None) -> None:
+        """Shows a plant state and alpha_d.
+
+        Args:
+            x: The plant state.
+            alpha_desired: alpha_d [rad].
+            time: The playback time [s] of the recording's frame to draw into
+                (None: live)."""
         end = self._Publish(x, time).translation()
         base_pose, q, _, _ = self._coordinates.Split(x)
         for path, alpha, height in ((DESIRED_PATH, alpha_desired, 0.02),
@@ -115,19 +147,39 @@ class ArmViewer(_RobotViewer):
 
 
 class LiveView:
-    """Draws a closed loop's ground truth into Meshcat while it simulates:
+    """Draws a closed loop's ground truth into Meshcat while it simulates.
+
     Update(root_context) after each advance calls ``draw(root_context, x, t)`` with
     the plant state x at most ``fps`` times per simulated second and sets Meshcat's
-    simulation time. A robot makes one for its loop (robots.Robot.LiveView)."""
+    simulation time. A robot makes one for its loop (robots.Robot.LiveView).
 
-    def __init__(self, plant, meshcat: Meshcat, draw, fps: float = 30.0):
+    Args:
+        plant: The loop's ground-truth plant.
+        meshcat: The Meshcat drawn into.
+        draw: ``draw(root_context, x, t)`` draws plant state x at time t [s].
+        fps: The most frames per simulated second.
+    """
+
+    def __init__(self, plant: MultibodyPlant, meshcat: Meshcat,
+                 draw: Callable[[Context, np.ndarray, float], None], fps: float = 30.0):
         self._plant, self._meshcat, self._draw = plant, meshcat, draw
         self._period, self._next = 1.0 / fps, 0.0
 
     @staticmethod
-    def ForPlanarLoop(loop, meshcat: Meshcat, fps: float = 30.0) -> "LiveView":
-        """An ArmViewer with alpha_d from the controller's lhs_log output (the
-        measured direction where the controller has none)."""
+    def ForPlanarLoop(loop: "ClosedLoop", meshcat: Meshcat, fps: float = 30.0
+                      ) -> "LiveView":
+        """A LiveView of a planar loop through an ArmViewer.
+
+        alpha_d is from the controller's lhs_log output (the measured direction
+        where the controller has none).
+
+        Args:
+            loop: The planar arm's closed loop.
+            meshcat: The Meshcat drawn into.
+            fps: The most frames per simulated second.
+
+        Returns:
+            The LiveView."""
         scenario = loop.scenario
         viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
         lhs_log = loop.loggers.get("lhs_log")
@@ -144,9 +196,11 @@ class LiveView:
             viewer.Draw(x, alpha_desired)
         return LiveView(loop.plant, meshcat, draw, fps)
 
-    def Update(self, root_context) -> None:
-        """Draws the robot at ``root_context``'s state when its next frame is due (a
-        Simulator monitor)."""
+    def Update(self, root_context: Context) -> None:
+        """Draws the robot when its next frame is due (a Simulator monitor).
+
+        Args:
+            root_context: The loop diagram's context."""
         t = root_context.get_time()
         if t < self._next:
             return
@@ -157,12 +211,30 @@ class LiveView:
         self._draw(root_context, x, t)
 
 
-def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
-                    max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
-    """Replays logs["state"] (plant state, sampled at logs["time"]) and the logged
+def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
+                    out_html: Union[str, Path], fps: float = 30.0,
+                    max_playback: float = 60.0, meshcat: Optional[Meshcat] = None
+                    ) -> Path:
+    """Writes a planar run's replay as a self-contained HTML file.
+
+    Replays logs["state"] (plant state, sampled at logs["time"]) and the logged
     alpha_d (lhs_log) through an ArmViewer into a Meshcat recording and writes
-    meshcat.StaticHtml(), with the overlay, to out_html. Runs longer than
-    ``max_playback`` seconds are sped up to fit."""
+    meshcat.StaticHtml(), with the overlay, to out_html.
+
+    Args:
+        scenario: The scenario the run ran.
+        logs: The run's logs (RunResult.logs).
+        out_html: The HTML file to write (its folder is created).
+        fps: The replay's frames per second.
+        max_playback: The longest replay [s]: longer runs are sped up to fit.
+        meshcat: The Meshcat to record in (None: a new QuietMeshcat).
+
+    Returns:
+        The HTML file's path.
+
+    Raises:
+        ConfigError: ``fps`` or ``max_playback`` is not positive.
+        ValueError: The logs hold fewer than two samples."""
     t, x = _RequireReplayable(logs, fps, max_playback)
     alpha_desired = logs["lhs_log"][:, LhsLog(scenario.robot.truth.num_links).alpha_desired]
     meshcat = meshcat or QuietMeshcat()
@@ -184,11 +256,21 @@ def write_animation(scenario: Scenario, logs, out_html, fps: float = 30.0,
 
 
 class SpatialViewer(_RobotViewer):
-    """A robot from a description file in Meshcat (perspective view), with the
-    desired end-effector attitude R_d (thick translucent triad) and the measured one
-    (thin triad) at the end effector; triad axes x, y, z in red, green, blue."""
+    """A robot from a description file in Meshcat (perspective view).
 
-    def __init__(self, description, meshcat: Meshcat, fps: float = 30.0):
+    It is drawn with the desired end-effector attitude R_d (thick translucent triad)
+    and the measured one (thin triad) at the end effector; triad axes x, y, z in
+    red, green, blue.
+
+    Args:
+        description: The robot, as AddRobotFromDescription takes it (a scenario's
+            robot section, a shipped name or a path).
+        meshcat: The Meshcat to draw into.
+        fps: The visualizer's publish rate [1/s].
+    """
+
+    def __init__(self, description: Union[str, Path, DescribedArm], meshcat: Meshcat,
+                 fps: float = 30.0):
         super().__init__(meshcat, fps,
                          lambda builder: AddRobotFromDescription(builder, description))
         for path, (length, width, opacity) in TRIADS.items():
@@ -198,20 +280,44 @@ class SpatialViewer(_RobotViewer):
                                   Rgba(*unit, opacity))
                 meshcat.SetTransform(child, RigidTransform(0.5 * length * unit))
 
-    def Draw(self, x: np.ndarray, R_d: RotationMatrix, time: float = None) -> None:
-        """Shows plant state ``x`` and R_d; with ``time``, as the frame of a
-        recording at that playback time."""
+    def Draw(self, x: np.ndarray, R_d: RotationMatrix,
+             time: Optional[float] = None) -> None:
+        """Shows a plant state and R_d.
+
+        Args:
+            x: The plant state.
+            R_d: The desired end-effector attitude.
+            time: The playback time [s] of the recording's frame to draw into
+                (None: live)."""
         X_WE = self._Publish(x, time)
         for path, R in ((DESIRED_TRIAD, R_d), (MEASURED_TRIAD, X_WE.rotation())):
             self._Place(path, RigidTransform(R, X_WE.translation()), time)
 
 
-def write_spatial_animation(robot, logs, out_html, fps: float = 30.0,
-                            max_playback: float = 60.0, meshcat: Meshcat = None) -> Path:
-    """Replays a spatial run's logs["state"] (sampled at logs["time"]) with the
-    logged R_d (attitude_log) through a SpatialViewer of ``robot`` (its
-    description) into a self-contained HTML file with a legend and the simulated
-    time."""
+def write_spatial_animation(robot: DescribedArm, logs: Dict[str, np.ndarray],
+                            out_html: Union[str, Path], fps: float = 30.0,
+                            max_playback: float = 60.0, meshcat: Optional[Meshcat] = None
+                            ) -> Path:
+    """Writes a spatial run's replay as a self-contained HTML file.
+
+    Replays logs["state"] (sampled at logs["time"]) with the logged R_d
+    (attitude_log) through a SpatialViewer into a self-contained HTML file with a
+    legend and the simulated time.
+
+    Args:
+        robot: The scenario's robot section (its description is drawn).
+        logs: The run's logs (RunResult.logs).
+        out_html: The HTML file to write (its folder is created).
+        fps: The replay's frames per second.
+        max_playback: The longest replay [s]: longer runs are sped up to fit.
+        meshcat: The Meshcat to record in (None: a new QuietMeshcat).
+
+    Returns:
+        The HTML file's path.
+
+    Raises:
+        ConfigError: ``fps`` or ``max_playback`` is not positive.
+        ValueError: The logs hold fewer than two samples."""
     t, x = _RequireReplayable(logs, fps, max_playback)
     desired = logs["attitude_log"][:, AttitudeLog().desired]
     meshcat = meshcat or QuietMeshcat()
@@ -240,9 +346,13 @@ def _RequireReplayable(logs, fps: float, max_playback: float):
 
 
 def QuietMeshcat() -> Meshcat:
-    """A Meshcat without Drake's "listening for connections" message (when a file is
-    written nobody is meant to connect; the CLI prints its own line with the URL):
-    Drake's info messages are off while it starts."""
+    """A Meshcat without Drake's "listening for connections" message.
+
+    When a file is written nobody is meant to connect (the CLI prints its own line
+    with the URL): Drake's info messages are off while it starts.
+
+    Returns:
+        The Meshcat."""
     drake_logger = logging.getLogger("drake")
     level = drake_logger.level
     drake_logger.setLevel(logging.WARNING)

@@ -2,7 +2,7 @@
 end-effector attitude as its task (attitude.py) and the damping and the robust
 term's boundary layer scaled to the inertia (scenario.AttitudeGains)."""
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.math import RotationMatrix
@@ -23,10 +23,15 @@ FAR = 0.01
 
 @dataclass
 class AttitudeTrial:
-    """One trial's part of an AttitudeController: the controller's model (its
-    inertias set from input ``inertial_parameters`` with ``identify``), the
-    clearance potential (or None) and q0 (R_d(0) is the end effector's attitude
-    there)."""
+    """One trial's part of an AttitudeController.
+
+    Attributes:
+        model: The controller's model (its inertias set from input
+            ``inertial_parameters`` with ``identify``).
+        potential: The clearance potential, or None.
+        q0: The initial joint angles [rad] (n): R_d(0) is the end effector's
+            attitude there.
+    """
     model: FloatingBaseModel
     potential: Optional[BaseClearancePotential]
     q0: Sequence[float]
@@ -127,8 +132,16 @@ class AttitudeController(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateControl)
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
-    def DesiredAttitude(self, t: float, trial: int = 0):
-        """(R_d(t), omega_d(t)) of trial ``trial``."""
+    def DesiredAttitude(self, t: float, trial: int = 0
+                        ) -> Tuple[RotationMatrix, np.ndarray]:
+        """(R_d(t), omega_d(t)) of trial ``trial``.
+
+        Args:
+            t: The time [s].
+            trial: The trial's index in the batch.
+
+        Returns:
+            (R_d(t), omega_d(t) in the world frame [rad/s] (3))."""
         return self._reference.At(self._R_d0[trial], t)
 
     def _Secondary(self, potential, q, base_pose):

@@ -41,7 +41,13 @@ class DisturbanceSource(LeafSystem):
             prerequisites_of_calc={self.nothing_ticket()})
 
     def Evaluate(self, t: float) -> np.ndarray:
-        """The trials' d(t), stacked."""
+        """The trials' d(t), stacked.
+
+        Args:
+            t: The time [s].
+
+        Returns:
+            d(t) [N m] (n per trial)."""
         return np.concatenate([disturbance(t, model) for model in self._models])
 
     def _CalcDisturbance(self, context, output):

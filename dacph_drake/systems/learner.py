@@ -16,9 +16,16 @@ from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 @dataclass
 class LearnerTrial:
-    """One trial's part of an RhsLearner: the controller's model (its network's
-    coupling scale reads diag M(q0); p = M qdot where input ``reduced_model`` is
-    not connected), the prior (B0, D0), the network's seed and q0."""
+    """One trial's part of an RhsLearner.
+
+    Attributes:
+        model: The controller's model (its network's coupling scale reads
+            diag M(q0); p = M qdot where input ``reduced_model`` is not connected).
+        B0: The prior's B0 (its diagonal, n).
+        D0: The prior's D0 (its diagonal, n) [N m s].
+        seed: The network's seed.
+        q0: The start configuration [rad] (n).
+    """
     model: ReducedModel
     B0: Sequence[float]
     D0: Sequence[float]

@@ -1,7 +1,7 @@
 """LHS model-based controller: Slotine-Li sliding mode with a null-space potential
 field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41)."""
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Sequence, Tuple
 
 import numpy as np
 from pydrake.systems.framework import LeafSystem
@@ -16,16 +16,31 @@ from dacph_drake.scenario import Excitation, LhsGains
 
 
 def boundary_layer_per_chi(gains: LhsGains, lambda_min_M: float) -> float:
-    """d phi / d chi of the robust term's boundary layer, 1 / (boundary_rate
-    inf_q lambda_min(M)) (0 with boundary_rate 0: phi = epsilon)."""
+    """d phi / d chi of the robust term's boundary layer.
+
+    1 / (boundary_rate inf_q lambda_min(M)) (0 with boundary_rate 0: phi =
+    epsilon).
+
+    Args:
+        gains: The sliding-mode gains (their boundary_rate [1/s]).
+        lambda_min_M: inf_q lambda_min(M) of the controller's model.
+
+    Returns:
+        d phi / d chi."""
     return 1.0 / (gains.boundary_rate * lambda_min_M) if gains.boundary_rate > 0 else 0.0
 
 
 @dataclass
 class LhsTrial:
-    """One trial's part of an LhsController: the controller's model of its robot,
-    the base-repulsion potential of that robot, its reference (theta0(0) from its
-    q0) and inf_q lambda_min(M) of its model (the boundary layer's scale)."""
+    """One trial's part of an LhsController.
+
+    Attributes:
+        model: The controller's model of its robot.
+        potential: The base-repulsion potential of that robot.
+        reference: Its reference (theta0(0) from its q0).
+        lambda_min_M: inf_q lambda_min(M) of its model (the boundary layer's
+            scale).
+    """
     model: ReducedOrderModel
     potential: BaseRepulsionPotential
     reference: OrientationReference
@@ -115,9 +130,19 @@ class LhsController(LeafSystem):
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
     def Control(self, t: float, theta0: float, q: np.ndarray, qdot: np.ndarray,
-                chi: float, trial: int = 0):
-        """(tau_c^r, lhs_log) of one trial at time t, base angle theta0 and joint
-        state (q, qdot)."""
+                chi: float, trial: int = 0) -> Tuple[np.ndarray, np.ndarray]:
+        """(tau_c^r, lhs_log) of one trial at one state, outside a simulation.
+
+        Args:
+            t: The time [s].
+            theta0: The base angle [rad].
+            q: The joint angles [rad] (n).
+            qdot: The joint rates [rad/s] (n).
+            chi: The RHS loop's bound chi [N m].
+            trial: The trial's index in the batch.
+
+        Returns:
+            (tau_c^r [N m] (n), lhs_log (log_layout.LhsLog))."""
         tau, log, model = lhs_samples(
             t, np.array([theta0]), q, qdot, np.array([chi]),
             self._coefficients[trial:trial + 1],

@@ -4,7 +4,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import Context, LeafSystem
 
 from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
                                    integral_gains, stays_stable_if_wrong, within_trust)
@@ -19,10 +19,17 @@ from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 @dataclass
 class RhsTrial:
-    """One trial's part of an RhsIntegrator: the controller's model (p = M qdot
-    where input ``reduced_model`` is not connected), the learner's exported
-    network (ExportedNetwork), the LHS rates of the gain rule (eq. 48: Kd_max,
-    lambda_min_M) and the nominal RHS (B0, D0)."""
+    """One trial's part of an RhsIntegrator.
+
+    Attributes:
+        model: The controller's model (p = M qdot where input ``reduced_model`` is
+            not connected).
+        network: The learner's exported network (ExportedNetwork).
+        Kd_max: lambda_max(K_d) of the LHS, for the gain rule (eq. 48).
+        lambda_min_M: inf_q lambda_min(M), for the gain rule (eq. 48).
+        B0: The nominal RHS's B0 (its diagonal, n).
+        D0: The nominal RHS's D0 (its diagonal, n) [N m s].
+    """
     model: ReducedModel
     network: ExportedNetwork
     Kd_max: float
@@ -177,9 +184,15 @@ class RhsIntegrator(LeafSystem):
         return np.maximum((1 + self._settings.c_margin) * self._CBound(beta),
                           self._c_floor)
 
-    def GetModelGroup(self, context) -> np.ndarray:
-        """The model groups (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
-        dic_ok, trusted; per trial, stacked) in ``context``, for inspection."""
+    def GetModelGroup(self, context: Context) -> np.ndarray:
+        """The model groups in ``context``, for inspection.
+
+        Args:
+            context: This system's context.
+
+        Returns:
+            The model groups (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
+                dic_ok, trusted; per trial, stacked), a copy."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
     def _Refresh(self, gains, weights, q, p, beta, B_hat_scale, evidence=None):

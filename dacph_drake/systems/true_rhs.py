@@ -3,7 +3,7 @@ from typing import Dict, Sequence, Tuple
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector, Context, InputPort, LeafSystem
 
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
@@ -24,8 +24,17 @@ class TrueRhsSystem(LeafSystem):
     trial whose state or torque goes unsound, which is reported (Unsound), so that
     a NaN of one trial never reaches the plant that the others share."""
 
-    def DeclareTrueRhsPorts(self, n: int, state_size: int, trials: int = 1):
-        """DeclareTrueRhsPorts, and the trials' running flags."""
+    def DeclareTrueRhsPorts(self, n: int, state_size: int, trials: int = 1
+                            ) -> Tuple[InputPort, InputPort, InputPort]:
+        """DeclareTrueRhsPorts, and the trials' running flags.
+
+        Args:
+            n: The number of joints.
+            state_size: The size of the plant's state.
+            trials: The number of trials of the batch.
+
+        Returns:
+            The input ports (``u``, ``state``, ``disturbance_model``)."""
         self._n, self._trials = n, trials
         # 1 for a trial that runs, 0 for one stopped (Stop): its torque is zero.
         self._running = self.DeclareNumericParameter(BasicVector(np.ones(trials)))
@@ -34,10 +43,16 @@ class TrueRhsSystem(LeafSystem):
         self._all_running, self._any_stopped = np.ones(trials), False
         return DeclareTrueRhsPorts(self, n, state_size, trials)
 
-    def Stop(self, context, trial: int) -> None:
-        """From now on in ``context`` (this system's), trial ``trial``'s torque is
-        zero, whatever its inputs hold: a trial of a batch that stopped
-        (loop.simulate) stays where it is while the others run on."""
+    def Stop(self, context: Context, trial: int) -> None:
+        """Zeroes a trial's torque from now on.
+
+        From now on in ``context``, trial ``trial``'s torque is zero, whatever its
+        inputs hold: a trial of a batch that stopped (loop.simulate) stays where it
+        is while the others run on.
+
+        Args:
+            context: This system's context.
+            trial: The trial's index in the batch."""
         context.get_mutable_numeric_parameter(self._running).SetAtIndex(trial, 0.0)
         self._any_stopped = True
 
@@ -122,13 +137,24 @@ class TrueRhs(TrueRhsSystem):
             self._offsets, self._n))
 
 
-def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int, trials: int = 1):
-    """The ports every true RHS has (TrueRhsSystem), for ``trials`` trials of n
-    joints: inputs ``u`` (n per trial), ``state`` (the plant's, ``state_size``) and
+def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int, trials: int = 1
+                        ) -> Tuple[InputPort, InputPort, InputPort]:
+    """Declares the ports every true RHS has (TrueRhsSystem).
+
+    Inputs ``u`` (n per trial), ``state`` (the plant's, ``state_size``) and
     ``disturbance_model`` (DisturbanceSource's parameters); outputs ``tau`` (n per
     trial, system._CalcTau) and ``true_matrices`` (n * n + n per trial,
     system._CalcMatrices), each depending only on time, the inputs it reads and
-    (tau) the parameters. Returns the three input ports."""
+    (tau) the parameters.
+
+    Args:
+        system: The true RHS that declares them.
+        n: The number of joints.
+        state_size: The size of the plant's state.
+        trials: The number of trials of the batch.
+
+    Returns:
+        The three input ports (``u``, ``state``, ``disturbance_model``)."""
     u = system.DeclareVectorInputPort("u", trials * n)
     state = system.DeclareVectorInputPort("state", state_size)
     disturbance_model = system.DeclareVectorInputPort("disturbance_model",

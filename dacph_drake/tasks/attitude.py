@@ -11,27 +11,56 @@ from pydrake.math import RotationMatrix
 
 
 def attitude_error(R_WE: RotationMatrix, R_WD: RotationMatrix) -> np.ndarray:
-    """e = 2 sgn(eta) epsilon, (eta, epsilon) the quaternion of the world-frame error
-    rotation R_WE R_WD^T: |e| = 2 sin(theta / 2) for an error of angle theta about
-    the axis epsilon / |epsilon|, so e equals the rotation vector theta k to first
-    order; the sign picks the shorter way round (either quaternion of the double
-    cover gives the same e). With omega_E = omega_d - Lambda e, e decays as
-    exp(-Lambda t) to first order."""
+    """The attitude error e = 2 sgn(eta) epsilon.
+
+    (eta, epsilon) is the quaternion of the world-frame error rotation
+    R_WE R_WD^T: |e| = 2 sin(theta / 2) for an error of angle theta about the axis
+    epsilon / |epsilon|, so e equals the rotation vector theta k to first order;
+    the sign picks the shorter way round (either quaternion of the double cover
+    gives the same e). With omega_E = omega_d - Lambda e, e decays as
+    exp(-Lambda t) to first order.
+
+    Args:
+        R_WE: The end effector's orientation in the world.
+        R_WD: The desired orientation in the world.
+
+    Returns:
+        e (3), in the world frame."""
     error = (R_WE @ R_WD.inverse()).ToQuaternion()
     epsilon = np.array([error.x(), error.y(), error.z()])
     return 2.0 * (1.0 if error.w() >= 0.0 else -1.0) * epsilon
 
 
 def damped_pseudo_inverse(D: np.ndarray, damping: float) -> np.ndarray:
-    """D^+ = D^T (D D^T + damping^2 I)^-1 (n x m for an m x n task Jacobian D)."""
+    """The damped pseudo-inverse D^+ = D^T (D D^T + damping^2 I)^-1.
+
+    Args:
+        D: The task Jacobian (m x n).
+        damping: The damping mu (0: the Moore-Penrose pseudo-inverse of a
+            full-rank D).
+
+    Returns:
+        D^+ (n x m)."""
     m = D.shape[0]
     return D.T @ np.linalg.inv(D @ D.T + damping**2 * np.eye(m))
 
 
 def reference_rates(D: np.ndarray, omega_d: np.ndarray, e: np.ndarray,
                     Lambda: float, xi: np.ndarray, damping: float) -> np.ndarray:
-    """nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi: the task rate in the range of
-    D^+, the secondary motion xi (for example the potential field's descent) in its
-    null space."""
+    """The reference joint rates nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi.
+
+    The task rate in the range of D^+, the secondary motion xi in its null space.
+
+    Args:
+        D: The task Jacobian (3 x n), the GJM's angular rows.
+        omega_d: The desired angular velocity (3) [rad/s].
+        e: The attitude error (3) (attitude_error).
+        Lambda: The attitude error's gain [1/s].
+        xi: The secondary motion (n) [rad/s] (for example the potential field's
+            descent).
+        damping: The pseudo-inverse's damping mu (damped_pseudo_inverse).
+
+    Returns:
+        nu (n) [rad/s]."""
     D_plus = damped_pseudo_inverse(D, damping)
     return D_plus @ (omega_d - Lambda * e) + (np.eye(D.shape[1]) - D_plus @ D) @ xi

@@ -6,8 +6,12 @@ from dacph_drake.scenario import Reference
 
 
 class OrientationReference:
-    """alpha_d(t) of the module docstring from ``reference`` and alpha(0) =
-    ``alpha0``, callable at t."""
+    """alpha_d(t) of the module docstring, callable at t.
+
+    Args:
+        reference: The reference's amplitudes a_i and periods T_i.
+        alpha0: alpha(0) [rad].
+    """
     def __init__(self, reference: Reference, alpha0: float):
         self._a = np.asarray(reference.amplitudes, float)
         self._w = 2 * np.pi / np.asarray(reference.periods, float)
