@@ -1,7 +1,8 @@
-"""The scenario of an arm from its own description (scenario.DescribedArm) with every
-per-joint setting sized to the arm, so that a scenario naming only the robot, its
-base and q0 runs DAC (scenario files: scenario_files.load_scenario starts from it;
-Python: arm_scenario).
+"""The scenario of an arm from its own description (scenario.DescribedArm), or of a
+planar arm of other than the paper's two links (scenario.PlanarArm), with every
+per-joint setting sized to the arm, so that a scenario naming only the robot (and
+q0) runs DAC (scenario files: scenario_files.load_scenario starts from it; Python:
+arm_scenario, planar_arm_scenario).
 
 The rule. Two scales per joint j, from the description at q0 and the task's
 reference:
@@ -29,18 +30,24 @@ by them, with signs alternating over the joints as the paper's two:
 
 The other sections are those of the shipped spatial scenarios (satellite_6dof):
 scenario.SATELLITE_PHASES, described_arm_periods, described_arm_rhs and
-described_arm_learner."""
+described_arm_learner. A planar arm's are the paper's (Scenario's defaults); its
+reference alpha_d = sum_i a_i sin(2 pi t / T_i) gives w = sum_i 2 pi a_i / T_i and
+the peak acceleration sum_i a_i (2 pi / T_i)^2 (tau_j = M_j times it), M_j from the
+true arm."""
+import copy
 from typing import TYPE_CHECKING, Optional, Sequence
 
 import numpy as np
 
 from dacph_drake.scenario import (SATELLITE_PHASES, DescribedArm, Disturbance,
-                                  EndEffectorAttitude, Phases, Scenario, Uncertainty,
+                                  EndEffectorAngle, EndEffectorAttitude, Phases,
+                                  PlanarArm, Scenario, Uncertainty,
                                   described_arm_learner, described_arm_periods,
                                   described_arm_rhs)
 
 if TYPE_CHECKING:
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
+    from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 
 DAMPING_RATE = 2.0              # [1/s] D0_j / M_j: a free joint's speed decays over 0.5 s
 MIN_AMPLITUDE = 0.1             # [rad] the amplitude the scales assume for a still reference
@@ -65,9 +72,11 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
             (DescribedArm.ValidateAssembly) or its description cannot be
             loaded."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
+    from dacph_drake.robots.described import require_every_joint_moves_inertia
     from dacph_drake.robots.description import MakeRobotPlant
     robot.ValidateAssembly()
     model = FloatingBaseModel(MakeRobotPlant(robot))
+    require_every_joint_moves_inertia(model, robot.description)
     q0 = np.asarray(rest_configuration(model) if q0 is None else q0, float)
     task = EndEffectorAttitude() if task is None else task
     scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
@@ -81,6 +90,77 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     scenario.uncertainty = sized_uncertainty(inertia, rate)
     scenario.disturbance = sized_disturbance(inertia * rate * 2 * np.pi / reference.period)
     return scenario
+
+
+def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
+                        task: Optional[EndEffectorAngle] = None) -> Scenario:
+    """The scenario of a planar arm of any number of links, sized by the module's
+    rule: its uncertainty and disturbance from the true arm's joint inertias at q0
+    and the reference's rates.
+
+    Args:
+        robot: The robot section; a nominal arm of another number of links than the
+            truth (the paper's two, where a file leaves it out) becomes a copy of
+            the truth.
+        q0: The start (default: the paper's q1 = 0.3 rad and its elbow's 1 rad
+            spread evenly over the other joints).
+        task: The task (default EndEffectorAngle(): the paper's reference and gains).
+
+    Returns:
+        The scenario (the paper's phases, periods, RHS and learner settings)."""
+    from dacph_drake.dynamics.plant import MakeArmPlant
+    from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+    n = robot.truth.num_links
+    if robot.nominal.num_links != n:
+        robot = copy.deepcopy(robot)
+        robot.nominal = copy.deepcopy(robot.truth)
+    robot.Validate()            # names a bad link before its plant is built
+    task = EndEffectorAngle() if task is None else task
+    q0 = np.asarray([0.3] + [1.0 / max(n - 1, 1)] * (n - 1) if q0 is None else q0,
+                    float)
+    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0])
+    if len(q0) != n:
+        return scenario         # Validate names q0's length; nothing to size by
+    reference = task.reference
+    amplitudes = np.maximum(np.asarray(reference.amplitudes, float), 0.0)
+    periods = np.asarray(reference.periods, float)
+    if not (len(periods) and np.all(periods > 0) and len(amplitudes) == len(periods)):
+        return scenario         # Validate names the reference's problem
+    if not np.any(amplitudes > 0):
+        amplitudes = np.full_like(periods, MIN_AMPLITUDE / len(periods))
+    rate = float(np.sum(2 * np.pi * amplitudes / periods))
+    acceleration = float(np.sum(amplitudes * (2 * np.pi / periods) ** 2))
+    inertia = np.diag(ReducedOrderModel(MakeArmPlant(robot.truth)).MassMatrix(q0))
+    scenario.uncertainty = sized_uncertainty(inertia, rate)
+    scenario.disturbance = sized_disturbance(inertia * acceleration)
+    scenario.periods.rhs = rhs_period(scenario, ReducedOrderModel(MakeArmPlant(
+        robot.nominal)))
+    return scenario
+
+
+def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
+    """The scenario's periods.rhs, or a shorter one where the gain rule asks for it.
+
+    The RHS loop's largest rate c = (1 + rhs.c_margin) c_min(rhs.beta_max) (eq. 48)
+    grows as 1 / inf_q lambda_min(M): an arm with light distal links needs a
+    faster loop than the paper's (gain_rule.check_rhs_period: periods.rhs <=
+    1 / (4 c)). The period returned divides periods.lhs evenly.
+
+    Args:
+        scenario: The scenario (its rhs settings, task.gains.Kd and periods).
+        nominal: The controller's model of the arm (mass_matrix_bounds).
+
+    Returns:
+        periods.rhs [s]."""
+    from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
+    from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound
+    rhs, periods = scenario.rhs, scenario.periods
+    largest = (1 + rhs.c_margin) * c_lower_bound(
+        rhs.Td, scenario.task.gains.Kd, mass_matrix_bounds(nominal)[0], rhs.beta_max)
+    bound = WELL_DAMPED_LOOP_GAIN / largest
+    if periods.rhs <= bound:
+        return periods.rhs
+    return periods.lhs / int(np.ceil(periods.lhs / bound))
 
 
 def rest_configuration(model: "FloatingBaseModel") -> np.ndarray:

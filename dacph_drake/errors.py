@@ -1,7 +1,11 @@
 """Error types shared by the package, and the checks that raise them."""
 import dataclasses
 import math
+import numbers
+import typing
 from typing import Iterable
+
+import numpy as np
 
 
 class ConfigError(ValueError):
@@ -75,6 +79,61 @@ def _require(name: str, value: float, ok: bool, allowed: str) -> None:
         raise ConfigError(f"{name} = {value!r} is out of range; allowed: {allowed}")
 
 
+def require_setting_types(name: str, value: object) -> None:
+    """Requires every setting of a dataclass to have its declared kind, walked
+    recursively: a number where a float or int is declared, a list where a list is,
+    a mapping where a mapping or a section is.
+
+    YAML files are checked so when they are read (yaml_load_typed); this checks the
+    sections a Python user set, before any range check compares them.
+
+    Args:
+        name: The setting's dotted path, for the message ("" for the root).
+        value: A dataclass instance.
+
+    Raises:
+        ConfigError: Naming the first setting of another kind."""
+    for f in dataclasses.fields(value):
+        _require_kind(f"{name}.{f.name}" if name else f.name, getattr(value, f.name),
+                      f.type)
+
+
+def _require_kind(name: str, value: object, declared: object) -> None:
+    """Requires ``value`` to be of the ``declared`` kind (require_setting_types);
+    kinds it does not know (str, bool, Drake's types) are left to their own
+    checks."""
+    origin, arguments = typing.get_origin(declared), typing.get_args(declared)
+    if declared in (float, int):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ConfigError(f"{name} = {_plain(value)!r} is not a number; allowed: a "
+                              "finite number")
+    elif origin is list:
+        if not isinstance(value, (list, tuple, np.ndarray)):
+            raise ConfigError(f"{name} = {_plain(value)!r} is not a list; allowed: a "
+                              "list")
+        for i, entry in enumerate(value):
+            _require_kind(f"{name}[{i}]", entry, arguments[0])
+    elif origin is dict:
+        if not isinstance(value, dict):
+            raise ConfigError(f"{name} = {value!r} is not a mapping; allowed: a mapping")
+        for key, entry in value.items():
+            _require_kind(f"{name}.{key}", entry, arguments[1])
+    elif origin is typing.Union:
+        if value is None and type(None) in arguments:
+            return
+        sections = [kind for kind in arguments if dataclasses.is_dataclass(kind)]
+        if sections and not isinstance(value, tuple(sections)):
+            raise ConfigError(f"{name} is a {type(value).__name__}; allowed: "
+                              f"{' or '.join(kind.__name__ for kind in sections)}")
+        if sections:
+            require_setting_types(name, value)
+    elif dataclasses.is_dataclass(declared):
+        if not isinstance(value, declared):
+            raise ConfigError(f"{name} = {value!r} is not a mapping; allowed: a "
+                              f"{declared.__name__} section")
+        require_setting_types(name, value)
+
+
 def require_finite_numbers(name: str, value: object) -> None:
     """Requires every number of a setting, walked recursively, to be finite.
 
@@ -90,7 +149,7 @@ def require_finite_numbers(name: str, value: object) -> None:
             string where a number belongs."""
     if dataclasses.is_dataclass(value):
         for f in dataclasses.fields(value):
-            if f.type is not str:
+            if not _holds_strings(f.type):
                 require_finite_numbers(f"{name}.{f.name}" if name else f.name,
                                        getattr(value, f.name))
     elif isinstance(value, (list, tuple)):
@@ -101,6 +160,14 @@ def require_finite_numbers(name: str, value: object) -> None:
     elif isinstance(value, (int, float)) and not math.isfinite(value):
         raise ConfigError(f"{name} = {_plain(value)!r} is not finite; allowed: a finite "
                           "number")
+
+
+def _holds_strings(declared: object) -> bool:
+    """Whether a field declared so holds strings by design: str, a list of str, a
+    mapping to str (names, modes, paths)."""
+    arguments = typing.get_args(declared)
+    return declared is str or (typing.get_origin(declared) in (list, dict)
+                               and arguments[-1] is str)
 
 
 def _plain(value):

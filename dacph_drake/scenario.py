@@ -738,6 +738,12 @@ class PlanarArm:
             self.nominal.base.mass *= base
             self.nominal.base.inertia *= base
 
+    def ResolvePaths(self, folder: Path) -> None:
+        """Nothing: a planar arm's section names no file.
+
+        Args:
+            folder: The folder of the scenario file."""
+
     def SizedDefaults(self, q0: Optional[Sequence[float]],
                       task: Optional["EndEffectorAngle"]) -> Optional["Scenario"]:
         """The scenario a file naming this robot starts from.
@@ -747,8 +753,13 @@ class PlanarArm:
             task: The file's task (None where it leaves it out).
 
         Returns:
-            None, since a planar arm's defaults are Scenario's own (the paper's)."""
-        return None
+            None for the paper's arm (Scenario's own defaults, the paper's); for
+                any other, arm_defaults.planar_arm_scenario: every per-joint setting
+                sized to the arm, so that a file naming only robot.truth runs."""
+        if self.truth == RobotParams():
+            return None
+        from dacph_drake.arm_defaults import planar_arm_scenario
+        return planar_arm_scenario(self, q0, task)
 
     # The older file layouts that can express a scenario of this robot
     # (scenario_files: a saved run's fingerprint may come from them).
@@ -870,6 +881,21 @@ class DescribedArm:
     effort_limits: str = "saturate"  # EFFORT_LIMITS
     nominal_inertia_scale: List[float] = field(default_factory=list)
     potential: ClearancePotential = field(default_factory=ClearancePotential)
+
+    def ResolvePaths(self, folder: Path) -> None:
+        """Makes the relative file paths of a scenario file's robot section relative
+        to the file's folder: description (a .urdf or .sdf file), package_paths and
+        packages' folders. Names of shipped robots and package:// URIs stay.
+
+        Args:
+            folder: The folder of the scenario file."""
+        def resolved(path: str) -> str:
+            return str(folder / path) if not Path(path).is_absolute() else path
+        if (not self.description.startswith("package://")
+                and Path(self.description).suffix.lower() in (".urdf", ".sdf")):
+            self.description = resolved(self.description)
+        self.package_paths = [resolved(path) for path in self.package_paths]
+        self.packages = {name: resolved(path) for name, path in self.packages.items()}
 
     def ValidateAssembly(self) -> None:
         """Checks how the robot is put together, before it is parsed.

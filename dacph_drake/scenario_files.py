@@ -316,6 +316,7 @@ def load_scenario(path: Union[str, Path]) -> Scenario:
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
     scenario = load_older_layout(path) or _load_current_layout(path)
+    scenario.robot.ResolvePaths(Path(path).resolve().parent)   # paths in the file
     scenario.Validate()
     return scenario
 
@@ -327,6 +328,7 @@ def _load_current_layout(path) -> Scenario:
     and q0 runs."""
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
                                    migrate=_migrate_file)
+    scenario.robot.ResolvePaths(Path(path).resolve().parent)   # before it is parsed
     raw = read_yaml(path)
     given = raw if isinstance(raw, dict) else {}
     defaults = scenario.robot.SizedDefaults(

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -32,13 +33,35 @@ from test_scenario import BAD_SCENARIO_FILES
     (["simulate", "short", "--out", "FILE"], "is an existing file; allowed: a directory"),
     (["simulate", "short", "--out", "OUT", "--checkpoint", "0"],
      "checkpoint_seconds (--checkpoint) = 0.0 is out of range; allowed: > 0 s"),
+    (["simulate", "LATIN1", "--out", "OUT"], "cannot be read ('utf-8' codec"),
+    (["simulate", "LATIN1_DESCRIBED", "--out", "OUT"], "cannot be read ('utf-8' codec"),
+    (["free-flight", "--duration", "nan"], "--duration = nan is out of range; allowed: > 0"),
+    (["free-flight", "--duration", "-1"], "--duration = -1.0 is out of range; allowed: > 0"),
+    (["free-flight", "--duration", "0"], "--duration = 0.0 is out of range; allowed: > 0"),
+    (["diagram", "short", "--controller", "dac", "--out", "FILE"],
+     "is an existing file; allowed: a directory"),
+    (["diagram", "short", "--controller", "dac", "--out", "/proc/dacph"],
+     "cannot be created"),
+    (["sweep", "BAD_SWEEP", "--out", "OUT"], "malformed YAML at line 2, column 9"),
+    (["sweep", "SWEEP", "--out", "OUT", "--dask", "foo://x"],
+     "--dask foo://x is not a scheduler address (unknown address scheme 'foo'"),
+    (["sweep", "SWEEP", "--out", "OUT", "--dask", "tcp://127.0.0.1:1"],
+     "--dask tcp://127.0.0.1:1: no scheduler answered within 10 s"),
 ])
 def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, message):
     bad = tmp_path / "bad.yaml"
     bad.write_text("q0: [.nan, 1.0]\n")
     existing = tmp_path / "file"
     existing.write_text("")
-    replace = {"OUT": str(tmp_path / "out"), "BAD": str(bad), "FILE": str(existing)}
+    (tmp_path / "latin1.yaml").write_bytes("# caf\xe9\nseed: 1\n".encode("latin-1"))
+    (tmp_path / "latin1_described.yaml").write_bytes(
+        "# caf\xe9\nrobot: !DescribedArm {description: satellite_3dof}\n".encode("latin-1"))
+    (tmp_path / "bad_sweep.yaml").write_text("trials: [1, 2\nscenario: short\n")
+    replace = {"OUT": str(tmp_path / "out"), "BAD": str(bad), "FILE": str(existing),
+               "LATIN1": str(tmp_path / "latin1.yaml"),
+               "LATIN1_DESCRIBED": str(tmp_path / "latin1_described.yaml"),
+               "BAD_SWEEP": str(tmp_path / "bad_sweep.yaml"),
+               "SWEEP": str(Path(__file__).parents[1] / "sweeps" / "short_sweep.yaml")}
     assert main([replace.get(a, a) for a in argv]) == 2
     err = capsys.readouterr().err
     assert err.startswith("dacph: error: ") and message in err, err

@@ -262,10 +262,10 @@ def test_inertia_bound_search_finds_the_grids_minimum(links):
     (the grid only samples), within 0.5 %."""
     from conftest import three_link_robot
     from dacph_drake.dynamics.inertia_bound import search_inertia_bound
-    from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
+    from dacph_drake.dynamics.reduced_model import grid_mass_matrix_bounds
     from dacph_drake.arm_parameters import RobotParams
     plant = MakeArmPlant(RobotParams() if links == 2 else three_link_robot())
-    grid, _ = mass_matrix_bounds(ReducedOrderModel(plant))
+    grid, _ = grid_mass_matrix_bounds(ReducedOrderModel(plant))
     bound = search_inertia_bound(FloatingBaseModel(plant))
     assert grid * 0.995 < bound.smallest_found <= grid
     assert bound.lambda_min == pytest.approx(0.95 * bound.smallest_found)

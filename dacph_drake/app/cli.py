@@ -15,6 +15,7 @@ from dacph_drake.errors import ConfigError, require_nonnegative, require_positiv
 def _free_flight(args) -> int:
     from dacph_drake.app.free_flight import run_free_flight
     from dacph_drake.arm_parameters import RobotParams, load_robot
+    require_positive("--duration", args.duration, "s")
     robot = load_robot(args.robot) if args.robot else RobotParams()
     n = robot.num_links
     result = run_free_flight(robot, args.duration, amplitudes=np.full(n, 0.006),
@@ -76,9 +77,10 @@ def _spatial(args) -> int:
 def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.app.graph import render_diagram
+    from dacph_drake.loop.run_store import prepare_out_dir
     from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
-    out = Path(args.out) if args.out else Path.cwd()
+    out = prepare_out_dir(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
     for controller in controllers:
         loop = build_closed_loop(controller, scenario)
@@ -151,7 +153,13 @@ def _verify(args) -> int:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        simulate(scenario, args.controller, out_dir=run_dir, progress=True)
+        result = simulate(scenario, args.controller, out_dir=run_dir, progress=True,
+                          interruptible=True)
+        if result.status == "interrupted":
+            print(f"{args.controller}: interrupted ({result.reason}; "
+                  f"{result.final_time:.2f} s simulated), saved to {run_dir}; not "
+                  "verified", file=sys.stderr)
+            return 130
     require_positive("--region-budget", args.region_budget, "s")
     report = verify_run(run_dir, controller=args.controller,
                         region_budget=args.region_budget)
@@ -256,7 +264,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         argv: The arguments after the program's name (default: sys.argv[1:]).
 
     Returns:
-        The exit status (2 for bad input, with one line naming it)."""
+        The exit status (2 for bad input, with one line naming it; 130 when
+            interrupted)."""
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     free = commands.add_parser(
@@ -329,7 +338,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                           "this process); with --dask local, the cluster's workers")
     swp.add_argument("--batch-size", type=int, default=None,
                      help="trials simulated together in one diagram (default: the "
-                          "sweep's batch_size, else 64 for a planar arm, 1 for a "
+                          "sweep's batch_size, else 64 for a planar arm, 16 for a "
                           "described arm); no trial's row depends on it")
     swp.add_argument("--dask", metavar="ADDRESS", default=None,
                      help="run on the Dask cluster at ADDRESS (e.g. tcp://host:8786), "
@@ -353,6 +362,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ConfigError as e:
         print(f"dacph: error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # A command between its runs (a run itself saves what it has: simulate's
+        # interruptible, the sweep's rows); every file it writes is replaced
+        # atomically, so none is left half written.
+        print(f"\ndacph: {args.command} interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """The reduced models of free-floating arms at zero momentum (the planar closed form,
 any plant's by AutoDiff), their inertial parameters and bounds, and the port's true
 RHS model; ReducedModel is what the systems of the loop need of any of them."""
-from typing import Protocol
+from typing import Protocol, Tuple
 
 import numpy as np
 
@@ -35,3 +35,13 @@ class ReducedModel(Protocol):
 
         Returns:
             M(q) (n x n)."""
+
+    def MassMatrixAndDerivatives(self, q: np.ndarray
+                                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """M(q) and its derivatives by the joint angles.
+
+        Args:
+            q: The joint angles (n) [rad].
+
+        Returns:
+            (M, dM) with dM[k] = dM/dq_k (n x n x n)."""

@@ -1,22 +1,26 @@
-"""inf_q lambda_min(M(q)), the inertia bound of the RHS gain rule (eq. 48), for arms
-with many joints: a grid over [-pi, pi)^n costs 73^n mass matrices (a 32 s build
-already for n = 3), so the bound is searched instead.
+"""inf_q lambda_min(M(q)), the inertia bound of the RHS gain rule (eq. 48), and
+sup_q lambda_max(M(q)) (the Lyapunov envelope's), for arms with many joints: a grid
+over [-pi, pi)^n costs 73^n mass matrices (a 32 s build already for a spatial arm of
+n = 3, 398 s for a planar one of n = 4, and 73^6 angles for n = 6 do not fit in
+memory), so the bounds are searched instead.
 
 Multi-start descent on lambda_min(M(q)): where the smallest eigenvalue is simple, its
-gradient is d lambda_min / d q_k = v^T (dM/dq_k) v (v its unit eigenvector; dM/dq from
-FloatingBaseModel's AutoDiff); each start descends with an Armijo line search on the
-torus of joint angles. A local search can miss the global minimum, so the bound
-returned is the smallest minimum found times (1 - safety_margin), and the result
-says how many starts came within 0.1 % of it (the more, the likelier it is the
-global one; the landscape is flat near it, so descents stop at slightly different
-values)."""
+gradient is d lambda_min / d q_k = v^T (dM/dq_k) v (v its unit eigenvector; dM/dq
+from the model: FloatingBaseModel's AutoDiff, ReducedOrderModel's closed form); each
+start descends with an Armijo line search on the torus of joint angles. A local
+search can miss the global minimum, so the bound returned is the smallest minimum
+found times (1 - safety_margin), and the result says how many starts came within
+0.1 % of it (the more, the likelier it is the global one; the landscape is flat near
+it, so descents stop at slightly different values). lambda_max likewise, by descent
+on -lambda_max, its bound the largest maximum found times (1 + safety_margin)."""
 import hashlib
 import time
 from dataclasses import dataclass
+from typing import Tuple
 
 import numpy as np
 
-from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics import ReducedModel
 
 
 @dataclass
@@ -44,7 +48,7 @@ class InertiaBound:
 _CACHE = {}
 
 
-def search_inertia_bound(model: FloatingBaseModel, starts: int = 24,
+def search_inertia_bound(model: ReducedModel, starts: int = 24,
                          safety_margin: float = 0.05, seed: int = 0,
                          iterations: int = 200) -> InertiaBound:
     """The gain rule's inf_q lambda_min(M) of a model's arm (see the module docstring).
@@ -62,24 +66,58 @@ def search_inertia_bound(model: FloatingBaseModel, starts: int = 24,
 
     Returns:
         The bound and how it was found."""
-    probe = np.random.default_rng(12345).uniform(-np.pi, np.pi, (3, model.num_joints))
-    key = (hashlib.sha256(np.concatenate([model.MassMatrix(q).ravel() for q in probe]
-                                         ).tobytes()).hexdigest(),
-           starts, safety_margin, seed, iterations)
+    key = _Key(model, starts, safety_margin, seed, iterations)
     if key not in _CACHE:
         _CACHE[key] = _Search(model, starts, safety_margin, seed, iterations)
     return _CACHE[key]
 
 
-def _SmallestEigen(model: FloatingBaseModel, q):
+def search_mass_matrix_bounds(model: ReducedModel, starts: int = 24,
+                              safety_margin: float = 0.05, seed: int = 0,
+                              iterations: int = 200) -> Tuple[float, float]:
+    """The bounds (inf_q lambda_min(M), sup_q lambda_max(M)) of a model's arm, searched.
+
+    lambda_min is search_inertia_bound's; lambda_max the largest local maximum of
+    ``starts`` ascents times (1 + safety_margin) (module docstring). Cached like
+    search_inertia_bound.
+
+    Args:
+        model: The arm's reduced model.
+        starts: The number of descents per bound, from random joint angles.
+        safety_margin: The relative margin by which each bound is widened.
+        seed: The seed of the starts.
+        iterations: The most steps of each descent.
+
+    Returns:
+        (lambda_min bound, lambda_max bound) [kg m^2]."""
+    smallest = search_inertia_bound(model, starts, safety_margin, seed, iterations)
+    key = ("largest", *_Key(model, starts, safety_margin, seed, iterations))
+    if key not in _CACHE:
+        found, _, _ = _Extremes(model, -1.0, starts, seed, iterations)
+        _CACHE[key] = (1.0 + safety_margin) * -found
+    return smallest.lambda_min, _CACHE[key]
+
+
+def _Key(model: ReducedModel, *settings) -> tuple:
+    """The cache key of a robot and the search's settings: its mass matrix at fixed
+    probe configurations identifies the robot."""
+    probe = np.random.default_rng(12345).uniform(-np.pi, np.pi, (3, model.num_joints))
+    return (hashlib.sha256(np.concatenate([model.MassMatrix(q).ravel() for q in probe]
+                                          ).tobytes()).hexdigest(), *settings)
+
+
+def _ExtremeEigen(model: ReducedModel, q, sign: float):
+    """sign * lambda(M(q)) and its gradient by q, lambda the smallest eigenvalue for
+    sign = 1, the largest for sign = -1 (what _Descend minimizes)."""
     M, dM = model.MassMatrixAndDerivatives(q)
     values, vectors = np.linalg.eigh(M)
-    v = vectors[:, 0]
-    return values[0], np.einsum("i,kij,j->k", v, dM, v)
+    extreme = 0 if sign > 0 else -1
+    v = vectors[:, extreme]
+    return sign * values[extreme], sign * np.einsum("i,kij,j->k", v, dM, v)
 
 
-def _Descend(model: FloatingBaseModel, q, iterations: int):
-    value, gradient = _SmallestEigen(model, q)
+def _Descend(model: ReducedModel, q, iterations: int, sign: float = 1.0):
+    value, gradient = _ExtremeEigen(model, q, sign)
     step = 1.0
     for _ in range(iterations):
         norm = np.linalg.norm(gradient)
@@ -87,7 +125,7 @@ def _Descend(model: FloatingBaseModel, q, iterations: int):
             break
         while step > 1e-12:                       # Armijo backtracking
             trial = np.angle(np.exp(1j * (q - step * gradient)))
-            trial_value, trial_gradient = _SmallestEigen(model, trial)
+            trial_value, trial_gradient = _ExtremeEigen(model, trial, sign)
             if trial_value <= value - 1e-4 * step * norm**2:
                 break
             step *= 0.5
@@ -101,16 +139,23 @@ def _Descend(model: FloatingBaseModel, q, iterations: int):
     return value, q
 
 
-def _Search(model, starts, safety_margin, seed, iterations) -> InertiaBound:
-    begin = time.perf_counter()
+def _Extremes(model: ReducedModel, sign: float, starts: int, seed: int,
+              iterations: int):
+    """The smallest of the starts' local minima of sign * lambda (_ExtremeEigen),
+    where it is, and how many starts came within 0.1 % of it."""
     rng = np.random.default_rng(seed)
-    minima = [_Descend(model, rng.uniform(-np.pi, np.pi, model.num_joints), iterations)
-              for _ in range(starts)]
+    minima = [_Descend(model, rng.uniform(-np.pi, np.pi, model.num_joints), iterations,
+                       sign) for _ in range(starts)]
     values = np.array([value for value, _ in minima])
     best = int(np.argmin(values))
-    smallest = float(values[best])
+    found = float(values[best])
+    return found, minima[best][1], int(np.sum(values <= found + 1e-3 * abs(found)))
+
+
+def _Search(model, starts, safety_margin, seed, iterations) -> InertiaBound:
+    begin = time.perf_counter()
+    smallest, argmin, at_minimum = _Extremes(model, 1.0, starts, seed, iterations)
     return InertiaBound(
         lambda_min=(1.0 - safety_margin) * smallest, smallest_found=smallest,
-        argmin=minima[best][1], starts=starts,
-        starts_at_minimum=int(np.sum(values <= smallest * (1 + 1e-3))),
+        argmin=argmin, starts=starts, starts_at_minimum=at_minimum,
         safety_margin=safety_margin, seconds=time.perf_counter() - begin)

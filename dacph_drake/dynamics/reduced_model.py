@@ -220,6 +220,18 @@ class ReducedOrderModel:
         H = self._MassMatrixAndDerivatives(q)[0]
         return H[3:, 3:] - H[:3, 3:].T @ np.linalg.solve(H[:3, :3], H[:3, 3:])
 
+    def MassMatrixAndDerivatives(self, q: np.ndarray
+                                 ) -> "tuple[np.ndarray, np.ndarray]":
+        """M(q) and its derivatives by the joint angles (Evaluate's, at rest).
+
+        Args:
+            q: The joint angles (n) [rad].
+
+        Returns:
+            (M, dM) with dM[k] = dM/dq_k (n x n x n)."""
+        dynamics = self.Evaluate(q, np.zeros(self._num_joints))
+        return dynamics.M, dynamics.dM
+
     def Evaluate(self, q: np.ndarray, qdot: np.ndarray) -> ReducedDynamics:
         """M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base velocity map at (q, qdot).
 
@@ -342,28 +354,53 @@ class ReducedOrderModel:
 _MASS_MATRIX_BOUNDS = {}      # (trigonometric coefficients, grid) -> bounds
 
 
+# The largest arm whose bounds come from the grid (73^2 mass matrices, about 0.1 s;
+# 73^3 would take 5 s, the search 0.3 s): larger arms' bounds are searched
+# (inertia_bound.search_mass_matrix_bounds).
+GRID_JOINTS = 2
+
+
 def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                        ) -> "tuple[float, float]":
     """The paper's lambda_min_min(M) and lambda_max_max(M).
 
-    Over a uniform grid of joint angles in [-pi, pi)^n. The grid search takes
-    ~0.1 s and every diagram build and verification asks for it, so it runs once
-    per distinct robot in a process: the model's fitted coefficients determine M(q)
-    entirely and serve as the key.
+    For up to GRID_JOINTS joints, over a uniform grid of joint angles in [-pi, pi)^n
+    (the paper's arm: 73^2 mass matrices, about 0.1 s); the grid's cost grows as 73^n,
+    so for more joints they are searched (inertia_bound.search_mass_matrix_bounds:
+    0.3 s for 3 or 4 links, 0.5 s for 6). Every diagram build and verification asks
+    for them, so they are computed once per distinct robot in a process: the
+    model's fitted coefficients determine M(q) entirely and serve as the key.
 
     Args:
         model: The arm's reduced model.
         samples_per_joint: The grid's points per joint.
 
     Returns:
-        (inf_q lambda_min(M), sup_q lambda_max(M)) over the grid."""
+        (inf_q lambda_min(M), sup_q lambda_max(M))."""
     key = (model._coefficients.tobytes(), model._coefficients.shape, samples_per_joint)
     if key not in _MASS_MATRIX_BOUNDS:
-        _MASS_MATRIX_BOUNDS[key] = _GridMassMatrixBounds(model, samples_per_joint)
+        if model.num_joints <= GRID_JOINTS:
+            _MASS_MATRIX_BOUNDS[key] = grid_mass_matrix_bounds(model, samples_per_joint)
+        else:
+            from dacph_drake.dynamics.inertia_bound import search_mass_matrix_bounds
+            _MASS_MATRIX_BOUNDS[key] = search_mass_matrix_bounds(model)
     return _MASS_MATRIX_BOUNDS[key]
 
 
-def _GridMassMatrixBounds(model: ReducedOrderModel, samples_per_joint: int):
+def grid_mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
+                            ) -> "tuple[float, float]":
+    """The extreme eigenvalues of M(q) over a uniform grid of joint angles.
+
+    The grid holds samples_per_joint^n configurations in [-pi, pi)^n, so its
+    bounds only sample the true inf and sup (mass_matrix_bounds uses it for small
+    arms).
+
+    Args:
+        model: The arm's reduced model.
+        samples_per_joint: The grid's points per joint.
+
+    Returns:
+        (min lambda_min(M), max lambda_max(M)) over the grid."""
     n = model.num_joints
     axes = [np.linspace(-np.pi, np.pi, samples_per_joint, endpoint=False)] * n
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)

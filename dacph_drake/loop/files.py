@@ -1,8 +1,12 @@
-"""Saving files so that a reader or a crash never sees half of one."""
+"""Saving files so that a reader or a crash never sees half of one, and reading
+them back so that a damaged one is named."""
+import json
 import os
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator, Union
+from typing import Dict, Iterator, Sequence, Union
+
+from dacph_drake.errors import ConfigError
 
 
 @contextmanager
@@ -23,3 +27,32 @@ def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
     temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
     yield temporary
     os.replace(temporary, path)
+
+
+def read_json_record(path: Union[str, Path], keys: Sequence[str], written_by: str
+                     ) -> Dict:
+    """Reads a JSON object this project saved (run_CONTROLLER.json, a sweep's
+    manifest.json), naming the file when it is damaged.
+
+    Args:
+        path: The file.
+        keys: The keys every such record has.
+        written_by: What writes such a file, for the message.
+
+    Returns:
+        The record.
+
+    Raises:
+        ConfigError: The file cannot be read, is not JSON, or is not an object with
+            ``keys`` (one line naming the file)."""
+    try:
+        record = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:         # UnicodeDecodeError is a ValueError
+        raise ConfigError(f"{path} is damaged ({e}); allowed: a file saved by "
+                          f"{written_by}") from e
+    missing = ([key for key in keys if key not in record] if isinstance(record, dict)
+               else list(keys))
+    if missing:
+        raise ConfigError(f"{path} is damaged (no {', '.join(missing)}); allowed: a "
+                          f"file saved by {written_by}")
+    return record

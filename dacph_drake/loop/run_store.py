@@ -15,7 +15,7 @@ from typing import IO, Dict, List, Sequence, Tuple, Union
 import numpy as np
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.loop.files import replaced_atomically
+from dacph_drake.loop.files import read_json_record, replaced_atomically
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
 
@@ -118,23 +118,48 @@ def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
 def LockRun(out: Path, controller: str) -> IO:
     """Takes the exclusive lock of a controller's run in a directory.
 
+    The lock is flock's on out/.run_CONTROLLER.lock, which the kernel releases when
+    its holder exits, however it exits; ReleaseRun removes the file again.
+
     Args:
         out: The run directory.
-        controller: The controller's name: the lock is out/.run_CONTROLLER.lock.
+        controller: The controller's name.
 
     Returns:
-        The open lock file; closing it releases the lock.
+        The open lock file; ReleaseRun releases it.
 
     Raises:
         ConfigError: Another process holds it."""
-    lock = open(out / f".run_{controller}.lock", "w")
-    try:
-        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
+    path = out / f".run_{controller}.lock"
+    while True:
+        lock = open(path, "a")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            raise ConfigError(f"--out = {str(out)!r}: another process is writing a "
+                              f"{controller} run there; allowed: one writer per run")
+        try:            # the file locked is still the one at path (no ReleaseRun since)
+            if os.stat(path).st_ino == os.fstat(lock.fileno()).st_ino:
+                return lock
+        except FileNotFoundError:
+            pass
         lock.close()
-        raise ConfigError(f"--out = {str(out)!r}: another process is writing a "
-                          f"{controller} run there; allowed: one writer per run")
-    return lock
+
+
+def ReleaseRun(lock: IO) -> None:
+    """Removes a run's lock file (LockRun) and releases the lock.
+
+    The file is removed while the lock is held, so that a writer that opened it
+    meanwhile finds it gone once it gets the lock, and opens the path anew.
+
+    Args:
+        lock: LockRun's open lock file."""
+    try:
+        os.unlink(lock.name)
+    except FileNotFoundError:
+        pass
+    lock.close()
 
 
 def require_run_files(run_dir: Union[str, Path], controllers: Sequence[str]) -> Path:
@@ -281,9 +306,5 @@ def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
 
     Raises:
         ConfigError: Naming the file when it is damaged."""
-    path = Path(run_dir) / f"run_{controller}.json"
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError) as e:
-        raise ConfigError(f"{path} is damaged ({e}); allowed: a run file saved by "
-                          "dacph simulate") from e
+    return read_json_record(Path(run_dir) / f"run_{controller}.json",
+                            ("status", "final_time"), "dacph simulate")

@@ -16,7 +16,7 @@ from pydrake.systems.framework import Context
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
-from dacph_drake.loop.run_store import (LockRun, RunResult, prepare_out_dir,
+from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult, prepare_out_dir,
                                         require_one_scenario, save_run)
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.loop.closed_loop import ClosedLoop
@@ -82,7 +82,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         try:
             require_one_scenario(Path(out_dir), scenario, controller)
         except ConfigError:
-            lock.close()
+            ReleaseRun(lock)
             raise
     checkpoint = None
     if out_dir is not None and checkpoint_seconds is not None:
@@ -95,7 +95,7 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
             save_run(result, scenario, out_dir)
     finally:
         if lock is not None:
-            lock.close()
+            ReleaseRun(lock)
     return result
 
 
@@ -144,7 +144,7 @@ def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
                 save_run(result, scenario, out_dir)
     finally:
         for lock in locks:
-            lock.close()
+            ReleaseRun(lock)
     return results
 
 

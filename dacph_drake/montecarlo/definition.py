@@ -35,7 +35,7 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
-from dacph_drake.arm_parameters import load_yaml_dataclass
+from dacph_drake.arm_parameters import load_yaml_dataclass, read_yaml
 from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario
 from dacph_drake.scenario_files import load_scenario, saved_forms
 
@@ -218,6 +218,7 @@ def load_sweep(path: Union[str, Path]) -> SweepDefinition:
     Raises:
         ConfigError: Naming the invalid setting and what is allowed."""
     path = Path(path)
+    read_yaml(path)         # a file that cannot be read or parsed, named (one line)
     try:
         raw = yaml_load(filename=str(path))
     except (OSError, RuntimeError, ValueError) as e:

@@ -87,9 +87,13 @@ def default_workers() -> int:
     return len(os.sched_getaffinity(0))
 
 
+# [s] how long dask_executor waits for a scheduler to answer.
+CONNECT_TIMEOUT = 10.0
+
+
 @contextmanager
-def dask_executor(address: str, workers: Optional[int] = None
-                  ) -> Iterator[Tuple[Executor, int]]:
+def dask_executor(address: str, workers: Optional[int] = None,
+                  timeout: float = CONNECT_TIMEOUT) -> Iterator[Tuple[Executor, int]]:
     """Opens a Dask executor for a sweep.
 
     Each worker must have one thread: torch's random state and thread settings are
@@ -99,13 +103,15 @@ def dask_executor(address: str, workers: Optional[int] = None
         address: The scheduler's address (``Client(address).get_executor()``), or
             "local" for a new LocalCluster of single-threaded worker processes.
         workers: The LocalCluster's worker processes (default: one per core).
+        timeout: How long to wait for the scheduler at ``address`` [s].
 
     Yields:
         (the executor, the number of worker slots).
 
     Raises:
-        ConfigError: Dask is not installed, or the cluster has no workers or
-            workers with several threads."""
+        ConfigError: Dask is not installed, the address is malformed or its
+            scheduler does not answer within ``timeout``, or the cluster has no
+            workers or workers with several threads."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as e:
@@ -116,7 +122,15 @@ def dask_executor(address: str, workers: Optional[int] = None
                                processes=True, dashboard_address=None)
         client = Client(cluster)
     else:
-        client = Client(address)
+        allowed = "allowed: a running scheduler's address such as tcp://host:8786, or local"
+        try:
+            client = Client(address, timeout=timeout)
+        except OSError as e:
+            raise ConfigError(f"--dask {address}: no scheduler answered within "
+                              f"{timeout:g} s; {allowed}") from e
+        except (ValueError, TypeError) as e:
+            raise ConfigError(f"--dask {address} is not a scheduler address "
+                              f"({str(e).splitlines()[0]}); {allowed}") from e
     try:
         threads = client.nthreads()
         if not threads:

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Dict, List, Union
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.loop.files import replaced_atomically
+from dacph_drake.loop.files import read_json_record, replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
 from dacph_drake.scenario_files import save_scenario
 
@@ -73,12 +73,13 @@ def read_manifest(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
         The manifest.
 
     Raises:
-        ConfigError: The directory holds no sweep, or another sweep's."""
+        ConfigError: The directory holds no sweep, another sweep's, or a damaged
+            manifest."""
     path = Path(out_dir) / MANIFEST
     if not path.exists():
         raise ConfigError(f"{out_dir} holds no sweep ({MANIFEST} is missing); allowed: a "
                           "sweep's output directory")
-    manifest = json.loads(path.read_text())
+    manifest = read_json_record(path, ("fingerprint", "sessions"), "dacph sweep")
     if manifest["fingerprint"] not in definition.fingerprints():
         raise ConfigError(
             f"{out_dir} holds a different sweep (its sweep.yaml and scenario.yaml differ "

@@ -15,7 +15,7 @@ from typing import (TYPE_CHECKING, Callable, Dict, List, Optional, Protocol, Seq
 import numpy as np
 
 from dacph_drake.dynamics import ReducedModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.errors import ConfigError, require_setting_types
 
 if TYPE_CHECKING:       # type names only: importing robots loads no Drake module
     from pydrake.geometry import Meshcat, SceneGraph
@@ -205,6 +205,27 @@ def robot_type(scenario: "Scenario") -> type:
     return getattr(importlib.import_module(module), name)
 
 
+def require_clear_start(q0: Sequence[float],
+                        clearance: Optional[Callable[[np.ndarray], float]]) -> None:
+    """Requires every link of the ground truth outside the base at q0.
+
+    The ground truth has no contact model: a run started inside the base would go
+    on through it (the run's monitor stops one that gets there, with reason
+    "collision").
+
+    Args:
+        q0: The scenario's start.
+        clearance: The robot's Robot.Clearance (None: it measures none).
+
+    Raises:
+        ConfigError: q0 puts a link into the base (naming q0 and the clearance)."""
+    rho = clearance(np.asarray(q0, float)) if clearance is not None else np.inf
+    if rho <= 0:
+        raise ConfigError(f"q0 = {list(q0)} puts the arm into the base (clearance "
+                          f"{rho:.3f} m); allowed: a configuration with every link "
+                          "outside the base")
+
+
 def robot_of(scenario: "Scenario") -> Robot:
     """Makes the Robot of a scenario, validating the scenario against it.
 
@@ -216,6 +237,7 @@ def robot_of(scenario: "Scenario") -> Robot:
 
     Raises:
         ConfigError: Naming the first invalid setting."""
+    require_setting_types("", scenario)   # a Python user's sections, before any range
     return robot_type(scenario)(scenario)
 
 

@@ -14,6 +14,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.robots import require_clear_start
 from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
@@ -38,6 +39,53 @@ SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
 DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
 
 
+def arm_joints(model: FloatingBaseModel) -> list:
+    """The plant's joints of an arm's joint angles q, in q's order.
+
+    Args:
+        model: The arm's model.
+
+    Returns:
+        The pydrake joints."""
+    plant = model.plant
+    joints = {plant.get_joint(j).position_start(): plant.get_joint(j)
+              for j in plant.GetJointIndices() if plant.get_joint(j).num_positions() == 1}
+    return [joints[int(i)] for i in model.coordinates.joint_q]
+
+
+def require_every_joint_moves_inertia(model: FloatingBaseModel, description: str
+                                      ) -> None:
+    """Requires every actuated joint of a described arm to move some inertia.
+
+    A joint whose outboard bodies have no mass and no rotational inertia about its
+    axis has M_jj = 0: M(q) is singular, and the gain rule's bound, the sizing
+    rule's scales and the port's momentum are undefined.
+
+    Args:
+        model: The arm's model.
+        description: The robot's description, for the message.
+
+    Raises:
+        ConfigError: Naming the first such joint."""
+    diagonal = np.diag(model.MassMatrix(np.zeros(model.num_joints)))
+    idle = np.flatnonzero(diagonal <= 1e-9 * max(float(np.max(diagonal)), 1e-300))
+    if len(idle):
+        raise ConfigError(
+            f"robot.description {description!r}: joint "
+            f"{arm_joints(model)[idle[0]].name()!r} moves no inertia (the bodies beyond "
+            "it have no mass and no rotational inertia about its axis); allowed: a "
+            "description whose every actuated joint moves a body with mass, or "
+            "robot.locked_joints naming that joint")
+
+
+# [m] how far the clearance the monitor checks (DescribedRobot.Clearance) is measured:
+# it asks only whether a link touches the base.
+CONTACT_QUERY = 0.01
+# The base joint's coordinates (qw, qx, qy, qz, x, y, z) at the origin: link-base
+# distances do not depend on them.
+_BASE_AT_REST = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+
 class DescribedRobot:
     """robots.Robot for a scenario whose robot is a DescribedArm.
 
@@ -58,6 +106,7 @@ class DescribedRobot:
         self.parsed = ParsedDescription(arm)
         self.model = FloatingBaseModel(self.parsed.plant)
         self.num_joints = self.model.num_joints
+        require_every_joint_moves_inertia(self.model, arm.description)
         arm.Validate(len(self.model.parameters.bodies))
         scenario.ValidateShared(self.num_joints)
         if arm.nominal_inertia_scale:
@@ -118,15 +167,18 @@ class DescribedRobot:
         """Requires that a run can start at the scenario's q0.
 
         q0 must lie within the description's joint limits (robot.joint_limits
-        "stop"); the clearance at q0 is not checked yet (the reliability issue).
+        "stop"), with every link's collision geometry outside the base's
+        (Clearance).
 
         Raises:
-            ConfigError: Naming the first joint beyond its limits."""
+            ConfigError: Naming the first joint beyond its limits, or q0 putting a
+                link into the base."""
         violation = self.LimitViolation()
         reason = violation(np.asarray(self.scenario.q0, float)) if violation else None
         if reason:
             raise ConfigError(f"q0 = {list(self.scenario.q0)}: {reason}; allowed: a q0 "
                               "within the limits, or robot.joint_limits: ignore")
+        require_clear_start(self.scenario.q0, self.Clearance())
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
         """The check of the description's joint limits, for the run's monitor.
@@ -137,11 +189,7 @@ class DescribedRobot:
                 or None; otherwise None."""
         if self.scenario.robot.joint_limits != "stop":
             return None
-        plant, coordinates = self.model.plant, self.model.coordinates
-        joints = {plant.get_joint(j).position_start(): plant.get_joint(j)
-                  for j in plant.GetJointIndices()
-                  if plant.get_joint(j).num_positions() == 1}
-        arm = [joints[int(i)] for i in coordinates.joint_q]
+        arm = arm_joints(self.model)
         names = [joint.name() for joint in arm]
         lower = np.array([joint.position_lower_limits()[0] for joint in arm])
         upper = np.array([joint.position_upper_limits()[0] for joint in arm])
@@ -211,12 +259,19 @@ class DescribedRobot:
                 if arm.potential.gain > 0 else None)
 
     def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
-        """The ground truth's link-base clearance, for the run's monitor: none.
+        """The ground truth's link-base clearance, for the run's monitor and the
+        start's check.
+
+        The smallest signed distance between a link's collision geometry and the
+        base's, measured as the clearance potential measures it (with its own
+        contexts; it depends on q alone), reported as inf beyond CONTACT_QUERY.
 
         Returns:
-            None: the clearance of a described arm is its AttitudeController's
-                log."""
-        return None
+            q -> the clearance [m]."""
+        measure = BaseClearancePotential(parsed=self.parsed, model=self.model, gain=0.0,
+                                         margin=CONTACT_QUERY,
+                                         query_distance=CONTACT_QUERY)
+        return lambda q: measure.Evaluate(q, _BASE_AT_REST).min_distance
 
     def LiveView(self, loop: "ClosedLoop", meshcat: Meshcat) -> "viewers.LiveView":
         """Makes a viewers.LiveView drawing the loop's ground truth.

@@ -15,6 +15,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.dynamics.plant import AddFreeFloatingArms, ArmCoordinates, MakeArmPlant
+from dacph_drake.robots import require_clear_start
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.tasks.reference import OrientationReference
@@ -103,11 +104,7 @@ class PlanarRobot:
                 of D."""
         scenario = self.scenario
         q0 = np.asarray(scenario.q0, float)
-        clearance = self.Clearance()(q0)
-        if clearance <= 0:
-            raise ConfigError(f"q0 = {list(scenario.q0)} puts the arm into the base "
-                              f"(clearance {clearance:.3f} m); allowed: a configuration "
-                              "with every link outside the base")
+        require_clear_start(scenario.q0, self.Clearance())
         sigma = float(np.linalg.norm(self.model.Evaluate(q0, np.zeros_like(q0)).D))
         bound = scenario.task.gains.min_task_singular_value
         if sigma < bound:
