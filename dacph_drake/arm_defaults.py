@@ -99,9 +99,8 @@ def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
     and the reference's rates.
 
     Args:
-        robot: The robot section; a nominal arm of another number of links than the
-            truth (the paper's two, where a file leaves it out) becomes a copy of
-            the truth.
+        robot: The robot section; the defaults' nominal arm is a copy of its truth
+            (a file that names robot.nominal overrides it).
         q0: The start (default: the paper's q1 = 0.3 rad and its elbow's 1 rad
             spread evenly over the other joints).
         task: The task (default EndEffectorAngle(): the paper's reference and gains).
@@ -111,9 +110,8 @@ def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
     from dacph_drake.dynamics.plant import MakeArmPlant
     from dacph_drake.dynamics.reduced_model import ReducedOrderModel
     n = robot.truth.num_links
-    if robot.nominal.num_links != n:
-        robot = copy.deepcopy(robot)
-        robot.nominal = copy.deepcopy(robot.truth)
+    robot = copy.deepcopy(robot)
+    robot.nominal = copy.deepcopy(robot.truth)
     robot.Validate()            # names a bad link before its plant is built
     task = EndEffectorAngle() if task is None else task
     q0 = np.asarray([0.3] + [1.0 / max(n - 1, 1)] * (n - 1) if q0 is None else q0,
