@@ -258,3 +258,35 @@ def test_larger_planar_arms_build_fast_and_run_dac_through_every_phase(tmp_path,
     metrics = run_metrics(result.logs, scenario)
     assert metrics["phase1.tracking_error_rms"] < 0.05
     assert all(metrics[f"phase{k}.tracking_error_rms"] < 1e-3 for k in (2, 3))
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+@pytest.mark.parametrize("setting", ["task.gains.Lambda", "task.reference"])
+def test_a_run_driven_to_blow_up_stops_diverged_with_its_logs(tmp_path, robot, setting):
+    """Gains or a reference far beyond the arm's means stop as "diverged" with the
+    reason and the logs up to then saved, exit 1. Where the state blows up within
+    the steps between two checks of the monitor (planar, Lambda = 1e6: the torque is
+    zeroed at the runaway, but at 1e6 rad/s the explicit step itself diverges and
+    Drake's own check fails), the run still ends "diverged" with the runaway's
+    reason, not a Drake assertion (loop.simulate.advance_in_chunks)."""
+    scenario = load_scenario(robot)
+    if setting == "task.gains.Lambda":
+        scenario.task.gains.Lambda = 1e6
+    elif robot == "short":
+        scenario.task.reference.amplitudes = [1e3, 0.0]
+    else:
+        scenario.task.reference.amplitude = 1e3
+    out = tmp_path / "run"
+    assert main_simulate(scenario, out) == 1
+    meta = json.loads((out / "run_dac.json").read_text())
+    assert meta["status"] == "diverged" and meta["reason"], meta
+    with np.load(out / "logs_dac.npz") as logs:
+        assert len(logs["time"]) >= 1 and np.all(np.isfinite(logs["state"]))
+
+
+def main_simulate(scenario, out: Path) -> int:
+    """`dacph simulate` of a scenario object: saved to a file first."""
+    from dacph_drake.scenario_files import save_scenario
+    path = out.parent / "scenario.yaml"
+    save_scenario(scenario, path)
+    return main(["simulate", str(path), "--out", str(out), "--duration", "2"])

@@ -246,8 +246,10 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
     reason = ""
     try:
         reason = advance_in_chunks(simulator, duration, check, after_chunk)
-        if reason and not all(stops):     # the simulation failed: every trial stops
-            stops = [stop or (reason, context.get_time()) for stop in stops]
+        if reason and not all(stops):     # the simulation failed: every trial stops,
+            unsound = truth.Unsound()     # one whose state went unsound with its reason
+            stops = [stop or unsound.get(i) or (reason, context.get_time())
+                     for i, stop in enumerate(stops)]
     except BaseException as e:
         interruption = _Interruption(e)
         if interruption is None:
@@ -306,7 +308,9 @@ def advance_in_chunks(simulator: Simulator, duration: float,
 
     Returns:
         Why the run stopped early (a RuntimeError of the simulation, such as a failed
-            callback, included), or "" when it reached ``duration``."""
+            callback, or a failed Drake assertion, such as a state gone non-finite
+            in the plant's integrator, included), or "" when it reached
+            ``duration``."""
     context = simulator.get_context()
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
     for k in range(1, chunks + 1):
@@ -316,6 +320,11 @@ def advance_in_chunks(simulator: Simulator, duration: float,
             if _Interruption(e) is not None:
                 raise
             return str(e).splitlines()[0]
+        except SystemExit as e:         # pydrake's form of a failed Drake assertion
+            if not str(e).startswith("Failure at "):
+                raise
+            return (f"Drake stopped the simulation at t = {context.get_time():.4f} s "
+                    f"({str(e).splitlines()[0]})")
         reason = check(context.get_time())
         if reason:
             return reason
