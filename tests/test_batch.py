@@ -99,3 +99,30 @@ def test_every_trial_of_a_spatial_batch_is_its_solo_run(controller):
     trials[1].uncertainty.B_scale = [100.0] * 3
     batch = _batch_equal_to_solo_runs(trials, controller, duration=0.6)
     assert [result.status for result in batch] == ["ok", "diverged", "ok"]
+
+
+def test_a_trial_that_breaks_the_step_stops_alone():
+    """A trial whose true arm is 1000x lighter than its controller's model, with
+    actuators 100x stronger, runs away within a step and its state blows up before
+    the monitor's next check: Drake's integrator fails the batch's step. The batch
+    goes back to the last check, stops that trial there and takes the step again
+    (loop.simulate.advance_in_chunks' recover): the other trials run to the end,
+    each bit for bit its solo run; the failing trial keeps its solo run's status,
+    reason and stop time."""
+    trials = _trials(3)
+    for link in trials[1].robot.truth.links:
+        link.mass *= 1e-3
+        link.inertia *= 1e-3
+    trials[1].uncertainty.B_scale = [100.0, 100.0]
+    duration = 0.3
+    batch = simulate_batch(trials, "dac", duration=duration)
+    solo = simulate(trials[1], "dac", duration=duration)
+    assert (batch[1].status, batch[1].reason, batch[1].final_time) == (
+        solo.status, solo.reason, solo.final_time)
+    assert batch[1].status == "diverged" and "runaway" in batch[1].reason
+    healthy = [trials[0], trials[2]]
+    for scenario, result in zip(healthy, (batch[0], batch[2])):
+        alone = simulate(scenario, "dac", duration=duration)
+        assert result.status == alone.status == "ok"
+        for name, log in alone.logs.items():
+            np.testing.assert_array_equal(result.logs[name], log, err_msg=name)

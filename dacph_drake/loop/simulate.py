@@ -10,7 +10,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import Simulator
+from pydrake.systems.analysis import InitializeParams, Simulator
 from pydrake.systems.framework import Context
 
 from dacph_drake.controllers import build_closed_loop, require_controller
@@ -110,7 +110,11 @@ def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
     alone with its reason and final time while the others run on: a non-finite or
     runaway state or torque is caught at the integrator stage it appears at (its
     torque is zero from then on: TrueRhsSystem), and the trial is brought to rest at
-    the next check (every MONITOR_PERIOD of simulated time).
+    the next check (every MONITOR_PERIOD of simulated time). A trial whose state
+    blows up before that check fails the step of the whole batch in Drake's
+    integrator: the batch goes back to the last check, stops that trial there and
+    takes the step again (advance_in_chunks' recover; the others stay bit for bit
+    their solo runs, tests/test_batch.py).
 
     Args:
         scenarios: The trials; they may differ in robot, q0, uncertainty,
@@ -243,9 +247,25 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
                                  "finished"))
             last_checkpoint = time.perf_counter()
 
+    def recover(snapshot: Context) -> bool:
+        """After a failed step of a batch: back to the last step's end, the trials
+        whose state went unsound stopped there (check), the logs cut to that time;
+        False (the run ends) when no trial newly went unsound or none runs on."""
+        unsound = truth.Unsound()
+        if not any(stops[i] is None for i in unsound):
+            return False
+        context.SetTimeStateAndParametersFrom(snapshot)
+        _CutLogs(loop, context, snapshot.get_time())
+        if check(snapshot.get_time()):
+            return False
+        simulator.Initialize(InitializeParams(suppress_initialization_events=True))
+        return True
+
     reason = ""
     try:
-        reason = advance_in_chunks(simulator, duration, check, after_chunk)
+        reason = (advance_in_chunks(simulator, duration, check, after_chunk,
+                                    recover=recover) if len(watched) > 1 else
+                  advance_in_chunks(simulator, duration, check, after_chunk))
         if reason and not all(stops):     # the simulation failed: every trial stops,
             unsound = truth.Unsound()     # one whose state went unsound with its reason
             stops = [stop or unsound.get(i) or (reason, context.get_time())
@@ -297,7 +317,8 @@ def _Freeze(plant, plant_context, coordinates: ArmCoordinates, q0) -> None:
 
 def advance_in_chunks(simulator: Simulator, duration: float,
                       check: Callable[[float], Optional[str]],
-                      after_chunk: Callable[[bool], None]) -> str:
+                      after_chunk: Callable[[bool], None],
+                      recover: Optional[Callable[[Context], bool]] = None) -> str:
     """Advances a simulator in steps of MONITOR_PERIOD of simulated time.
 
     Args:
@@ -305,6 +326,11 @@ def advance_in_chunks(simulator: Simulator, duration: float,
         duration: Where to stop [s].
         check: ``check(t)`` after each step: the reason to stop, or None.
         after_chunk: ``after_chunk(last)`` after each step (last: the final one).
+        recover: For a batch: ``recover(snapshot)`` after a step failed, with a
+            context holding the time, state and parameters of the last step's end;
+            True when it restored them and stopped the trials that made the step
+            fail, so that the step is taken again (None: a failed step ends the
+            run).
 
     Returns:
         Why the run stopped early (a RuntimeError of the simulation, such as a failed
@@ -312,24 +338,51 @@ def advance_in_chunks(simulator: Simulator, duration: float,
             in the plant's integrator, included), or "" when it reached
             ``duration``."""
     context = simulator.get_context()
+    snapshot = context.Clone() if recover is not None else None
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
-    for k in range(1, chunks + 1):
-        try:
-            simulator.AdvanceTo(min(k * MONITOR_PERIOD, duration))
-        except RuntimeError as e:
-            if _Interruption(e) is not None:
-                raise
-            return str(e).splitlines()[0]
-        except SystemExit as e:         # pydrake's form of a failed Drake assertion
-            if not str(e).startswith("Failure at "):
-                raise
-            return (f"Drake stopped the simulation at t = {context.get_time():.4f} s "
-                    f"({str(e).splitlines()[0]})")
+    k = 1
+    while k <= chunks:
+        failure = _FailedStep(simulator, min(k * MONITOR_PERIOD, duration))
+        if failure:
+            if snapshot is not None and recover(snapshot):
+                continue
+            return failure
         reason = check(context.get_time())
         if reason:
             return reason
+        if snapshot is not None:
+            snapshot.SetTimeStateAndParametersFrom(context)
         after_chunk(k == chunks)
+        k += 1
     return ""
+
+
+def _FailedStep(simulator: Simulator, t: float) -> str:
+    """Advances the simulator to t: "" or why it failed (a RuntimeError of the
+    simulation, or a failed Drake assertion, which pydrake raises as SystemExit)."""
+    try:
+        simulator.AdvanceTo(t)
+    except RuntimeError as e:
+        if _Interruption(e) is not None:
+            raise
+        return str(e).splitlines()[0]
+    except SystemExit as e:
+        if not str(e).startswith("Failure at "):
+            raise
+        return (f"Drake stopped the simulation at t = "
+                f"{simulator.get_context().get_time():.4f} s ({str(e).splitlines()[0]})")
+    return ""
+
+
+def _CutLogs(loop: ClosedLoop, context: Context, t: float) -> None:
+    """Drops every logger's samples from time t on (a batch's failed step, taken
+    again from t: the simulator's initialization at t publishes t's anew)."""
+    for logger in loop.loggers.values():
+        log = logger.FindMutableLog(context)
+        times, data = log.sample_times().copy(), log.data().copy()
+        log.Clear()
+        for k in np.flatnonzero(times < t):
+            log.AddData(times[k], data[:, k])
 
 
 def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
