@@ -43,6 +43,10 @@ from test_scenario import BAD_SCENARIO_FILES
     (["diagram", "short", "--controller", "dac", "--out", "/proc/dacph"],
      "cannot be created"),
     (["sweep", "BAD_SWEEP", "--out", "OUT"], "malformed YAML at line 2, column 9"),
+    (["sweep", "SWEEP", "--out", "FILE"], "is an existing file; allowed: a directory"),
+    (["reproduce", "short", "--out", "FILE"], "is an existing file; allowed: a directory"),
+    (["animate", "RUN", "--out", "OUT"], "is a directory; allowed: an HTML file"),
+    (["animate", "RUN", "--out", "/proc/dacph.html"], "cannot be written"),
     (["sweep", "SWEEP", "--out", "OUT", "--dask", "foo://x"],
      "--dask foo://x is not a scheduler address (unknown address scheme 'foo'"),
     (["sweep", "SWEEP", "--out", "OUT", "--dask", "tcp://127.0.0.1:1"],
@@ -57,7 +61,11 @@ def test_cli_bad_input_exits_2_naming_the_setting(tmp_path, capsys, argv, messag
     (tmp_path / "latin1_described.yaml").write_bytes(
         "# caf\xe9\nrobot: !DescribedArm {description: satellite_3dof}\n".encode("latin-1"))
     (tmp_path / "bad_sweep.yaml").write_text("trials: [1, 2\nscenario: short\n")
+    if "RUN" in argv:
+        simulate(short_scenario(), "dac", duration=0.05, out_dir=tmp_path / "run")
+        (tmp_path / "out").mkdir()
     replace = {"OUT": str(tmp_path / "out"), "BAD": str(bad), "FILE": str(existing),
+               "RUN": str(tmp_path / "run"),
                "LATIN1": str(tmp_path / "latin1.yaml"),
                "LATIN1_DESCRIBED": str(tmp_path / "latin1_described.yaml"),
                "BAD_SWEEP": str(tmp_path / "bad_sweep.yaml"),

@@ -77,7 +77,7 @@ def _spatial(args) -> int:
 def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.app.graph import render_diagram
-    from dacph_drake.loop.run_store import prepare_out_dir
+    from dacph_drake.loop.files import prepare_out_dir
     from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     out = prepare_out_dir(args.out) if args.out else Path.cwd()

@@ -5,6 +5,8 @@ import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING, List, Union
 
+from dacph_drake.loop.files import prepare_out_dir
+
 if TYPE_CHECKING:
     from pydrake.systems.framework import Diagram
 
@@ -67,7 +69,7 @@ def render_diagram(diagram: "Diagram", stem: Union[str, Path]) -> List[Path]:
         RuntimeError: Graphviz's ``dot`` program is not installed."""
     dot = _dot()
     stem = Path(stem)
-    stem.parent.mkdir(parents=True, exist_ok=True)
+    prepare_out_dir(stem.parent)
     source = stem.with_suffix(".dot")
     source.write_text(diagram_graphviz(diagram))
     paths = [source]

@@ -16,6 +16,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.app.figures import plot_panels
 from dacph_drake.analysis.metrics import PHASES, comparison, run_metrics
 from dacph_drake.loop.simulate import simulate
+from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.loop.run_store import load_logs, load_run_meta, require_run_files, scenario_fingerprints, versions
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario_files import load_scenario, save_scenario
@@ -344,8 +345,7 @@ def reproduce(scenario: Scenario, out_dir: Union[str, Path], progress: bool = Tr
         ValueError: jobs is not between 1 and the number of controllers."""
     if jobs not in range(1, len(CONTROLLERS) + 1):
         raise ValueError(f"jobs = {jobs!r}; allowed: 1 to {len(CONTROLLERS)}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out_dir(out_dir)
     save_scenario(scenario, out / "scenario.yaml")
     if jobs == 1:
         for controller in CONTROLLERS:

@@ -9,6 +9,33 @@ from typing import Dict, Iterator, Sequence, Union
 from dacph_drake.errors import ConfigError
 
 
+def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
+    """Creates a run directory and checks it is writable, before any simulation.
+
+    Args:
+        out_dir: The directory (created with its parents if missing).
+
+    Returns:
+        It, as a Path.
+
+    Raises:
+        ConfigError: It is a file, cannot be created or is not writable (naming
+            the path)."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out = {str(out)!r} is an existing file; allowed: a "
+                          "directory (created if missing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ConfigError(f"--out = {str(out)!r} cannot be created ({e.strerror}); "
+                          "allowed: a writable directory") from e
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out = {str(out)!r} is not writable; allowed: a writable "
+                          "directory")
+    return out
+
+
 @contextmanager
 def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
     """Replaces a file in one step with what a block writes.

@@ -16,7 +16,8 @@ from pydrake.systems.framework import Context
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
-from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult, prepare_out_dir,
+from dacph_drake.loop.files import prepare_out_dir
+from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
                                         require_one_scenario, save_run)
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.loop.closed_loop import ClosedLoop

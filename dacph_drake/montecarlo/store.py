@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Dict, List, Union
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.loop.files import read_json_record, replaced_atomically
+from dacph_drake.loop.files import prepare_out_dir, read_json_record, replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
 from dacph_drake.scenario_files import save_scenario
 
@@ -103,8 +103,7 @@ class RowStore:
 
     def __init__(self, out_dir: Union[str, Path], definition: SweepDefinition,
                  versions: Dict[str, str], executor: str):
-        self.out = Path(out_dir)
-        self.out.mkdir(parents=True, exist_ok=True)
+        self.out = prepare_out_dir(out_dir)
         self._fd = os.open(self.out / ROWS, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
         try:
             fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -18,7 +18,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Context, DiagramBuilder
 
 from dacph_drake.robots.description import AddRobotFromDescription
-from dacph_drake.errors import require_positive
+from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.log_layout import AttitudeLog, LhsLog
 from dacph_drake.dynamics.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
@@ -379,8 +380,14 @@ def _Record(visualizer, t: np.ndarray, fps: float, max_playback: float, draw) ->
 
 def _WritePage(meshcat: Meshcat, out_html, overlay: str) -> Path:
     out = Path(out_html)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(meshcat.StaticHtml().replace("</body>", overlay + "</body>", 1))
+    if out.is_dir():
+        raise ConfigError(f"--out = {str(out)!r} is a directory; allowed: an HTML file")
+    prepare_out_dir(out.parent)
+    try:
+        out.write_text(meshcat.StaticHtml().replace("</body>", overlay + "</body>", 1))
+    except OSError as e:
+        raise ConfigError(f"--out = {str(out)!r} cannot be written ({e.strerror}); "
+                          "allowed: a writable HTML file") from e
     return out
 
 
