@@ -885,12 +885,17 @@ class DescribedArm:
     def ResolvePaths(self, folder: Path) -> None:
         """Makes the relative file paths of a scenario file's robot section relative
         to the file's folder: description (a .urdf or .sdf file), package_paths and
-        packages' folders. Names of shipped robots and package:// URIs stay.
+        packages' folders. Names of shipped robots and package:// URIs stay. A path
+        that exists only relative to the working directory, as the previous release
+        read it (a run directory's scenario.yaml saved by it), stays as it is.
 
         Args:
             folder: The folder of the scenario file."""
         def resolved(path: str) -> str:
-            return str(folder / path) if not Path(path).is_absolute() else path
+            beside = folder / path
+            if Path(path).is_absolute() or (Path(path).exists() and not beside.exists()):
+                return path
+            return str(beside)
         if (not self.description.startswith("package://")
                 and Path(self.description).suffix.lower() in (".urdf", ".sdf")):
             self.description = resolved(self.description)

@@ -184,6 +184,25 @@ def test_paths_in_a_scenario_file_are_the_files(tmp_path, monkeypatch):
     assert shipped.robot.description == "satellite_3dof"        # a name stays a name
 
 
+def test_a_run_directory_of_the_previous_release_with_a_relative_path_still_loads(
+        tmp_path, monkeypatch):
+    """The previous release read a relative description against the working
+    directory and saved it so in the run directory's scenario.yaml: from that
+    directory the run still loads, with the fingerprint it was saved with."""
+    from dacph_drake.loop.run_store import load_run, scenario_fingerprint
+    _satellite_3dof_urdf(tmp_path, lambda urdf: urdf)
+    monkeypatch.chdir(tmp_path)
+    scenario = load_scenario("satellite_3dof")
+    scenario.robot.description = "arm.urdf"          # as the previous release kept it
+    out = tmp_path / "runs" / "old"
+    simulate(scenario, "model-based", duration=0.05, out_dir=out)
+    assert "description: arm.urdf" in (out / "scenario.yaml").read_text()
+    _, loaded, meta = load_run(out, "model-based")
+    assert loaded.robot.description == "arm.urdf"
+    assert scenario_fingerprint(loaded) == meta["scenario_fingerprint"]
+    assert main(["animate", str(out), "--controller", "model-based"]) == 0
+
+
 @pytest.mark.parametrize("robot", ROBOTS)
 @pytest.mark.parametrize("section, value, message", [
     ("uncertainty.B0", "letters", r"uncertainty.B0\[0\] = 'l' is not a number"),
