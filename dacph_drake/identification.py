@@ -109,13 +109,15 @@ class PortEvidence:
         n: The number of joints.
         sample_period: The sample period h [s].
         window: The forgetting's time constant [s].
+        columns: Where [qdot, u, tau_obs] lie in a sample (default: the
+            PortSample layout's regressed part).
     """
 
-    def __init__(self, n: int, sample_period: float, window: float):
+    def __init__(self, n: int, sample_period: float, window: float, columns=None):
         self.n = n
         self.decay = float(np.exp(-sample_period / window))
         self.size = 9 * n * n + 1
-        self._layout = PortSample(n)
+        self._columns = PortSample(n).regressed if columns is None else columns
 
     def Update(self, state: np.ndarray, sample: np.ndarray) -> np.ndarray:
         """The statistics after one more port sample.
@@ -128,7 +130,7 @@ class PortEvidence:
         Returns:
             The new statistics (state's shape)."""
         m = 3 * self.n
-        z = np.asarray(sample, float)[..., self._layout.regressed]
+        z = np.asarray(sample, float)[..., self._columns]
         out = self.decay * state
         out[..., :m * m] += (z[..., :, None] * z[..., None, :]).reshape(
             z.shape[:-1] + (m * m,))

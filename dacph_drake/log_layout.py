@@ -20,7 +20,11 @@ class LhsLog:
 class RhsLog:
     """The columns of the RHS integrator's log.
 
-    rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted].
+    rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted,
+    certified, set_slowest, set_fastest]: trusted is 1 when this refresh adopted
+    the learner's estimate; certified 1 while the estimate in use was adopted on its
+    credible set's certificate (rhs.adoption certified_set), with that set's slowest
+    and fastest mode ratios (kernels.certificate.certified_gains; nan without a set).
 
     Args:
         n: The number of joints.
@@ -29,8 +33,9 @@ class RhsLog:
     def __init__(self, n: int):
         self.e_tau, self.e_norm, self.chi = slice(0, n), n, n + 1
         self.K = slice(n + 2, 2 * n + 2)
-        self.c, self.c_min, self.dic_ok, self.trusted = range(2 * n + 2, 2 * n + 6)
-        self.size = 2 * n + 6
+        (self.c, self.c_min, self.dic_ok, self.trusted, self.certified,
+         self.set_slowest, self.set_fastest) = range(2 * n + 2, 2 * n + 9)
+        self.size = 2 * n + 9
 
 
 class RhsState:
@@ -40,7 +45,8 @@ class RhsState:
 
     fast, every RHS period:  [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]
     model, every model period: [vec(B_hat^-1) (n*n), D_hat (n), K (n), c, c_min,
-                                dic_ok, trusted]
+                                dic_ok, trusted, certified, set_slowest,
+                                set_fastest, mode_low (n), mode_high (n)]
     rhs_log = [fast e_tau .. chi, model K .. trusted] (RhsLog).
 
     Args:
@@ -55,24 +61,31 @@ class RhsState:
         self.fast_logged = slice(n, 2 * n + 2)
         self.B_inverse, self.D_hat = slice(0, n * n), slice(n * n, n * n + n)
         self.K = slice(n * n + n, n * n + 2 * n)
-        self.c, self.c_min, self.dic_ok, self.trusted = range(n * n + 2 * n,
-                                                             n * n + 2 * n + 4)
-        self.model_size = n * n + 2 * n + 4
-        self.model_logged = slice(n * n + n, self.model_size)
+        (self.c, self.c_min, self.dic_ok, self.trusted, self.certified,
+         self.set_slowest, self.set_fastest) = range(n * n + 2 * n, n * n + 2 * n + 7)
+        # The in-use credible set's range of each mode's eigenvalue (Gershgorin).
+        self.mode_low = slice(n * n + 2 * n + 7, n * n + 3 * n + 7)
+        self.mode_high = slice(n * n + 3 * n + 7, n * n + 4 * n + 7)
+        self.model_size = n * n + 4 * n + 7
+        self.model_logged = slice(n * n + n, n * n + 2 * n + 7)
 
 
 class LearnerLog:
-    """learner_log = [loss, beta_hat, nominal loss, holding, network published]:
-    the fit's weighted squared residual, the gain rule's uncertainty estimate, the
-    same residual of the nominal RHS (B0, D0) on the same samples, 1 while a
-    detected change pauses training (identification.ChangeDetector), and 1 while
-    the published weights are the network's, 0 while they are the prior's
-    (Learner.prior_fallback; 0 in the learner-off ablation)."""
+    """learner_log = [loss, beta_hat, nominal loss, holding, network published,
+    undetermined, restarts]: the published model's weighted squared residual on the
+    window, the gain rule's uncertainty estimate 1 + RMS residual / RMS tau_obs, the
+    same residual of the nominal RHS (B0, D0) on the same samples, 1 while nothing is
+    learned (training paused after a change, identification.ChangeDetector; no row
+    of the local model determined), 1 while some published quantity is learned, 0
+    while all are the prior's (Learner.prior_fallback, a local model's undetermined
+    rows; 0 in the learner-off ablation), the share of the n^2 + n quantities
+    [B, diag D] published at the prior, and the rows restarted this update (a
+    change in their newest samples, learning.local_bayes)."""
 
     def __init__(self):
         (self.loss, self.beta_hat, self.nominal_loss, self.holding,
-         self.network_published) = range(5)
-        self.size = 5
+         self.network_published, self.undetermined, self.restarts) = range(7)
+        self.size = 7
 
 
 class AttitudeLog:

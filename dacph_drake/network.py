@@ -255,7 +255,8 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 class ExportedNetwork:
     """RhsNetwork evaluated from its exported parameter vector by a compiled kernel.
 
-    The kernel is kernels.network.evaluate_networks.
+    The kernel is kernels.network.evaluate_networks. The network's learning.PublishedModel
+    for one trial (a point estimate: no credible set); Stack evaluates a batch's.
 
     Args:
         n: The number of joints.
@@ -281,6 +282,19 @@ class ExportedNetwork:
                                                (n, hidden[-1]), (n,)])
         self.size = int(sum(np.prod(s) for s in self._shapes))
         self._hidden = np.asarray(hidden, np.int64)
+
+    has_uncertainty = False
+
+    @staticmethod
+    def Stack(models: Sequence["ExportedNetwork"]) -> "NetworkStack":
+        """The evaluator of a batch whose trials' networks are ``models``.
+
+        Args:
+            models: Each trial's ExportedNetwork.
+
+        Returns:
+            Their NetworkStack."""
+        return NetworkStack(models)
 
     @staticmethod
     def ForLearner(settings: Learner, model: ReducedModel, q0: Sequence[float]
@@ -320,17 +334,37 @@ class ExportedNetwork:
 
 
 class NetworkStack:
-    """The exported networks of a batch's trials, evaluated in one compiled call.
+    """The exported networks of a batch's trials, evaluated in one compiled call
+    (the batch's learning.PublishedModel).
 
     Args:
         networks: Each trial's ExportedNetwork, alike but for their coupling
             scales.
     """
+    has_uncertainty = False
 
     def __init__(self, networks: Sequence[ExportedNetwork]):
         self._hidden = networks[0]._hidden
         self._momentum_scale = networks[0]._momentum_scale
         self._coupling = np.array([network.coupling for network in networks])
+        self.size = networks[0].size
+
+    def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray):
+        """Every trial's estimate at its state (learning.PublishedModel.Estimate):
+        the point, no credible set, the point as its interval.
+
+        Args:
+            published: Each trial's exported parameters (trials, size).
+            t: The time [s] (unused).
+            q: Each trial's joint angles (trials, n) [rad].
+            p: Each trial's momenta (trials, n).
+
+        Returns:
+            The learning.PortEstimate."""
+        from dacph_drake.learning import PortEstimate
+        B, D = self.Evaluate(published, q, p)
+        return PortEstimate(B=B, D=D, B_set=None, B_interval=np.stack([B, B]),
+                            D_interval=np.stack([D, D]))
 
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
                  ) -> Tuple[np.ndarray, np.ndarray]:

@@ -273,7 +273,15 @@ class Rhs:
     most ``evidence_ratio`` times the residual of the estimate in use (0: never).
     The gain rule reads min(beta_hat, beta_max): periods.rhs is checked at build
     time for the largest c that this allows, so the discrete loop never runs past
-    the bound it was built for. ``gain_rule`` "paper" (default): c follows
+    the bound it was built for.
+
+    ``adoption`` "certified_set" (default): a learner that publishes a credible set
+    of B (learner.model local_bayes) has an estimate adopted only if the discrete
+    loop's certificate (spectral radius, time-scale separation, DIC) holds for every
+    B of the set, with c raised from the paper's rule where the set asks for it
+    (gain_rule.CertifiedGains); the trust band and the evidence are then not used.
+    A learner without a set (the network) is adopted by the trust band, as with
+    "trust_band", which adopts every learner's point estimate by it. ``gain_rule`` "paper" (default): c follows
     (1 + c_margin) c_min(beta_hat) (eq. 48); "well_damped": c = 1 / (4 periods.rhs),
     the fastest decay whose discrete loop with the estimate right is still well
     damped (at least the paper's rule's c: the period check at build time
@@ -304,7 +312,9 @@ class Rhs:
         beta_max: The largest beta_hat the gain rule uses, in [1, 1e6]: the RHS
             period is sized for c_min(beta_max), see RhsIntegrator.
         gain_rule: How c is chosen, one of GAIN_RULES: "paper" or
-            "well_damped"."""
+            "well_damped".
+        adoption: How an estimate is adopted, one of ADOPTIONS: "certified_set"
+            or "trust_band"."""
     Td: float = 2.0
     c_margin: float = 0.1
     c_time_constant: float = 1.0    # [s]
@@ -322,6 +332,7 @@ class Rhs:
     beta_max: float = 2.0           # the largest beta_hat the gain rule uses: the RHS
     #                                 period is sized for c_min(beta_max), see RhsIntegrator
     gain_rule: str = "paper"        # GAIN_RULES
+    adoption: str = "certified_set"
 
 
 @dataclass
@@ -440,14 +451,86 @@ class Disturbance:
 
 TRUST_ANCHORS = ("in_use", "prior")            # Rhs.trust_anchor
 GAIN_RULES = ("paper", "well_damped")           # Rhs.gain_rule
+ADOPTIONS = ("certified_set", "trust_band")     # Rhs.adoption
+LEARNER_MODELS = ("local_bayes", "network")     # Learner.model (learning package)
 LEARNER_MODES = ("regularized", "plain")
 LEARNER_COUPLINGS = ("uniform", "inertia")     # network.coupling_factors
 LEARNER_PRIOR_SCALES = ("pooled", "per_input")  # identification.RhsIdentifier
 
 
 @dataclass
+class LocalBayes:
+    """The local Bayesian learner's settings (learner.bayes; learning.local_bayes).
+
+    Per joint, B_ij(x) and D_i(x) are local linear models (a value, a drift in time
+    and a slope in the joint's momentum) fitted with a Gaussian prior: B_ii around
+    B0_i, B_ij (i != j) around 0, D_i around D0_i, drifts and slopes around 0, each
+    with the sd below times the entry's scale (B0_i, sqrt(B0_i B0_j), D0_i). The
+    prior's ranges are also what is published (and certified by the RHS
+    integrator) while a joint's window does not determine its row.
+
+    Attributes:
+        gain_range: [low, high], the actuators' gains B~_ii / B0_i the prior
+            allows; 0 < low < 1 < high <= 100. Its half-width is the regression
+            prior's sd of B_ii / B0_i.
+        coupling: The prior's bound on |B_ij| / sqrt(B0_i B0_j), i != j, and its
+            sd, in [0, 1].
+        damping_range: [low, high], D~_i / D0_i the prior allows, 0 <= low < 1 <
+            high; its half-width is the prior's sd of D_i / D0_i.
+        drift: The prior's sd of an entry's rate of change along the trajectory,
+            per unit of its scale [1/s], > 0.
+        momentum_slope: The prior's sd of an entry's slope in its joint's
+            momentum, per unit of its scale and of learner.momentum_scale, > 0.
+        curvature: A bound on the second time derivative of an entry along the
+            trajectory, per unit of its scale [1/s^2], >= 0: the local linear
+            model's error over the window widens every interval by half of it
+            times the window's mean squared age.
+        floor: The systematic-error floor (kernels.bayes.fit_row), >= 0.
+        min_window: The samples a row's window must hold before it is fitted [s],
+            > 0 and at most learner.window * periods.learner_sample.
+        min_dof: The residual degrees of freedom, in independent samples, a
+            row's window must leave before its fit is published, >= 1: the
+            band-pass makes neighbouring samples one (kernels.bayes.fit_row).
+        credible_level: The level of the reported intervals, in (0, 1).
+        certificate_level: The level of the credible set the RHS integrator
+            certifies, in [credible_level, 1).
+        margin: An entry is published as learned only where it differs from the
+            prior by more than margin times its credible half-width, >= 0 (2:
+            with the interval right, the learned entry is no worse than the
+            prior).
+        change_floor: The relative residual of a row's newest samples that is a
+            change (with learner.change_ratio over its recent median), >= 0: the
+            local model explains its window to about 1e-3 of tau_obs.
+        inconsistency: The relative residual of a row's newest samples that
+            restarts its window whatever its history, > change_floor: the
+            window's relation does not hold."""
+    gain_range: List[float] = field(default_factory=lambda: [0.5, 2.0])
+    coupling: float = 0.05
+    damping_range: List[float] = field(default_factory=lambda: [0.0, 3.0])
+    drift: float = 0.05             # [1/s]
+    momentum_slope: float = 0.03
+    curvature: float = 0.01         # [1/s^2]
+    floor: float = 1.0
+    min_window: float = 0.2         # [s]
+    min_dof: float = 5.0
+    credible_level: float = 0.9
+    certificate_level: float = 0.99
+    margin: float = 2.0
+    change_floor: float = 5e-3
+    inconsistency: float = 0.1
+
+
+@dataclass
 class Learner:
-    """Physics-informed network (docs/equations.md E34-E35), trained online with Adam.
+    """The learner of the port's RHS (learning package), trained online.
+
+    ``model`` "local_bayes" (default) is the local Bayesian learner: per joint a
+    local linear model of B and D with calibrated intervals, its settings in
+    ``bayes`` (LocalBayes), and band, band_sections, window, forgetting,
+    momentum_scale, change_ratio and model_change below (learning.local_bayes).
+    ``model`` "network" is the paper's physics-informed network (docs/equations.md
+    E34-E35), trained online with Adam, with every setting below but ``bayes``;
+    ``mode`` "plain" is always the network (the paper's learner):
 
     ``mode`` "plain" is the paper's learner: the raw port samples (x, u, qdot,
     tau_obs) of the last ``window`` sampling instants, the loss
@@ -575,7 +658,9 @@ class Learner:
         coupling: One of LEARNER_COUPLINGS: "uniform" or "inertia"
             (network.coupling_factors).
         prior_scale: One of LEARNER_PRIOR_SCALES: "pooled" or "per_input"
-            (identification.RhsIdentifier)."""
+            (identification.RhsIdentifier).
+        model: One of LEARNER_MODELS: "local_bayes" or "network".
+        bayes: The local Bayesian learner's settings (LocalBayes)."""
     mode: str = "regularized"
     hidden: List[int] = field(default_factory=lambda: [16, 8])
     learning_rate: float = 1e-2
@@ -600,6 +685,8 @@ class Learner:
     prior_fallback: bool = False    # True: (B0, D0) published while they fit better
     coupling: str = "uniform"
     prior_scale: str = "pooled"
+    model: str = "local_bayes"
+    bayes: LocalBayes = field(default_factory=LocalBayes)
 
 
 @dataclass
@@ -1225,6 +1312,7 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     require_in_range("rhs.trust_ratio", scenario.rhs.trust_ratio, 1.0, 10.0)
     require_one_of("rhs.trust_anchor", scenario.rhs.trust_anchor, TRUST_ANCHORS)
     require_one_of("rhs.gain_rule", scenario.rhs.gain_rule, GAIN_RULES)
+    require_one_of("rhs.adoption", scenario.rhs.adoption, ADOPTIONS)
     require_in_range("rhs.evidence_ratio", scenario.rhs.evidence_ratio, 0.0, 1.0)
     require_positive("rhs.evidence_window", scenario.rhs.evidence_window, "s")
     require_in_range("rhs.beta_max", scenario.rhs.beta_max, 1.0, 1e6)
@@ -1307,6 +1395,8 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     require_in_range("learner.min_window", L.min_window, 0.0,
                      L.window * periods.learner_sample,
                      "s (at most learner.window * periods.learner_sample)")
+    require_one_of("learner.model", L.model, LEARNER_MODELS)
+    validate_local_bayes(L.bayes, L.window * periods.learner_sample)
     E = scenario.excitation
     require_nonnegative("excitation.amplitude", E.amplitude, "N m")
     _require_length("excitation.frequencies", E.frequencies, 2,
@@ -1324,6 +1414,46 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
             f"excitation.frequencies = {E.frequencies} Hz lie outside learner.band "
             f"= {L.band} Hz; allowed: inside the band (the learner filters "
             "everything else out)")
+
+
+def validate_local_bayes(bayes: LocalBayes, window: float) -> None:
+    """Checks the local Bayesian learner's settings (learner.bayes).
+
+    Args:
+        bayes: The settings.
+        window: The learner's window, learner.window * periods.learner_sample [s].
+
+    Raises:
+        ConfigError: Naming the first invalid setting and its allowed range."""
+    for name, values, low_range, high_range in (
+            ("gain_range", bayes.gain_range, (1e-3, 1.0), (1.0, 100.0)),
+            ("damping_range", bayes.damping_range, (0.0, 1.0), (1.0, 100.0))):
+        _require_length(f"learner.bayes.{name}", values, 2, "[low, high]")
+        require_in_range(f"learner.bayes.{name}[0]", values[0], *low_range,
+                         "(below 1)")
+        require_in_range(f"learner.bayes.{name}[1]", values[1], *high_range,
+                         "(above 1)")
+        if not values[0] < 1.0 < values[1]:
+            raise ConfigError(f"learner.bayes.{name} = {list(values)}; allowed: "
+                              "low < 1 < high (the prior's range holds the prior)")
+    require_in_range("learner.bayes.coupling", bayes.coupling, 0.0, 1.0)
+    require_positive("learner.bayes.drift", bayes.drift, "1/s")
+    require_positive("learner.bayes.momentum_slope", bayes.momentum_slope)
+    require_nonnegative("learner.bayes.curvature", bayes.curvature, "1/s^2")
+    require_nonnegative("learner.bayes.floor", bayes.floor)
+    require_in_range("learner.bayes.min_window", bayes.min_window, 1e-9, window,
+                     "s (above 0, at most learner.window * periods.learner_sample)")
+    require_in_range("learner.bayes.min_dof", bayes.min_dof, 1.0, 1e6)
+    require_in_range("learner.bayes.credible_level", bayes.credible_level, 0.01, 0.999)
+    require_in_range("learner.bayes.certificate_level", bayes.certificate_level,
+                     bayes.credible_level, 0.999999,
+                     "(at least learner.bayes.credible_level, below 1)")
+    require_nonnegative("learner.bayes.margin", bayes.margin)
+    require_nonnegative("learner.bayes.change_floor", bayes.change_floor)
+    if not bayes.inconsistency > bayes.change_floor:
+        raise ConfigError(f"learner.bayes.inconsistency = {bayes.inconsistency!r}; "
+                          "allowed: a number above learner.bayes.change_floor = "
+                          f"{bayes.change_floor!r}")
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"

@@ -24,6 +24,7 @@ from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass, read_ya
 from dacph_drake.scenario import (
     AttitudeGains, AttitudeReference, ClearancePotential, DescribedArm, Disturbance,
     EndEffectorAngle, EndEffectorAttitude, Excitation, InertiaIdentification, Learner,
+    LocalBayes,
     LhsGains, Periods, Phases, PlanarArm, Potential, Reference, Rhs, Scenario, Stress,
     BUILT_IN_SCENARIOS, Uncertainty, described_arm_learner, described_arm_rhs,
     six_dof_disturbance, six_dof_uncertainty)
@@ -38,19 +39,30 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  evidence_ratio: 0.5", "  evidence_window: 1.0",
                           "  min_window: 0.5", "  warm_start: true",
                           "  model_change: true", "  step_guard: 10.0",
-                          "  boundary_rate: 0.0")
+                          "  boundary_rate: 0.0", "  model: local_bayes",
+                          "  adoption: certified_set")
 # Settings added to the current layout since it was introduced: (section, key, the
 # value that reproduces the behaviour before it). A file whose section lacks the key
 # was written before it and is read with that value (not the robot's sized default);
 # the key's line at that value is left out of the fingerprinted text, so a run
 # saved before it keeps its fingerprint (saved_forms).
-ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),)
+ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
+                           ("learner", "model", "network"),
+                           ("rhs", "adoption", "trust_band"))
+# Sections added to the current layout's sections since it was introduced: their
+# lines at the defaults are left out of the fingerprinted text too (a file without
+# them reads them at their defaults).
+ADDED_SUBSECTIONS = (("learner", "bayes", LocalBayes),)
 
 
 def _added_lines() -> Tuple[str, ...]:
-    """ADDED_TO_CURRENT_LAYOUT's lines as yaml_dump_typed writes them."""
-    return tuple(f"  {key}: {str(value).lower()}"
-                 for _, key, value in ADDED_TO_CURRENT_LAYOUT)
+    """ADDED_TO_CURRENT_LAYOUT's lines and ADDED_SUBSECTIONS' default lines as
+    yaml_dump_typed writes them."""
+    lines = [f"  {key}: {str(value).lower()}" for _, key, value in ADDED_TO_CURRENT_LAYOUT]
+    for _, key, section in ADDED_SUBSECTIONS:
+        lines.append(f"  {key}:")
+        lines += ["    " + line for line in yaml_dump_typed(section()).splitlines()]
+    return tuple(lines)
 
 
 def _without_lines(text: str, lines) -> str:

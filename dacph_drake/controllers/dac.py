@@ -8,10 +8,10 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.network import ExportedNetwork
+from dacph_drake.learning import LearnerTrial, published_model
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
-from dacph_drake.systems.learner import LearnerTrial, RhsLearner
+from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.regression_filter import RegressionFilter
 from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
@@ -64,7 +64,7 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     The port observer, the regression filter (regularized mode), the learner and the
     RHS integrator, wired to the LHS controller and to the controller's inputs q,
     qdot; exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``,
-    ``estimates``. The gain rule (eq. 48) uses each trial's robot's LHS rates
+    ``estimates``, ``estimate_bounds``. The gain rule (eq. 48) uses each trial's robot's LHS rates
     (robots.Robot.GainRuleRates); the RHS period is checked for the largest c they
     allow (gain_rule.check_rhs_period). Each system serves every trial of the loop.
 
@@ -97,27 +97,29 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         num_joints=model.num_joints, sample_period=periods.rhs,
         noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],
         anti_alias_cutoff=settings.band[1] if regularized else 0.0))
+    trials = [LearnerTrial(model=robot.model, B0=s.uncertainty.B0, D0=s.uncertainty.D0,
+                           seed=s.seed, q0=s.q0)
+              for robot, s in zip(loop.robots, loop.scenarios)]
+    learner = RhsLearner(trials=trials, settings=settings, period=periods.learner,
+                         sample_period=periods.learner_sample, learning=learning,
+                         watch_model=identifier is not None)
     prefilter = (builder.AddNamedSystem("regression_filter", RegressionFilter(
         settings=settings, num_joints=model.num_joints,
-        period=periods.learner_sample, trials=loop.trials)) if regularized else None)
-    learner = builder.AddNamedSystem("learner", RhsLearner(
-        trials=[LearnerTrial(model=robot.model, B0=s.uncertainty.B0, D0=s.uncertainty.D0,
-                             seed=s.seed, q0=s.q0)
-                for robot, s in zip(loop.robots, loop.scenarios)],
-        settings=settings, period=periods.learner, sample_period=periods.learner_sample,
-        learning=learning, watch_model=identifier is not None))
+        period=periods.learner_sample, trials=loop.trials,
+        channels=learner.learner.channels)) if regularized else None)
+    builder.AddNamedSystem("learner", learner)
     if identifier is not None:
         builder.Connect(identifier.GetOutputPort("model_epoch"),
                         learner.GetInputPort("model_epoch"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        trials=[RhsTrial(model=robot.model,
-                         network=ExportedNetwork.ForLearner(settings, robot.model, s.q0),
+        trials=[RhsTrial(model=robot.model, network=published_model(settings, trial),
                          Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=s.uncertainty.B0,
                          D0=s.uncertainty.D0)
-                for robot, s, (Kd_max, lambda_min_M)
-                in zip(loop.robots, loop.scenarios, rates)],
+                for robot, s, trial, (Kd_max, lambda_min_M)
+                in zip(loop.robots, loop.scenarios, trials, rates)],
         settings=rhs_settings, period=periods.rhs,
-        model_period=periods.learner_sample, stress=scenario.stress))
+        model_period=periods.learner_sample, stress=scenario.stress,
+        channels=learner.learner.channels if regularized else None))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):
@@ -146,7 +148,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     for name, port in [("tau_observed", observer.GetOutputPort("tau_observed")),
                        ("rhs_log", rhs.GetOutputPort("rhs_log")),
                        ("learner_log", learner.GetOutputPort("learner_log")),
-                       ("estimates", learner.GetOutputPort("estimates"))]:
+                       ("estimates", learner.GetOutputPort("estimates")),
+                       ("estimate_bounds", learner.GetOutputPort("estimate_bounds"))]:
         builder.ExportOutput(port, name)
     systems = {"port_observer": observer, "learner": learner, "rhs_integrator": rhs}
     if prefilter is not None:

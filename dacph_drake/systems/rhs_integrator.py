@@ -1,7 +1,7 @@
 """RHS controller: decentralized integral control around the learned inverse
 feed-forward (paper section "RHS Control and Learning", docs/equations.md E36-E38, E48)."""
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 from pydrake.systems.framework import Context, LeafSystem
@@ -9,9 +9,10 @@ from pydrake.systems.framework import Context, LeafSystem
 from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
                                    integral_gains, stays_stable_if_wrong, within_trust)
 from dacph_drake.identification import PortEvidence, PortSample
+from dacph_drake.kernels.certificate import certified_gains
 from dacph_drake.kernels.loop import integrator_samples
+from dacph_drake.learning import Channels, PublishedModel
 from dacph_drake.log_layout import RhsLog, RhsState
-from dacph_drake.network import ExportedNetwork, NetworkStack
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import Rhs, Stress
 from dacph_drake.systems.reduced_model_input import ReducedModelInput
@@ -24,14 +25,16 @@ class RhsTrial:
     Attributes:
         model: The controller's model (p = M qdot where input ``reduced_model`` is
             not connected).
-        network: The learner's exported network (ExportedNetwork).
+        network: The evaluator of the learner's published vector
+            (learning.PublishedModel: a network.ExportedNetwork, a
+            learning.local_bayes.LocalModel).
         Kd_max: lambda_max(K_d) of the LHS, for the gain rule (eq. 48).
         lambda_min_M: inf_q lambda_min(M), for the gain rule (eq. 48).
         B0: The nominal RHS's B0 (its diagonal, n).
         D0: The nominal RHS's D0 (its diagonal, n) [N m s].
     """
     model: ReducedModel
-    network: ExportedNetwork
+    network: PublishedModel
     Kd_max: float
     lambda_min_M: float
     B0: Sequence[float]
@@ -85,14 +88,32 @@ class RhsIntegrator(LeafSystem):
     biased learner, ``stress``), or that would destabilize the loop if they
     misled, is refused.
 
+    With ``adoption`` "certified_set" and a learner that publishes a credible set of
+    B (learning.PortEstimate.B_set; the local Bayesian learner's, its prior's range
+    while it has not determined B), the trust band and the evidence give way to the
+    set's certificate (kernels.certificate.certified_gains): the estimate passing
+    DIC is adopted only if some c, at least c_min and the rate at which the set's
+    slowest mode meets the time-scale separation, at most the well-damped rate
+    1 / (4 period) and the rate at which the set's fastest mode keeps the spectral
+    radius within 1 - STABILITY_MARGIN, certifies the discrete loop for every B of
+    the set, and every paired eigenvalue of the estimate lies within ``trust_ratio``
+    of the in-use set's range of it (the trust band, around the set in use: a
+    confidently wrong jump is refused, and a real change passes through the
+    prior's range, which the learner publishes once it detects the change); c is
+    then the paper's filtered rule clipped into that range, with
+    beta = max(beta_hat, 1 / the set's slowest mode ratio) (the paper's beta_hat_p
+    is the worst ratio of the estimated to the true mode gain). Otherwise the
+    estimate in use is kept with its c range. At t = 0 the learner publishes its
+    prior's range: the loop starts certified for every actuator that range allows.
+
     ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
-    from stress.start on.
+    (and its set likewise) from stress.start on.
 
     Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
     ``port_sample`` (optional: without it, the band alone decides), ``reduced_model``
     (optional: the LHS's M for p = M qdot; without it the model's).
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
-    c_min, dic_ok, trusted]. For a batch (``trials``: each trial's RhsTrial; one: a
+    c_min, dic_ok, trusted, certified, set_slowest, set_fastest] (log_layout.RhsLog). For a batch (``trials``: each trial's RhsTrial; one: a
     single run) every port carries the trials' signals stacked; the fast sample of
     all trials is one compiled kernel (kernels.loop.integrator_samples), the
     model refresh one evaluation of all trials' networks (kernels.network) and
@@ -105,15 +126,20 @@ class RhsIntegrator(LeafSystem):
         period: The integrator's period h [s] (periods.rhs).
         model_period: The model refresh's period [s] (periods.learner_sample).
         stress: A verification setting that scales B_hat from a time on.
+        channels: The learner's channels, whose filtered samples input
+            ``port_sample`` carries (default: the PortSample layout).
     """
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
-                 model_period: float, stress: Stress = Stress()):
+                 model_period: float, stress: Stress = Stress(),
+                 channels: Optional[Channels] = None):
         super().__init__()
         n = trials[0].model.num_joints
         count = len(trials)
         self._n, self._trials = n, list(trials)
-        self._networks = NetworkStack([trial.network for trial in trials])
+        self._published = trials[0].network.Stack([trial.network for trial in trials])
+        self._certified_set = (settings.adoption == "certified_set"
+                               and self._published.has_uncertainty)
         self._B0 = np.array([trial.B0 for trial in trials], float)
         self._Kd_max = np.array([trial.Kd_max for trial in trials], float)
         self._lambda_min_M = np.array([trial.lambda_min_M for trial in trials], float)
@@ -123,21 +149,28 @@ class RhsIntegrator(LeafSystem):
                                     settings.chi_floor])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._period = period
+        # lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45), and the largest
+        # rate a certified set may ask: the fastest well-damped one.
+        self._lambda_lhs = 2.0 * self._Kd_max / self._lambda_min_M
+        self._c_cap = WELL_DAMPED_LOOP_GAIN / period
         # c's target at beta: the paper's (1 + c_margin) c_min(beta), or at least the
         # fastest well-damped rate (Rhs.gain_rule).
         self._c_floor = WELL_DAMPED_LOOP_GAIN / period \
             if settings.gain_rule == "well_damped" else 0.0
-        network_size = trials[0].network.size
+        network_size = self._published.size
         self._tau_request = self.DeclareVectorInputPort("tau_request", n * count)
         self._tau_observed = self.DeclareVectorInputPort("tau_observed", n * count)
         self._q = self.DeclareVectorInputPort("q", n * count)
         self._qdot = self.DeclareVectorInputPort("qdot", n * count)
         self._weights = self.DeclareVectorInputPort("weights", network_size * count)
         self._beta_hat = self.DeclareVectorInputPort("beta_hat", count)
+        sample_size = (PortSample(n).size if channels is None
+                       else 2 * n + channels.size)
         self._port_sample = self.DeclareVectorInputPort("port_sample",
-                                                        PortSample(n).size * count)
+                                                        sample_size * count)
         self._reduced_model = ReducedModelInput(self, n, [t.model for t in trials])
-        self._evidence = PortEvidence(n, model_period, settings.evidence_window)
+        self._evidence = PortEvidence(n, model_period, settings.evidence_window,
+                                      None if channels is None else channels.port_columns)
         self._evidence_minimum = 0.5 * settings.evidence_window / model_period
         self._evidence_index = self.DeclareDiscreteState(self._evidence.size * count)
         # The fast and model groups (log_layout.RhsState), per trial; u is a group of
@@ -161,6 +194,8 @@ class RhsIntegrator(LeafSystem):
                                              c0)[0]
         models[:, layout.c], models[:, layout.c_min] = c0, self._CBound(ones)
         models[:, layout.dic_ok] = models[:, layout.trusted] = 1.0
+        models[:, layout.set_slowest] = models[:, layout.set_fastest] = np.nan
+        models[:, layout.mode_low], models[:, layout.mode_high] = 0.0, np.inf
         self._gains = self.DeclareDiscreteState(models.reshape(-1))
         fast_ticket = {self.discrete_state_ticket(self._fast)}
         chi = np.arange(count) * layout.fast_size + layout.chi
@@ -195,15 +230,21 @@ class RhsIntegrator(LeafSystem):
                 dic_ok, trusted; per trial, stacked), a copy."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
-    def _Refresh(self, gains, weights, q, p, beta, B_hat_scale, evidence=None):
+    def _Refresh(self, gains, weights, t, q, p, beta, B_hat_scale, evidence=None):
         """The trials' model groups after one refresh from ``gains`` (trials x
         model group) at their states x = (q, p) (see class docstring; every trial
         at once); ``evidence``: the PortEvidence states of the learner's samples,
         or None."""
         L = self._layout
         gains = gains.copy()
-        B_hat, D_hat = self._networks.Evaluate(weights, q, p)
-        B_hat = B_hat_scale * B_hat
+        estimate = self._published.Estimate(weights, t, q, p)
+        B_hat, D_hat = B_hat_scale * estimate.B, estimate.D
+        k, paired, dic_ok = integral_gains(B_hat, gains[:, L.c])
+        if self._certified_set:
+            gains = self._Certify(gains, B_hat, D_hat, B_hat_scale * estimate.B_set,
+                                  paired, dic_ok, beta)
+            gains[:, L.dic_ok] = dic_ok
+            return gains
         beta = np.minimum(beta, self._settings.beta_max)
         c_min = self._CBound(beta)
         c = gains[:, L.c]
@@ -220,6 +261,54 @@ class RhsIntegrator(LeafSystem):
         gains[kept, L.K] *= (c / gains[:, L.c])[kept, None]
         gains[:, L.c], gains[:, L.c_min] = c, c_min
         gains[:, L.dic_ok], gains[:, L.trusted] = dic_ok, trusted
+        return gains
+
+    def _Certify(self, gains, B_hat, D_hat, B_set, paired, dic_ok, beta):
+        """The certified-set adoption (class docstring): each trial's candidate is
+        adopted with the c its set certifies, or the estimate in use is kept with its
+        c and K."""
+        L, settings = self._layout, self._settings
+        count = len(self._trials)
+        eigenvalues = np.where(dic_ok[:, None], paired.real, 1.0)
+        lower, upper = np.minimum(B_set[0], B_set[1]), np.maximum(B_set[0], B_set[1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slowest = np.min((np.diagonal(lower, axis1=1, axis2=2)
+                              - _off_diagonal_bound(lower, upper)) / eigenvalues, axis=1)
+        beta = np.minimum(np.maximum(beta, np.where(slowest > 0, 1.0 / slowest, np.inf)),
+                          settings.beta_max)
+        c_min = self._CBound(beta)
+        c = gains[:, L.c]
+        target = c + self._c_step * (self._CTarget(beta) - c)
+        out = np.empty((count, 4))
+        certified_gains(lower, upper, eigenvalues, target, c_min,
+                        settings.Td * self._lambda_lhs, self._period, self._c_cap,
+                        1.0 - STABILITY_MARGIN, out)
+        # The trust band around the set in use: each mode's estimate within
+        # trust_ratio of the in-use set's range of it (a jump beyond it is taken
+        # only through the prior's range, which the learner publishes after a
+        # detected change).
+        radius = _off_diagonal_bound(lower, upper)
+        mode_low = np.diagonal(lower, axis1=1, axis2=2) - radius
+        mode_high = np.diagonal(upper, axis1=1, axis2=2) + radius
+        ratio = settings.trust_ratio
+        within = np.all((eigenvalues <= gains[:, L.mode_high] * ratio)
+                        & (eigenvalues >= gains[:, L.mode_low] / ratio), axis=1)
+        adopted = dic_ok & (out[:, 1] > 0.5) & within
+        if np.any(adopted):
+            gains[adopted, L.B_inverse] = np.linalg.inv(B_hat[adopted]).reshape(
+                np.count_nonzero(adopted), -1)
+            gains[adopted, L.D_hat] = D_hat[adopted]
+            gains[adopted, L.K] = out[adopted, 0, None] / paired.real[adopted]
+            gains[adopted, L.c] = out[adopted, 0]
+            gains[adopted, L.c_min] = c_min[adopted]
+            gains[adopted, L.certified] = 1.0
+            gains[adopted, L.set_slowest] = out[adopted, 2]
+            gains[adopted, L.set_fastest] = out[adopted, 3]
+            gains[adopted, L.mode_low] = mode_low[adopted]
+            gains[adopted, L.mode_high] = mode_high[adopted]
+        # A candidate the set does not certify leaves the estimate in use, its c
+        # and K as they were: they were certified on its own set.
+        gains[:, L.trusted] = adopted
         return gains
 
     def _Accepts(self, gains, B_hat, D_hat, paired, k, dic_ok, evidence) -> np.ndarray:
@@ -265,8 +354,8 @@ class RhsIntegrator(LeafSystem):
                        if context.get_time() >= self._stress.start else 1.0)
         gains = self._Refresh(
             context.get_discrete_state(self._gains).get_value().reshape(count, -1),
-            self._weights.Eval(context).reshape(count, -1), q, p, betas, B_hat_scale,
-            evidence)
+            self._weights.Eval(context).reshape(count, -1), context.get_time(), q, p,
+            betas, B_hat_scale, evidence)
         discrete_state.get_mutable_vector(self._gains).SetFromVector(gains.reshape(-1))
 
     def _UpdateIntegrator(self, context, discrete_state):
@@ -285,3 +374,9 @@ class RhsIntegrator(LeafSystem):
         output.SetFromVector(np.concatenate([fast[:, L.fast_logged],
                                              gains[:, L.model_logged]], axis=1).reshape(-1))
 
+
+
+def _off_diagonal_bound(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """R_p = sum_{j != p} max(|lower_pj|, |upper_pj|) of each trial's box (trials, n)."""
+    largest = np.maximum(np.abs(lower), np.abs(upper))
+    return np.sum(largest, axis=-1) - np.diagonal(largest, axis1=-2, axis2=-1)

@@ -1,0 +1,118 @@
+"""The certificate of the discrete RHS loop on a credible set of B (gain_rule.CertifiedGains),
+compiled.
+
+Per decoupled mode the loop's characteristic polynomial is z^2 - z + mu with mu an
+eigenvalue of h K B (gain_rule.loop_matrix); with K = c diag(1 / Re lambda_hat_p)
+and B anywhere in the entrywise box [lower, upper], Gershgorin places the
+eigenvalues of h K B in the union over p of the "stadiums"
+
+    S_p = {mu : dist(mu, h c [lower_pp, upper_pp] / lambda_p) <= h c R_p / lambda_p},
+    R_p = sum_{j != p} max(|lower_pj|, |upper_pj|).
+
+The loop is certified at c when every S_p lies in Re(mu) > 0 with
+Re(mu) / h >= Td lambda_LHS (the time-scale separation, eq. 45) and every root of
+z^2 - z + mu, mu in S_p, lies within the spectral radius bound (the largest root
+modulus is subharmonic in mu: its maximum over S_p is on S_p's boundary, sampled
+here at BOUNDARY_POINTS points)."""
+import numpy as np
+from numba import njit
+
+BOUNDARY_POINTS = 48
+
+
+@njit(cache=True)
+def root_radius(mu: complex) -> float:
+    """The largest root modulus of z^2 - z + mu.
+
+    Args:
+        mu: The loop gain (an eigenvalue of h K B).
+
+    Returns:
+        max |z| over the two roots."""
+    disc = np.sqrt(1.0 - 4.0 * mu + 0j)
+    return max(abs(0.5 * (1.0 + disc)), abs(0.5 * (1.0 - disc)))
+
+
+@njit(cache=True)
+def _largest_radius(low, high, radius, scale) -> float:
+    """The largest root radius over the stadiums at loop scale h c (``scale``):
+    ``low``, ``high``, ``radius`` per mode, in units of h c."""
+    worst = 0.0
+    quarter = BOUNDARY_POINTS // 4
+    for p in range(low.shape[0]):
+        a, b, r = scale * low[p], scale * high[p], scale * radius[p]
+        for k in range(BOUNDARY_POINTS):
+            if k < quarter:                      # the left semicircle
+                angle = np.pi / 2 + np.pi * k / (quarter - 1)
+                mu = a + r * np.cos(angle) + 1j * r * np.sin(angle)
+            elif k < 2 * quarter:                # the right semicircle
+                angle = -np.pi / 2 + np.pi * (k - quarter) / (quarter - 1)
+                mu = b + r * np.cos(angle) + 1j * r * np.sin(angle)
+            else:                                # the upper and lower edges
+                x = a + (b - a) * ((k - 2 * quarter) % quarter) / (quarter - 1)
+                mu = x + 1j * r * (1.0 if k < 3 * quarter else -1.0)
+            worst = max(worst, root_radius(mu))
+    return worst
+
+
+@njit(cache=True)
+def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarray,
+                    c_target: np.ndarray, c_floor: np.ndarray, rate: np.ndarray,
+                    period: float, c_cap: float, radius_bound: float,
+                    out: np.ndarray) -> None:
+    """Every trial's certified decay rate c on its credible set (module docstring).
+
+    c is c_target clipped to the certified range [max(c_floor, c_sep), c_high]:
+    c_sep = rate / min_p (lower_pp - R_p) / lambda_p is where the slowest mode
+    meets the separation, c_high the largest c <= c_cap whose stadiums keep every
+    root within ``radius_bound`` (bisection from the clipped target down to the
+    range's lower end).
+
+    Args:
+        lower: Each trial's set's lower bounds (trials, n, n).
+        upper: Each trial's set's upper bounds (trials, n, n).
+        eigenvalues: The real parts of each trial's estimate's paired eigenvalues
+            lambda_p, each > 0 (trials, n).
+        c_target: The rate the gain rule asks of each trial [1/s] (trials).
+        c_floor: The least rate each trial may run [1/s] (trials).
+        rate: Td lambda_LHS of each trial [1/s] (trials).
+        period: The RHS period h [s].
+        c_cap: The largest rate any trial may run [1/s].
+        radius_bound: The largest spectral radius allowed.
+        out: Written per trial: [c, certified (1/0), the set's slowest mode
+            min_p (lower_pp - R_p) / lambda_p, its fastest (upper_pp + R_p) /
+            lambda_p] (trials, 4)."""
+    trials, n = lower.shape[0], lower.shape[1]
+    low, high, radius = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(trials):
+        slowest, fastest = np.inf, 0.0
+        for p in range(n):
+            R = 0.0
+            for j in range(n):
+                if j != p:
+                    R += max(abs(lower[i, p, j]), abs(upper[i, p, j]))
+            low[p] = lower[i, p, p] / eigenvalues[i, p]
+            high[p] = upper[i, p, p] / eigenvalues[i, p]
+            radius[p] = R / eigenvalues[i, p]
+            slowest = min(slowest, low[p] - radius[p])
+            fastest = max(fastest, high[p] + radius[p])
+        out[i, 2], out[i, 3] = slowest, fastest
+        out[i, 0], out[i, 1] = c_target[i], 0.0
+        if not slowest > 0.0:
+            continue
+        c_low = max(c_floor[i], rate[i] / slowest)
+        if c_low > c_cap:
+            continue
+        c = min(max(c_target[i], c_low), c_cap)
+        if _largest_radius(low, high, radius, period * c) > radius_bound:
+            if _largest_radius(low, high, radius, period * c_low) > radius_bound:
+                continue
+            good, bad = c_low, c
+            for _ in range(30):
+                middle = 0.5 * (good + bad)
+                if _largest_radius(low, high, radius, period * middle) > radius_bound:
+                    bad = middle
+                else:
+                    good = middle
+            c = good
+        out[i, 0], out[i, 1] = c, 1.0

@@ -1,0 +1,461 @@
+"""The local Bayesian learner (``learner.model: local_bayes``): per joint i, the
+port relation's row
+
+    tau_i = sum_j B_ij(x) u_j - D_i(x) qdot_i + d_i(t)
+
+with every entry a local linear model around the newest sample (t_now, p_now),
+
+    X(x) = X + X_t (t - t_now) + X_p (p_i - p_now,i),      X in {B_i1..B_in, D_i},
+
+its drift along the trajectory and its slope in the joint's momentum, fitted
+by Bayesian linear regression to the band-passed products of the port signals with
+those features (LocalBayesChannels: the band-pass of B(x) u is not B(x) times the
+band-pass of u when B moves, the band-pass of each product is exact), on the
+samples since the row's last restart, with exponential forgetting. The band-pass
+filter's memory of whatever the port did before the window (the start from rest, a
+change of B, the disturbance's onset) is the cascade's free response from its state
+at the window's start, a known span projected out of the regression
+(kernels.bayes.project_out): a window is consistent from its first sample on, and a
+change costs a restart, not a wait for the filter to forget.
+
+Calibration (kernels.bayes.fit_row): the residual's variance is inflated by its
+correlation time and by the degrees of freedom spent; a floor adds the coefficient
+change that alone explains the residual (the port observer's systematic error); the
+local linear model's own error is bounded by the curvature setting over the
+window's spread in time. A row whose newest residual jumps (learner.change_ratio
+over the rest of the window, above learner.change_floor relative to its signal)
+restarts at the newest samples; so do all rows when the LHS model changes
+(learner.model_change).
+
+What is published (LocalModel): an entry is the learned one where the data move it
+from the prior by more than ``margin`` times its credible half-width, so that with
+the interval right the learned entry is no worse than the prior; every other entry
+is the prior's, with the learned interval (or, while the row is not determined, the
+prior's range) around it."""
+from dataclasses import dataclass
+from statistics import NormalDist
+from typing import Sequence, Tuple
+
+import numpy as np
+
+from dacph_drake.identification import BandPassCascade
+from dacph_drake.kernels.bayes import fit_rows, row_design
+from dacph_drake.learning import LearnerTrial, PortEstimate
+from dacph_drake.log_layout import LearnerLog
+from dacph_drake.scenario import Learner
+
+# The correlation-time estimate's longest lag [samples] (kernels.bayes.fit_row): the
+# band-passed residual's memory is the cascade's, well under 20 samples of 10 ms.
+RESIDUAL_LAGS = 20
+# The change test's history of each row's newest relative residuals (updates), and
+# the fewest it needs before it tests.
+HISTORY, MIN_HISTORY = 10, 3
+
+
+class LocalBayesChannels:
+    """The band-passed channels of the local model, per trial (n^2 + 6 n):
+
+        [u_j (n), u_j t (n), u_j p_i (n^2, index i n + j), qdot_i (n), qdot_i t (n),
+         qdot_i p_i (n), tau_i (n)]
+
+    of the port sample's u, qdot, tau (anti-aliased by the observer) and its p, at
+    the sample's time t [s].
+
+    Args:
+        n: The number of joints.
+    """
+
+    def __init__(self, n: int):
+        self.n = n
+        self.size = n * n + 6 * n
+        # Where the filtered sample [q, p, channels] holds [qdot, u, tau_obs].
+        self.port_columns = 2 * n + np.concatenate([
+            np.arange(2 * n + n * n, 3 * n + n * n), np.arange(n),
+            np.arange(5 * n + n * n, 6 * n + n * n)])
+
+    def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
+        """Each trial's channels from its port sample.
+
+        Args:
+            t: The sample's time [s].
+            samples: Each trial's identification.PortSample (trials, 5 n).
+
+        Returns:
+            The channels (trials, size)."""
+        n = self.n
+        p, qdot, u, tau = (samples[:, k * n:(k + 1) * n] for k in range(1, 5))
+        return np.concatenate([u, t * u, (p[:, :, None] * u[:, None, :]).reshape(
+            len(samples), n * n), qdot, t * qdot, qdot * p, tau], axis=1)
+
+
+class LocalModelLayout:
+    """The published vector of the local model (LocalModel), per trial, with
+    k = n^2 + n quantities [vec(B), diag(D)]:
+
+        [t_ref, p_ref (n), value (k), drift (k) [1/s], slope (k) [per unit p_i],
+         interval below, above (k each), set below, above (k each), learned (k)]
+
+    value + drift (t - t_ref) + slope (p_i - p_ref,i) is the estimate at (t, p)
+    (row i's momentum for B_ij and D_i); the interval (learner.bayes.credible_level)
+    and the credible set (certificate_level) are [estimate - below, estimate +
+    above]; learned is 1 where the entry is the learner's, 0 where the prior's.
+
+    Args:
+        n: The number of joints.
+    """
+
+    def __init__(self, n: int):
+        k = n * n + n
+        self.n, self.quantities = n, k
+        self.t_ref, self.p_ref = 0, slice(1, 1 + n)
+        start = 1 + n
+        names = ("value", "drift", "slope", "interval_below", "interval_above",
+                 "set_below", "set_above", "learned")
+        for index, name in enumerate(names):
+            setattr(self, name, slice(start + index * k, start + (index + 1) * k))
+        self.size = start + len(names) * k
+
+
+class LocalModel:
+    """Evaluates a batch's published local models (LocalModelLayout).
+
+    Args:
+        n: The number of joints.
+    """
+    has_uncertainty = True
+
+    def __init__(self, n: int):
+        self.n = n
+        self.layout = LocalModelLayout(n)
+        self.size = self.layout.size
+        # Row i's momentum for every quantity: B_ij reads p_i, D_i reads p_i.
+        self._row = np.concatenate([np.repeat(np.arange(n), n), np.arange(n)])
+
+    def Stack(self, models: Sequence["LocalModel"]) -> "LocalModel":
+        """The batch's evaluator (learning.PublishedModel.Stack).
+
+        Args:
+            models: The batch's trials' models.
+
+        Returns:
+            This one: it serves any batch of its n."""
+        return self
+
+    def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
+                 ) -> PortEstimate:
+        """Every trial's estimate at its state (PublishedModel.Estimate).
+
+        Args:
+            published: Each trial's published vector (trials, size).
+            t: The time [s].
+            q: Each trial's joint angles (trials, n) [rad] (unused: the model's
+                dependence on the state is through its drift and momentum).
+            p: Each trial's momenta (trials, n).
+
+        Returns:
+            The PortEstimate."""
+        L, n = self.layout, self.n
+        trials = published.shape[0]
+        point = (published[:, L.value] + published[:, L.drift]
+                 * (t - published[:, L.t_ref, None])
+                 + published[:, L.slope] * (p - published[:, L.p_ref])[:, self._row])
+        point[:, n * n:] = np.maximum(point[:, n * n:], 0.0)
+        interval = np.stack([point - published[:, L.interval_below],
+                             point + published[:, L.interval_above]])
+        credible = np.stack([point - published[:, L.set_below],
+                             point + published[:, L.set_above]])
+        return PortEstimate(
+            B=point[:, :n * n].reshape(trials, n, n), D=point[:, n * n:],
+            B_set=credible[:, :, :n * n].reshape(2, trials, n, n),
+            B_interval=interval[:, :, :n * n].reshape(2, trials, n, n),
+            D_interval=interval[:, :, n * n:])
+
+
+def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
+    """The cascade's output from each unit state with zero input.
+
+    Args:
+        cascade: The band-pass cascade.
+        length: The number of samples.
+
+    Returns:
+        (length, sections): column s is the output from state e_s, sample 0 the
+            first output after the state (as BandPassCascade.Step gives it)."""
+    sections = cascade.num_sections
+    state = np.eye(sections)               # one column per unit state
+    out = np.empty((length, sections))
+    for k in range(length):
+        state, out[k] = cascade.Step(state, np.zeros(sections))
+    return out
+
+
+def student_quantile(z: float, dof: float) -> float:
+    """Student's t quantile with ``dof`` degrees of freedom at the normal quantile
+    z (the Cornish-Fisher expansion to third order in 1 / dof; within 2 % of the
+    exact quantile from 2 degrees of freedom on at the 0.95 and 0.995 levels).
+
+    Args:
+        z: The standard normal quantile.
+        dof: The degrees of freedom, >= 2.
+
+    Returns:
+        The quantile."""
+    z3, z5, z7 = z ** 3, z ** 5, z ** 7
+    return (z + (z3 + z) / (4 * dof) + (5 * z5 + 16 * z3 + 3 * z) / (96 * dof ** 2)
+            + (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * dof ** 3))
+
+
+@dataclass
+class _Prior:
+    """One trial's prior of every row: mean and sd of [const, drift, slope] per
+    entry (n, 3 (n + 1)), the entries' scales (n, n + 1) and the prior's range of
+    every quantity (2, n^2 + n)."""
+    mean: np.ndarray
+    sd: np.ndarray
+    scale: np.ndarray
+    range: np.ndarray
+
+
+class LocalBayesLearner:
+    """The local Bayesian learner of a batch (module docstring; learning.PortLearner).
+
+    Its state per trial is, per row, its window start [s] (its last restart), the
+    number of relative residuals its change test has seen and the last HISTORY of
+    them.
+
+    Args:
+        settings: The learner's settings (its ``bayes`` section, the band, the
+            forgetting, the window, the change detection).
+        trials: Each trial's LearnerTrial.
+        period: The training period [s].
+        sample_period: The sampling period [s].
+    """
+
+    def __init__(self, settings: Learner, trials: Sequence[LearnerTrial], period: float,
+                 sample_period: float):
+        n = len(trials[0].B0)
+        self.n, self._trials = n, len(trials)
+        self._settings, self._bayes = settings, settings.bayes
+        self._period = period
+        self.channels = LocalBayesChannels(n)
+        self.model = LocalModel(n)
+        self.state_size = n * (2 + HISTORY)
+        self._layout = self.model.layout
+        cascade = BandPassCascade(settings.band[0], settings.band[1],
+                                  settings.band_sections[0], settings.band_sections[1],
+                                  sample_period)
+        self._free_response = free_response(cascade, settings.window + 1)
+        self._minimum = max(2, int(round(self._bayes.min_window / sample_period)))
+        # A band of width f sampled every h carries one independent sample per
+        # 1 / (2 f h) (kernels.bayes.fit_row's min_tau).
+        self._min_tau = 1.0 / (2.0 * (settings.band[1] - settings.band[0]) * sample_period)
+        self._priors = [self._MakePrior(trial) for trial in trials]
+        standard = NormalDist()
+        self._z_interval = standard.inv_cdf(0.5 + self._bayes.credible_level / 2)
+        self._z_set = standard.inv_cdf(0.5 + self._bayes.certificate_level / 2)
+        self._prior_vectors = np.array([self._PriorVector(prior) for prior in self._priors])
+
+    def _MakePrior(self, trial: LearnerTrial) -> _Prior:
+        """The prior of one trial's rows from B0, D0 and the bayes section."""
+        n, bayes = self.n, self._bayes
+        B0, D0 = np.asarray(trial.B0, float), np.asarray(trial.D0, float)
+        damping = np.where(D0 > 0, D0, max(np.max(D0), 1e-3))
+        scale = np.empty((n, n + 1))
+        scale[:, :n] = np.sqrt(B0[:, None] * B0[None, :])
+        scale[:, n] = damping
+        mean = np.zeros((n, n + 1, 3))
+        mean[:, :n, 0] = np.diag(B0)
+        mean[:, n, 0] = D0
+        low, high = bayes.gain_range
+        constant = np.where(np.eye(n, n + 1) > 0, 0.5 * (high - low), bayes.coupling)
+        constant[:, n] = 0.5 * (bayes.damping_range[1] - bayes.damping_range[0])
+        sd = np.stack([constant, np.full((n, n + 1), bayes.drift),
+                       np.full((n, n + 1), bayes.momentum_slope
+                               / self._settings.momentum_scale)], axis=2) * scale[:, :, None]
+        bounds = np.empty((2, n * n + n))
+        bounds[0, :n * n] = np.where(np.eye(n) > 0, low * B0[:, None],
+                                     -bayes.coupling * scale[:, :n]).reshape(-1)
+        bounds[1, :n * n] = np.where(np.eye(n) > 0, high * B0[:, None],
+                                     bayes.coupling * scale[:, :n]).reshape(-1)
+        bounds[:, n * n:] = np.outer(bayes.damping_range, D0)
+        return _Prior(mean=mean.reshape(n, -1), sd=sd.reshape(n, -1), scale=scale,
+                      range=bounds)
+
+    def _PriorVector(self, prior: _Prior) -> np.ndarray:
+        """The published vector of the prior: (B0, D0), no drift or slope, the
+        prior's range as interval and set."""
+        L, n = self._layout, self.n
+        out = np.zeros(self.model.size)
+        value = np.concatenate([prior.mean.reshape(n, n + 1, 3)[:, :n, 0].reshape(-1),
+                                prior.mean.reshape(n, n + 1, 3)[:, n, 0]])
+        out[L.value] = value
+        out[L.interval_below] = out[L.set_below] = value - prior.range[0]
+        out[L.interval_above] = out[L.set_above] = prior.range[1] - value
+        return out
+
+    def InitialState(self) -> np.ndarray:
+        """Every row's window starts with the run, its change test has seen
+        nothing (PortLearner.InitialState)."""
+        state = np.zeros((self._trials, self.n, 2 + HISTORY))
+        state[:, :, 0] = -np.inf
+        return state.reshape(self._trials, -1)
+
+    def Prior(self) -> np.ndarray:
+        """Each trial's published prior (PortLearner.Prior)."""
+        return self._prior_vectors.copy()
+
+    def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
+               model_changed: np.ndarray, learning: bool
+               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fits every trial's rows and publishes (PortLearner.Update).
+
+        Args:
+            t: The time [s].
+            rows: Each trial's buffered samples, oldest first (trials, samples,
+                1 + 2 n + channels).
+            state: Each trial's row starts (trials, n) [s].
+            model_changed: Whether each trial's LHS model changed.
+            learning: False publishes the prior.
+
+        Returns:
+            (published, log rows, state), each per trial."""
+        published = self._prior_vectors.copy()
+        logs = np.zeros((self._trials, LearnerLog().size))
+        state = state.reshape(self._trials, self.n, -1).copy()
+        watch = self._settings.model_change
+        for trial in range(self._trials):
+            if watch and model_changed[trial]:
+                state[trial, :, 0] = t + 1e-9
+                state[trial, :, 1] = 0.0
+            fitted, determined = self._priors[trial].mean, np.zeros(self.n, bool)
+            if learning:
+                published[trial], fitted, determined, restarts = self._Fit(
+                    trial, t, rows[trial], state[trial])
+                logs[trial, LearnerLog().restarts] = restarts
+            logs[trial] = self._Log(trial, t, rows[trial], published[trial], fitted,
+                                    determined, logs[trial])
+        return published, logs, state.reshape(self._trials, -1)
+
+    def _Fit(self, trial: int, t: float, rows: np.ndarray, state: np.ndarray
+             ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """One trial's fit: its published vector, its rows' fitted coefficients
+        (the prior's where not determined), which rows are determined and how
+        many restarted (their newest samples broke their window's relation;
+        ``state``, (n, 2 + HISTORY), updated in place)."""
+        n, bayes, settings = self.n, self._bayes, self._settings
+        prior = self._priors[trial]
+        P = 3 * (n + 1)
+        mean, variance = np.empty((n, P)), np.empty((n, P))
+        statistics, determined = np.empty((n, 6)), np.zeros(n, np.bool_)
+        times = rows[:, 0]
+        starts = state[:, 0].copy()
+        fit_rows(times, rows[:, 1:], starts, n, prior.mean, prior.sd,
+                 self._free_response, settings.forgetting, RESIDUAL_LAGS, self._min_tau,
+                 bayes.floor, self._period, self._minimum, bayes.min_dof, mean, variance,
+                 statistics, determined)
+        changed = np.zeros(n, bool)
+        for i in np.flatnonzero(determined):
+            changed[i] = self._Changed(state[i], statistics[i, 3], statistics[i, 4])
+        if np.any(changed):
+            state[changed, 0] = t + 1e-9
+            state[changed, 1] = 0.0
+            determined &= ~changed
+        dof = np.maximum(statistics[:, 1], bayes.min_dof)
+        fitted = np.where(determined[:, None], mean, prior.mean)
+        return (self._Publish(trial, t, rows[-1], mean, variance, determined, dof, times,
+                              state[:, 0]), fitted, determined,
+                int(np.count_nonzero(changed)))
+
+    def _Changed(self, row: np.ndarray, surprise: float, relative: float) -> bool:
+        """The change test of one row (``row`` = its state, updated in place). The
+        newest samples' relative residual above bayes.inconsistency is a change
+        (the window's relation does not hold, whatever came before); so is one
+        above bayes.change_floor when the newest samples, predicted by the fit to
+        the rest of the window, miss by more than learner.change_ratio predictive
+        sd (RMS, ``surprise``) or their relative residual exceeds
+        learner.change_ratio times the median of the row's recent ones;
+        otherwise the relative residual joins the history."""
+        if not np.isfinite(relative):
+            return False
+        if relative > self._bayes.inconsistency:
+            return True
+        count = int(row[1])
+        known = row[2:2 + min(count, HISTORY)]
+        ratio = self._settings.change_ratio
+        if relative > self._bayes.change_floor and (
+                surprise > ratio
+                or (count >= MIN_HISTORY and relative > ratio * np.median(known))):
+            return True
+        row[2 + count % HISTORY] = relative
+        row[1] = count + 1
+        return False
+
+    def _Publish(self, trial, t, newest, mean, variance, determined, dof, times, starts):
+        """The published vector from the rows' posteriors (module docstring); the
+        intervals are Student's t at each row's residual degrees of freedom (the
+        residual's variance is itself estimated from the window)."""
+        L, n, bayes = self._layout, self.n, self._bayes
+        prior = self._priors[trial]
+        out = self._prior_vectors[trial].copy()
+        out[L.t_ref] = t
+        out[L.p_ref] = newest[1 + n:1 + 2 * n]
+        # The local linear model's error over the window: half the curvature bound
+        # times the weighted mean of (t_k - t_now)^2, per unit of the entry's scale.
+        forgetting = self._settings.forgetting
+        for i in np.flatnonzero(determined):
+            inside = times >= starts[i] - 1e-9
+            w = np.exp((times[inside] - t) / forgetting)
+            spread = np.sum(w * (times[inside] - t) ** 2) / np.sum(w)
+            curvature = 0.5 * bayes.curvature * spread * prior.scale[i]
+            entries = np.concatenate([i * n + np.arange(n), [n * n + i]])
+            theta = mean[i].reshape(n + 1, 3)
+            sd = np.sqrt(variance[i].reshape(n + 1, 3)[:, 0] + curvature ** 2)
+            prior_value = prior.mean[i].reshape(n + 1, 3)[:, 0]
+            z_interval = student_quantile(self._z_interval, dof[i])
+            z_set = student_quantile(self._z_set, dof[i])
+            learned = (np.abs(theta[:, 0] - prior_value) > bayes.margin * z_interval * sd)
+            value = np.where(learned, theta[:, 0], prior_value)
+            out[L.value][entries] = value
+            out[L.drift][entries] = np.where(learned, theta[:, 1], 0.0)
+            out[L.slope][entries] = np.where(learned, theta[:, 2], 0.0)
+            out[L.learned][entries] = learned
+            for z, below, above in ((z_interval, L.interval_below, L.interval_above),
+                                    (z_set, L.set_below, L.set_above)):
+                out[below][entries] = np.maximum(value - (theta[:, 0] - z * sd), 0.0)
+                out[above][entries] = np.maximum(theta[:, 0] + z * sd - value, 0.0)
+        # D >= 0: a published damping below zero is zero, and so is its interval.
+        D = slice(L.value.start + n * n, L.value.stop)
+        below_zero = out[D] < 0
+        out[D] = np.maximum(out[D], 0.0)
+        for below in (L.interval_below, L.set_below):
+            d_below = slice(below.start + n * n, below.stop)
+            out[d_below] = np.minimum(out[d_below], out[D])
+        out[L.interval_above.start + n * n:L.interval_above.stop][below_zero] = 0.0
+        return out
+
+    def _Log(self, trial, t, rows, published, fitted, determined, log):
+        """The log row: the fitted model's and the prior's weighted squared residual
+        on the buffer (recency-weighted as the regression, the whole buffer: a
+        change shows), beta_hat = 1 + RMS residual / RMS tau, holding (no row
+        determined), whether some published quantity is learned, the share of
+        quantities published at the prior."""
+        n, layout = self.n, LearnerLog()
+        times = rows[:, 0]
+        w = np.exp((times - t) / self._settings.forgetting)
+        w /= np.sum(w)
+        samples = rows[:, 1:]
+        loss = nominal = signal = 0.0
+        prior = self._priors[trial].mean
+        for i in range(n):
+            A = row_design(samples, i, n, t, samples[-1, n + i])
+            y = samples[:, 2 * n + 5 * n + n * n + i]
+            loss += np.sum(w * (y - A @ fitted[i]) ** 2)
+            nominal += np.sum(w * (y - A @ prior[i]) ** 2)
+            signal += np.sum(w * y ** 2)
+        learned = published[self._layout.learned]
+        log[layout.loss], log[layout.nominal_loss] = loss, nominal
+        log[layout.beta_hat] = 1.0 + np.sqrt(loss / max(signal, 1e-300))
+        log[layout.network_published] = float(np.any(learned > 0.5))
+        log[layout.undetermined] = float(np.mean(learned < 0.5))
+        log[layout.holding] = float(not np.any(determined))
+        return log

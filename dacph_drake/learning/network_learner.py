@@ -1,0 +1,175 @@
+"""The paper's physics-informed network as a learning.PortLearner
+(``learner.model: network``): identification.RhsIdentifier fits network.RhsNetwork
+(docs/equations.md E33-E35) to the window of band-passed port samples
+[q, p, qdot, u, tau_obs] (regularized mode) or raw ones (plain mode, the paper's).
+
+In regularized mode a ChangeDetector watches the relative residual of the newest
+samples and pauses training after an abrupt change (settings.change_*), for
+settings.start_hold seconds from the start and after the LHS model changed
+(settings.model_change); a fit needs settings.min_window seconds of samples in the
+window, and the first fit of the run starts from the window's best constant B
+(settings.warm_start, RhsIdentifier.WarmStart). With settings.prior_fallback the
+published weights are the prior's (B_hat = B0, D_hat = D0) whenever the network does
+not beat them on the samples since the last change or on the last period's
+(_NetworkPublished). It publishes a point estimate: no credible set (the RHS
+integrator adopts it by its trust band, rhs.trust_ratio).
+
+The torch modules and Adam's moments live in this object, not in the Context: a
+diagram with this learner simulates one trajectory at a time (build one diagram per
+run, as the package's builders do)."""
+from typing import Sequence, Tuple
+
+import numpy as np
+
+from dacph_drake.identification import ChangeDetector, NewestRows, RhsIdentifier
+from dacph_drake.learning import LearnerTrial
+from dacph_drake.log_layout import LearnerLog
+from dacph_drake.network import ExportedNetwork, NetworkStack
+from dacph_drake.scenario import Learner
+
+
+class PortSampleChannels:
+    """The network's channels: the port sample's regressed part [qdot, u, tau_obs]
+    (identification.PortSample), so that the filtered sample keeps its layout.
+
+    Args:
+        n: The number of joints.
+    """
+
+    def __init__(self, n: int):
+        self.n = n
+        self.size = 3 * n
+        # Where the filtered sample [q, p, channels] holds [qdot, u, tau_obs].
+        self.port_columns = np.arange(2 * n, 5 * n)
+
+    def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
+        """Each trial's [qdot, u, tau_obs] (learning.Channels.Of).
+
+        Args:
+            t: The sample's time [s] (unused).
+            samples: Each trial's PortSample (trials, 5 n).
+
+        Returns:
+            (trials, 3 n)."""
+        return samples[:, 2 * self.n:]
+
+
+class NetworkLearner:
+    """The network learner of a batch (module docstring; learning.PortLearner).
+
+    Its state per trial is its ChangeDetector's and the window start of its warm
+    start (-inf before it). For a batch every trial has a network, Adam moments,
+    window and change detector of its own; one torch forward and backward pass fits
+    every trial that fits this update (RhsIdentifier.FitTrials).
+
+    Args:
+        settings: The learner's settings.
+        trials: Each trial's LearnerTrial.
+        period: The training period [s].
+        sample_period: The sampling period [s].
+    """
+
+    def __init__(self, settings: Learner, trials: Sequence[LearnerTrial], period: float,
+                 sample_period: float):
+        n = len(trials[0].B0)
+        self._n, self._trials = n, len(trials)
+        self._period = period
+        self._settings = settings
+        self._regularized = settings.mode == "regularized"
+        self._min_samples = max(2, int(round(settings.min_window / sample_period)))
+        networks = [ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
+                    for trial in trials]
+        self.model = NetworkStack(networks)
+        self.channels = PortSampleChannels(n)
+        self._identifier = RhsIdentifier.ForTrials(
+            n, settings, [np.diag(trial.B0) for trial in trials],
+            [trial.D0 for trial in trials], [trial.seed for trial in trials],
+            [network.coupling for network in networks])
+        self._detector = ChangeDetector(settings.change_ratio, settings.change_floor,
+                                        settings.change_hold)
+        self._prior = self._identifier.Export()
+        self._detector_size = len(ChangeDetector.InitialState())
+        self.state_size = self._detector_size + 1
+
+    def InitialState(self) -> np.ndarray:
+        """The detector holding for start_hold seconds (regularized mode), no warm
+        start yet (PortLearner.InitialState)."""
+        hold = (self._settings.start_hold if self._regularized
+                and self._settings.start_hold > 0 else -np.inf)
+        return np.tile(np.concatenate([ChangeDetector.InitialState(hold), [-np.inf]]),
+                       (self._trials, 1))
+
+    def Prior(self) -> np.ndarray:
+        """The networks' initial weights: B_hat = B0, D_hat = D0 (PortLearner.Prior)."""
+        return self._prior.copy()
+
+    def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
+               model_changed: np.ndarray, learning: bool
+               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Detects changes, fits and publishes (PortLearner.Update).
+
+        Args:
+            t: The time [s].
+            rows: Each trial's buffered samples (trials, samples, 1 + PortSample
+                size).
+            state: Each trial's state (trials, state_size).
+            model_changed: Whether each trial's LHS model changed.
+            learning: False keeps the initial weights (B0, D0).
+
+        Returns:
+            (published, log rows, state), each per trial."""
+        count, settings = self._trials, self._settings
+        learning = learning and settings.steps_per_update > 0
+        detectors = state[:, :self._detector_size].copy()
+        warm_started = state[:, self._detector_size].copy()
+        if self._regularized and settings.model_change:
+            for i in np.flatnonzero(model_changed):
+                detectors[i] = self._detector.Changed(detectors[i], t)
+        if self._regularized and learning:
+            newest = NewestRows(rows, t, self._period)
+            if newest.shape[1]:
+                residuals = self._identifier.RelativeResiduals(newest)
+                for i in range(count):
+                    detectors[i] = self._detector.Update(detectors[i], t, residuals[i])
+        holding = np.array([ChangeDetector.Holding(d, t) for d in detectors])
+        window_starts = np.array([ChangeDetector.WindowStart(d) for d in detectors])
+        fitted = (learning & ~holding
+                  & (np.count_nonzero(rows[:, :, 0] >= window_starts[:, None], axis=1)
+                     >= self._min_samples))
+        if self._regularized and settings.warm_start:
+            for i in np.flatnonzero(fitted & (warm_started == -np.inf)):
+                self._identifier.WarmStart(rows[i], t, window_starts[i], i)
+                warm_started[i] = window_starts[i]
+        self._identifier.FitTrials(rows, t, window_starts, fitted)
+        stats = self._identifier.StatisticsOfTrials(rows, t, np.full(count, -np.inf))
+        published = self._NetworkPublished(rows, t, window_starts, fitted, learning)
+        layout = LearnerLog()
+        logs = np.zeros((count, layout.size))
+        logs[:, layout.loss], logs[:, layout.beta_hat] = stats.loss, stats.beta_hat
+        logs[:, layout.nominal_loss], logs[:, layout.holding] = stats.nominal_loss, holding
+        logs[:, layout.network_published] = published
+        logs[:, layout.undetermined] = np.where(published, 0.0, 1.0)
+        weights = (np.where(published[:, None], self._identifier.Export(), self._prior)
+                   if learning else self._prior.copy())
+        return weights, logs, np.concatenate([detectors, warm_started[:, None]], axis=1)
+
+    def _NetworkPublished(self, rows, t, window_starts, fitted, learning) -> np.ndarray:
+        """Whether each trial's network weights, not the prior's, are published this
+        update. Always (while learning), unless settings.prior_fallback: then only
+        when this update fitted (not holding after a change, min_window seconds of
+        samples since it) and the network explains the samples since the change,
+        and those of the last period, at least as well as (B0, D0) do
+        (FitStatistics.loss <= nominal_loss on each); the prior otherwise. After a
+        change the frozen network describes the old relation, and a refit on the
+        first window after it can be further off than the prior; a change not yet
+        detected shows first in the newest samples."""
+        count = self._trials
+        if not learning:
+            return np.zeros(count, bool)
+        if not self._settings.prior_fallback:
+            return np.ones(count, bool)
+        since_change = self._identifier.StatisticsOfTrials(rows, t, window_starts)
+        newest = self._identifier.StatisticsOfTrials(
+            rows, t, np.full(count, t - self._period + 1e-12))
+        return (fitted & (since_change.loss <= since_change.nominal_loss)
+                & (newest.loss <= newest.nominal_loss))
