@@ -72,20 +72,26 @@ class RhsState:
 
 class LearnerLog:
     """learner_log = [loss, beta_hat, nominal loss, holding, network published,
-    undetermined, restarts]: the published model's weighted squared residual on the
-    window, the gain rule's uncertainty estimate 1 + RMS residual / RMS tau_obs, the
-    same residual of the nominal RHS (B0, D0) on the same samples, 1 while nothing is
-    learned (training paused after a change, identification.ChangeDetector; no row
-    of the local model determined), 1 while some published quantity is learned, 0
-    while all are the prior's (Learner.prior_fallback, a local model's undetermined
-    rows; 0 in the learner-off ablation), the share of the n^2 + n quantities
-    [B, diag D] published at the prior, and the rows restarted this update (a
-    change in their newest samples, learning.local_bayes)."""
+    undetermined, restarts, physical]: the learner's fitted model's weighted squared
+    residual on the window, the gain rule's uncertainty estimate 1 + RMS residual /
+    RMS tau_obs, the same residual of the nominal RHS (B0, D0) on the same samples,
+    1 while nothing is learned (training paused after a change,
+    identification.ChangeDetector; no row of the local model determined), 1 while
+    some published quantity is learned, 0 while all are the prior's
+    (Learner.prior_fallback, a local model's undetermined rows; 0 in the
+    learner-off ablation), the share of the n^2 + n quantities [B, diag D]
+    published at the prior, the rows restarted this update (a change in their
+    newest samples, learning.local_bayes), and physical: 1 while the observed port
+    is in physical units, 0 once the inertial identifier reported the
+    controller's kinematics mismatched (scenario.inertia.fit_tolerance): the
+    learned B and D are then the port's as the model sees it, which serves the
+    loop, and the metrics count them as the prior against the truth."""
 
     def __init__(self):
         (self.loss, self.beta_hat, self.nominal_loss, self.holding,
-         self.network_published, self.undetermined, self.restarts) = range(7)
-        self.size = 7
+         self.network_published, self.undetermined, self.restarts,
+         self.physical) = range(8)
+        self.size = 8
 
 
 class AttitudeLog:

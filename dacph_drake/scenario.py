@@ -106,6 +106,17 @@ class InertiaIdentification:
     ``identify`` False: the
     controller keeps nominal_robot (earlier releases).
 
+    ``anchor`` fixes that common scale: "model" (default) at the controller's
+    model's, as above; "total_mass" or "base_mass" at a measured mass of the whole
+    spacecraft or of its base (``anchor_mass`` [kg]; 0: the simulated robot's own,
+    measured with the relative error ``anchor_error``), which momentum data cannot
+    give and a spacecraft's mass properties usually do. With the controller's
+    kinematics off (a link a few percent longer than modelled), no parameters
+    explain the momentum: the identifier measures the unexplained part
+    (inertial_parameters.momentum_misfit) and past ``fit_tolerance`` reports a
+    kinematic mismatch, after which the LHS keeps the identified parameters
+    (``on_mismatch`` "identified") or returns to nominal_robot's ("nominal").
+
     prior_weight is small because the simulated rates carry no noise: on the 6-DOF
     arm the directions that fix M lie 1e-11 to 1e-8 below the best-informed one
     (at 1e-8 its identified M stayed 10 % off the truth's, up to the scale; at
@@ -120,12 +131,27 @@ class InertiaIdentification:
         duration: How long the identification refines them before the estimate is
             kept [s], > 0.
         change_threshold: The relative change of M(q) (an entry against
-            sqrt(M_ii M_jj)) that restarts the learner's window, in [0, 1]."""
+            sqrt(M_ii M_jj)) that restarts the learner's window, in [0, 1].
+        anchor: What fixes the parameters' common scale, one of
+            INERTIA_ANCHORS: "model", "total_mass" or "base_mass".
+        anchor_mass: The measured mass of the anchor [kg], >= 0 (0: the
+            simulated robot's own, times 1 + anchor_error).
+        anchor_error: The relative error of the simulated measurement, in
+            [-0.5, 0.5] (with anchor_mass 0).
+        fit_tolerance: The momentum misfit past which the kinematics are reported
+            mismatched, >= 0 (0: no test).
+        on_mismatch: What the LHS uses after a mismatch, one of ON_MISMATCH:
+            "identified" or "nominal"."""
     identify: bool = True
     prior_weight: float = 1e-12
     start: float = 0.2              # [s]
     duration: float = 10.0          # [s] of identification, then the estimate is kept
     change_threshold: float = 5e-2  # relative change of M(q) that restarts learning
+    anchor: str = "model"
+    anchor_mass: float = 0.0        # [kg]; 0: the simulated robot's own
+    anchor_error: float = 0.0
+    fit_tolerance: float = 1e-6
+    on_mismatch: str = "identified"
 
 
 @dataclass
@@ -450,6 +476,8 @@ class Disturbance:
 
 
 TRUST_ANCHORS = ("in_use", "prior")            # Rhs.trust_anchor
+INERTIA_ANCHORS = ("model", "total_mass", "base_mass")   # InertiaIdentification.anchor
+ON_MISMATCH = ("identified", "nominal")         # InertiaIdentification.on_mismatch
 GAIN_RULES = ("paper", "well_damped")           # Rhs.gain_rule
 ADOPTIONS = ("certified_set", "trust_band")     # Rhs.adoption
 LEARNER_MODELS = ("local_bayes", "network")     # Learner.model (learning package)
@@ -512,7 +540,7 @@ class LocalBayes:
     curvature: float = 0.01         # [1/s^2]
     floor: float = 1.0
     min_window: float = 0.2         # [s]
-    min_dof: float = 5.0
+    min_dof: float = 8.0
     credible_level: float = 0.9
     certificate_level: float = 0.99
     margin: float = 2.0
@@ -1259,6 +1287,11 @@ class Scenario:
         require_positive("inertia.duration", self.inertia.duration, "s")
         require_in_range("inertia.change_threshold", self.inertia.change_threshold,
                          0.0, 1.0)
+        require_one_of("inertia.anchor", self.inertia.anchor, INERTIA_ANCHORS)
+        require_nonnegative("inertia.anchor_mass", self.inertia.anchor_mass, "kg")
+        require_in_range("inertia.anchor_error", self.inertia.anchor_error, -0.5, 0.5)
+        require_nonnegative("inertia.fit_tolerance", self.inertia.fit_tolerance)
+        require_one_of("inertia.on_mismatch", self.inertia.on_mismatch, ON_MISMATCH)
         validate_port_settings(self, n)
         validate_simulator_config(self.simulator)
         # Last, so that a setting with a range names it: every other number finite.

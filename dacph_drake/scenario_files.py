@@ -40,7 +40,7 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  min_window: 0.5", "  warm_start: true",
                           "  model_change: true", "  step_guard: 10.0",
                           "  boundary_rate: 0.0", "  model: local_bayes",
-                          "  adoption: certified_set")
+                          "  adoption: certified_set", "  fit_tolerance: 1.0e-06")
 # Settings added to the current layout since it was introduced: (section, key, the
 # value that reproduces the behaviour before it). A file whose section lacks the key
 # was written before it and is read with that value (not the robot's sized default);
@@ -48,7 +48,12 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
 # saved before it keeps its fingerprint (saved_forms).
 ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("learner", "model", "network"),
-                           ("rhs", "adoption", "trust_band"))
+                           ("rhs", "adoption", "trust_band"),
+                           ("inertia", "anchor", "model"),
+                           ("inertia", "anchor_mass", 0.0),
+                           ("inertia", "anchor_error", 0.0),
+                           ("inertia", "fit_tolerance", 0.0),
+                           ("inertia", "on_mismatch", "identified"))
 # Sections added to the current layout's sections since it was introduced: their
 # lines at the defaults are left out of the fingerprinted text too (a file without
 # them reads them at their defaults).

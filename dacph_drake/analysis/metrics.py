@@ -89,6 +89,25 @@ def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarr
     return logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1) / total_mass
 
 
+def physical_estimates(logs: Dict[str, np.ndarray], scenario: Scenario) -> np.ndarray:
+    """The learned estimates as statements about the physical B~, D~: the logged
+    ``estimates``, but the prior (B0, D0) wherever the learner's log says the
+    observed port is not in physical units (LearnerLog.physical: a kinematic
+    mismatch reported by the inertial identifier).
+
+    Args:
+        logs: The run's logs.
+        scenario: The scenario it ran.
+
+    Returns:
+        [vec(B), diag(D)] per sample (T x (n^2 + n))."""
+    estimates = logs["estimates"]
+    if "learner_log" not in logs or logs["learner_log"].shape[1] <= LearnerLog().physical:
+        return estimates
+    physical = logs["learner_log"][:, LearnerLog().physical] > 0.5
+    return np.where(physical[:, None], estimates, nominal_estimates(scenario)[None, :])
+
+
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray, total_mass: float) -> Dict[str, float]:
     """Learning's own value over the samples ``mask``.
@@ -111,7 +130,7 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     Returns:
         Metric name -> value."""
     n = len(scenario.q0)
-    truth, estimate = logs["true_matrices"][mask], logs["estimates"][mask]
+    truth, estimate = logs["true_matrices"][mask], physical_estimates(logs, scenario)[mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
     out = {}
     for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
@@ -131,11 +150,71 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
             nominal = relative_error_rms(prior[:, columns], scale * truth[:, columns])
             out[f"{name}_error_ratio_scaled"] = (learned / nominal if nominal > 0
                                                  else float("nan"))
+    if "estimate_bounds" in logs:
+        out.update(interval_metrics(logs, scenario, mask))
     trusted = logs["rhs_log"][mask, RhsLog(n).trusted]
     out["rejected_share"] = float(np.mean(trusted < 0.5)) if len(trusted) else float("nan")
     beta_hat = logs["learner_log"][mask, LearnerLog().beta_hat]
     out["beta_clipped_share"] = (float(np.mean(beta_hat > scenario.rhs.beta_max))
                                  if len(beta_hat) else float("nan"))
+    return out
+
+
+def interval_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
+                     mask: np.ndarray) -> Dict[str, float]:
+    """How the learner's reported intervals (``estimate_bounds``, at
+    learner.bayes.credible_level) hold the truth over the samples ``mask``.
+
+    For X in (B, D): ``X_coverage``, the share of (sample, entry) pairs whose true
+    entry lies in its interval; ``X_interval``, the time-RMS of the intervals'
+    Frobenius half-width relative to ||X~||, comparable with ``X_error``
+    (where the learner's log says the port is not in physical units, the
+    interval is the prior's range, learning.local_bayes.prior_range);
+    ``X_interval_ratio``, the time-RMS half-width over the time-RMS error of the
+    prior (below 1: the interval says more than the prior's error); and the share
+    of quantities published at the prior (``undetermined_share``, the
+    learner_log's).
+
+    Args:
+        logs: The run's logs (with estimate_bounds and learner_log).
+        scenario: The scenario it ran.
+        mask: The samples to average over (boolean, T).
+
+    Returns:
+        Metric name -> value (nan over no samples)."""
+    n = len(scenario.q0)
+    k = n * n + n
+    truth = logs["true_matrices"][mask]
+    bounds = logs["estimate_bounds"][mask]
+    lower, upper = bounds[:, :k], bounds[:, k:]
+    physical = logs["learner_log"][mask, LearnerLog().physical] > 0.5
+    from dacph_drake.learning import uses_local_bayes
+    if not np.all(physical) and uses_local_bayes(scenario.learner):
+        from dacph_drake.learning.local_bayes import prior_range
+        unit = np.ones((1, 1))
+        rng = prior_range(scenario.learner.bayes, scenario.uncertainty.B0,
+                          scenario.uncertainty.D0)
+        lower = np.where(physical[:, None], lower, rng[0] * unit)
+        upper = np.where(physical[:, None], upper, rng[1] * unit)
+    prior = nominal_estimates(scenario)
+    out = {}
+    for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, k))):
+        if not len(truth):
+            out.update({f"{name}_coverage": float("nan"), f"{name}_interval": float("nan"),
+                        f"{name}_interval_ratio": float("nan")})
+            continue
+        inside = ((lower[:, columns] - 1e-12 <= truth[:, columns])
+                  & (truth[:, columns] <= upper[:, columns] + 1e-12))
+        half = 0.5 * (upper[:, columns] - lower[:, columns])
+        scale = np.maximum(np.linalg.norm(truth[:, columns], axis=1), 1e-300)
+        prior_error = rms(prior[columns][None, :] - truth[:, columns])
+        out[f"{name}_coverage"] = float(np.mean(inside))
+        out[f"{name}_interval"] = rms(np.linalg.norm(half, axis=1) / scale)
+        out[f"{name}_interval_ratio"] = (rms(half) / prior_error if prior_error > 0
+                                         else float("nan"))
+    undetermined = logs["learner_log"][mask, LearnerLog().undetermined]
+    out["undetermined_share"] = (float(np.mean(undetermined)) if len(undetermined)
+                                 else float("nan"))
     return out
 
 
@@ -189,7 +268,8 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
     if "estimates" in logs:
         window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \
                  (t < phases.disturbance_start)
-        truth, estimate = logs["true_matrices"][window], logs["estimates"][window]
+        truth = logs["true_matrices"][window]
+        estimate = physical_estimates(logs, scenario)[window]
         out["estimation_error_B"] = relative_error_rms(estimate[:, :n * n], truth[:, :n * n])
         out["estimation_error_D"] = relative_error_rms(estimate[:, n * n:], truth[:, n * n:])
         rhs = logs["rhs_log"]
@@ -213,6 +293,11 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
             out[f"{phase}.chi_rms"] = rms(logs["rhs_log"][mask, R.chi])
             out.update({f"{phase}.{k}": v for k, v in
                         learning_metrics(logs, scenario, mask, total_mass).items()})
+    if "identification_log" in logs and len(t):
+        identified = logs["identification_log"]
+        out["identified_mass_error"] = float(identified[-1, 0] / total_mass - 1.0)
+        out["momentum_misfit"] = float(identified[-1, 1])
+        out["kinematic_mismatch"] = float(identified[-1, 2])
     out.update(robot.TaskMetrics(logs))
     return out
 

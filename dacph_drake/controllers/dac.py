@@ -111,6 +111,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     if identifier is not None:
         builder.Connect(identifier.GetOutputPort("model_epoch"),
                         learner.GetInputPort("model_epoch"))
+        builder.Connect(identifier.GetOutputPort("identification_log"),
+                        learner.GetInputPort("identification_log"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         trials=[RhsTrial(model=robot.model, network=published_model(settings, trial),
                          Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=s.uncertainty.B0,

@@ -42,7 +42,7 @@ from dacph_drake.identification import BandPassCascade
 from dacph_drake.kernels.bayes import fit_rows, row_design
 from dacph_drake.learning import LearnerTrial, PortEstimate
 from dacph_drake.log_layout import LearnerLog
-from dacph_drake.scenario import Learner
+from dacph_drake.scenario import Learner, LocalBayes
 
 # The correlation-time estimate's longest lag [samples] (kernels.bayes.fit_row): the
 # band-passed residual's memory is the cascade's, well under 20 samples of 10 ms.
@@ -189,6 +189,31 @@ def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
     return out
 
 
+def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
+                ) -> np.ndarray:
+    """The prior's range of every quantity [vec(B), diag(D)].
+
+    B_ii in gain_range times B0_i, B_ij (i != j) within coupling
+    sqrt(B0_i B0_j), D_i in damping_range times D0_i (learner.bayes).
+
+    Args:
+        bayes: The local Bayesian learner's settings.
+        B0: The prior's B0 (its diagonal, n).
+        D0: The prior's D0 (its diagonal, n).
+
+    Returns:
+        [lower, upper] (2, n^2 + n)."""
+    B0, D0 = np.asarray(B0, float), np.asarray(D0, float)
+    n = len(B0)
+    coupling = bayes.coupling * np.sqrt(B0[:, None] * B0[None, :])
+    low, high = bayes.gain_range
+    bounds = np.empty((2, n * n + n))
+    bounds[0, :n * n] = np.where(np.eye(n) > 0, low * B0[:, None], -coupling).reshape(-1)
+    bounds[1, :n * n] = np.where(np.eye(n) > 0, high * B0[:, None], coupling).reshape(-1)
+    bounds[:, n * n:] = np.outer(bayes.damping_range, D0)
+    return bounds
+
+
 def student_quantile(z: float, dof: float) -> float:
     """Student's t quantile with ``dof`` degrees of freedom at the normal quantile
     z (the Cornish-Fisher expansion to third order in 1 / dof; within 2 % of the
@@ -272,14 +297,8 @@ class LocalBayesLearner:
         sd = np.stack([constant, np.full((n, n + 1), bayes.drift),
                        np.full((n, n + 1), bayes.momentum_slope
                                / self._settings.momentum_scale)], axis=2) * scale[:, :, None]
-        bounds = np.empty((2, n * n + n))
-        bounds[0, :n * n] = np.where(np.eye(n) > 0, low * B0[:, None],
-                                     -bayes.coupling * scale[:, :n]).reshape(-1)
-        bounds[1, :n * n] = np.where(np.eye(n) > 0, high * B0[:, None],
-                                     bayes.coupling * scale[:, :n]).reshape(-1)
-        bounds[:, n * n:] = np.outer(bayes.damping_range, D0)
         return _Prior(mean=mean.reshape(n, -1), sd=sd.reshape(n, -1), scale=scale,
-                      range=bounds)
+                      range=prior_range(bayes, B0, D0))
 
     def _PriorVector(self, prior: _Prior) -> np.ndarray:
         """The published vector of the prior: (B0, D0), no drift or slope, the

@@ -221,7 +221,8 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
         controller: The controller's ControllerBuilder.
         excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
         identify: Add an InertialIdentifier fed from the controller's state inputs,
-            feeding the LHS; its estimate is the output ``inertial_parameters``.
+            feeding the LHS; its estimate is the output ``inertial_parameters``, its
+            log ``identification_log``.
 
     Returns:
         (the LHS controller, its named systems)."""
@@ -238,4 +239,6 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
                         lhs.GetInputPort("inertial_parameters"))
         builder.ExportOutput(identifier.GetOutputPort("inertial_parameters"),
                              "inertial_parameters")
+        builder.ExportOutput(identifier.GetOutputPort("identification_log"),
+                             "identification_log")
     return lhs, systems

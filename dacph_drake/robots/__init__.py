@@ -156,6 +156,13 @@ class Robot(Protocol):
         Returns:
             Metric name -> value."""
 
+    def MeasuredMasses(self) -> Tuple[float, float]:
+        """The ground truth's total and base mass, as a spacecraft's mass
+        properties give them (the inertial identifier's anchor, scenario.inertia).
+
+        Returns:
+            (total, base) [kg]."""
+
     def TotalMass(self) -> float:
         """The ground truth's total mass.
 

@@ -247,7 +247,8 @@ class DescribedRobot:
         identifier = builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
             plants=[trial.model.plant for trial in trials],
             priors=[trial.model.inertial_parameters for trial in trials],
-            settings=first.inertia, period=first.periods.learner_sample))
+            settings=first.inertia, period=first.periods.learner_sample,
+            measured_masses=[trial.MeasuredMasses() for trial in trials]))
         return {cls.lhs_name: lhs, "inertial_identifier": identifier}
 
     def _Potential(self) -> Optional[BaseClearancePotential]:
@@ -359,6 +360,15 @@ class DescribedRobot:
             "effort_saturated_share": (float(np.mean(np.any(logs["saturated"] > 0.5,
                                                             axis=1)))
                                        if "saturated" in logs and len(t) else nan)}
+
+    def MeasuredMasses(self) -> Tuple[float, float]:
+        """The ground truth's total and base mass, as a spacecraft's mass
+        properties give them (the identifier's anchor, scenario.inertia).
+
+        Returns:
+            (total, base) [kg]."""
+        base = KinematicTree.FromPlant(self.truth_plant).bodies[0]
+        return self.TotalMass(), float(base.default_mass())
 
     def TotalMass(self) -> float:
         """The ground truth's total mass (its bodies with mass).

@@ -140,7 +140,8 @@ class PlanarRobot:
         scenario, builder = trials[0].scenario, controller.builder
         identifier = (builder.AddNamedSystem("inertial_identifier", InertialIdentifier(
             plants=[t.model.plant for t in trials], settings=scenario.inertia,
-            period=scenario.periods.learner_sample)) if identify else None)
+            period=scenario.periods.learner_sample,
+            measured_masses=[t.MeasuredMasses() for t in trials])) if identify else None)
         lhs = builder.AddNamedSystem(cls.lhs_name, LhsController(
             trials=[LhsTrial(
                 model=t.model, potential=BaseRepulsionPotential(
@@ -228,6 +229,14 @@ class PlanarRobot:
         Returns:
             An empty dictionary."""
         return {}
+
+    def MeasuredMasses(self) -> Tuple[float, float]:
+        """The ground truth's total and base mass, as a spacecraft's mass
+        properties give them (the identifier's anchor, scenario.inertia).
+
+        Returns:
+            (total, base) [kg]."""
+        return self.TotalMass(), float(self.scenario.robot.truth.base.mass)
 
     def TotalMass(self) -> float:
         """The true arm's total mass, base and links.

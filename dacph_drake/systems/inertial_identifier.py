@@ -7,8 +7,9 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.dynamics.inertial_parameters import (MASS, PER_BODY, InertialParameters,
-                                             identify_parameters, prior_scales)
+from dacph_drake.dynamics.inertial_parameters import (
+    MASS, PER_BODY, InertialParameters, identify_parameters, mass_anchor, momentum_misfit,
+    prior_scales)
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.kernels import identification
@@ -29,11 +30,18 @@ class InertialIdentifier(LeafSystem):
     robot starts at rest, so L = P = 0 along the whole motion and Y(x) pi~ = 0 for
     the true parameters pi~: the samples determine the parameters up to one common
     factor, which the prior pi0 (the controller's model: ``prior``, by default
-    ``plant``'s own inertias) fixes, and the directions the motion has not informed
-    stay at the prior. No actuator model enters.
+    ``plant``'s own inertias) fixes, or, with ``settings.anchor`` "total_mass" or
+    "base_mass", a measured mass (``measured_masses``, the simulated
+    spacecraft's own, when settings.anchor_mass is 0: a navigation system's mass
+    properties), and the directions the motion has not informed stay at the prior.
+    No actuator model enters. The momentum the estimate leaves unexplained
+    (inertial_parameters.momentum_misfit) above settings.fit_tolerance reports the
+    controller's kinematics mismatched (latched); with settings.on_mismatch
+    "nominal" the LHS then returns to the prior.
 
-    Output ``inertial_parameters`` is pi0 until ``settings.start`` and pi_hat after
-    it, every period until ``settings.duration`` has passed (then it is kept: the
+    Output ``identification_log`` = [identified total mass [kg], momentum misfit,
+    mismatch (0/1)] per trial. Output ``inertial_parameters`` is pi0 until
+    ``settings.start`` and pi_hat after it, every period until ``settings.duration`` has passed (then it is kept: the
     bodies' inertias do not change, while the directions the data hardly inform
     keep refining); an estimate with a mass <= 0, or whose mass matrix at the
     sample is not positive definite, is not used. Output ``model_epoch`` counts the
@@ -59,11 +67,14 @@ class InertialIdentifier(LeafSystem):
         settings: The identification's settings (scenario.inertia).
         period: The sample period [s] (periods.learner_sample).
         priors: Each trial's prior pi0, or None for the plant's own inertias.
+        measured_masses: Each trial's simulated mass measurement, (total, base)
+            [kg] of its ground truth (the anchor with settings.anchor_mass 0).
     """
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,
-                 priors: Optional[Sequence[np.ndarray]] = None):
+                 priors: Optional[Sequence[np.ndarray]] = None,
+                 measured_masses: Optional[Sequence[Sequence[float]]] = None):
         super().__init__()
         priors = [None] * len(plants) if priors is None else priors
         self._trees = _TreeStack(plants)
@@ -76,6 +87,7 @@ class InertialIdentifier(LeafSystem):
                                  for prior in self._priors])
         self._settings = settings
         count, size = len(plants), self.parameters.size
+        self._anchor, self._anchor_value = self._Anchor(settings, measured_masses, count)
         c = ArmCoordinates.FromPlant(plants[0])
         self._base_pose = self.DeclareVectorInputPort("base_pose", len(c.base_q) * count)
         self._base_velocity = self.DeclareVectorInputPort("base_velocity",
@@ -87,7 +99,11 @@ class InertialIdentifier(LeafSystem):
         # Per trial [number of the model, the estimate that began it].
         self._epoch = self.DeclareDiscreteState(np.concatenate(
             [np.zeros((count, 1)), self._priors], axis=1).reshape(-1))
+        # Per trial [identified total mass, momentum misfit, mismatch].
+        self._status = self.DeclareDiscreteState(np.concatenate([
+            [float(np.sum(prior[MASS::PER_BODY])), 0.0, 0.0] for prior in self._priors]))
         self.DeclareStateOutputPort("inertial_parameters", self._estimate)
+        self.DeclareStateOutputPort("identification_log", self._status)
         epochs = np.arange(count) * (1 + size)
         self.DeclareVectorOutputPort(
             "model_epoch", count, lambda context, output: output.SetFromVector(
@@ -114,9 +130,18 @@ class InertialIdentifier(LeafSystem):
             count, -1).copy()
         epochs = context.get_discrete_state(self._epoch).get_value().reshape(
             count, -1).copy()
-        candidates = identify_parameters(information.reshape(count, size, size),
-                                         self._priors, self._scales,
-                                         settings.prior_weight)
+        information = information.reshape(count, size, size)
+        candidates = identify_parameters(information, self._priors, self._scales,
+                                         settings.prior_weight, self._anchor,
+                                         self._anchor_value)
+        status = context.get_discrete_state(self._status).get_value().reshape(
+            count, -1).copy()
+        misfit = momentum_misfit(information, candidates)
+        status[:, 1] = np.where(np.isfinite(misfit), misfit, status[:, 1])
+        if settings.fit_tolerance > 0:
+            status[:, 2] = np.maximum(status[:, 2], status[:, 1] > settings.fit_tolerance)
+        if settings.on_mismatch == "nominal":
+            candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
         M = self._trees.ReducedMassMatrices(candidates, q)
         usable = _PositiveDefinite(M) & np.all(candidates[:, MASS::PER_BODY] > 0, axis=1)
         estimates[usable] = candidates[usable]
@@ -129,9 +154,28 @@ class InertialIdentifier(LeafSystem):
             changed = usable & (np.max(change, axis=(1, 2)) > settings.change_threshold)
         epochs[changed, 0] += 1
         epochs[changed, 1:] = candidates[changed]
+        status[:, 0] = np.sum(estimates[:, MASS::PER_BODY], axis=1)
+        discrete_state.get_mutable_vector(self._status).SetFromVector(status.reshape(-1))
         discrete_state.get_mutable_vector(self._estimate).SetFromVector(
             estimates.reshape(-1))
         discrete_state.get_mutable_vector(self._epoch).SetFromVector(epochs.reshape(-1))
+
+
+    def _Anchor(self, settings, measured_masses, count):
+        """Each trial's anchor (its constraint vector and value), or (None, None)
+        for the model's scale (identify_parameters)."""
+        if settings.anchor == "model":
+            return None, None
+        layout = self.parameters
+        base = [int(np.flatnonzero(self._trees.nodes == 0)[0])]
+        c = mass_anchor(layout, None if settings.anchor == "total_mass" else base)
+        if settings.anchor_mass > 0:
+            values = np.full(count, settings.anchor_mass)
+        else:
+            which = 0 if settings.anchor == "total_mass" else 1
+            values = np.array([masses[which] for masses in measured_masses]) * (
+                1.0 + settings.anchor_error)
+        return np.tile(c, (count, 1)), values
 
 
 def _PositiveDefinite(M: np.ndarray) -> np.ndarray:
@@ -155,7 +199,7 @@ class _TreeStack:
                     (first.parent, first.joint, first.below, first.base_subspace))):
                 raise ValueError("the trials' arms differ in their kinematic tree")
         self.parameters = InertialParameters(plants[0])
-        self._nodes = self.parameters.Nodes(first)
+        self.nodes = self.parameters.Nodes(first)
         self._topology = (first.base_subspace, first.parent, first.joint)
         self._X_PF, self._axis, self._X_MC = (
             np.array([getattr(tree, name) for tree in trees])
@@ -170,11 +214,11 @@ class _TreeStack:
         measured state, for every trial (in place)."""
         identification.add_momentum_information(
             *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
-            self._nodes, base_pose, base_velocity, q, qdot, information)
+            self.nodes, base_pose, base_velocity, q, qdot, information)
 
     def ReducedMassMatrices(self, pis: np.ndarray, q: np.ndarray) -> np.ndarray:
         """M(q_i) with trial i's bodies at pis[i] (non-finite where H_bb is not
         positive definite)."""
         return identification.reduced_mass_matrices(
             *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
-            self._joint_below, *self._inertias, self._nodes, pis, q)
+            self._joint_below, *self._inertias, self.nodes, pis, q)

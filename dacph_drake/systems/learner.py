@@ -20,7 +20,9 @@ class RhsLearner(LeafSystem):
     returns what it publishes, its log row and its state (kept in this system's
     Context). The learner watches the LHS model (input ``model_epoch``, declared
     with ``watch_model``: an InertialIdentifier's new epoch is a change of the port
-    relation it observes, settings.model_change).
+    relation it observes, settings.model_change), and the identifier's
+    ``identification_log``: after a reported kinematic mismatch the log's
+    ``physical`` column is 0 (log_layout.LearnerLog).
 
     Outputs: ``weights`` (the published vector, held between updates; the fast
     loops evaluate it with the learner's learning.PublishedModel), ``beta_hat`` (the
@@ -69,14 +71,17 @@ class RhsLearner(LeafSystem):
         self._weights = self.DeclareDiscreteState(self.learner.Prior().reshape(-1))
         # The LHS model's epoch at the last check (settings.model_change).
         self._model_epoch = self._last_epoch = None
+        self._identification = None
         if watch_model:
             self._model_epoch = self.DeclareVectorInputPort("model_epoch", count)
             self._last_epoch = self.DeclareDiscreteState(count)
+            self._identification = self.DeclareVectorInputPort("identification_log",
+                                                               3 * count)
         log = LearnerLog()
         initial_log = np.zeros(log.size)
         initial_log[[log.loss, log.nominal_loss]] = np.nan
         initial_log[log.beta_hat] = 1.0
-        initial_log[log.undetermined] = 1.0
+        initial_log[log.undetermined] = initial_log[log.physical] = 1.0
         self._log = self.DeclareDiscreteState(np.tile(initial_log, count))
         beta_hat = np.arange(count) * log.size + log.beta_hat
         self.DeclareStateOutputPort("weights", self._weights)
@@ -118,6 +123,10 @@ class RhsLearner(LeafSystem):
         published, logs, state = self.learner.Update(
             context.get_time(), rows, state, self._ModelChanges(context, discrete_state),
             self._learning)
+        logs[:, LearnerLog().physical] = 1.0
+        if self._identification is not None and self._identification.HasValue(context):
+            mismatch = self._identification.Eval(context).reshape(count, 3)[:, 2]
+            logs[:, LearnerLog().physical] = mismatch < 0.5
         discrete_state.get_mutable_vector(self._state).SetFromVector(state.reshape(-1))
         discrete_state.get_mutable_vector(self._weights).SetFromVector(
             published.reshape(-1))

@@ -1,0 +1,262 @@
+"""Families of trials for the learning targets (run: .venv/bin/python
+scripts/learning_families.py [--families NAME ...] [--variant NAME] [--trials N]).
+
+Each family is a Monte Carlo sweep (montecarlo.run_sweep, DAC and dac-nominal on
+every sample, resumable) of trials the project was not tuned on:
+
+- compressed: the short scenario's phases compressed to 0.5 + 1 + 1 + 1 s, the
+  robot's masses +-10 %, the RHS's unknown parts x0.5-1.5, d(t) x0.5-2, q0 drawn;
+- model_error: the robot's link masses +-20 %, link lengths +-5 %, base +-20 %,
+  the controller's link and base masses +-15 %, the RHS's unknown parts x0.5-1.5,
+  actuators x0.4-2.5 each, one actuator fault in phase 2, d(t) x0.5-2, q0 drawn;
+- actuators: actuators x0.3-3 each and one fault in phase 2, q0 drawn;
+- links: planar arms of 2 to 8 links (10 trials each), masses +-20 %, the
+  RHS's unknown parts x0.5-1.5, d(t) x0.5-2;
+- described: satellite_3dof, satellite_6dof and the Panda, q0 drawn around
+  each shipped one, the RHS's unknown parts x0.5-1.5, d(t) x0.5-2.
+
+A variant (--variant) changes settings of every family's base scenario: the
+learner (network against local_bayes), the adoption rule (trust_band against
+certified_set), the identifier's anchor. The rows go to
+OUT/VARIANT/FAMILY/rows.jsonl, the per-family table of the learning targets to
+OUT/VARIANT/summary.md and .json (family_table).
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Callable, Dict, List
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+PHASES = ("phase1", "phase2", "phase3")
+
+
+def _planar_arm_file(n: int) -> str:
+    """A planar arm of n tapering links (a file naming only the links and the short
+    scenario's phases; the rest is sized to the arm)."""
+    links = "\n".join(
+        f"      - {{mass: {0.9**k:.6g}, length: {0.5 * 0.9**k:.6g}, "
+        f"inertia: {0.02 * 0.9**(3 * k):.6g}, com: {0.25 * 0.9**k:.6g}}}"
+        for k in range(n))
+    return ("robot: !PlanarArm\n  truth:\n    links:\n" + links + "\n"
+            "phases: {warmup: 2.0, linear: 8.0, nonlinear: 8.0, disturbance: 8.0}\n")
+
+
+def _load(text_or_name: str, folder: Path, name: str):
+    from dacph_drake.scenario_files import load_scenario
+    if "\n" not in text_or_name:
+        return load_scenario(text_or_name if not text_or_name.endswith(".yaml")
+                             else ROOT / "scenarios" / text_or_name)
+    path = folder / f"{name}_source.yaml"
+    path.write_text(text_or_name)
+    return load_scenario(path)
+
+
+RHS_SPREAD = {"delta_B_scale": "!Uniform {min: 0.5, max: 1.5}",
+              "delta_D_scale": "!Uniform {min: 0.5, max: 1.5}",
+              "disturbance_scale": "!Uniform {min: 0.5, max: 2.0}"}
+
+
+def _compressed(scenario):
+    scenario.phases.warmup, scenario.phases.linear = 0.5, 1.0
+    scenario.phases.nonlinear, scenario.phases.disturbance = 1.0, 1.0
+    return scenario
+
+
+# name -> list of (sweep name, base scenario source, scenario edit, trials share,
+# distributions).
+FAMILIES: Dict[str, List] = {
+    "compressed": [("compressed", "short", _compressed, 1.0, {
+        "link_mass_scale": "!Uniform {min: 0.9, max: 1.1}",
+        "base_mass_scale": "!Uniform {min: 0.9, max: 1.1}", **RHS_SPREAD,
+        "q0": "!UniformVector {min: [0.1, 0.7], max: [0.6, 1.5]}"})],
+    "model_error": [("model_error", "model_error.yaml", None, 1.0, {
+        "link_mass_scale": "!Uniform {min: 0.8, max: 1.2}",
+        "link_length_scale": "!Uniform {min: 0.95, max: 1.05}",
+        "base_mass_scale": "!Uniform {min: 0.8, max: 1.2}",
+        "nominal_link_mass_scale": "!Uniform {min: 0.85, max: 1.15}",
+        "nominal_base_mass_scale": "!Uniform {min: 0.85, max: 1.15}", **RHS_SPREAD,
+        "actuator_gain_log10": "!Uniform {min: -0.398, max: 0.398}",
+        "fault_time": "!Uniform {min: 11.0, max: 17.0}",
+        "fault_joint": "!UniformDiscrete {values: [1, 2]}",
+        "fault_gain": "!Uniform {min: 0.3, max: 0.7}",
+        "q0": "!UniformVector {min: [0.1, 0.7], max: [0.6, 1.5]}"})],
+    "actuators": [("actuators", "model_error.yaml", None, 1.0, {
+        "actuator_gain_log10": "!Uniform {min: -0.523, max: 0.477}",
+        "fault_time": "!Uniform {min: 11.0, max: 17.0}",
+        "fault_joint": "!UniformDiscrete {values: [1, 2]}",
+        "fault_gain": "!Uniform {min: 0.3, max: 0.7}", **RHS_SPREAD,
+        "q0": "!UniformVector {min: [0.1, 0.7], max: [0.6, 1.5]}"})],
+    "links": [(f"links{n}", _planar_arm_file(n), None, 1.0 / 7, {
+        "link_mass_scale": "!Uniform {min: 0.8, max: 1.2}", **RHS_SPREAD})
+        for n in range(2, 9)],
+    "described": [
+        ("satellite_3dof", "satellite_3dof", None, 0.34, {
+            **RHS_SPREAD, "q0": "!UniformVector {min: [0.2, -0.9, 1.5], "
+                                "max: [0.4, -0.7, 1.7]}"}),
+        ("satellite_6dof", "satellite_6dof", None, 0.33, {
+            **RHS_SPREAD, "q0": "!UniformVector {min: [0.25, -0.85, 1.55, 0.15, 0.55, "
+                                "-0.35], max: [0.35, -0.75, 1.65, 0.25, 0.65, -0.25]}"}),
+        ("panda", "panda.yaml", None, 0.33, dict(RHS_SPREAD))],
+}
+
+# A variant's settings, applied to every base scenario: name -> edit.
+VARIANTS: Dict[str, Callable] = {
+    "default": lambda s: s,
+    "network": lambda s: (setattr(s.learner, "model", "network"),
+                          setattr(s.rhs, "adoption", "trust_band"), s)[-1],
+    "local_bayes_trust_band": lambda s: (setattr(s.rhs, "adoption", "trust_band"), s)[-1],
+}
+
+
+def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
+               seed: int) -> List[Dict]:
+    """Runs (or resumes) one family of one variant; its rows, each tagged with its
+    sweep's name."""
+    from dacph_drake.montecarlo.definition import load_sweep
+    from dacph_drake.montecarlo.runner import run_sweep
+    from dacph_drake.scenario_files import save_scenario
+    rows = []
+    for k, (name, source, edit, share, distributions) in enumerate(FAMILIES[family]):
+        folder = out / variant / family / name
+        folder.mkdir(parents=True, exist_ok=True)
+        scenario = _load(source, folder, name)
+        if edit is not None:
+            scenario = edit(scenario)
+        scenario = VARIANTS[variant](scenario)
+        save_scenario(scenario, folder / "base.yaml")
+        count = max(1, int(round(share * trials)))
+        lines = [f"scenario: base.yaml", f"trials: {count}", f"seed: {seed + k}",
+                 "controllers: [dac, dac-nominal]", "distributions:"]
+        lines += [f"  {key}: {value}" for key, value in distributions.items()]
+        (folder / "sweep.yaml").write_text("\n".join(lines) + "\n")
+        definition = load_sweep(folder / "sweep.yaml")
+        for row in run_sweep(definition, folder / "runs", slots=workers, progress=True):
+            row["sweep"] = name
+            row["n"] = len(definition.scenario.q0)
+            rows.append(row)
+    return rows
+
+
+def _actuator_error(row: Dict) -> float:
+    """The largest factor by which an actuator is off the prior (x or 1/x)."""
+    gains = 10.0 ** np.abs(np.asarray(row["sampled"].get("actuator_gain_log10", [0.0])))
+    return float(np.max(gains))
+
+
+def family_table(rows: List[Dict]) -> Dict:
+    """The learning targets over a family's rows (the issue's list):
+
+    - runaways: trials where DAC did not finish while dac-nominal did;
+    - B and D no worse than the prior against the truth: the share of finished
+      trial-phases with phaseK.X_error_ratio <= 1, and the worst ratio;
+    - interval coverage: the pooled share of (sample, entry) pairs inside the
+      reported intervals, and the share of trial-phases whose coverage is at least
+      0.85;
+    - informative intervals: the share of trial-phases with X_interval_ratio < 1;
+    - DAC against dac-nominal where an actuator is off by more than x2: the share
+      of trials with a lower phases 2-3 tracking error.
+
+    Args:
+        rows: The family's rows.
+
+    Returns:
+        The table's numbers."""
+    out = {"trials": len(rows)}
+    finished = [r for r in rows if r["runs"].get("dac-nominal", {}).get("status") == "ok"]
+    dac_ok = [r for r in finished if r["runs"].get("dac", {}).get("status") == "ok"]
+    out["nominal_finished"] = len(finished)
+    out["runaways"] = len(finished) - len(dac_ok)
+    out["runaway_reasons"] = [f"{r['sweep']} trial {r['trial']}: "
+                              f"{r['runs']['dac']['reason']}"
+                              for r in finished if r not in dac_ok][:10]
+    for X in ("B", "D"):
+        ratios, coverage, informative, pooled = [], [], [], []
+        for row in dac_ok:
+            m = row["runs"]["dac"]["metrics"]
+            for phase in PHASES:
+                ratio = m.get(f"{phase}.{X}_error_ratio", float("nan"))
+                if np.isfinite(ratio):
+                    ratios.append(ratio)
+                c = m.get(f"{phase}.{X}_coverage", float("nan"))
+                if np.isfinite(c):
+                    coverage.append(c)
+                i = m.get(f"{phase}.{X}_interval_ratio", float("nan"))
+                if np.isfinite(i):
+                    informative.append(i < 1.0)
+        ratios = np.array(ratios)
+        out[f"{X}_no_worse_share"] = float(np.mean(ratios <= 1.0)) if len(ratios) else None
+        out[f"{X}_worst_ratio"] = float(np.max(ratios)) if len(ratios) else None
+        out[f"{X}_median_ratio"] = float(np.median(ratios)) if len(ratios) else None
+        out[f"{X}_coverage_pooled"] = float(np.mean(coverage)) if coverage else None
+        out[f"{X}_coverage_share_085"] = (float(np.mean(np.array(coverage) >= 0.85))
+                                          if coverage else None)
+        out[f"{X}_informative_share"] = (float(np.mean(informative))
+                                         if informative else None)
+    off = [r for r in dac_ok if _actuator_error(r) > 2.0]
+    better = [r for r in off if r["runs"]["dac"]["metrics"]["tracking_error_rms_phases_2_3"]
+              < r["runs"]["dac-nominal"]["metrics"]["tracking_error_rms_phases_2_3"]]
+    out["actuator_off_trials"] = len(off)
+    out["dac_better_when_off_share"] = len(better) / len(off) if off else None
+    tracking = [r["runs"]["dac"]["metrics"]["tracking_error_rms_phases_2_3"]
+                / r["runs"]["dac-nominal"]["metrics"]["tracking_error_rms_phases_2_3"]
+                for r in dac_ok]
+    out["tracking_ratio_median"] = float(np.median(tracking)) if tracking else None
+    return out
+
+
+def _cell(value, digits=3):
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    return str(value)
+
+
+def markdown(tables: Dict[str, Dict]) -> str:
+    """The per-family table as Markdown."""
+    columns = [("trials", "trials"), ("runaways", "runaways (dac-nominal finished)"),
+               ("B_no_worse_share", "B <= prior"), ("B_worst_ratio", "B worst"),
+               ("B_median_ratio", "B median"), ("D_no_worse_share", "D <= prior"),
+               ("D_worst_ratio", "D worst"), ("B_coverage_pooled", "B coverage"),
+               ("D_coverage_pooled", "D coverage"),
+               ("B_informative_share", "B informative"),
+               ("dac_better_when_off_share", "DAC better, actuator off > x2"),
+               ("tracking_ratio_median", "tracking DAC / dac-nominal (median)")]
+    lines = ["| family | " + " | ".join(label for _, label in columns) + " |",
+             "|---" * (len(columns) + 1) + "|"]
+    for family, table in tables.items():
+        lines.append(f"| {family} | " + " | ".join(_cell(table.get(key))
+                                                    for key, _ in columns) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--families", nargs="+", default=list(FAMILIES))
+    parser.add_argument("--variant", default="default", choices=list(VARIANTS))
+    parser.add_argument("--trials", type=int, default=64)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=3700)
+    parser.add_argument("--out", default=str(ROOT / "runs" / "learning_families"))
+    args = parser.parse_args()
+    out = Path(args.out)
+    tables = {}
+    for family in args.families:
+        rows = run_family(family, args.variant, args.trials, out, args.workers, args.seed)
+        tables[family] = family_table(rows)
+        print(f"\n{family}: {json.dumps(tables[family], indent=1)}", flush=True)
+    summary = out / args.variant
+    summary.mkdir(parents=True, exist_ok=True)
+    previous = (json.loads((summary / "summary.json").read_text())
+                if (summary / "summary.json").exists() else {})
+    previous.update(tables)
+    (summary / "summary.json").write_text(json.dumps(previous, indent=1))
+    (summary / "summary.md").write_text(markdown(previous))
+    print(markdown(previous))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
