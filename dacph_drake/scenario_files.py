@@ -40,7 +40,8 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  min_window: 0.5", "  warm_start: true",
                           "  model_change: true", "  step_guard: 10.0",
                           "  boundary_rate: 0.0", "  model: local_bayes",
-                          "  adoption: certified_set", "  fit_tolerance: 1.0e-06")
+                          "  adoption: certified_set", "  fit_tolerance: 1.0e-05",
+                          "  anchor: total_mass")
 # Settings added to the current layout since it was introduced: (section, key, the
 # value that reproduces the behaviour before it). A file whose section lacks the key
 # was written before it and is read with that value (not the robot's sized default);

@@ -111,8 +111,21 @@ VARIANTS: Dict[str, Callable] = {
 }
 
 
+def _apply_settings(scenario, settings: List[str]):
+    """Applies KEY=VALUE overrides (a dotted path into the scenario, a YAML value)."""
+    import yaml
+    for item in settings:
+        key, value = item.split("=", 1)
+        *path, last = key.split(".")
+        target = scenario
+        for name in path:
+            target = getattr(target, name)
+        setattr(target, last, yaml.safe_load(value))
+    return scenario
+
+
 def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
-               seed: int) -> List[Dict]:
+               seed: int, settings: List[str] = (), label: str = "") -> List[Dict]:
     """Runs (or resumes) one family of one variant; its rows, each tagged with its
     sweep's name."""
     from dacph_drake.montecarlo.definition import load_sweep
@@ -120,12 +133,12 @@ def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
     from dacph_drake.scenario_files import save_scenario
     rows = []
     for k, (name, source, edit, share, distributions) in enumerate(FAMILIES[family]):
-        folder = out / variant / family / name
+        folder = out / (label or variant) / family / name
         folder.mkdir(parents=True, exist_ok=True)
         scenario = _load(source, folder, name)
         if edit is not None:
             scenario = edit(scenario)
-        scenario = VARIANTS[variant](scenario)
+        scenario = _apply_settings(VARIANTS[variant](scenario), settings)
         save_scenario(scenario, folder / "base.yaml")
         count = max(1, int(round(share * trials)))
         lines = [f"scenario: base.yaml", f"trials: {count}", f"seed: {seed + k}",
@@ -241,14 +254,20 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=3700)
     parser.add_argument("--out", default=str(ROOT / "runs" / "learning_families"))
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="settings of every base scenario (a dotted path, a YAML "
+                             "value), e.g. learner.bayes.min_dof=4")
+    parser.add_argument("--label", default="", help="the results' folder name "
+                        "(default: the variant's)")
     args = parser.parse_args()
     out = Path(args.out)
     tables = {}
     for family in args.families:
-        rows = run_family(family, args.variant, args.trials, out, args.workers, args.seed)
+        rows = run_family(family, args.variant, args.trials, out, args.workers, args.seed,
+                          args.set, args.label)
         tables[family] = family_table(rows)
         print(f"\n{family}: {json.dumps(tables[family], indent=1)}", flush=True)
-    summary = out / args.variant
+    summary = out / (args.label or args.variant)
     summary.mkdir(parents=True, exist_ok=True)
     previous = (json.loads((summary / "summary.json").read_text())
                 if (summary / "summary.json").exists() else {})

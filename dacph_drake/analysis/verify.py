@@ -10,6 +10,12 @@
    ground truth's B~ (known in simulation only) is checked at every logged sample:
    a learner that is wrong but self-consistent (B_hat K = c I) passes the first
    check and fails this one.
+   With a learner that reports credible intervals (learner.model local_bayes),
+   the loop with the gains in effect is also checked on the whole box of B its
+   interval allows at every logged sample where an estimate was adopted
+   (kernels.certificate.box_certificate: time-scale separation and spectral
+   radius for every B of the box): an estimate adopted outside its certificate
+   (the point rule, rhs.adoption trust_band) fails the run.
 3. A region-of-attraction certificate of the sliding dynamics at the initial
    configuration (region_of_attraction), checked to contain s(0).
 The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
@@ -32,6 +38,7 @@ from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
+from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
 from dacph_drake.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
 from dacph_drake.robots import robot_of  # noqa: E402
@@ -96,6 +103,39 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     return series
 
 
+def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
+    """box_certificate on the learner's reported interval of B with the gains in
+    effect, at every logged sample whose refresh adopted an estimate; skipped
+    (ok) for a learner without intervals."""
+    n = len(scenario.q0)
+    t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
+    if "estimate_bounds" not in logs:
+        return {"ok": True, "evaluated": 0, "skipped": "the run logs no intervals"}
+    k = n * n + n
+    bounds = logs["estimate_bounds"]
+    if np.allclose(bounds[:, :n * n], bounds[:, k:k + n * n]):
+        return {"ok": True, "evaluated": 0,
+                "skipped": "the learner reports no credible set (a point estimate)"}
+    adopted = np.flatnonzero(rhs[:, R.trusted] > 0.5)
+    rate = scenario.rhs.Td * lambda_lhs
+    failures, worst_separation, worst_radius = [], np.inf, 0.0
+    for i in adopted:
+        scale = scenario.stress.B_hat_scale if t[i] > scenario.stress.start else 1.0
+        lower = scale * bounds[i, :n * n].reshape(n, n)
+        upper = scale * bounds[i, k:k + n * n].reshape(n, n)
+        slowest, radius = box_certificate(lower, upper, rhs[i, R.K],
+                                          scenario.periods.rhs)
+        worst_separation = min(worst_separation, slowest / lambda_lhs)
+        worst_radius = max(worst_radius, radius)
+        if not (slowest >= rate * (1 - 1e-9) and radius <= 1.0 - STABILITY_MARGIN):
+            failures.append(float(t[i]))
+    return {"ok": not failures, "evaluated": int(len(adopted)),
+            "failed": len(failures),
+            "min_separation": float(worst_separation) if len(adopted) else None,
+            "max_spectral_radius": float(worst_radius) if len(adopted) else None,
+            "first_failure_time": failures[0] if failures else None}
+
+
 @dataclass
 class LhsSide:
     """What the checks need of a run's LHS.
@@ -151,6 +191,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
         "lhs_envelope": envelope.as_dict(),
         "rhs_loop_learned": learned.summary(),
         "rhs_loop_truth": truth.summary(),
+        "rhs_loop_credible_set": _set_series(logs, scenario, lhs.lambda_lhs),
         # A region the budget did not allow is reported as skipped, with why.
         "region_of_attraction": {**lhs.region.as_dict(), "s0_norm": lhs.s0_norm,
                                  "ok": bool(lhs.region.skipped)
@@ -240,7 +281,7 @@ _UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time
           "worst_time": "s", "min_margin_time": "s", "first_failure_time": "s",
           "first_rejection_time": "s", "radius": "rad/s", "s0_norm": "rad/s",
           "rho": "J", "q": "rad", "fraction_inside": "-", "worst_violation": "-",
-          "min_margin": "-", "min_separation": "-"}
+          "min_margin": "-", "min_separation": "-", "max_spectral_radius": "-"}
 
 
 def _Item(key: str, value) -> str:

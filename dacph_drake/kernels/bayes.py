@@ -70,6 +70,16 @@ def _matvec(M: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
+def _newest_relative(r: np.ndarray, y: np.ndarray, old: int) -> float:
+    """RMS of the residual over RMS of y on the samples from ``old`` on."""
+    new_rms, new_y = 0.0, 0.0
+    for k in range(old, r.shape[0]):
+        new_rms += r[k] ** 2
+        new_y += y[k] ** 2
+    return np.sqrt(new_rms / new_y) if new_y > 0.0 else np.nan
+
+
+@njit(cache=True)
 def _correlation_time(r: np.ndarray, lags: int) -> float:
     """1 + 2 sum_l (1 - l / (L + 1)) max(rho_l, 0), rho_l the residual's
     autocorrelation at lag l (Bartlett), at least 1."""
@@ -133,7 +143,7 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         Whether the window determines the fit (at least min_dof residual degrees
         of freedom in independent samples: (sum w - nuisance - trace of the hat
         matrix) / correlation time); the mean and variances are the prior's if
-        not."""
+        not, and of the statistics only the newest relative residual is set."""
     K, P = A.shape
     scaled = A * prior_sd.reshape(1, P)
     offset = y - _matvec(A, prior_mean)
@@ -186,6 +196,7 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         mean[:] = prior_mean
         variance[:] = prior_sd ** 2
         statistics[:] = np.nan
+        statistics[4] = _newest_relative(r, y, K - newest)
         return False
     phi = _matvec(C, b / sigma2)
     r = offset - _matvec(scaled, phi)
@@ -197,10 +208,6 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         if column > 0.0:
             variance[c] += (floor * residual / column) ** 2
     old = K - newest
-    new_rms, new_y = 0.0, 0.0
-    for k in range(old, K):
-        new_rms += r[k] ** 2
-        new_y += y[k] ** 2
     # The newest samples predicted by the fit to the others (their rows removed
     # from the normal equations), each against its predictive variance: the
     # noise's, the coefficients' and the floor's.
@@ -245,9 +252,8 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
     statistics[0] = sigma2
     statistics[1] = (weight - nuisance - p_eff) / tau
     statistics[2] = p_eff + nuisance
-    new_rms = np.sqrt(new_rms / max(newest, 1))
     statistics[3] = np.sqrt(z2 / predicted) if predicted else np.nan
-    statistics[4] = new_rms / np.sqrt(new_y / max(newest, 1)) if new_y > 0.0 else np.nan
+    statistics[4] = _newest_relative(r, y, old)
     statistics[5] = tau
     return True
 

@@ -116,3 +116,39 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
                     good = middle
             c = good
         out[i, 0], out[i, 1] = c, 1.0
+
+
+@njit(cache=True)
+def box_certificate(lower: np.ndarray, upper: np.ndarray, gains: np.ndarray,
+                    period: float) -> np.ndarray:
+    """The certificate of the discrete loop with given gains on an entrywise box of B.
+
+    Gershgorin on h K B, K = diag(gains) (module docstring), row p's disc centred in
+    h k_p [lower_pp, upper_pp] with radius h k_p R_p: the slowest decay rate
+    min_p k_p (lower_pp - R_p) [1/s] and the largest root modulus over the discs
+    (at most radius_bound where certified).
+
+    Args:
+        lower: The box's lower bounds (n, n).
+        upper: The box's upper bounds (n, n).
+        gains: The integrator's gains k_p (n).
+        period: The RHS period h [s].
+
+    Returns:
+        [slowest decay rate [1/s], largest root modulus]."""
+    n = lower.shape[0]
+    low, high, radius = np.empty(n), np.empty(n), np.empty(n)
+    slowest = np.inf
+    for p in range(n):
+        R = 0.0
+        for j in range(n):
+            if j != p:
+                R += max(abs(lower[p, j]), abs(upper[p, j]))
+        low[p] = gains[p] * lower[p, p]
+        high[p] = gains[p] * upper[p, p]
+        radius[p] = gains[p] * R
+        slowest = min(slowest, low[p] - radius[p])
+    out = np.empty(2)
+    out[0] = slowest
+    out[1] = _largest_radius(low, high, radius, period)
+    return out

@@ -369,12 +369,21 @@ class LocalBayesLearner:
         times = rows[:, 0]
         starts = state[:, 0].copy()
         fit_rows(times, rows[:, 1:], starts, n, prior.mean, prior.sd,
-                 self._free_response, settings.forgetting, RESIDUAL_LAGS, self._min_tau,
+                 self._free_response, bayes.forgetting, RESIDUAL_LAGS, self._min_tau,
                  bayes.floor, self._period, self._minimum, bayes.min_dof, mean, variance,
                  statistics, determined)
+        # A short window predicts its newest samples poorly whatever holds: only
+        # windows of half the forgetting time add to the history, and a row its
+        # window does not determine is tested once it spans the forgetting time
+        # (it may hold a change it cannot resolve).
+        span = t - np.maximum(state[:, 0], times[0])
         changed = np.zeros(n, bool)
-        for i in np.flatnonzero(determined):
-            changed[i] = self._Changed(state[i], statistics[i, 3], statistics[i, 4])
+        for i in range(n):
+            if determined[i] or span[i] >= bayes.forgetting:
+                changed[i] = self._Changed(state[i], statistics[i, 3], statistics[i, 4],
+                                           span[i] >= 0.5 * bayes.forgetting)
+            elif span[i] >= 0.5 * bayes.forgetting:
+                self._Remember(state[i], statistics[i, 4])
         if np.any(changed):
             state[changed, 0] = t + 1e-9
             state[changed, 1] = 0.0
@@ -385,7 +394,8 @@ class LocalBayesLearner:
                               state[:, 0]), fitted, determined,
                 int(np.count_nonzero(changed)))
 
-    def _Changed(self, row: np.ndarray, surprise: float, relative: float) -> bool:
+    def _Changed(self, row: np.ndarray, surprise: float, relative: float,
+                 remember: bool) -> bool:
         """The change test of one row (``row`` = its state, updated in place). The
         newest samples' relative residual above bayes.inconsistency is a change
         (the window's relation does not hold, whatever came before); so is one
@@ -393,7 +403,7 @@ class LocalBayesLearner:
         the rest of the window, miss by more than learner.change_ratio predictive
         sd (RMS, ``surprise``) or their relative residual exceeds
         learner.change_ratio times the median of the row's recent ones;
-        otherwise the relative residual joins the history."""
+        otherwise the relative residual joins the history (with ``remember``)."""
         if not np.isfinite(relative):
             return False
         if relative > self._bayes.inconsistency:
@@ -405,9 +415,17 @@ class LocalBayesLearner:
                 surprise > ratio
                 or (count >= MIN_HISTORY and relative > ratio * np.median(known))):
             return True
-        row[2 + count % HISTORY] = relative
-        row[1] = count + 1
+        if remember:
+            self._Remember(row, relative)
         return False
+
+    @staticmethod
+    def _Remember(row: np.ndarray, relative: float) -> None:
+        """Adds a relative residual to a row's history (its state, in place)."""
+        if np.isfinite(relative):
+            count = int(row[1])
+            row[2 + count % HISTORY] = relative
+            row[1] = count + 1
 
     def _Publish(self, trial, t, newest, mean, variance, determined, dof, times, starts):
         """The published vector from the rows' posteriors (module docstring); the
@@ -420,7 +438,7 @@ class LocalBayesLearner:
         out[L.p_ref] = newest[1 + n:1 + 2 * n]
         # The local linear model's error over the window: half the curvature bound
         # times the weighted mean of (t_k - t_now)^2, per unit of the entry's scale.
-        forgetting = self._settings.forgetting
+        forgetting = bayes.forgetting
         for i in np.flatnonzero(determined):
             inside = times >= starts[i] - 1e-9
             w = np.exp((times[inside] - t) / forgetting)
@@ -460,7 +478,7 @@ class LocalBayesLearner:
         quantities published at the prior."""
         n, layout = self.n, LearnerLog()
         times = rows[:, 0]
-        w = np.exp((times - t) / self._settings.forgetting)
+        w = np.exp((times - t) / self._bayes.forgetting)
         w /= np.sum(w)
         samples = rows[:, 1:]
         loss = nominal = signal = 0.0
