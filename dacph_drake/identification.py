@@ -113,7 +113,8 @@ class PortEvidence:
             PortSample layout's regressed part).
     """
 
-    def __init__(self, n: int, sample_period: float, window: float, columns=None):
+    def __init__(self, n: int, sample_period: float, window: float,
+                 columns: Optional[np.ndarray] = None):
         self.n = n
         self.decay = float(np.exp(-sample_period / window))
         self.size = 9 * n * n + 1

@@ -11,7 +11,7 @@ The output layers start at zero with biases vec(B0 / F) and softplus^-1(D0): the
 nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
 network) unless the learner's ``coupling`` setting is "inertia".
 """
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
@@ -19,6 +19,9 @@ import torch
 from dacph_drake.kernels.network import evaluate_networks
 from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import LEARNER_COUPLINGS, Learner
+
+if TYPE_CHECKING:
+    from dacph_drake.learning import PortEstimate
 
 
 def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarray:
@@ -349,7 +352,8 @@ class NetworkStack:
         self._coupling = np.array([network.coupling for network in networks])
         self.size = networks[0].size
 
-    def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray):
+    def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
+                 ) -> "PortEstimate":
         """Every trial's estimate at its state (learning.PublishedModel.Estimate):
         the point, no credible set, the point as its interval.
 

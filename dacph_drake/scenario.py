@@ -505,8 +505,9 @@ class LocalBayes:
         gain_range: [low, high], the actuators' gains B~_ii / B0_i the prior
             allows; 0 < low < 1 < high <= 100. Its half-width is the regression
             prior's sd of B_ii / B0_i.
-        coupling: The prior's bound on |B_ij| / sqrt(B0_i B0_j), i != j, and its
-            sd, in [0, 1].
+        coupling: The prior's bound on a row's total cross-coupling
+            sum_{j != i} |B_ij| / sqrt(B0_i B0_j), in [0, 1]; each entry's range
+            and sd is its share, coupling / (n - 1) (local_bayes.entry_coupling).
         damping_range: [low, high], D~_i / D0_i the prior allows, 0 <= low < 1 <
             high; its half-width is the prior's sd of D_i / D0_i.
         drift: The prior's sd of an entry's rate of change along the trajectory,
@@ -538,7 +539,15 @@ class LocalBayes:
             local model explains its window to about 1e-3 of tau_obs.
         inconsistency: The relative residual of a row's newest samples that
             restarts its window whatever its history, > change_floor: the
-            window's relation does not hold."""
+            window's relation does not hold.
+        model_error: The relative standard deviation of the LHS model's inertia
+            that the physical claims allow, in [0, 1): the learner fits the port
+            as the model sees it, (I + E) B~ and (I + E) D~ with E the model's
+            relative inertia error, which port data cannot tell from B~ and
+            momentum data do not reveal when a link's length is off
+            (learning.local_bayes.physical_claims). It widens only what the
+            metrics and reports claim about B~ and D~; the loop runs on the
+            port as the model sees it."""
     gain_range: List[float] = field(default_factory=lambda: [0.5, 2.0])
     coupling: float = 0.05
     damping_range: List[float] = field(default_factory=lambda: [0.0, 3.0])
@@ -554,6 +563,7 @@ class LocalBayes:
     margin: float = 2.0
     change_floor: float = 5e-3
     inconsistency: float = 0.1
+    model_error: float = 0.1
 
 
 @dataclass
@@ -1496,6 +1506,8 @@ def validate_local_bayes(bayes: LocalBayes, window: float) -> None:
         raise ConfigError(f"learner.bayes.inconsistency = {bayes.inconsistency!r}; "
                           "allowed: a number above learner.bayes.change_floor = "
                           f"{bayes.change_floor!r}")
+    require_in_range("learner.bayes.model_error", bayes.model_error, 0.0, 0.999,
+                     "(a relative standard deviation, below 1)")
 
 
 def _require_length(name: str, values, n: int, meaning: str = "one per joint"

@@ -61,6 +61,27 @@ ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
 ADDED_SUBSECTIONS = (("learner", "bayes", LocalBayes),)
 
 
+def as_before_added(scenario: Scenario) -> Scenario:
+    """A copy of ``scenario`` with each setting of ADDED_TO_CURRENT_LAYOUT at its
+    value before it existed, ADDED_SUBSECTIONS at their defaults but for
+    learner.bayes.model_error at 0 (the claims about B~ and D~ were the estimates
+    themselves): the release before them, as the ablations' baseline.
+
+    Args:
+        scenario: The scenario.
+
+    Returns:
+        The copy."""
+    import copy
+    before = copy.deepcopy(scenario)
+    for section, key, value in ADDED_TO_CURRENT_LAYOUT:
+        setattr(getattr(before, section), key, value)
+    for section, key, defaults in ADDED_SUBSECTIONS:
+        setattr(getattr(before, section), key, defaults())
+    before.learner.bayes.model_error = 0.0
+    return before
+
+
 def _added_lines() -> Tuple[str, ...]:
     """ADDED_TO_CURRENT_LAYOUT's lines and ADDED_SUBSECTIONS' default lines as
     yaml_dump_typed writes them."""
@@ -307,7 +328,7 @@ def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
         "%s: read in the layout before the robot: and task: sections (%s); save it "
         "again to update the file", path, note)
     return load_yaml_dataclass(path, layout,
-                               migrate=_migrate_file).ToScenario(path)
+                               migrate=_migrate_older_file).ToScenario(path)
 
 
 def load_scenario(path: Union[str, Path]) -> Scenario:
@@ -356,6 +377,17 @@ def _load_current_layout(path) -> Scenario:
         return scenario
     return load_yaml_dataclass(path, Scenario, migrate=_migrate_file,
                                defaults=defaults)
+
+
+def _migrate_older_file(raw, path):
+    """_migrate_file, with the sections an older layout's file lacks added holding
+    ADDED_TO_CURRENT_LAYOUT's values before them (every such file was written
+    before them)."""
+    if isinstance(raw, dict):
+        raw = {**raw, **{section: {} for section, _, _ in ADDED_TO_CURRENT_LAYOUT
+                         if section not in raw}}
+    migrated = _migrate_file(raw, path)
+    return raw if migrated is None else migrated
 
 
 def _migrate_file(raw, path):

@@ -1,6 +1,8 @@
-"""Which part of the learner earns what: the DAC loop on the short scenario (and a
-second, harder variant of it) with the paper's plain learner and with the
-regularized learner minus one component at a time, over several learner seeds.
+"""Which part of the network learner earns what (learner.model: network): the DAC
+loop on the short scenario (and a second, harder variant of it) with the paper's
+plain learner and with the regularized network learner minus one component at a
+time, over several learner seeds. (The local Bayesian learner's ablation is
+scripts/learning_families.py's variants.)
 
     .venv/bin/python scripts/learning_ablation.py --out runs/learning_ablation
 
@@ -64,6 +66,8 @@ def run_one(task):
     import torch
     torch.set_num_threads(1)
     scenario = copy.deepcopy(SCENARIOS[scenario_name]())
+    scenario.learner.model = "network"
+    scenario.rhs.adoption = "trust_band"
     VARIANTS[variant](scenario)
     scenario.seed = seed
     result = simulate(scenario, "dac")

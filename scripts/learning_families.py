@@ -125,15 +125,22 @@ def _apply_settings(scenario, settings: List[str]):
 
 
 def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
-               seed: int, settings: List[str] = (), label: str = "") -> List[Dict]:
+               seed: int, settings: List[str] = (), label: str = "",
+               saved: bool = False) -> List[Dict]:
     """Runs (or resumes) one family of one variant; its rows, each tagged with its
-    sweep's name."""
+    sweep's name (``saved``: only the rows already saved)."""
     from dacph_drake.montecarlo.definition import load_sweep
     from dacph_drake.montecarlo.runner import run_sweep
+    from dacph_drake.montecarlo.store import read_rows, sorted_rows
     from dacph_drake.scenario_files import save_scenario
     rows = []
     for k, (name, source, edit, share, distributions) in enumerate(FAMILIES[family]):
         folder = out / (label or variant) / family / name
+        if saved:
+            for row in sorted_rows(read_rows(folder / "runs")):
+                row["sweep"] = name
+                rows.append(row)
+            continue
         folder.mkdir(parents=True, exist_ok=True)
         scenario = _load(source, folder, name)
         if edit is not None:
@@ -141,7 +148,7 @@ def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
         scenario = _apply_settings(VARIANTS[variant](scenario), settings)
         save_scenario(scenario, folder / "base.yaml")
         count = max(1, int(round(share * trials)))
-        lines = [f"scenario: base.yaml", f"trials: {count}", f"seed: {seed + k}",
+        lines = ["scenario: base.yaml", f"trials: {count}", f"seed: {seed + k}",
                  "controllers: [dac, dac-nominal]", "distributions:"]
         lines += [f"  {key}: {value}" for key, value in distributions.items()]
         (folder / "sweep.yaml").write_text("\n".join(lines) + "\n")
@@ -153,10 +160,9 @@ def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
     return rows
 
 
-def _actuator_error(row: Dict) -> float:
-    """The largest factor by which an actuator is off the prior (x or 1/x)."""
-    gains = 10.0 ** np.abs(np.asarray(row["sampled"].get("actuator_gain_log10", [0.0])))
-    return float(np.max(gains))
+def _actuator_gains(row: Dict) -> np.ndarray:
+    """The actuators' gains over the prior's (before any fault)."""
+    return 10.0 ** np.asarray(row["sampled"].get("actuator_gain_log10", [0.0]), float)
 
 
 def family_table(rows: List[Dict]) -> Dict:
@@ -170,7 +176,13 @@ def family_table(rows: List[Dict]) -> Dict:
       0.85;
     - informative intervals: the share of trial-phases with X_interval_ratio < 1;
     - DAC against dac-nominal where an actuator is off by more than x2: the share
-      of trials with a lower phases 2-3 tracking error.
+      of trials with a lower phases 2-3 tracking error, and the same where some
+      actuator is below x0.5 (weak) and where all are within x0.5 and some above
+      x2 (strong);
+    - an actuator fault: the share of trials whose tracking error over the 2 s
+      after it is within 2x of the 2 s before (fault1.tracking_error_ratio);
+    - the identified total mass: the share within 10 % of the truth, and the
+      share of trials whose kinematic mismatch was reported.
 
     Args:
         rows: The family's rows.
@@ -186,7 +198,7 @@ def family_table(rows: List[Dict]) -> Dict:
                               f"{r['runs']['dac']['reason']}"
                               for r in finished if r not in dac_ok][:10]
     for X in ("B", "D"):
-        ratios, coverage, informative, pooled = [], [], [], []
+        ratios, coverage, informative = [], [], []
         for row in dac_ok:
             m = row["runs"]["dac"]["metrics"]
             for phase in PHASES:
@@ -208,11 +220,30 @@ def family_table(rows: List[Dict]) -> Dict:
                                           if coverage else None)
         out[f"{X}_informative_share"] = (float(np.mean(informative))
                                          if informative else None)
-    off = [r for r in dac_ok if _actuator_error(r) > 2.0]
-    better = [r for r in off if r["runs"]["dac"]["metrics"]["tracking_error_rms_phases_2_3"]
-              < r["runs"]["dac-nominal"]["metrics"]["tracking_error_rms_phases_2_3"]]
-    out["actuator_off_trials"] = len(off)
-    out["dac_better_when_off_share"] = len(better) / len(off) if off else None
+    def better_share(trials):
+        key = "tracking_error_rms_phases_2_3"
+        better = [r for r in trials if r["runs"]["dac"]["metrics"][key]
+                  < r["runs"]["dac-nominal"]["metrics"][key]]
+        return len(better) / len(trials) if trials else None
+
+    weak = [r for r in dac_ok if np.min(_actuator_gains(r)) < 0.5]
+    strong = [r for r in dac_ok if np.max(_actuator_gains(r)) > 2.0 and r not in weak]
+    out["actuator_off_trials"] = len(weak) + len(strong)
+    out["dac_better_when_off_share"] = better_share(weak + strong)
+    out["dac_better_weak_share"] = better_share(weak)
+    out["dac_better_strong_share"] = better_share(strong)
+    faults = [r["runs"]["dac"]["metrics"].get("fault1.tracking_error_ratio")
+              for r in dac_ok]
+    faults = np.array([f for f in faults if f is not None and np.isfinite(f)])
+    out["fault_trials"] = len(faults)
+    out["fault_recovered_share"] = float(np.mean(faults <= 2.0)) if len(faults) else None
+    out["fault_ratio_median"] = float(np.median(faults)) if len(faults) else None
+    mass = np.array([r["runs"]["dac"]["metrics"].get("identified_mass_error", np.nan)
+                     for r in dac_ok], float)
+    out["mass_within_10_share"] = (float(np.mean(np.abs(mass[np.isfinite(mass)]) <= 0.1))
+                                   if np.isfinite(mass).any() else None)
+    out["mismatch_reported_share"] = float(np.mean([
+        r["runs"]["dac"]["metrics"].get("kinematic_mismatch", 0.0) > 0.5 for r in dac_ok]))
     tracking = [r["runs"]["dac"]["metrics"]["tracking_error_rms_phases_2_3"]
                 / r["runs"]["dac-nominal"]["metrics"]["tracking_error_rms_phases_2_3"]
                 for r in dac_ok]
@@ -228,22 +259,34 @@ def _cell(value, digits=3):
     return str(value)
 
 
+LEARNING_COLUMNS = [
+    ("trials", "trials"), ("B_no_worse_share", "B <= prior"), ("B_worst_ratio", "B worst"),
+    ("B_median_ratio", "B median"), ("D_no_worse_share", "D <= prior"),
+    ("D_worst_ratio", "D worst"), ("B_coverage_pooled", "B coverage"),
+    ("D_coverage_pooled", "D coverage"), ("B_informative_share", "B informative"),
+    ("D_informative_share", "D informative")]
+LOOP_COLUMNS = [
+    ("nominal_finished", "dac-nominal finished"),
+    ("runaways", "DAC runaways there"),
+    ("dac_better_when_off_share", "DAC better, an actuator off > x2"),
+    ("dac_better_weak_share", "... one < x0.5"), ("dac_better_strong_share", "... > x2 only"),
+    ("fault_recovered_share", "fault: within 2x in 2 s"),
+    ("mass_within_10_share", "mass within 10 %"),
+    ("mismatch_reported_share", "mismatch reported"),
+    ("tracking_ratio_median", "tracking DAC / dac-nominal (median)")]
+
+
 def markdown(tables: Dict[str, Dict]) -> str:
-    """The per-family table as Markdown."""
-    columns = [("trials", "trials"), ("runaways", "runaways (dac-nominal finished)"),
-               ("B_no_worse_share", "B <= prior"), ("B_worst_ratio", "B worst"),
-               ("B_median_ratio", "B median"), ("D_no_worse_share", "D <= prior"),
-               ("D_worst_ratio", "D worst"), ("B_coverage_pooled", "B coverage"),
-               ("D_coverage_pooled", "D coverage"),
-               ("B_informative_share", "B informative"),
-               ("dac_better_when_off_share", "DAC better, actuator off > x2"),
-               ("tracking_ratio_median", "tracking DAC / dac-nominal (median)")]
-    lines = ["| family | " + " | ".join(label for _, label in columns) + " |",
-             "|---" * (len(columns) + 1) + "|"]
-    for family, table in tables.items():
-        lines.append(f"| {family} | " + " | ".join(_cell(table.get(key))
-                                                    for key, _ in columns) + " |")
-    return "\n".join(lines) + "\n"
+    """The per-family tables as Markdown: the learning targets, then the loop's."""
+    out = []
+    for columns in (LEARNING_COLUMNS, LOOP_COLUMNS):
+        lines = ["| family | " + " | ".join(label for _, label in columns) + " |",
+                 "|---" * (len(columns) + 1) + "|"]
+        for family, table in tables.items():
+            lines.append(f"| {family} | " + " | ".join(_cell(table.get(key))
+                                                        for key, _ in columns) + " |")
+        out.append("\n".join(lines) + "\n")
+    return "\n".join(out)
 
 
 def main() -> None:
@@ -259,12 +302,14 @@ def main() -> None:
                              "value), e.g. learner.bayes.min_dof=4")
     parser.add_argument("--label", default="", help="the results' folder name "
                         "(default: the variant's)")
+    parser.add_argument("--tables-only", action="store_true",
+                        help="the tables of the rows already saved, without running")
     args = parser.parse_args()
     out = Path(args.out)
     tables = {}
     for family in args.families:
         rows = run_family(family, args.variant, args.trials, out, args.workers, args.seed,
-                          args.set, args.label)
+                          args.set, args.label, saved=args.tables_only)
         tables[family] = family_table(rows)
         print(f"\n{family}: {json.dumps(tables[family], indent=1)}", flush=True)
     summary = out / (args.label or args.variant)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate, simulate_batch
 from dacph_drake.scenario import short_scenario
 
@@ -59,6 +60,23 @@ def test_every_trial_of_a_batch_is_its_solo_run(controller):
     assert batch[2].final_time < 0.05
     assert all(result.status == "ok" and result.final_time == pytest.approx(duration)
                for trial, result in enumerate(batch) if trial != 2)
+
+
+def test_a_learning_trial_is_its_solo_run_through_every_phase():
+    """Past the learner's fits, restarts and adoptions (phases of 0.5 + 1 + 1 + 1 s,
+    actuators off their prior, one with a fault), each DAC trial of a batch of
+    different scenarios equals its solo run, every log bit for bit."""
+    from dacph_drake.scenario import ActuatorFault, Phases
+    trials = _trials(3)
+    for scenario, scale in zip(trials, ([1.0, 1.0], [2.5, 0.6], [0.5, 1.8])):
+        scenario.phases = Phases(warmup=0.5, linear=1.0, nonlinear=1.0, disturbance=1.0)
+        scenario.uncertainty.B_scale = scale
+    trials[1].uncertainty.faults = [ActuatorFault(time=2.2, joint=2, gain=0.5)]
+    batch = _batch_equal_to_solo_runs(trials, "dac", trials[0].duration)
+    assert all(result.status == "ok" for result in batch)
+    published = LearnerLog().network_published
+    learned = [np.any(r.logs["learner_log"][:, published] > 0.5) for r in batch]
+    assert any(learned), "no trial published a learned quantity"
 
 
 def test_the_trials_of_a_batch_share_what_shapes_the_diagram(tmp_path):

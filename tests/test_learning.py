@@ -15,6 +15,7 @@ from dacph_drake.kernels.certificate import box_certificate, certified_gains
 from dacph_drake.learning.local_bayes import (LocalBayesChannels, LocalModel,
                                               LocalModelLayout, free_response,
                                               prior_range, student_quantile)
+from dacph_drake.log_layout import RhsLog
 from dacph_drake.scenario import LocalBayes, Phases, short_scenario
 
 
@@ -128,11 +129,13 @@ def test_a_certified_set_keeps_every_matrix_of_it_stable_and_separated(rng, low,
     n, h, rate = 2, 2e-4, 2 * 196.0
     lower = np.array([[low, -0.05], [-0.05, low]])
     upper = np.array([[high, 0.05], [0.05, high]])
-    out = np.empty((1, 4))
-    certified_gains(lower[None], upper[None], np.ones((1, n)), np.array([862.0]),
-                    np.array([800.0]), np.array([rate]), h, 0.25 / h, 0.95, out)
+    out, K = np.empty((1, 4)), np.empty((1, n))
+    certified_gains(lower[None], upper[None], np.ones((1, n)), np.zeros((1, n)),
+                    np.array([862.0]), np.array([800.0]), np.array([rate]), h, 0.25 / h,
+                    0.95, out, K)
     c, ok = out[0, 0], out[0, 1]
     assert ok == 1.0
+    np.testing.assert_allclose(K[0], c)
     K = np.full(n, c)
     for _ in range(200):
         B = lower + (upper - lower) * rng.uniform(size=(n, n))
@@ -145,11 +148,90 @@ def test_a_certified_set_keeps_every_matrix_of_it_stable_and_separated(rng, low,
 def test_a_set_no_gain_can_certify_is_refused():
     """Actuators anywhere in [0.1, 5] x B0: no c is both fast enough for the weakest
     and stable for the strongest."""
-    out = np.empty((1, 4))
+    out, K = np.empty((1, 4)), np.empty((1, 2))
     lower, upper = np.diag([0.1, 0.1])[None], np.diag([5.0, 5.0])[None]
-    certified_gains(lower, upper, np.ones((1, 2)), np.array([862.0]), np.array([800.0]),
-                    np.array([392.0]), 2.5e-4, 1000.0, 0.95, out)
+    certified_gains(lower, upper, np.ones((1, 2)), np.zeros((1, 2)), np.array([862.0]),
+                    np.array([800.0]), np.array([392.0]), 2.5e-4, 1000.0, 0.95, out, K)
     assert out[0, 1] == 0.0
+
+
+def test_learned_gains_never_fall_below_the_priors_where_the_set_certifies_them():
+    """An actuator learned 3x its prior B0 = 1: its gain stays at the gain of the
+    loop without learning (c / B0 at that loop's c, the floor) where the set
+    certifies that gain, and drops to c / lambda_hat where a wide set would not
+    keep it stable; a weak actuator keeps the learned, larger gain."""
+    h, rate = 2.5e-4, 392.0
+    cases = {"strong, tight set": ([2.8, 0.9], [3.2, 1.1], [3.0, 1.0]),
+             "strong, wide set": ([2.8, 0.9], [12.0, 1.1], [3.0, 1.0]),
+             "weak": ([0.45, 0.9], [0.55, 1.1], [0.5, 1.0])}
+    gains = {}
+    for name, (low, high, eigenvalues) in cases.items():
+        out, K = np.empty((1, 4)), np.empty((1, 2))
+        lower, upper = np.diag(low)[None], np.diag(high)[None]
+        certified_gains(lower, upper, np.array([eigenvalues]), np.full((1, 2), 900.0),
+                        np.array([862.0]), np.array([800.0]), np.array([rate]), h,
+                        0.25 / h, 0.95, out, K)
+        assert out[0, 1] == 1.0, name
+        slowest, radius = box_certificate(lower[0], upper[0], K[0], h)
+        assert slowest >= rate * (1 - 1e-9) and radius <= 0.95, name
+        gains[name] = K[0]
+        c = out[0, 0]
+    np.testing.assert_allclose(gains["strong, tight set"], [900.0, 900.0])
+    np.testing.assert_allclose(gains["strong, wide set"], [c / 3.0, c])
+    np.testing.assert_allclose(gains["weak"], [2.0 * c, 900.0])
+
+
+def test_learning_never_runs_the_loop_slower_than_without_it():
+    """Actuators 2.5x and 0.5x their prior: once learned, every mode's integral
+    gain is at least the gain of the same loop without learning (dac-nominal) at
+    every adopted sample, and the weak actuator's is higher."""
+    from dacph_drake.loop.simulate import simulate_batch
+    s = short_scenario()
+    s.phases = Phases(warmup=1.0, linear=5.0, nonlinear=0.5, disturbance=0.5)
+    s.uncertainty.B_scale = [2.5, 0.5]
+    dac, nominal = (simulate_batch([s], c)[0] for c in ("dac", "dac-nominal"))
+    R = RhsLog(2)
+    t = dac.logs["time"]
+    late = (t > 4.0) & (dac.logs["rhs_log"][:, R.trusted] > 0.5)
+    assert late.any()
+    K, K0 = dac.logs["rhs_log"][late][:, R.K], nominal.logs["rhs_log"][late][:, R.K]
+    assert np.all(K >= K0 * (1 - 1e-9))
+    assert np.median(K[:, 1] / K0[:, 1]) > 1.5
+
+
+def test_physical_claims_hold_the_truth_behind_a_model_error(rng):
+    """The port as an LHS model with relative inertia error E sees it, (I + E) B~
+    and the dampings' leak into each row with the joints moving together,
+    (I + E) D~ summed per row, learned exactly (zero-width intervals): the claims about B~ and
+    D~ (physical_claims, E's entries of sd model_error) hold the truth at about
+    their level; an entry within margin half-widths of the prior is claimed at the
+    prior, its interval holding the prior; a damping's lower end is at least 0."""
+    from dacph_drake.learning.local_bayes import physical_claims
+    n, eps = 2, 0.05
+    bayes = LocalBayes(model_error=eps)
+    B_true, D_true = np.array([[2.0, 0.1], [0.0, 0.5]]), np.array([0.3, 0.2])
+    truth = np.concatenate([B_true.reshape(-1), D_true])
+    points = []
+    for _ in range(4000):
+        E = eps * rng.standard_normal((n, n))
+        points.append(np.concatenate([((np.eye(n) + E) @ B_true).reshape(-1),
+                                      (np.eye(n) + E) @ D_true]))
+    points = np.array(points)
+    estimate, lower, upper = physical_claims(points, points, points, bayes,
+                                             [1.0, 1.0], [0.1, 0.1])
+    coverage = np.mean((lower <= truth) & (truth <= upper), axis=0)
+    learned = [0, 1, 3, 4, 5]
+    assert np.all(np.abs(coverage[learned] - bayes.credible_level) < 0.03), coverage
+    prior = np.array([1.0, 0.0, 0.0, 1.0, 0.1, 0.1])
+    claimed_prior = estimate == prior[None, :]
+    # B~_10 = 0 seen as E_10 B~_00: claimed at the prior; B~_00 = 2 B0: learned.
+    assert np.mean(claimed_prior[:, 2]) > 0.99 and not np.any(claimed_prior[:, 0])
+    assert np.all(lower[claimed_prior] <= np.broadcast_to(prior, estimate.shape)[claimed_prior])
+    near_zero = physical_claims(np.array([[1.0, 0, 0, 1.0, 0.01, 0.01]]),
+                                np.array([[1.0, 0, 0, 1.0, 0.0, 0.0]]),
+                                np.array([[1.0, 0, 0, 1.0, 0.02, 0.02]]), bayes,
+                                [1.0, 1.0], [0.1, 0.1])[1]
+    assert np.all(near_zero[:, 4:] >= 0.0)
 
 
 def test_the_mass_anchor_fixes_the_identified_total_mass():
@@ -229,14 +311,16 @@ def test_learning_never_turns_a_finished_run_into_a_diverging_one():
 
 
 def test_the_intervals_hold_the_truth_on_a_batch():
-    """Phases of 4 s, three trials: the learner's 90 % intervals hold the true B and
-    D at 85 % of the samples and entries at least, and for most of some phase they
-    say more than the prior's error."""
+    """Phases of 4 s, three trials, one actuator of each 1.6x or 0.6x its prior:
+    the 90 % intervals the run claims about the true B and D (the learner's, with
+    the LHS model's inertia error) hold them at 85 % of the samples and entries at
+    least, and for most of some phase they say more than the prior's error."""
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
     trials = _compressed(3, seed=1)
-    for s in trials:
+    for s, scale in zip(trials, ([1.6, 1.0], [1.0, 0.6], [0.6, 1.0])):
         s.phases = Phases(warmup=1.0, linear=4.0, nonlinear=4.0, disturbance=4.0)
+        s.uncertainty.B_scale = scale
     coverage, informative = [], []
     for scenario, result in zip(trials, simulate_batch(trials, "dac")):
         assert result.status == "ok", result.reason
@@ -273,13 +357,13 @@ def test_a_kinematic_mismatch_is_reported_and_the_mass_is_the_measured_one():
     assert abs(m_off["identified_mass_error"]) <= 0.10
     assert m_off["kinematic_mismatch"] == 1.0 and m_exact["kinematic_mismatch"] == 0.0
     assert m_off["momentum_misfit"] > 10 * m_exact["momentum_misfit"]
-    from dacph_drake.analysis.metrics import nominal_estimates, physical_estimates
+    from dacph_drake.analysis.metrics import nominal_estimates, physical_view
     from dacph_drake.log_layout import LearnerLog
     physical = results[1].logs["learner_log"][:, LearnerLog().physical]
     reported = np.flatnonzero(physical < 0.5)
     assert len(reported) and np.all(physical[reported[0]:] < 0.5)      # latched
     np.testing.assert_array_equal(
-        physical_estimates(results[1].logs, off)[reported[0]:],
+        physical_view(results[1].logs, off)[0][reported[0]:],
         np.tile(nominal_estimates(off), (len(physical) - reported[0], 1)))
     assert m_off["phase3.B_error_ratio"] == pytest.approx(1.0)
 

@@ -43,6 +43,7 @@ def _synthetic_logs(scenario, error_amplitude, effort, B_error):
     u[:, 0] = effort
     learner = np.zeros((T, LearnerLog().size))
     learner[:, LearnerLog().beta_hat] = np.where(t >= scenario.disturbance_start, 3.0, 1.0)
+    learner[:, LearnerLog().physical] = 1.0         # no kinematic mismatch reported
     return {"time": t, "lhs_log": lhs, "state": state, "u": u, "rhs_log": rhs,
             "learner_log": learner, "true_matrices": truth, "estimates": estimates,
             "tau_request": np.zeros((T, n)), "tau": np.zeros((T, n))}

@@ -118,6 +118,47 @@ BAD_SCENARIO_FILES = [
     ("inertia: {start: -0.1}\n", r"inertia.start = -0.1 .*>= 0"),
     ("inertia: {change_threshold: 2.0}\n", r"inertia.change_threshold = 2.0 .*in \[0, 1\]"),
     ("inertia: {duration: 0.0}\n", r"inertia.duration = 0.0 .*> 0"),
+    # trustworthy learning (docs/results/learning.md)
+    ("learner: {model: gp}\n", r"learner.model = 'gp'; allowed: local_bayes, network"),
+    ("rhs: {adoption: always}\n",
+     r"rhs.adoption = 'always'; allowed: certified_set, trust_band"),
+    ("inertia: {anchor: payload}\n",
+     r"inertia.anchor = 'payload'; allowed: total_mass, base_mass, model"),
+    ("inertia: {anchor_mass: -1.0}\n", r"inertia.anchor_mass = -1.0 .*>= 0 kg"),
+    ("inertia: {anchor_error: 0.9}\n", r"inertia.anchor_error = 0.9 .*in \[-0.5, 0.5\]"),
+    ("inertia: {fit_tolerance: -1.0e-5}\n", r"inertia.fit_tolerance = -1e-05 .*>= 0"),
+    ("inertia: {on_mismatch: ignore}\n",
+     r"inertia.on_mismatch = 'ignore'; allowed: identified, nominal"),
+    ("learner: {bayes: {gain_range: [0.5]}}\n",
+     r"learner.bayes.gain_range has 1 entries; allowed: 2"),
+    ("learner: {bayes: {gain_range: [1.5, 2.0]}}\n",
+     r"learner.bayes.gain_range\[0\] = 1.5 .*in \[0.001, 1\]"),
+    ("learner: {bayes: {gain_range: [0.5, 200.0]}}\n",
+     r"learner.bayes.gain_range\[1\] = 200.0 .*in \[1, 100\]"),
+    ("learner: {bayes: {coupling: 2.0}}\n", r"learner.bayes.coupling = 2.0 .*in \[0, 1\]"),
+    ("learner: {bayes: {damping_range: [-0.1, 2.0]}}\n",
+     r"learner.bayes.damping_range\[0\] = -0.1 .*in \[0, 1\]"),
+    ("learner: {bayes: {drift: 0.0}}\n", r"learner.bayes.drift = 0.0 .*> 0 1/s"),
+    ("learner: {bayes: {momentum_slope: -1.0}}\n",
+     r"learner.bayes.momentum_slope = -1.0 .*> 0"),
+    ("learner: {bayes: {curvature: -0.01}}\n", r"learner.bayes.curvature = -0.01 .*>= 0"),
+    ("learner: {bayes: {floor: -1.0}}\n", r"learner.bayes.floor = -1.0 .*>= 0"),
+    ("learner: {bayes: {forgetting: 0.0}}\n", r"learner.bayes.forgetting = 0.0 .*> 0 s"),
+    ("learner: {bayes: {min_window: 100.0}}\n",
+     r"learner.bayes.min_window = 100.0 .*at most learner.window"),
+    ("learner: {bayes: {min_dof: 0.5}}\n", r"learner.bayes.min_dof = 0.5 .*in \[1, "),
+    ("learner: {bayes: {credible_level: 1.0}}\n",
+     r"learner.bayes.credible_level = 1.0 .*in \[0.01, 0.999\]"),
+    ("learner: {bayes: {certificate_level: 0.5}}\n",
+     r"learner.bayes.certificate_level = 0.5 .*at least learner.bayes.credible_level"),
+    ("learner: {bayes: {margin: -1.0}}\n", r"learner.bayes.margin = -1.0 .*>= 0"),
+    ("learner: {bayes: {change_floor: -0.1}}\n", r"learner.bayes.change_floor = -0.1 .*>= 0"),
+    ("learner: {bayes: {inconsistency: 0.001}}\n",
+     r"learner.bayes.inconsistency = 0.001; allowed: a number above "
+     r"learner.bayes.change_floor"),
+    ("learner: {bayes: {model_error: 1.0}}\n",
+     r"learner.bayes.model_error = 1.0 .*in \[0, 0.999\]"),
+    ("learner: {bayes: {prior: wide}}\n", r"s.yaml.*\['prior'\] were unknown"),
 ]
 
 
@@ -166,17 +207,19 @@ def test_files_written_before_a_setting_was_added_keep_their_meaning(tmp_path):
 def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplog):
     """A planar file with top-level robot:, nominal_robot:, lhs:, potential:,
     reference: and a spatial file with robot: DESCRIPTION, gains:, flat periods and
-    a duration load with a note, into the same settings; the paper run committed
-    in results/paper (saved in the older layout) keeps its fingerprint, so report()
-    still reads it."""
+    a duration load with a note, into the same settings (those of the release that
+    wrote them: the settings added since at their values before, as_before_added);
+    a paper run saved in the older layout (results/paper as committed before the
+    learning settings, kept in tests/data) keeps its fingerprint, so report() still
+    reads it."""
     import json
     from dacph_drake.app.reproduce import check_runs_belong_together
-    from dacph_drake.scenario_files import PlanarLayoutV1
-    results = Path(__file__).resolve().parents[1] / "results" / "paper"
+    from dacph_drake.scenario_files import PlanarLayoutV1, as_before_added
+    results = Path(__file__).resolve().parent / "data" / "paper_run_before_sections"
     with caplog.at_level("WARNING"):
         scenario = load_scenario(results / "scenario.yaml")
     assert "read in the layout before the robot: and task: sections" in caplog.text
-    assert scenario == BUILT_IN_SCENARIOS["paper"]()
+    assert scenario == as_before_added(BUILT_IN_SCENARIOS["paper"]())
     runs = {c: json.loads((results / f"run_{c}.json").read_text())
             for c in ("dac", "dac-nominal", "model-based")}
     check_runs_belong_together(results, scenario, runs)

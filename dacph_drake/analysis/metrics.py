@@ -1,6 +1,6 @@
 """The metrics of a run (the paper's reported quantities and this project's,
 docs/results/paper.md), computed from its logs."""
-from typing import Dict
+from typing import Dict, Tuple
 
 import numpy as np
 
@@ -89,37 +89,58 @@ def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarr
     return logs["inertial_parameters"][:, MASS::PER_BODY].sum(axis=1) / total_mass
 
 
-def physical_estimates(logs: Dict[str, np.ndarray], scenario: Scenario) -> np.ndarray:
-    """The learned estimates as statements about the physical B~, D~: the logged
-    ``estimates``, but the prior (B0, D0) wherever the learner's log says the
+def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
+                  ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The learned estimates as claims about the physical B~, D~, with their
+    intervals.
+
+    The logged ``estimates`` with the learner's ``estimate_bounds`` (a point for
+    a learner without intervals) widened by the LHS model's inertia error
+    (learning.local_bayes.physical_claims, with learner.bayes' model_error, margin
+    and credible_level whatever the learner); where the learner's log says the
     observed port is not in physical units (LearnerLog.physical: a kinematic
-    mismatch reported by the inertial identifier).
+    mismatch reported by the inertial identifier), the prior (B0, D0) with the
+    prior's range (learning.local_bayes.prior_range).
 
     Args:
         logs: The run's logs.
         scenario: The scenario it ran.
 
     Returns:
-        [vec(B), diag(D)] per sample (T x (n^2 + n))."""
-    estimates = logs["estimates"]
-    if "learner_log" not in logs or logs["learner_log"].shape[1] <= LearnerLog().physical:
-        return estimates
-    physical = logs["learner_log"][:, LearnerLog().physical] > 0.5
-    return np.where(physical[:, None], estimates, nominal_estimates(scenario)[None, :])
+        (estimate, lower, upper), each [vec(B), diag(D)] per sample
+        (T x (n^2 + n))."""
+    from dacph_drake.learning.local_bayes import physical_claims, prior_range
+    n = len(scenario.q0)
+    k = n * n + n
+    bayes, u = scenario.learner.bayes, scenario.uncertainty
+    point = logs["estimates"]
+    bounds = logs.get("estimate_bounds", np.concatenate([point, point], axis=1))
+    estimate, lower, upper = physical_claims(point, bounds[:, :k], bounds[:, k:], bayes,
+                                             u.B0, u.D0)
+    learner = logs.get("learner_log")
+    if learner is None or learner.shape[1] <= LearnerLog().physical:
+        return estimate, lower, upper
+    physical = (learner[:, LearnerLog().physical] > 0.5)[:, None]
+    prior_low, prior_high = prior_range(bayes, u.B0, u.D0)
+    return (np.where(physical, estimate, nominal_estimates(scenario)[None, :]),
+            np.where(physical, lower, prior_low[None, :]),
+            np.where(physical, upper, prior_high[None, :]))
 
 
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray, total_mass: float) -> Dict[str, float]:
     """Learning's own value over the samples ``mask``.
 
-    The time-RMS relative errors ||X_hat - X~|| / ||X~|| of the learned B and D and
-    of the nominal prior (B0, D0), their ratio (below 1: learning beats the prior),
+    The time-RMS relative errors ||X_hat - X~|| / ||X~|| of the run's claims about
+    B and D (physical_view) and of the nominal prior (B0, D0), their ratio (below 1:
+    learning beats the prior), the claimed intervals (interval_metrics),
     the share of samples whose B_hat the RHS integrator rejected (DIC or trust
     band), and the share where the learner's beta_hat exceeded rhs.beta_max, so
     that the gain rule ran on beta_max instead (RhsIntegrator). With an inertial
     identifier in the loop, also the identified scale k (identified_scale, mean)
-    and the ratios against k B~, k D~ (``*_error_ratio_scaled``, the prior's error
-    against the same).
+    and the ratios of the published estimates (the port as the model sees it)
+    against k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the
+    same).
 
     Args:
         logs: The run's logs (RunResult.logs).
@@ -130,7 +151,8 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     Returns:
         Metric name -> value."""
     n = len(scenario.q0)
-    truth, estimate = logs["true_matrices"][mask], physical_estimates(logs, scenario)[mask]
+    view = physical_view(logs, scenario)
+    truth, estimate = logs["true_matrices"][mask], view[0][mask]
     prior = np.tile(nominal_estimates(scenario), (len(truth), 1))
     out = {}
     for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
@@ -145,13 +167,19 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
         # learns, is k (B~ u - D~ qdot): the errors against k B~, k D~ too.
         scale = identified_scale(logs, total_mass)[mask][:, None]
         out["identified_scale"] = float(np.mean(scale)) if len(scale) else float("nan")
+        published = logs["estimates"][mask]        # the port as the model sees it
         for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
-            learned = relative_error_rms(estimate[:, columns], scale * truth[:, columns])
+            learned = relative_error_rms(published[:, columns], scale * truth[:, columns])
             nominal = relative_error_rms(prior[:, columns], scale * truth[:, columns])
             out[f"{name}_error_ratio_scaled"] = (learned / nominal if nominal > 0
                                                  else float("nan"))
-    if "estimate_bounds" in logs:
-        out.update(interval_metrics(logs, scenario, mask))
+    out.update(interval_metrics(view, truth, nominal_estimates(scenario), n, mask))
+    learner, layout = logs["learner_log"], LearnerLog()
+    learned = mask & (learner[:, layout.holding] < 0.5)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = learner[learned, layout.loss] / learner[learned, layout.nominal_loss]
+    ratio = ratio[np.isfinite(ratio)]
+    out["residual_ratio"] = float(np.sqrt(np.median(ratio))) if len(ratio) else 1.0
     trusted = logs["rhs_log"][mask, RhsLog(n).trusted]
     out["rejected_share"] = float(np.mean(trusted < 0.5)) if len(trusted) else float("nan")
     beta_hat = logs["learner_log"][mask, LearnerLog().beta_hat]
@@ -160,44 +188,31 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     return out
 
 
-def interval_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
-                     mask: np.ndarray) -> Dict[str, float]:
-    """How the learner's reported intervals (``estimate_bounds``, at
-    learner.bayes.credible_level) hold the truth over the samples ``mask``.
+def interval_metrics(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
+                     truth: np.ndarray, prior: np.ndarray, n: int, mask: np.ndarray
+                     ) -> Dict[str, float]:
+    """How the claimed intervals about B~ and D~ (physical_view) hold the truth
+    over the samples ``mask``.
 
     For X in (B, D): ``X_coverage``, the share of (sample, entry) pairs whose true
     entry lies in its interval; ``X_interval``, the time-RMS of the intervals'
-    Frobenius half-width relative to ||X~||, comparable with ``X_error``
-    (where the learner's log says the port is not in physical units, the
-    interval is the prior's range, learning.local_bayes.prior_range);
+    Frobenius half-width relative to ||X_hat||, comparable with ``X_error``;
     ``X_interval_ratio``, the median over the samples of the half-width over the
     prior's error (Frobenius; below 1: for most of the phase the interval says
-    more than the prior's error); and the share
-    of quantities published at the prior (``undetermined_share``, the
-    learner_log's).
+    more than the prior's error); and ``undetermined_share``, the share of the
+    quantities claimed at the prior.
 
     Args:
-        logs: The run's logs (with estimate_bounds and learner_log).
-        scenario: The scenario it ran.
+        view: physical_view's (estimate, lower, upper), all samples.
+        truth: The true [vec(B~), diag(D~)] over the samples ``mask``.
+        prior: [vec(B0), diag(D0)].
+        n: The number of joints.
         mask: The samples to average over (boolean, T).
 
     Returns:
         Metric name -> value (nan over no samples)."""
-    n = len(scenario.q0)
+    estimate, lower, upper = (x[mask] for x in view)
     k = n * n + n
-    truth = logs["true_matrices"][mask]
-    bounds = logs["estimate_bounds"][mask]
-    lower, upper = bounds[:, :k], bounds[:, k:]
-    physical = logs["learner_log"][mask, LearnerLog().physical] > 0.5
-    from dacph_drake.learning import uses_local_bayes
-    if not np.all(physical) and uses_local_bayes(scenario.learner):
-        from dacph_drake.learning.local_bayes import prior_range
-        unit = np.ones((1, 1))
-        rng = prior_range(scenario.learner.bayes, scenario.uncertainty.B0,
-                          scenario.uncertainty.D0)
-        lower = np.where(physical[:, None], lower, rng[0] * unit)
-        upper = np.where(physical[:, None], upper, rng[1] * unit)
-    prior = nominal_estimates(scenario)
     out = {}
     for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, k))):
         if not len(truth):
@@ -207,16 +222,83 @@ def interval_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
         inside = ((lower[:, columns] - 1e-12 <= truth[:, columns])
                   & (truth[:, columns] <= upper[:, columns] + 1e-12))
         half = np.linalg.norm(0.5 * (upper[:, columns] - lower[:, columns]), axis=1)
-        scale = np.maximum(np.linalg.norm(truth[:, columns], axis=1), 1e-300)
         prior_error = np.linalg.norm(prior[columns][None, :] - truth[:, columns], axis=1)
         out[f"{name}_coverage"] = float(np.mean(inside))
-        out[f"{name}_interval"] = rms(half / scale)
+        out[f"{name}_interval"] = relative_half_width(view, mask, columns)
         with np.errstate(divide="ignore", invalid="ignore"):
             out[f"{name}_interval_ratio"] = float(np.median(half / prior_error))
-    undetermined = logs["learner_log"][mask, LearnerLog().undetermined]
-    out["undetermined_share"] = (float(np.mean(undetermined)) if len(undetermined)
-                                 else float("nan"))
+    out["undetermined_share"] = (float(np.mean(estimate == prior[None, :]))
+                                 if len(truth) else float("nan"))
     return out
+
+
+def relative_half_width(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
+                        mask: np.ndarray, columns: slice) -> float:
+    """The time-RMS over ``mask`` of the claimed intervals' Frobenius half-width
+    relative to the claimed estimate's norm.
+
+    Args:
+        view: The claimed (estimate, lower, upper) (physical_view).
+        mask: The samples to average over.
+        columns: The entries (B's or D's columns of the view).
+
+    Returns:
+        The RMS relative half-width."""
+    estimate, lower, upper = (x[mask][:, columns] for x in view)
+    half = np.linalg.norm(0.5 * (upper - lower), axis=1)
+    return rms(half / np.maximum(np.linalg.norm(estimate, axis=1), 1e-300))
+
+
+def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
+    """What a user of a real robot sees of the learning, without the truth: per
+    phase the learned model's residual on the port data against the prior's
+    (``residual_ratio`` = sqrt of the median, over the samples where the learner
+    determined something, of its loss over its nominal loss; below 1: the learned
+    model explains the port better), the share
+    of quantities left undetermined (published at the prior) and the reported
+    intervals' relative width; and warnings: a phase where the learned model did
+    not beat the prior, one where nothing was determined, a reported kinematic
+    mismatch (the learned B and D are then the port as the model sees it).
+
+    Args:
+        logs: A DAC run's logs (learner_log; estimate_bounds where the learner
+            reports intervals).
+        scenario: The scenario it ran.
+
+    Returns:
+        {"phases": {phase: {residual_ratio, undetermined_share, interval}},
+        "warnings": [str]}."""
+    t, learner = logs["time"], logs["learner_log"]
+    layout = LearnerLog()
+    view = physical_view(logs, scenario)
+    prior = nominal_estimates(scenario)[None, :]
+    phases, warnings = {}, []
+    for phase, mask in phase_windows(scenario, t).items():
+        if not mask.any():
+            continue
+        learned = mask & (learner[:, layout.holding] < 0.5)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = learner[learned, layout.loss] / learner[learned, layout.nominal_loss]
+        finite = ratio[np.isfinite(ratio)]
+        residual = float(np.sqrt(np.median(finite))) if len(finite) else float("nan")
+        undetermined = float(np.mean(view[0][mask] == prior))
+        entry = {"residual_ratio": residual, "undetermined_share": undetermined}
+        entry["interval"] = relative_half_width(view, mask,
+                                                slice(0, len(scenario.q0) ** 2))
+        phases[phase] = entry
+        if not len(finite):
+            warnings.append(f"{phase}: the data determined no quantity; the prior "
+                            "(B0, D0) stood throughout")
+        elif residual >= 1.0:
+            warnings.append(f"{phase}: the learned model explains the port no better "
+                            f"than the prior (residual ratio {residual:.3g})")
+    physical = learner[:, layout.physical] if learner.shape[1] > layout.physical else None
+    if physical is not None and np.any(physical < 0.5):
+        first = float(t[np.argmax(physical < 0.5)])
+        warnings.append(f"the inertial identifier reported the controller's kinematics "
+                        f"mismatched at t = {first:.2f} s: the learned B and D are the "
+                        "port as the model sees it, not the robot's")
+    return {"phases": phases, "warnings": warnings}
 
 
 def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
@@ -270,7 +352,7 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
         window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \
                  (t < phases.disturbance_start)
         truth = logs["true_matrices"][window]
-        estimate = physical_estimates(logs, scenario)[window]
+        estimate = physical_view(logs, scenario)[0][window]
         out["estimation_error_B"] = relative_error_rms(estimate[:, :n * n], truth[:, :n * n])
         out["estimation_error_D"] = relative_error_rms(estimate[:, n * n:], truth[:, n * n:])
         rhs = logs["rhs_log"]

@@ -53,6 +53,10 @@ def _simulate(args) -> int:
             print(f"  {name:32s} {value:.6g}" if reached and value == value else
                   f"  {name:32s} n/a, not reached (the run ended at "
                   f"{result.final_time:g} s)")
+        if "learner_log" in result.logs:
+            from dacph_drake.analysis.metrics import learning_report
+            for text in learning_report(result.logs, scenario)["warnings"]:
+                print(f"dacph: warning: {text}", file=sys.stderr)
     if args.animate and len(result.logs["time"]) > 1:
         print(robot_of(scenario).WriteAnimation(
             result.logs, Path(args.out) / f"animation_{args.controller.replace('-', '_')}"

@@ -8,7 +8,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.learning import LearnerTrial, published_model
+from dacph_drake.learning import LearnerTrial, prior_set, published_model
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner
@@ -116,7 +116,9 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
         trials=[RhsTrial(model=robot.model, network=published_model(settings, trial),
                          Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=s.uncertainty.B0,
-                         D0=s.uncertainty.D0)
+                         D0=s.uncertainty.D0,
+                         prior_set=prior_set(s.learner, s.uncertainty.B0,
+                                             s.uncertainty.D0))
                 for robot, s, trial, (Kd_max, lambda_min_M)
                 in zip(loop.robots, loop.scenarios, trials, rates)],
         settings=rhs_settings, period=periods.rhs,

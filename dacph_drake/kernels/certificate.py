@@ -57,22 +57,30 @@ def _largest_radius(low, high, radius, scale) -> float:
 
 @njit(cache=True)
 def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarray,
-                    c_target: np.ndarray, c_floor: np.ndarray, rate: np.ndarray,
-                    period: float, c_cap: float, radius_bound: float,
-                    out: np.ndarray) -> None:
-    """Every trial's certified decay rate c on its credible set (module docstring).
+                    floor: np.ndarray, c_target: np.ndarray, c_floor: np.ndarray,
+                    rate: np.ndarray, period: float, c_cap: float, radius_bound: float,
+                    out: np.ndarray, gains: np.ndarray) -> None:
+    """Every trial's certified decay rate c and gains on its credible set (module
+    docstring).
 
     c is c_target clipped to the certified range [max(c_floor, c_sep), c_high]:
     c_sep = rate / min_p (lower_pp - R_p) / lambda_p is where the slowest mode
     meets the separation, c_high the largest c <= c_cap whose stadiums keep every
     root within ``radius_bound`` (bisection from the clipped target down to the
-    range's lower end).
+    range's lower end). The gains are k_p = c / lambda_p, each raised to
+    ``floor`` (the gains of the loop without learning) where the set certifies the
+    raised gains too: learning never runs a mode slower than the loop without it
+    would, where that loop is safe for every B of the set (an actuator stronger
+    than its prior gives the prior's loop more gain, and the prior's wide range a
+    larger c; the learned gains alone would give that up).
 
     Args:
         lower: Each trial's set's lower bounds (trials, n, n).
         upper: Each trial's set's upper bounds (trials, n, n).
         eigenvalues: The real parts of each trial's estimate's paired eigenvalues
             lambda_p, each > 0 (trials, n).
+        floor: The gains each mode is raised to where certified [1/s per unit of
+            B] (trials, n; 0: none).
         c_target: The rate the gain rule asks of each trial [1/s] (trials).
         c_floor: The least rate each trial may run [1/s] (trials).
         rate: Td lambda_LHS of each trial [1/s] (trials).
@@ -81,7 +89,9 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
         radius_bound: The largest spectral radius allowed.
         out: Written per trial: [c, certified (1/0), the set's slowest mode
             min_p (lower_pp - R_p) / lambda_p, its fastest (upper_pp + R_p) /
-            lambda_p] (trials, 4)."""
+            lambda_p] (trials, 4).
+        gains: Written per certified trial: its gains k_p [1/s per unit of B]
+            (trials, n)."""
     trials, n = lower.shape[0], lower.shape[1]
     low, high, radius = np.empty(n), np.empty(n), np.empty(n)
     for i in range(trials):
@@ -116,6 +126,22 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
                     good = middle
             c = good
         out[i, 0], out[i, 1] = c, 1.0
+        raised = False
+        for p in range(n):
+            gains[i, p] = c / eigenvalues[i, p]
+            if floor[i, p] > gains[i, p]:
+                gains[i, p], raised = floor[i, p], True
+        if raised:
+            # The stadiums in units of h k_p (unit scale: low, high, radius per mode).
+            slowest_rate = np.inf
+            for p in range(n):
+                k = gains[i, p] * eigenvalues[i, p]        # k_p lambda_p
+                slowest_rate = min(slowest_rate, k * (low[p] - radius[p]))
+                low[p], high[p], radius[p] = k * low[p], k * high[p], k * radius[p]
+            if not (slowest_rate >= rate[i]
+                    and _largest_radius(low, high, radius, period) <= radius_bound):
+                for p in range(n):
+                    gains[i, p] = c / eigenvalues[i, p]
 
 
 @njit(cache=True)

@@ -216,3 +216,24 @@ def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
         return LocalModel(len(trial.B0))
     from dacph_drake.network import ExportedNetwork
     return ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
+
+
+def prior_set(settings: Learner, B0: Sequence[float], D0: Sequence[float]
+              ) -> Optional[np.ndarray]:
+    """The credible set of B the learner publishes before it has learned anything
+    (the local Bayesian learner's prior range, learning.local_bayes.prior_range),
+    or None for a learner without a credible set.
+
+    Args:
+        settings: The learner's settings.
+        B0: The prior's B0 (its diagonal, n).
+        D0: The prior's D0 (its diagonal, n).
+
+    Returns:
+        [lower, upper] of B (2 x n x n), or None."""
+    if not uses_local_bayes(settings):
+        return None
+    from dacph_drake.learning.local_bayes import prior_range
+    n = len(B0)
+    return prior_range(settings.bayes, B0, D0)[:, :n * n].reshape(2, n, n)
+

@@ -24,8 +24,12 @@ change that alone explains the residual (the port observer's systematic error); 
 local linear model's own error is bounded by the curvature setting over the
 window's spread in time. A row whose newest residual jumps (learner.change_ratio
 over the rest of the window, above learner.change_floor relative to its signal)
-restarts at the newest samples; so do all rows when the LHS model changes
-(learner.model_change).
+restarts at the newest samples, and so does one whose fit moves from its previous
+fit's prediction by more than the credible set's quantile of their combined sd (a
+fit through an undetected switch can explain the mixed window with wrong
+coefficients and a small residual; a row's first fit after a restart is published
+only once the next update confirms it), or whose actuator gain or damping is credibly
+below zero; all rows restart when the LHS model changes (learner.model_change).
 
 What is published (LocalModel): an entry is the learned one where the data move it
 from the prior by more than ``margin`` times its credible half-width, so that with
@@ -40,7 +44,8 @@ import numpy as np
 
 from dacph_drake.identification import BandPassCascade
 from dacph_drake.kernels.bayes import fit_rows, row_design
-from dacph_drake.learning import LearnerTrial, PortEstimate
+from dacph_drake.learning import (Channels, LearnerTrial, PortEstimate,
+                                   PortLearner)
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.scenario import Learner, LocalBayes
 
@@ -52,7 +57,7 @@ RESIDUAL_LAGS = 20
 HISTORY, MIN_HISTORY = 10, 3
 
 
-class LocalBayesChannels:
+class LocalBayesChannels(Channels):
     """The band-passed channels of the local model, per trial (n^2 + 6 n):
 
         [u_j (n), u_j t (n), u_j p_i (n^2, index i n + j), qdot_i (n), qdot_i t (n),
@@ -74,14 +79,6 @@ class LocalBayesChannels:
             np.arange(5 * n + n * n, 6 * n + n * n)])
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
-        """Each trial's channels from its port sample.
-
-        Args:
-            t: The sample's time [s].
-            samples: Each trial's identification.PortSample (trials, 5 n).
-
-        Returns:
-            The channels (trials, size)."""
         n = self.n
         p, qdot, u, tau = (samples[:, k * n:(k + 1) * n] for k in range(1, 5))
         return np.concatenate([u, t * u, (p[:, :, None] * u[:, None, :]).reshape(
@@ -193,7 +190,7 @@ def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
                 ) -> np.ndarray:
     """The prior's range of every quantity [vec(B), diag(D)].
 
-    B_ii in gain_range times B0_i, B_ij (i != j) within coupling
+    B_ii in gain_range times B0_i, B_ij (i != j) within entry_coupling
     sqrt(B0_i B0_j), D_i in damping_range times D0_i (learner.bayes).
 
     Args:
@@ -205,13 +202,78 @@ def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
         [lower, upper] (2, n^2 + n)."""
     B0, D0 = np.asarray(B0, float), np.asarray(D0, float)
     n = len(B0)
-    coupling = bayes.coupling * np.sqrt(B0[:, None] * B0[None, :])
+    coupling = entry_coupling(bayes, n) * np.sqrt(B0[:, None] * B0[None, :])
     low, high = bayes.gain_range
     bounds = np.empty((2, n * n + n))
     bounds[0, :n * n] = np.where(np.eye(n) > 0, low * B0[:, None], -coupling).reshape(-1)
     bounds[1, :n * n] = np.where(np.eye(n) > 0, high * B0[:, None], coupling).reshape(-1)
     bounds[:, n * n:] = np.outer(bayes.damping_range, D0)
     return bounds
+
+
+def entry_coupling(bayes: LocalBayes, n: int) -> float:
+    """The prior's bound (and sd) of one cross-coupling |B_ij| / sqrt(B0_i B0_j):
+    bayes.coupling, a bound on a row's total, shared by its n - 1 entries, so that
+    the set's Gershgorin radius (kernels.certificate) does not grow with the number
+    of joints.
+
+    Args:
+        bayes: The local Bayesian learner's settings.
+        n: The number of joints.
+
+    Returns:
+        The per-entry bound."""
+    return bayes.coupling / max(n - 1, 1)
+
+
+def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                    bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
+                    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What the published estimates say about the physical B~ and D~.
+
+    The port the learner observes is tau_obs = p_dot + dH/dq of the LHS model, so
+    with the model's mass matrix M_hat = (I + E) M~ (to first order) it learns
+    (I + E) B~ and (I + E) D~: port data cannot tell an actuator's gain from the
+    arm's inertia, and momentum data do not reveal E when a link's length is off
+    (the identifier absorbs the length into the parent's inertial parameters). With
+    E's entries independent of standard deviation eps = bayes.model_error,
+    B~_ij = B_ij - sum_k E_ik B_kj; row i's damping sees every joint's through
+    E_ik D_k qdot_k, which leaks into D_i up to sum_k E_ik D_k when the joints move
+    together (a light joint beside heavily damped ones: the leak can exceed D~_i
+    itself). So each half-width grows in quadrature by z eps ||B_:j|| (B_ij) or
+    z eps ||D|| (D_i), D's norm over the larger of each estimate and its prior (a
+    damping collapsed to zero does not shrink its own error), z
+    the normal quantile of bayes.credible_level; an entry that then differs from
+    the prior by no more than bayes.margin half-widths is claimed at the prior,
+    its interval stretched to hold it.
+
+    Args:
+        point: The published estimates [vec(B), diag(D)] (T, n^2 + n).
+        lower: Their intervals' lower ends (T, n^2 + n).
+        upper: Their intervals' upper ends (T, n^2 + n).
+        bayes: The learner's settings.
+        B0: The prior's B0 (its diagonal, n).
+        D0: The prior's D0 (its diagonal, n).
+
+    Returns:
+        (estimate, lower, upper) about B~ and D~ (each T, n^2 + n)."""
+    n = len(B0)
+    z = NormalDist().inv_cdf(0.5 + 0.5 * bayes.credible_level)
+    prior = np.concatenate([np.diag(np.asarray(B0, float)).reshape(-1),
+                            np.asarray(D0, float)])[None, :]
+    B = point[:, :n * n].reshape(-1, n, n)
+    D = np.maximum(np.abs(point[:, n * n:]), prior[:, n * n:])
+    scale = np.concatenate([
+        np.repeat(np.linalg.norm(B, axis=1)[:, None, :], n, axis=1).reshape(-1, n * n),
+        np.repeat(np.linalg.norm(D, axis=1)[:, None], n, axis=1)], axis=1)
+    widening = (z * bayes.model_error * scale) ** 2
+    below = np.sqrt((point - lower) ** 2 + widening)
+    above = np.sqrt((upper - point) ** 2 + widening)
+    determined = np.abs(point - prior) > bayes.margin * np.maximum(below, above)
+    estimate = np.where(determined, point, prior)
+    low = np.minimum(point - below, estimate)
+    low[:, n * n:] = np.maximum(low[:, n * n:], 0.0)         # D~ >= 0
+    return estimate, low, np.maximum(point + above, estimate)
 
 
 def student_quantile(z: float, dof: float) -> float:
@@ -230,6 +292,19 @@ def student_quantile(z: float, dof: float) -> float:
             + (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * dof ** 3))
 
 
+class _RowState:
+    """The layout of one row's learner state: [window start [s], residuals seen,
+    the last HISTORY relative residuals, the previous fit's time [s] (-inf: none)
+    and momentum p_i, its coefficients [const, drift, slope] per entry (3 (n + 1))
+    and their sd (3 (n + 1))]."""
+
+    def __init__(self, n: int):
+        self.fit_time, self.fit_momentum = 2 + HISTORY, 3 + HISTORY
+        self.fit = slice(4 + HISTORY, 4 + HISTORY + 3 * (n + 1))
+        self.fit_spread = slice(self.fit.stop, self.fit.stop + 3 * (n + 1))
+        self.size = self.fit_spread.stop
+
+
 @dataclass
 class _Prior:
     """One trial's prior of every row: mean and sd of [const, drift, slope] per
@@ -241,12 +316,12 @@ class _Prior:
     range: np.ndarray
 
 
-class LocalBayesLearner:
+class LocalBayesLearner(PortLearner):
     """The local Bayesian learner of a batch (module docstring; learning.PortLearner).
 
-    Its state per trial is, per row, its window start [s] (its last restart), the
-    number of relative residuals its change test has seen and the last HISTORY of
-    them.
+    Update fits every trial's rows, oldest sample first, and publishes. Its state
+    per trial is, per row, _RowState: its window start [s] (its last restart), its
+    change test's recent relative residuals and its previous fit.
 
     Args:
         settings: The learner's settings (its ``bayes`` section, the band, the
@@ -264,7 +339,8 @@ class LocalBayesLearner:
         self._period = period
         self.channels = LocalBayesChannels(n)
         self.model = LocalModel(n)
-        self.state_size = n * (2 + HISTORY)
+        self._row_state = _RowState(n)
+        self.state_size = n * self._row_state.size
         self._layout = self.model.layout
         cascade = BandPassCascade(settings.band[0], settings.band[1],
                                   settings.band_sections[0], settings.band_sections[1],
@@ -292,7 +368,8 @@ class LocalBayesLearner:
         mean[:, :n, 0] = np.diag(B0)
         mean[:, n, 0] = D0
         low, high = bayes.gain_range
-        constant = np.where(np.eye(n, n + 1) > 0, 0.5 * (high - low), bayes.coupling)
+        constant = np.where(np.eye(n, n + 1) > 0, 0.5 * (high - low),
+                            entry_coupling(bayes, n))
         constant[:, n] = 0.5 * (bayes.damping_range[1] - bayes.damping_range[0])
         sd = np.stack([constant, np.full((n, n + 1), bayes.drift),
                        np.full((n, n + 1), bayes.momentum_slope
@@ -315,8 +392,8 @@ class LocalBayesLearner:
     def InitialState(self) -> np.ndarray:
         """Every row's window starts with the run, its change test has seen
         nothing (PortLearner.InitialState)."""
-        state = np.zeros((self._trials, self.n, 2 + HISTORY))
-        state[:, :, 0] = -np.inf
+        state = np.zeros((self._trials, self.n, self._row_state.size))
+        state[:, :, 0] = state[:, :, self._row_state.fit_time] = -np.inf
         return state.reshape(self._trials, -1)
 
     def Prior(self) -> np.ndarray:
@@ -326,26 +403,13 @@ class LocalBayesLearner:
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Fits every trial's rows and publishes (PortLearner.Update).
-
-        Args:
-            t: The time [s].
-            rows: Each trial's buffered samples, oldest first (trials, samples,
-                1 + 2 n + channels).
-            state: Each trial's row starts (trials, n) [s].
-            model_changed: Whether each trial's LHS model changed.
-            learning: False publishes the prior.
-
-        Returns:
-            (published, log rows, state), each per trial."""
         published = self._prior_vectors.copy()
         logs = np.zeros((self._trials, LearnerLog().size))
         state = state.reshape(self._trials, self.n, -1).copy()
         watch = self._settings.model_change
         for trial in range(self._trials):
             if watch and model_changed[trial]:
-                state[trial, :, 0] = t + 1e-9
-                state[trial, :, 1] = 0.0
+                self._Restart(state[trial], np.ones(self.n, bool), t)
             fitted, determined = self._priors[trial].mean, np.zeros(self.n, bool)
             if learning:
                 published[trial], fitted, determined, restarts = self._Fit(
@@ -360,8 +424,8 @@ class LocalBayesLearner:
         """One trial's fit: its published vector, its rows' fitted coefficients
         (the prior's where not determined), which rows are determined and how
         many restarted (their newest samples broke their window's relation;
-        ``state``, (n, 2 + HISTORY), updated in place)."""
-        n, bayes, settings = self.n, self._bayes, self._settings
+        ``state``, (n, _RowState.size), updated in place)."""
+        n, bayes = self.n, self._bayes
         prior = self._priors[trial]
         P = 3 * (n + 1)
         mean, variance = np.empty((n, P)), np.empty((n, P))
@@ -384,14 +448,21 @@ class LocalBayesLearner:
                                            span[i] >= 0.5 * bayes.forgetting)
             elif span[i] >= 0.5 * bayes.forgetting:
                 self._Remember(state[i], statistics[i, 4])
-        if np.any(changed):
-            state[changed, 0] = t + 1e-9
-            state[changed, 1] = 0.0
-            determined &= ~changed
+        sd = self._EntrySd(trial, t, times, starts, variance)
+        changed |= determined & (self._Jumped(state, t, rows[-1], mean, variance, sd)
+                                 | self._Unphysical(mean, sd, statistics[:, 1]))
+        self._Restart(state, changed, t)
+        determined &= ~changed
+        # A row's first fit since its restart waits one update: published only if
+        # the next one confirms it (the jump test), since a window that holds an
+        # undetected switch fits it with wrong coefficients and a small residual.
+        confirmed = determined & np.isfinite(state[:, self._row_state.fit_time])
+        self._RememberFits(state, t, rows[-1], mean, variance, sd, determined)
+        determined = confirmed
         dof = np.maximum(statistics[:, 1], bayes.min_dof)
         fitted = np.where(determined[:, None], mean, prior.mean)
-        return (self._Publish(trial, t, rows[-1], mean, variance, determined, dof, times,
-                              state[:, 0]), fitted, determined,
+        return (self._Publish(trial, t, rows[-1], mean, sd, determined, dof), fitted,
+                determined,
                 int(np.count_nonzero(changed)))
 
     def _Changed(self, row: np.ndarray, surprise: float, relative: float,
@@ -419,6 +490,75 @@ class LocalBayesLearner:
             self._Remember(row, relative)
         return False
 
+    def _EntrySd(self, trial, t, times, starts, variance) -> np.ndarray:
+        """Each row's entries' sd (n, n + 1): the posterior's, and the local linear
+        model's own error over the row's window, half the curvature bound times the
+        weighted mean of (t_k - t_now)^2, per unit of the entry's scale."""
+        n, bayes = self.n, self._bayes
+        scale = self._priors[trial].scale
+        sd = np.empty((n, n + 1))
+        for i in range(n):
+            inside = times >= starts[i] - 1e-9
+            w = np.exp((times[inside] - t) / bayes.forgetting)
+            spread = np.sum(w * (times[inside] - t) ** 2) / max(np.sum(w), 1e-300)
+            curvature = 0.5 * bayes.curvature * spread * scale[i]
+            sd[i] = np.sqrt(variance[i].reshape(n + 1, 3)[:, 0] + curvature ** 2)
+        return sd
+
+    def _Jumped(self, state, t, newest, mean, variance, sd) -> np.ndarray:
+        """Which rows' fits moved from their previous fit's prediction at (t, p)
+        by more than the credible set's quantile of the prediction's sd (the
+        previous fit's entry sd, its drift's and slope's over the time and momentum
+        moved since) and the new fit's, in some entry: the window now holds a
+        change the residual tests did not resolve (a least-squares fit through a
+        switch can explain the mixed window with wrong coefficients and a small
+        residual)."""
+        S, n = self._row_state, self.n
+        p = newest[1 + n:1 + 2 * n]
+        previous = state[:, S.fit_time]
+        jumped = np.zeros(n, bool)
+        for i in np.flatnonzero(np.isfinite(previous)):
+            theta = state[i, S.fit].reshape(n + 1, 3)
+            spread = state[i, S.fit_spread].reshape(n + 1, 3)
+            dt, dp = t - previous[i], p[i] - state[i, S.fit_momentum]
+            predicted = theta[:, 0] + theta[:, 1] * dt + theta[:, 2] * dp
+            predictive = (spread[:, 0] ** 2 + (spread[:, 1] * dt) ** 2
+                          + (spread[:, 2] * dp) ** 2 + sd[i] ** 2)
+            value = mean[i].reshape(n + 1, 3)[:, 0]
+            jumped[i] = np.any(np.abs(value - predicted) > self._z_set * np.sqrt(predictive))
+        return jumped
+
+    def _Unphysical(self, mean, sd, dof) -> np.ndarray:
+        """Which rows' fits put their own actuator's gain B_ii or their damping D_i
+        below zero beyond the credible interval: no port relation of the robot
+        does that, so the window holds something else (a transient)."""
+        n = self.n
+        constant = mean.reshape(n, n + 1, 3)[:, :, 0]
+        quantile = np.array([student_quantile(self._z_interval, max(d, self._bayes.min_dof))
+                             for d in dof])[:, None]
+        upper = constant + quantile * sd
+        rows = np.arange(n)
+        return (upper[rows, rows] < 0.0) | (upper[:, n] < 0.0)
+
+    def _RememberFits(self, state, t, newest, mean, variance, sd, determined) -> None:
+        """Keeps each determined row's fit for the next update's jump test (the
+        others have none): its coefficients, their sd (the constants' with the
+        local model's error) and the time and momentum they refer to."""
+        S, n = self._row_state, self.n
+        state[:, S.fit_time] = np.where(determined, t, -np.inf)
+        state[:, S.fit_momentum] = newest[1 + n:1 + 2 * n]
+        state[:, S.fit] = mean
+        spread = np.sqrt(variance).reshape(n, n + 1, 3).copy()
+        spread[:, :, 0] = sd
+        state[:, S.fit_spread] = spread.reshape(n, -1)
+
+    def _Restart(self, state, rows, t) -> None:
+        """Restarts rows (a mask) at the newest samples: their window, change test
+        history and previous fit start anew (``state`` in place)."""
+        state[rows, 0] = t + 1e-9
+        state[rows, 1] = 0.0
+        state[rows, self._row_state.fit_time] = -np.inf
+
     @staticmethod
     def _Remember(row: np.ndarray, relative: float) -> None:
         """Adds a relative residual to a row's history (its state, in place)."""
@@ -427,30 +567,26 @@ class LocalBayesLearner:
             row[2 + count % HISTORY] = relative
             row[1] = count + 1
 
-    def _Publish(self, trial, t, newest, mean, variance, determined, dof, times, starts):
-        """The published vector from the rows' posteriors (module docstring); the
-        intervals are Student's t at each row's residual degrees of freedom (the
-        residual's variance is itself estimated from the window)."""
+    def _Publish(self, trial, t, newest, mean, sd, determined, dof):
+        """The published vector from the rows' posteriors and entry sd (_EntrySd;
+        module docstring); the intervals are Student's t at each row's residual
+        degrees of freedom (the residual's variance is itself estimated from the
+        window). A damping fitted below zero is published at the prior with the
+        prior's range."""
         L, n, bayes = self._layout, self.n, self._bayes
         prior = self._priors[trial]
         out = self._prior_vectors[trial].copy()
         out[L.t_ref] = t
         out[L.p_ref] = newest[1 + n:1 + 2 * n]
-        # The local linear model's error over the window: half the curvature bound
-        # times the weighted mean of (t_k - t_now)^2, per unit of the entry's scale.
-        forgetting = bayes.forgetting
         for i in np.flatnonzero(determined):
-            inside = times >= starts[i] - 1e-9
-            w = np.exp((times[inside] - t) / forgetting)
-            spread = np.sum(w * (times[inside] - t) ** 2) / np.sum(w)
-            curvature = 0.5 * bayes.curvature * spread * prior.scale[i]
             entries = np.concatenate([i * n + np.arange(n), [n * n + i]])
             theta = mean[i].reshape(n + 1, 3)
-            sd = np.sqrt(variance[i].reshape(n + 1, 3)[:, 0] + curvature ** 2)
             prior_value = prior.mean[i].reshape(n + 1, 3)[:, 0]
             z_interval = student_quantile(self._z_interval, dof[i])
             z_set = student_quantile(self._z_set, dof[i])
-            learned = (np.abs(theta[:, 0] - prior_value) > bayes.margin * z_interval * sd)
+            learned = (np.abs(theta[:, 0] - prior_value) > bayes.margin * z_interval * sd[i])
+            negative_damping = theta[n, 0] < 0.0
+            learned[n] &= not negative_damping
             value = np.where(learned, theta[:, 0], prior_value)
             out[L.value][entries] = value
             out[L.drift][entries] = np.where(learned, theta[:, 1], 0.0)
@@ -458,8 +594,11 @@ class LocalBayesLearner:
             out[L.learned][entries] = learned
             for z, below, above in ((z_interval, L.interval_below, L.interval_above),
                                     (z_set, L.set_below, L.set_above)):
-                out[below][entries] = np.maximum(value - (theta[:, 0] - z * sd), 0.0)
-                out[above][entries] = np.maximum(theta[:, 0] + z * sd - value, 0.0)
+                out[below][entries] = np.maximum(value - (theta[:, 0] - z * sd[i]), 0.0)
+                out[above][entries] = np.maximum(theta[:, 0] + z * sd[i] - value, 0.0)
+            if negative_damping:        # not a damping the port can have: its range
+                for ends in (L.interval_below, L.interval_above, L.set_below, L.set_above):
+                    out[ends][n * n + i] = self._prior_vectors[trial][ends][n * n + i]
         # D >= 0: a published damping below zero is zero, and so is its interval.
         D = slice(L.value.start + n * n, L.value.stop)
         below_zero = out[D] < 0

@@ -22,13 +22,13 @@ from typing import Sequence, Tuple
 import numpy as np
 
 from dacph_drake.identification import ChangeDetector, NewestRows, RhsIdentifier
-from dacph_drake.learning import LearnerTrial
+from dacph_drake.learning import Channels, LearnerTrial, PortLearner
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.network import ExportedNetwork, NetworkStack
 from dacph_drake.scenario import Learner
 
 
-class PortSampleChannels:
+class PortSampleChannels(Channels):
     """The network's channels: the port sample's regressed part [qdot, u, tau_obs]
     (identification.PortSample), so that the filtered sample keeps its layout.
 
@@ -43,21 +43,14 @@ class PortSampleChannels:
         self.port_columns = np.arange(2 * n, 5 * n)
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
-        """Each trial's [qdot, u, tau_obs] (learning.Channels.Of).
-
-        Args:
-            t: The sample's time [s] (unused).
-            samples: Each trial's PortSample (trials, 5 n).
-
-        Returns:
-            (trials, 3 n)."""
         return samples[:, 2 * self.n:]
 
 
-class NetworkLearner:
+class NetworkLearner(PortLearner):
     """The network learner of a batch (module docstring; learning.PortLearner).
 
-    Its state per trial is its ChangeDetector's and the window start of its warm
+    Update detects changes, fits and publishes (with ``learning`` False it keeps
+    the initial weights: B0 and D0). Its state per trial is its ChangeDetector's and the window start of its warm
     start (-inf before it). For a batch every trial has a network, Adam moments,
     window and change detector of its own; one torch forward and backward pass fits
     every trial that fits this update (RhsIdentifier.FitTrials).
@@ -106,18 +99,6 @@ class NetworkLearner:
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Detects changes, fits and publishes (PortLearner.Update).
-
-        Args:
-            t: The time [s].
-            rows: Each trial's buffered samples (trials, samples, 1 + PortSample
-                size).
-            state: Each trial's state (trials, state_size).
-            model_changed: Whether each trial's LHS model changed.
-            learning: False keeps the initial weights (B0, D0).
-
-        Returns:
-            (published, log rows, state), each per trial."""
         count, settings = self._trials, self._settings
         learning = learning and settings.steps_per_update > 0
         detectors = state[:, :self._detector_size].copy()

@@ -32,6 +32,10 @@ class RhsTrial:
         lambda_min_M: inf_q lambda_min(M), for the gain rule (eq. 48).
         B0: The nominal RHS's B0 (its diagonal, n).
         D0: The nominal RHS's D0 (its diagonal, n) [N m s].
+        prior_set: The prior's range of B as the learner publishes it before it
+            has learned anything ([lower, upper], 2 x n x n), or None (a learner
+            without a credible set): the loop without learning certifies B0 on it,
+            and the learned gains never fall below that loop's.
     """
     model: ReducedModel
     network: PublishedModel
@@ -39,6 +43,7 @@ class RhsTrial:
     lambda_min_M: float
     B0: Sequence[float]
     D0: Sequence[float]
+    prior_set: Optional[np.ndarray] = None
 
 
 class RhsIntegrator(LeafSystem):
@@ -102,8 +107,11 @@ class RhsIntegrator(LeafSystem):
     prior's range, which the learner publishes once it detects the change); c is
     then the paper's filtered rule clipped into that range, with
     beta = max(beta_hat, 1 / the set's slowest mode ratio) (the paper's beta_hat_p
-    is the worst ratio of the estimated to the true mode gain). Otherwise the
-    estimate in use is kept with its c range. At t = 0 the learner publishes its
+    is the worst ratio of the estimated to the true mode gain), and c and each
+    k_p are raised to those the loop without learning settles at (B0 certified on
+    the prior's set, RhsTrial.prior_set) where the set certifies them too:
+    learning never runs a mode slower than that loop. Otherwise the estimate in
+    use is kept with its c and K. At t = 0 the learner publishes its
     prior's range: the loop starts certified for every actuator that range allows.
 
     ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
@@ -113,15 +121,17 @@ class RhsIntegrator(LeafSystem):
     ``port_sample`` (optional: without it, the band alone decides), ``reduced_model``
     (optional: the LHS's M for p = M qdot; without it the model's).
     Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
-    c_min, dic_ok, trusted, certified, set_slowest, set_fastest] (log_layout.RhsLog). For a batch (``trials``: each trial's RhsTrial; one: a
+    c_min, dic_ok, trusted, certified, set_slowest, set_fastest]
+    (log_layout.RhsLog). For a batch (``trials``: each trial's RhsTrial; one: a
     single run) every port carries the trials' signals stacked; the fast sample of
     all trials is one compiled kernel (kernels.loop.integrator_samples), the
-    model refresh one evaluation of all trials' networks (kernels.network) and
-    stacked numpy (the evidence test, which few refreshes reach, trial by
-    trial).
+    model refresh one evaluation of all trials' published models and stacked
+    numpy (the evidence test, which few refreshes reach, trial by trial; the
+    set's certificate, one compiled kernel, kernels.certificate).
 
     Args:
-        trials: Each trial's RhsTrial (model, network, LHS rates, nominal RHS).
+        trials: Each trial's RhsTrial (model, published model, LHS rates, nominal
+            RHS).
         settings: The RHS loop's settings (scenario.rhs).
         period: The integrator's period h [s] (periods.rhs).
         model_period: The model refresh's period [s] (periods.learner_sample).
@@ -157,6 +167,17 @@ class RhsIntegrator(LeafSystem):
         # fastest well-damped rate (Rhs.gain_rule).
         self._c_floor = WELL_DAMPED_LOOP_GAIN / period \
             if settings.gain_rule == "well_damped" else 0.0
+        # The rate and gains the loop without learning settles at: the prior B0
+        # certified on the prior's set (RhsTrial.prior_set) at the rule's c; no
+        # floor without one.
+        self._no_learning_c, self._no_learning_gains = np.zeros(count), np.zeros((count, n))
+        if self._certified_set and all(t.prior_set is not None for t in trials):
+            prior_sets = np.stack([np.asarray(t.prior_set, float) for t in trials], axis=1)
+            out, K = self._SetGains(prior_sets, self._B0, np.ones(count), None,
+                                    self._no_learning_gains, self._no_learning_c)[:2]
+            certified = out[:, 1] > 0.5
+            self._no_learning_c = np.where(certified, out[:, 0], 0.0)
+            self._no_learning_gains = np.where(certified[:, None], K, 0.0)
         network_size = self._published.size
         self._tau_request = self.DeclareVectorInputPort("tau_request", n * count)
         self._tau_observed = self.DeclareVectorInputPort("tau_observed", n * count)
@@ -263,33 +284,47 @@ class RhsIntegrator(LeafSystem):
         gains[:, L.dic_ok], gains[:, L.trusted] = dic_ok, trusted
         return gains
 
+    def _SetGains(self, B_set, eigenvalues, beta, c, floor, c_floor):
+        """certified_gains for each trial's set (2, trials, n, n) and estimate's paired
+        eigenvalues, at the gain rule's beta = max(beta, 1 / the set's slowest mode
+        ratio) capped at beta_max, with c moved from ``c`` towards its target by the
+        rule's filter (``c`` None: the target itself) and at least ``c_floor``, and
+        the gains raised to ``floor`` where certified: (out (trials, 4), K (trials,
+        n), c_min, each mode's eigenvalue range over the set (Gershgorin: low,
+        high))."""
+        settings = self._settings
+        lower, upper = np.minimum(B_set[0], B_set[1]), np.maximum(B_set[0], B_set[1])
+        radius = _off_diagonal_bound(lower, upper)
+        mode_low = np.diagonal(lower, axis1=1, axis2=2) - radius
+        mode_high = np.diagonal(upper, axis1=1, axis2=2) + radius
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slowest = np.min(mode_low / eigenvalues, axis=1)
+        beta = np.minimum(np.maximum(beta, np.where(slowest > 0, 1.0 / slowest, np.inf)),
+                          settings.beta_max)
+        c_min = self._CBound(beta)
+        target = self._CTarget(beta)
+        if c is not None:
+            target = c + self._c_step * (target - c)
+        target = np.maximum(target, c_floor)
+        out, K = np.empty((len(eigenvalues), 4)), np.empty(eigenvalues.shape)
+        certified_gains(lower, upper, eigenvalues, floor, target, c_min,
+                        settings.Td * self._lambda_lhs, self._period, self._c_cap,
+                        1.0 - STABILITY_MARGIN, out, K)
+        return out, K, c_min, mode_low, mode_high
+
     def _Certify(self, gains, B_hat, D_hat, B_set, paired, dic_ok, beta):
         """The certified-set adoption (class docstring): each trial's candidate is
         adopted with the c its set certifies, or the estimate in use is kept with its
         c and K."""
         L, settings = self._layout, self._settings
-        count = len(self._trials)
         eigenvalues = np.where(dic_ok[:, None], paired.real, 1.0)
-        lower, upper = np.minimum(B_set[0], B_set[1]), np.maximum(B_set[0], B_set[1])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slowest = np.min((np.diagonal(lower, axis1=1, axis2=2)
-                              - _off_diagonal_bound(lower, upper)) / eigenvalues, axis=1)
-        beta = np.minimum(np.maximum(beta, np.where(slowest > 0, 1.0 / slowest, np.inf)),
-                          settings.beta_max)
-        c_min = self._CBound(beta)
-        c = gains[:, L.c]
-        target = c + self._c_step * (self._CTarget(beta) - c)
-        out = np.empty((count, 4))
-        certified_gains(lower, upper, eigenvalues, target, c_min,
-                        settings.Td * self._lambda_lhs, self._period, self._c_cap,
-                        1.0 - STABILITY_MARGIN, out)
+        out, K, c_min, mode_low, mode_high = self._SetGains(
+            B_set, eigenvalues, beta, gains[:, L.c], self._no_learning_gains,
+            self._no_learning_c)
         # The trust band around the set in use: each mode's estimate within
         # trust_ratio of the in-use set's range of it (a jump beyond it is taken
         # only through the prior's range, which the learner publishes after a
         # detected change).
-        radius = _off_diagonal_bound(lower, upper)
-        mode_low = np.diagonal(lower, axis1=1, axis2=2) - radius
-        mode_high = np.diagonal(upper, axis1=1, axis2=2) + radius
         ratio = settings.trust_ratio
         within = np.all((eigenvalues <= gains[:, L.mode_high] * ratio)
                         & (eigenvalues >= gains[:, L.mode_low] / ratio), axis=1)
@@ -298,7 +333,7 @@ class RhsIntegrator(LeafSystem):
             gains[adopted, L.B_inverse] = np.linalg.inv(B_hat[adopted]).reshape(
                 np.count_nonzero(adopted), -1)
             gains[adopted, L.D_hat] = D_hat[adopted]
-            gains[adopted, L.K] = out[adopted, 0, None] / paired.real[adopted]
+            gains[adopted, L.K] = K[adopted]
             gains[adopted, L.c] = out[adopted, 0]
             gains[adopted, L.c_min] = c_min[adopted]
             gains[adopted, L.certified] = 1.0
