@@ -63,9 +63,8 @@ ADDED_SUBSECTIONS = (("learner", "bayes", LocalBayes),)
 
 def as_before_added(scenario: Scenario) -> Scenario:
     """A copy of ``scenario`` with each setting of ADDED_TO_CURRENT_LAYOUT at its
-    value before it existed, ADDED_SUBSECTIONS at their defaults but for
-    learner.bayes.model_error at 0 (the claims about B~ and D~ were the estimates
-    themselves): the release before them, as the ablations' baseline.
+    value before it existed and ADDED_SUBSECTIONS at their defaults: the settings
+    a file written before them is read with.
 
     Args:
         scenario: The scenario.
@@ -78,7 +77,6 @@ def as_before_added(scenario: Scenario) -> Scenario:
         setattr(getattr(before, section), key, value)
     for section, key, defaults in ADDED_SUBSECTIONS:
         setattr(getattr(before, section), key, defaults())
-    before.learner.bayes.model_error = 0.0
     return before
 
 

@@ -79,6 +79,14 @@ class LocalBayesChannels(Channels):
             np.arange(5 * n + n * n, 6 * n + n * n)])
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
+        """Each trial's channels (the layout above) from its port sample.
+
+        Args:
+            t: The sample's time [s].
+            samples: Each trial's identification.PortSample (trials, 5 n).
+
+        Returns:
+            The channels (trials, size)."""
         n = self.n
         p, qdot, u, tau = (samples[:, k * n:(k + 1) * n] for k in range(1, 5))
         return np.concatenate([u, t * u, (p[:, :, None] * u[:, None, :]).reshape(
@@ -319,9 +327,8 @@ class _Prior:
 class LocalBayesLearner(PortLearner):
     """The local Bayesian learner of a batch (module docstring; learning.PortLearner).
 
-    Update fits every trial's rows, oldest sample first, and publishes. Its state
-    per trial is, per row, _RowState: its window start [s] (its last restart), its
-    change test's recent relative residuals and its previous fit.
+    Its state per trial is, per row, _RowState: its window start [s] (its last
+    restart), its change test's recent relative residuals and its previous fit.
 
     Args:
         settings: The learner's settings (its ``bayes`` section, the band, the
@@ -403,6 +410,18 @@ class LocalBayesLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fits every trial's rows, oldest sample first, and publishes.
+
+        Args:
+            t: The time [s].
+            rows: Each trial's buffered samples, oldest first [t, q, p, channels].
+            state: Each trial's state (trials, state_size).
+            model_changed: Whether each trial's LHS model changed since the last
+                update.
+            learning: False publishes the prior (the dac-nominal ablation).
+
+        Returns:
+            (published, log rows, state), as PortLearner.Update."""
         published = self._prior_vectors.copy()
         logs = np.zeros((self._trials, LearnerLog().size))
         state = state.reshape(self._trials, self.n, -1).copy()

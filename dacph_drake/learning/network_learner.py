@@ -43,14 +43,21 @@ class PortSampleChannels(Channels):
         self.port_columns = np.arange(2 * n, 5 * n)
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
+        """Each trial's [qdot, u, tau_obs].
+
+        Args:
+            t: The sample's time [s].
+            samples: Each trial's identification.PortSample (trials, 5 n).
+
+        Returns:
+            The channels (trials, size)."""
         return samples[:, 2 * self.n:]
 
 
 class NetworkLearner(PortLearner):
     """The network learner of a batch (module docstring; learning.PortLearner).
 
-    Update detects changes, fits and publishes (with ``learning`` False it keeps
-    the initial weights: B0 and D0). Its state per trial is its ChangeDetector's and the window start of its warm
+    Its state per trial is its ChangeDetector's and the window start of its warm
     start (-inf before it). For a batch every trial has a network, Adam moments,
     window and change detector of its own; one torch forward and backward pass fits
     every trial that fits this update (RhsIdentifier.FitTrials).
@@ -99,6 +106,19 @@ class NetworkLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Detects changes, fits and publishes (with ``learning`` False it keeps
+        the initial weights: B0 and D0).
+
+        Args:
+            t: The time [s].
+            rows: Each trial's buffered samples, oldest first [t, q, p, channels].
+            state: Each trial's state (trials, state_size).
+            model_changed: Whether each trial's LHS model changed since the last
+                update.
+            learning: False publishes the prior (the dac-nominal ablation).
+
+        Returns:
+            (published, log rows, state), as PortLearner.Update."""
         count, settings = self._trials, self._settings
         learning = learning and settings.steps_per_update > 0
         detectors = state[:, :self._detector_size].copy()
