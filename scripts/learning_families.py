@@ -10,7 +10,7 @@ every sample, resumable) of trials the project was not tuned on:
   the controller's link and base masses +-15 %, the RHS's unknown parts x0.5-1.5,
   actuators x0.4-2.5 each, one actuator fault in phase 2, d(t) x0.5-2, q0 drawn;
 - actuators: actuators x0.3-3 each and one fault in phase 2, q0 drawn;
-- links: planar arms of 2 to 8 links (10 trials each), masses +-20 %, the
+- links: planar arms of 2 to 8 links (9 trials each), masses +-20 %, the
   RHS's unknown parts x0.5-1.5, d(t) x0.5-2;
 - described: satellite_3dof, satellite_6dof and the Panda, q0 drawn around
   each shipped one, the RHS's unknown parts x0.5-1.5, d(t) x0.5-2.
@@ -263,7 +263,8 @@ LEARNING_COLUMNS = [
     ("trials", "trials"), ("B_no_worse_share", "B <= prior"), ("B_worst_ratio", "B worst"),
     ("B_median_ratio", "B median"), ("D_no_worse_share", "D <= prior"),
     ("D_worst_ratio", "D worst"), ("B_coverage_pooled", "B coverage"),
-    ("D_coverage_pooled", "D coverage"), ("B_informative_share", "B informative"),
+    ("D_coverage_pooled", "D coverage"), ("B_coverage_share_085", "B covered >= 0.85"),
+    ("D_coverage_share_085", "D covered >= 0.85"), ("B_informative_share", "B informative"),
     ("D_informative_share", "D informative")]
 LOOP_COLUMNS = [
     ("nominal_finished", "dac-nominal finished"),
@@ -289,6 +290,33 @@ def markdown(tables: Dict[str, Dict]) -> str:
     return "\n".join(out)
 
 
+ABLATION_COLUMNS = [
+    ("runaways", "runaways"), ("B_no_worse_share", "B <= prior"),
+    ("B_worst_ratio", "B worst"), ("D_no_worse_share", "D <= prior"),
+    ("D_worst_ratio", "D worst"), ("B_coverage_pooled", "B coverage"),
+    ("D_coverage_pooled", "D coverage"), ("B_informative_share", "B informative"),
+    ("D_informative_share", "D informative"),
+    ("dac_better_when_off_share", "DAC better, actuator off > x2"),
+    ("fault_recovered_share", "fault within 2x"),
+    ("tracking_ratio_median", "tracking / dac-nominal")]
+
+
+def ablation_markdown(out: Path, labels: List[str]) -> str:
+    """One table of the saved summaries of several variants (OUT/LABEL/summary.json),
+    a row per family and variant."""
+    summaries = {label: json.loads((out / label / "summary.json").read_text())
+                 for label in labels}
+    families = [f for f in FAMILIES if any(f in s for s in summaries.values())]
+    lines = ["| family | variant | " + " | ".join(l for _, l in ABLATION_COLUMNS) + " |",
+             "|---" * (len(ABLATION_COLUMNS) + 2) + "|"]
+    for family in families:
+        for label, summary in summaries.items():
+            if family in summary:
+                lines.append(f"| {family} | {label} | " + " | ".join(
+                    _cell(summary[family].get(key)) for key, _ in ABLATION_COLUMNS) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--families", nargs="+", default=list(FAMILIES))
@@ -304,8 +332,13 @@ def main() -> None:
                         "(default: the variant's)")
     parser.add_argument("--tables-only", action="store_true",
                         help="the tables of the rows already saved, without running")
+    parser.add_argument("--compare", nargs="+", metavar="LABEL",
+                        help="print one table of these saved variants and stop")
     args = parser.parse_args()
     out = Path(args.out)
+    if args.compare:
+        print(ablation_markdown(out, args.compare))
+        return
     tables = {}
     for family in args.families:
         rows = run_family(family, args.variant, args.trials, out, args.workers, args.seed,

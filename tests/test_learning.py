@@ -155,6 +155,27 @@ def test_a_set_no_gain_can_certify_is_refused():
     assert out[0, 1] == 0.0
 
 
+def test_a_rate_too_slow_for_a_wide_set_is_raised_until_the_set_certifies_it():
+    """The 6-joint arms' step (0.5 ms) and the prior's range [0.45, 2.05]: at the
+    rule's c (200 / s) the weakest corner's slow root is beyond 0.95 (1 - h c 0.45),
+    and so it is at the least rate the rule allows; the certified c is the least
+    rate above them whose set keeps every root within 0.95 (not a refusal)."""
+    h, rate, n = 5e-4, 80.0, 6
+    lower, upper = 0.45 * np.eye(n), 2.05 * np.eye(n)
+    off = 0.05 / (n - 1) * (1 - np.eye(n))
+    lower, upper = lower - off, upper + off
+    out, K = np.empty((1, 4)), np.empty((1, n))
+    certified_gains(lower[None], upper[None], np.ones((1, n)), np.zeros((1, n)),
+                    np.array([200.0]), np.array([182.0]), np.array([rate]), h, 0.25 / h,
+                    0.95, out, K)
+    c = out[0, 1] == 1.0 and out[0, 0]
+    assert c and c > 200.0
+    for slower in (182.0, 200.0, 0.99 * c):
+        assert box_certificate(lower, upper, np.full(n, slower), h)[1] > 0.95
+    slowest, radius = box_certificate(lower, upper, K[0], h)
+    assert slowest >= rate and radius <= 0.95
+
+
 def test_learned_gains_never_fall_below_the_priors_where_the_set_certifies_them():
     """An actuator learned 3x its prior B0 = 1: its gain stays at the gain of the
     loop without learning (c / B0 at that loop's c, the floor) where the set

@@ -56,6 +56,45 @@ def _largest_radius(low, high, radius, scale) -> float:
 
 
 @njit(cache=True)
+def _bisect(low, high, radius, period, good, bad, radius_bound) -> float:
+    """The certified end of [good, bad] (30 halvings): the rate nearest ``bad``
+    whose stadiums keep every root within ``radius_bound``."""
+    for _ in range(30):
+        middle = 0.5 * (good + bad)
+        if _largest_radius(low, high, radius, period * middle) > radius_bound:
+            bad = middle
+        else:
+            good = middle
+    return good
+
+
+@njit(cache=True)
+def _certified_rate(low, high, radius, period, c, c_low, c_cap, radius_bound) -> float:
+    """The certified rate nearest ``c`` in [c_low, c_cap], or -1 for none.
+
+    The largest root radius over the stadiums falls with c while the slow roots
+    (near 1 - mu) dominate and rises once the fast ones turn complex (modulus
+    sqrt(mu)): the certified rates are an interval [c_a, c_b]. ``c`` itself where it
+    certifies; otherwise c_b below it (c too fast) or c_a above it (c too slow: a
+    small step with a wide set, whose slowest mode's root is within 1 - radius_bound
+    of 1), c_a found on a geometric scan up to c_cap."""
+    if _largest_radius(low, high, radius, period * c) <= radius_bound:
+        return c
+    if _largest_radius(low, high, radius, period * c_low) <= radius_bound:
+        return _bisect(low, high, radius, period, c_low, c, radius_bound)
+    previous = c_low
+    for k in range(1, 33):
+        candidate = c_low * (c_cap / c_low) ** (k / 32.0)
+        if _largest_radius(low, high, radius, period * candidate) <= radius_bound:
+            c_a = _bisect(low, high, radius, period, candidate, previous, radius_bound)
+            if c <= c_a:
+                return c_a
+            return _bisect(low, high, radius, period, c_a, c, radius_bound)
+        previous = candidate
+    return -1.0
+
+
+@njit(cache=True)
 def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarray,
                     floor: np.ndarray, c_target: np.ndarray, c_floor: np.ndarray,
                     rate: np.ndarray, period: float, c_cap: float, radius_bound: float,
@@ -63,13 +102,12 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
     """Every trial's certified decay rate c and gains on its credible set (module
     docstring).
 
-    c is c_target clipped to the certified range [max(c_floor, c_sep), c_high]:
-    c_sep = rate / min_p (lower_pp - R_p) / lambda_p is where the slowest mode
-    meets the separation, c_high the largest c <= c_cap whose stadiums keep every
-    root within ``radius_bound`` (bisection from the clipped target down to the
-    range's lower end). The gains are k_p = c / lambda_p, each raised to
-    ``floor`` (the gains of the loop without learning) where the set certifies the
-    raised gains too: learning never runs a mode slower than the loop without it
+    c is c_target moved into the certified range within [max(c_floor, c_sep),
+    c_cap] (_certified_rate): c_sep = rate / min_p (lower_pp - R_p) / lambda_p is
+    where the slowest mode meets the separation, and the rates whose stadiums keep
+    every root within ``radius_bound`` are an interval. The gains are
+    k_p = c / lambda_p, each raised to ``floor`` (the gains of the loop without
+    learning) where the set certifies the raised gains too: learning never runs a mode slower than the loop without it
     would, where that loop is safe for every B of the set (an actuator stronger
     than its prior gives the prior's loop more gain, and the prior's wide range a
     larger c; the learned gains alone would give that up).
@@ -113,18 +151,10 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
         c_low = max(c_floor[i], rate[i] / slowest)
         if c_low > c_cap:
             continue
-        c = min(max(c_target[i], c_low), c_cap)
-        if _largest_radius(low, high, radius, period * c) > radius_bound:
-            if _largest_radius(low, high, radius, period * c_low) > radius_bound:
-                continue
-            good, bad = c_low, c
-            for _ in range(30):
-                middle = 0.5 * (good + bad)
-                if _largest_radius(low, high, radius, period * middle) > radius_bound:
-                    bad = middle
-                else:
-                    good = middle
-            c = good
+        c = _certified_rate(low, high, radius, period, min(max(c_target[i], c_low), c_cap),
+                            c_low, c_cap, radius_bound)
+        if c < 0.0:
+            continue
         out[i, 0], out[i, 1] = c, 1.0
         raised = False
         for p in range(n):
