@@ -107,10 +107,11 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
     where the slowest mode meets the separation, and the rates whose stadiums keep
     every root within ``radius_bound`` are an interval. The gains are
     k_p = c / lambda_p, each raised to ``floor`` (the gains of the loop without
-    learning) where the set certifies the raised gains too: learning never runs a mode slower than the loop without it
-    would, where that loop is safe for every B of the set (an actuator stronger
-    than its prior gives the prior's loop more gain, and the prior's wide range a
-    larger c; the learned gains alone would give that up).
+    learning) where the set certifies the raised gains too (box_certificate):
+    learning never runs a mode slower than the loop without it would, where that
+    loop is safe for every B of the set (an actuator stronger than its prior gives
+    the prior's loop more gain, and the prior's wide range a larger c; the learned
+    gains alone would give that up).
 
     Args:
         lower: Each trial's set's lower bounds (trials, n, n).
@@ -162,14 +163,8 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
             if floor[i, p] > gains[i, p]:
                 gains[i, p], raised = floor[i, p], True
         if raised:
-            # The stadiums in units of h k_p (unit scale: low, high, radius per mode).
-            slowest_rate = np.inf
-            for p in range(n):
-                k = gains[i, p] * eigenvalues[i, p]        # k_p lambda_p
-                slowest_rate = min(slowest_rate, k * (low[p] - radius[p]))
-                low[p], high[p], radius[p] = k * low[p], k * high[p], k * radius[p]
-            if not (slowest_rate >= rate[i]
-                    and _largest_radius(low, high, radius, period) <= radius_bound):
+            slowest_rate, largest = box_certificate(lower[i], upper[i], gains[i], period)
+            if not (slowest_rate >= rate[i] and largest <= radius_bound):
                 for p in range(n):
                     gains[i, p] = c / eigenvalues[i, p]
 
