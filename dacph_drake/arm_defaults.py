@@ -4,16 +4,23 @@ per-joint setting sized to the arm, so that a scenario naming only the robot (an
 q0) runs DAC (scenario files: scenario_files.load_scenario starts from it; Python:
 arm_scenario, planar_arm_scenario).
 
-The rule. Two scales per joint j, from the description at q0 and the task's
+The rule. Scales per joint j, from the description at q0 and the task's
 reference:
 
     M_j = M_jj(q0)      the joint's inertia in the reduced model (docs/equations.md
                         E5-E9: base free, zero momentum) [kg m^2]
     w   = 2 pi a / T    the reference's peak angular rate (task.reference amplitude
                         a, at least MIN_AMPLITUDE, period T) [rad/s];
-                        p_j = M_j w, the joint's momentum turning at that rate
-                        [kg m^2/s]; tau_j = M_j w 2 pi / T, its inertial torque at
-                        the reference's peak acceleration [N m]
+    p_j = max(M_j w, max_t |p_j(t)|)            the joint's momentum [kg m^2/s]
+    tau_j = max(M_j w 2 pi / T, max_t |dp_j/dt|)  its inertial torque [N m]
+                        (t past the warm-up, when the uncertainty starts)
+
+with p(t) = M(q) qdot along a kinematic rehearsal of the task from q0 for the
+warm-up and one reference period (robots.start_pose.rehearse): the coupling
+M_jk qdot_k drives a light joint's momentum far beyond M_j w (Kinova j2s6s200's
+joint 4: 4-5x), where the quadratic terms below would take its true actuator gain
+through zero; for a described arm (a planar arm: M_j w and M_j times the peak
+acceleration)
 
 and the ground truth's RHS of the paper's form (eq. 19, scenario.Uncertainty) sized
 by them, with signs alternating over the joints as the paper's two:
@@ -28,7 +35,17 @@ by them, with signs alternating over the joints as the paper's two:
         0.05 + 0.01 j Hz, hf_amplitude = 0.05 max_j tau_j along hf_direction_j =
         +-tau_j / max_k tau_k (at the paper's 20 Hz)
 
-The other sections are those of the shipped spatial scenarios (satellite_6dof):
+For a described arm, four factors on top: B_q1_squared is divided by the largest
+q1^2 past the warm-up where that exceeds 1 rad^2 (the paper's arm keeps |q1| <= 1
+rad; the term is the paper's at those angles); d's scale keeps the accelerations it
+causes through M^-1 within DISTURBANCE_ACCELERATION times the reference's
+(disturbance_scale), the excitation's per-joint scale keeps the motion it causes
+within EXCITATION_MOTION (excitation_scale), and the clearance potential's margin
+is at most half the start's clearance (potential_margin). The ground truth's fixed
+RK2 step is the largest that keeps h lambda <= 1 for the fastest damping mode
+(truth_step). A described arm's q0, when the file gives none, is
+robots.start_pose.choose_start's. The other sections are those of the shipped
+spatial scenarios (satellite_6dof):
 scenario.SATELLITE_PHASES, described_arm_periods, described_arm_rhs and
 described_arm_learner. A planar arm's are the paper's (Scenario's defaults); its
 reference alpha_d = sum_i a_i sin(2 pi t / T_i) gives w = sum_i 2 pi a_i / T_i and
@@ -39,8 +56,10 @@ from typing import TYPE_CHECKING, Optional, Sequence
 
 import numpy as np
 
+from dacph_drake.loop.simulator import FixedStepConfig
 from dacph_drake.scenario import (SATELLITE_PHASES, DescribedArm, Disturbance,
-                                  EndEffectorAngle, EndEffectorAttitude, Phases,
+                                  EndEffectorAngle, EndEffectorAttitude, Excitation,
+                                  Phases,
                                   PlanarArm, Scenario, Uncertainty,
                                   described_arm_learner, described_arm_periods,
                                   described_arm_rhs)
@@ -55,6 +74,13 @@ if TYPE_CHECKING:
 LHS_DAMPING_RATE = 500.0
 DAMPING_RATE = 2.0              # [1/s] D0_j / M_j: a free joint's speed decays over 0.5 s
 MIN_AMPLITUDE = 0.1             # [rad] the amplitude the scales assume for a still reference
+DEFAULT_STEP = 2.5e-4           # [s] loop.simulator.FixedStepConfig's
+STEP_RATE_PRODUCT = 1.0         # h lambda of the fastest damping mode (RK2: stable to 2)
+# [rad] the most a joint moves under the learner's excitation (half the 1e-4 rad
+# tracking target; 2e-4 N m at 4.3 Hz move a 0.0067 kg m^2 wrist 4e-5 rad, a
+# 4e-5 kg m^2 one 7e-3 rad).
+EXCITATION_MOTION = 5e-5
+DISTURBANCE_ACCELERATION = 5.0  # the most d accelerates a joint, per reference's peak
 
 
 def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
@@ -63,8 +89,9 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
 
     Args:
         robot: The arm's robot section.
-        q0: The initial joint angles [rad] (default: every joint at 0, or at the
-            middle of its limits where 0 lies outside them).
+        q0: The initial joint angles [rad] (default: robots.start_pose.choose_start,
+            a start within the limits, clear of the base, away from the task's
+            singularities along the reference).
         task: The task it tracks (default EndEffectorAttitude()).
 
     Returns:
@@ -73,27 +100,172 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
 
     Raises:
         ConfigError: The robot section's assembly settings are invalid
-            (DescribedArm.ValidateAssembly) or its description cannot be
-            loaded."""
+            (DescribedArm.ValidateAssembly), its description cannot be loaded, or
+            no start qualifies where q0 is not given."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
-    from dacph_drake.robots.described import require_every_joint_moves_inertia
-    from dacph_drake.robots.description import MakeRobotPlant
+    from dacph_drake.errors import ConfigError
+    from dacph_drake.robots.described import (link_base_clearance, null_space_rate,
+                                              require_every_joint_moves_inertia)
+    from dacph_drake.robots.description import ParsedDescription
+    from dacph_drake.robots.start_pose import choose_start, rehearse
     robot.ValidateAssembly()
-    model = FloatingBaseModel(MakeRobotPlant(robot))
+    parsed = ParsedDescription(robot)
+    model = FloatingBaseModel(parsed.plant)
     require_every_joint_moves_inertia(model, robot.description)
-    q0 = np.asarray(rest_configuration(model) if q0 is None else q0, float)
     task = EndEffectorAttitude() if task is None else task
+    reference = task.reference
+    rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
+    if q0 is None:
+        try:
+            q0 = choose_start(model, task, link_base_clearance(parsed, model),
+                              null_space_rate(parsed, model, robot.potential),
+                              rehearsal_time)
+        except ValueError as e:
+            raise ConfigError(
+                f"robot.description {robot.description!r}: no start pose found for "
+                f"the end-effector attitude task ({e}); allowed: a q0 in the file, or "
+                "an arm whose end effector can turn about every axis") from e
+    q0 = np.asarray(q0, float)
+    robot = copy.deepcopy(robot)
+    if len(q0) == model.num_joints:
+        robot.potential.margin = potential_margin(
+            robot.potential.margin, link_base_clearance(parsed, model)(q0))
     scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
                         phases=Phases(**SATELLITE_PHASES), rhs=described_arm_rhs(),
                         periods=described_arm_periods(), learner=described_arm_learner())
     if len(q0) != model.num_joints:
         return scenario         # Validate names q0's length; nothing to size by
-    reference = task.reference
     rate = 2 * np.pi * max(reference.amplitude, MIN_AMPLITUDE) / reference.period
     inertia = np.diag(model.MassMatrix(q0))
-    scenario.uncertainty = sized_uncertainty(inertia, rate)
-    scenario.disturbance = sized_disturbance(inertia * rate * 2 * np.pi / reference.period)
+    rehearsal = rehearse(model, q0, task, rehearsal_time)
+    # Past the warm-up: the uncertainty and the disturbance act from phase 1 on, when
+    # the start's error has decayed (the rehearsal also starts with a jump in p).
+    steady = rehearsal.time >= SATELLITE_PHASES["warmup"]
+    momentum = np.maximum(inertia * rate, np.max(np.abs(rehearsal.p[steady]), axis=0))
+    torque = np.maximum(inertia * rate * 2 * np.pi / reference.period,
+                        np.max(np.abs(rehearsal.p_rate[steady]), axis=0))
+    scenario.uncertainty = sized_uncertainty(inertia, momentum)
+    # The paper's q1^2 coupling at the angles the task reaches: at most its size at
+    # |q1| = 1 rad (the paper's arm stays within it). From a start at q1 = 2.9 rad
+    # (a UR5's chosen start) it would put 3.5 of joint 1's command into joint 2's
+    # torque, and the true RHS loop lost its margin (spectral radius 0.97 > 0.95).
+    reach = float(np.max(rehearsal.q[steady, 0] ** 2))
+    if reach > 1.0:
+        scenario.uncertainty.B_q1_squared = (
+            np.asarray(scenario.uncertainty.B_q1_squared) / reach).tolist()
+    scenario.disturbance = sized_disturbance(torque)
+    scenario.disturbance.scale = disturbance_scale(
+        scenario.disturbance, model.MassMatrix(q0), rate * 2 * np.pi / reference.period)
+    scenario.excitation.joint_scale = excitation_scale(scenario.excitation,
+                                                       model.MassMatrix(q0))
+    scenario.simulator = FixedStepConfig(step=truth_step(
+        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs))
     return scenario
+
+
+def potential_margin(margin: float, clearance: float) -> float:
+    """The clearance potential's margin for a start's link-base clearance.
+
+    At most half the start's clearance: a link that always stays near the base (a
+    UR arm's shoulder, 3-5 cm above its mount) otherwise keeps the potential
+    pushing through the whole run, and its gradient jumps as the nearest mesh
+    features change (the UR10 from a start chosen for it: 8.3e-4 rad RMS in phase
+    3 with the 0.1 m margin, 4e-5 with 0.025 m).
+
+    Args:
+        margin: The margin otherwise (robot.potential.margin) [m].
+        clearance: The start's link-base clearance [m] (inf: beyond the query).
+
+    Returns:
+        The margin [m] (unchanged for a start inside the base: its validation
+            refuses it)."""
+    return min(margin, 0.5 * clearance) if clearance > 0 else margin
+
+
+def disturbance_scale(disturbance: Disturbance, M: np.ndarray,
+                      acceleration: float) -> float:
+    """The disturbance's factor that keeps the accelerations it causes within
+    DISTURBANCE_ACCELERATION times the reference's peak.
+
+    d_j's peak |lf_offset_j| + lf_amplitude_j + hf_amplitude |hf_direction_j|
+    accelerates joint i by up to sum_j |(M^-1)_ij| d_j: on arms whose light joints
+    are coupled to heavy ones (a tiny wrist, a chain of nine joints, a heavy tool)
+    the torques sized to each joint's coupled inertial torque reach 13-38 times
+    the reference's acceleration, where the model-based baseline ran away in phase
+    3; the shipped Panda and UR5 stay at 4.6 and 2.5 times it (factor 1).
+
+    Args:
+        disturbance: The sized disturbance (its factor not yet applied).
+        M: The reduced mass matrix at the start [kg m^2] (n x n).
+        acceleration: The reference's peak angular acceleration [rad/s^2].
+
+    Returns:
+        disturbance.scale: min(1, DISTURBANCE_ACCELERATION acceleration / max_i
+            sum_j |(M^-1)_ij| d_j)."""
+    peak = (np.abs(disturbance.lf_offset) + np.abs(disturbance.lf_amplitude)
+            + disturbance.hf_amplitude * np.abs(disturbance.hf_direction))
+    reach = float(np.max(np.abs(np.linalg.inv(M)) @ peak))
+    limit = DISTURBANCE_ACCELERATION * acceleration
+    return 1.0 if reach <= limit else limit / reach
+
+
+def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
+    """The excitation's per-joint factors that keep every joint's motion under it
+    at most EXCITATION_MOTION.
+
+    The request a_j sin(omega_j t) on joint j moves joint i by about
+    |(M^-1)_ij| a_j / omega_j^2 (the coupled inertia: on the SO-100 a request on
+    its shoulder moves the 6.5e-5 kg m^2 wrist roll further than one on the wrist
+    itself), so a_j <= EXCITATION_MOTION omega_j^2 / max_i |(M^-1)_ij|.
+
+    Args:
+        excitation: The excitation (its amplitude and frequencies).
+        M: The reduced mass matrix at the start [kg m^2] (n x n).
+
+    Returns:
+        excitation.joint_scale: each factor min(1, EXCITATION_MOTION omega_j^2 /
+            (amplitude max_i |(M^-1)_ij|)), or none where every factor is 1."""
+    if excitation.amplitude <= 0:
+        return []
+    omega = 2 * np.pi * excitation.Frequencies(len(M))
+    reach = np.max(np.abs(np.linalg.inv(M)), axis=0)
+    scale = np.minimum(1.0, omega**2 * EXCITATION_MOTION / (excitation.amplitude * reach))
+    return [] if np.all(scale >= 1.0) else [float(x) for x in scale]
+
+
+def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
+               uncertainty: Uncertainty, rhs_period: float) -> float:
+    """The ground truth's fixed RK2 step for an arm's fastest damping mode.
+
+    The explicit scheme is stable for a mode decaying at rate lambda while
+    h lambda <= 2; the step keeps h lambda <= STEP_RATE_PRODUCT for the fastest
+    mode, the largest generalized eigenvalue of (D, M(q)) with D the description's
+    joint damping plus D0, D_offset and D_linear at the sized momentum (a damping
+    of 2 N m s/rad on a 1e-4 kg m^2 wrist decays at 2e4 1/s: h <= 5e-5 s), over
+    the configurations given. At most the default step (loop.simulator), and
+    dividing the RHS period evenly (the discrete updates stop the integrator at
+    every RHS sample anyway).
+
+    Args:
+        model: The arm's model (its plant's joint damping).
+        configurations: Joint angles to take the largest rate over (k x n) [rad].
+        uncertainty: The sized RHS (D0 and its offset).
+        rhs_period: periods.rhs [s].
+
+    Returns:
+        The step [s]."""
+    from dacph_drake.dynamics.plant import joint_damping
+    damping = (joint_damping(model.plant, model.coordinates.joint_v)
+               + 1.5 * np.asarray(uncertainty.D0, float))
+    rate = 0.0
+    for q in configurations[::max(len(configurations) // 16, 1)]:
+        M = model.MassMatrix(q)
+        L = np.linalg.cholesky(M)
+        Linv = np.linalg.inv(L)
+        rate = max(rate, float(np.max(np.linalg.eigvalsh(
+            Linv @ np.diag(damping) @ Linv.T))))
+    step = min(DEFAULT_STEP, STEP_RATE_PRODUCT / rate) if rate > 0 else DEFAULT_STEP
+    return rhs_period / int(np.ceil(rhs_period / step - 1e-9))
 
 
 def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
@@ -140,7 +312,7 @@ def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
     rate = float(np.sum(2 * np.pi * amplitudes / periods))
     acceleration = float(np.sum(amplitudes * (2 * np.pi / periods) ** 2))
     inertia = np.diag(nominal.MassMatrix(q0))   # the defaults' nominal is the truth
-    scenario.uncertainty = sized_uncertainty(inertia, rate)
+    scenario.uncertainty = sized_uncertainty(inertia, inertia * rate)
     scenario.disturbance = sized_disturbance(inertia * acceleration)
     scenario.periods.rhs = rhs_period(scenario, nominal)
     return scenario
@@ -171,39 +343,22 @@ def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
     return periods.lhs / int(np.ceil(periods.lhs / bound))
 
 
-def rest_configuration(model: "FloatingBaseModel") -> np.ndarray:
-    """The arm's rest configuration.
-
-    Args:
-        model: The arm's model.
-
-    Returns:
-        q [rad]: every joint at 0, or at the middle of its position limits where 0
-            lies outside them."""
-    plant, q = model.plant, np.zeros(model.num_joints)
-    lower = plant.GetPositionLowerLimits()[model.coordinates.joint_q]
-    upper = plant.GetPositionUpperLimits()[model.coordinates.joint_q]
-    outside = (lower > 0) | (upper < 0)
-    q[outside] = 0.5 * (lower[outside] + upper[outside])
-    return q
-
-
 def _alternating(n: int, first: float = 1.0) -> np.ndarray:
     return first * (-1.0) ** np.arange(n)
 
 
-def sized_uncertainty(inertia: np.ndarray, rate: float) -> Uncertainty:
+def sized_uncertainty(inertia: np.ndarray, momentum: np.ndarray) -> Uncertainty:
     """The ground truth's RHS sized to the joints (module docstring).
 
     Args:
         inertia: The joints' inertias M_j [kg m^2].
-        rate: The reference's peak angular rate w [rad/s].
+        momentum: The joints' momentum scales p_j [kg m^2/s].
 
     Returns:
         The Uncertainty section."""
     n = len(inertia)
     D0 = DAMPING_RATE * inertia
-    p = inertia * rate
+    p = np.asarray(momentum, float)
     block = np.array([[-0.1, 0.0], [0.05, 0.15]])
     B_linear = np.zeros((n, n))
     for k in range(0, n - 1, 2):

@@ -739,9 +739,14 @@ class Learner:
 class Excitation:
     """A persistently exciting port request for the learner (DAC only).
 
-    The LHS adds tau_pe(t) = amplitude sin(2 pi f_j t) to channel j of tau_c^r, with f_j
-    spread geometrically over ``frequencies`` = [f_first, f_last] in Hz
-    (f_j = f_first (f_last / f_first)^(j / (n - 1))). amplitude = 0 switches it off.
+    The LHS adds tau_pe(t) = a_j sin(2 pi f_j t) to channel j of tau_c^r, with
+    a_j = amplitude joint_scale_j and f_j spread geometrically over ``frequencies``
+    = [f_first, f_last] in Hz (f_j = f_first (f_last / f_first)^(j / (n - 1))).
+    amplitude = 0 switches it off. Joint i moves by about |(M^-1)_ij| a_j / (2 pi
+    f_j)^2 under channel j: one amplitude for a 0.01 kg m^2 wrist and a 4e-5 kg m^2
+    one (SO-101's) moves the light joint 250 times as far, which then bounds the
+    tracking error; arm_defaults.excitation_scale sizes joint_scale for described
+    arms.
 
     Why: under the slow reference the data inform B only weakly, and from phase 3
     on the low-frequency disturbance shares the reference's band; a small request
@@ -750,12 +755,25 @@ class Excitation:
 
     Attributes:
         amplitude: The request's amplitude [N m], >= 0 (0: off).
+        joint_scale: Each joint's factor on it, in [0, 1], or none (all 1).
         frequencies: The first and last frequency, [f_first, f_last], in Hz:
             f_first in [1e-3, the Nyquist frequency of periods.lhs], f_last in
             [f_first, that Nyquist frequency]; with learner.mode "regularized" and
             an amplitude > 0, both inside learner.band."""
     amplitude: float = 2e-4         # [N m]
     frequencies: List[float] = field(default_factory=lambda: [3.1, 4.3])   # [Hz]
+    joint_scale: List[float] = field(default_factory=list)     # per joint; []: all 1
+
+    def Amplitudes(self, n: int) -> np.ndarray:
+        """The excitation's amplitude on each joint.
+
+        Args:
+            n: The number of joints.
+
+        Returns:
+            a_j = amplitude joint_scale_j for joints j = 0 .. n-1 [N m]."""
+        scale = np.asarray(self.joint_scale, float) if self.joint_scale else np.ones(n)
+        return self.amplitude * scale
 
     def Frequencies(self, n: int) -> np.ndarray:
         """The excitation's frequency on each joint.
@@ -909,7 +927,9 @@ class ClearancePotential:
 
     Attributes:
         gain: The potential's gain, >= 0 (0: off).
-        margin: The clearance below which the potential acts [m], > 0.
+        margin: The clearance below which the potential acts [m], > 0 (a file
+            that leaves it out gets at most half its start's clearance:
+            arm_defaults.potential_margin).
         eta: The null-space gain of xi = -eta grad U [1/s], >= 0."""
     gain: float = 1.0
     margin: float = 0.1             # [m]
@@ -965,8 +985,8 @@ class DescribedArm:
     EndEffectorAttitude.
 
     Attributes:
-        description: A shipped name (description.SPATIAL_ROBOTS) or a .urdf/.sdf
-            path.
+        description: A shipped name (description.SPATIAL_ROBOTS) or a path to a
+            .urdf, .sdf or MJCF .xml file.
         base: The free base (ArmBase; by default the description's root body is
             the base).
         end_effector: The frame whose attitude the task tracks
@@ -978,12 +998,12 @@ class DescribedArm:
             the one its package.xml declares (example-robot-data's files use
             package://example-robot-data/ while its package.xml is
             example_robot_descriptions); each must be a folder.
-        joint_damping: What becomes of the description's joint damping (URDF
-            ``<dynamics damping>``), which acts in the ground truth beside the
-            port's D~, one of JOINT_DAMPING: "keep" counts it in the ground
-            truth's logged D~ (true_matrices), so that the D errors compare against
-            what acts; "zero" removes it (a logged note), as the planar arms have
-            none.
+        joint_damping: What becomes of the description's joint damping b (URDF
+            ``<dynamics damping>``), one of JOINT_DAMPING: "keep" lets it act in the
+            ground truth and counts it in the LHS model, as the inertias are (the
+            attitude controller requests b nu, the port observer adds b qdot: the
+            port's D~ is what acts beyond it); "zero" removes it (a logged note),
+            as the planar arms have none.
         locked_joints: Joints welded at a position (name: [rad] or [m], finite):
             a gripper's and any other joint that is not the arm's. Every prismatic
             joint is locked, at its position here or 0 (a logged note names them).
@@ -997,8 +1017,8 @@ class DescribedArm:
             metric ``effort_saturated_share``); "ignore" leaves u as the
             controller sent it.
         nominal_inertia_scale: The controller's model error: one factor per body
-            with mass in the description's order (base first;
-            inertial_parameters.InertialParameters), each in [0.1, 10], by which
+            with mass in the plant's order (the description's bodies in its order,
+            then robot.base's box when mass > 0; a wrong length lists them), each in [0.1, 10], by which
             the controller's model multiplies that body's mass and rotational
             inertia (its centre of mass stays); empty: the description's own
             inertias.
@@ -1017,8 +1037,8 @@ class DescribedArm:
 
     def ResolvePaths(self, folder: Path) -> None:
         """Makes the relative file paths of a scenario file's robot section relative
-        to the file's folder: description (a .urdf or .sdf file), package_paths and
-        packages' folders. Names of shipped robots and package:// URIs stay. A path
+        to the file's folder: description (a .urdf, .sdf or MJCF .xml file),
+        package_paths and packages' folders. Names of shipped robots and package:// URIs stay. A path
         that exists only relative to the working directory, as the previous release
         read it (a run directory's scenario.yaml saved by it), stays as it is.
 
@@ -1030,7 +1050,7 @@ class DescribedArm:
                 return path
             return str(beside)
         if (not self.description.startswith("package://")
-                and Path(self.description).suffix.lower() in (".urdf", ".sdf")):
+                and Path(self.description).suffix.lower() in (".urdf", ".sdf", ".xml")):
             self.description = resolved(self.description)
         self.package_paths = [resolved(path) for path in self.package_paths]
         self.packages = {name: resolved(path) for name, path in self.packages.items()}
@@ -1065,18 +1085,19 @@ class DescribedArm:
                 raise ConfigError(f"robot.packages.{name} = {folder!r} is not a folder; "
                                   "allowed: the folder package://NAME/ stands for")
 
-    def Validate(self, num_bodies: int) -> None:
+    def Validate(self, bodies: Sequence[str]) -> None:
         """Checks the settings that depend on the parsed description.
 
         Args:
-            num_bodies: The description's bodies with mass.
+            bodies: The names of the bodies with mass, in the plant's order.
 
         Raises:
             ConfigError: Naming the first invalid setting."""
-        if len(self.nominal_inertia_scale) not in (0, num_bodies):
+        if len(self.nominal_inertia_scale) not in (0, len(bodies)):
             raise ConfigError(f"robot.nominal_inertia_scale has "
                               f"{len(self.nominal_inertia_scale)} entries; allowed: "
-                              f"{num_bodies} (one per body with mass, base first) or none")
+                              f"{len(bodies)}, one per body with mass in this order: "
+                              f"{', '.join(bodies)}; or none")
         for i, f in enumerate(self.nominal_inertia_scale):
             require_in_range(f"robot.nominal_inertia_scale[{i}]", f, 0.1, 10.0)
         require_nonnegative("robot.potential.gain", self.potential.gain)
@@ -1287,14 +1308,20 @@ class Scenario:
         validate_seed(self.seed)
         robot_of(self)
 
-    def ValidateShared(self, n: int) -> None:
+    def ValidateShared(self, n: int, joint_names: Sequence[str] = ()) -> None:
         """Checks the sections every robot shares (robots.robot_of calls it).
 
         Args:
             n: The robot's number of joints.
+            joint_names: Their names in q's order, for the messages (none: not
+                named).
 
         Raises:
             ConfigError: Naming the first invalid setting of those sections."""
+        if joint_names and len(self.q0) != n:
+            raise ConfigError(f"q0 has {len(self.q0)} entries; allowed: {n} (one per "
+                              f"joint); the joints in q0's order: "
+                              f"{', '.join(joint_names)}")
         _require_length("q0", self.q0, n)
         require_finite_numbers("q0", list(self.q0))
         self.task.Validate(self.periods)
@@ -1450,6 +1477,11 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     validate_local_bayes(L.bayes, L.window * periods.learner_sample)
     E = scenario.excitation
     require_nonnegative("excitation.amplitude", E.amplitude, "N m")
+    if E.joint_scale:
+        _require_length("excitation.joint_scale", E.joint_scale, n,
+                        "one per joint, or none")
+        for i, factor in enumerate(E.joint_scale):
+            require_in_range(f"excitation.joint_scale[{i}]", factor, 0.0, 1.0)
     _require_length("excitation.frequencies", E.frequencies, 2,
                     "[first, last] in Hz")
     require_in_range("excitation.frequencies[0]", E.frequencies[0], 1e-3,

@@ -54,7 +54,8 @@ ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("inertia", "anchor_mass", 0.0),
                            ("inertia", "anchor_error", 0.0),
                            ("inertia", "fit_tolerance", 0.0),
-                           ("inertia", "on_mismatch", "identified"))
+                           ("inertia", "on_mismatch", "identified"),
+                           ("excitation", "joint_scale", []))
 # Sections added to the current layout's sections since it was introduced: their
 # lines at the defaults are left out of the fingerprinted text too (a file without
 # them reads them at their defaults).
@@ -396,11 +397,61 @@ def _migrate_file(raw, path):
     source = migrated if migrated is not None else raw
     if not isinstance(source, dict):
         return migrated
+    if isinstance(source.get("q0"), dict):
+        source = {**source, "q0": q0_by_joint_name(source, path)}
     for section, key, before in ADDED_TO_CURRENT_LAYOUT:
         if isinstance(source.get(section), dict) and key not in source[section]:
             source = dict(source)
             source[section] = {**source[section], key: before}
     return source if source is not raw else None
+
+
+def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
+    """A q0 given as a mapping joint name -> angle, as the list in q's order.
+
+    Only for an arm from its description (robot.description): its joints are
+    named there.
+
+    Args:
+        raw: The parsed scenario file (its q0 a mapping).
+        path: The file (relative description paths are relative to its folder).
+
+    Returns:
+        q0 [rad], one entry per joint in q's order.
+
+    Raises:
+        ConfigError: Naming a joint the arm does not have (with the closest name),
+            the joints left out, or a robot without a description."""
+    import difflib
+    import json
+
+    from pydrake.common.yaml import yaml_dump, yaml_load_typed
+
+    from dacph_drake.dynamics.floating_model import FloatingBaseModel
+    from dacph_drake.robots.described import arm_joints
+    from dacph_drake.robots.description import MakeRobotPlant
+    mapping, robot = raw["q0"], raw.get("robot")
+    if not (isinstance(robot, dict) and "description" in robot):
+        raise ConfigError(f"{path}: q0 is given by joint name; allowed: by name only "
+                          "for an arm from its description (robot: !DescribedArm), "
+                          "else a list with one angle per joint")
+    arm = yaml_load_typed(schema=DescribedArm, data=yaml_dump(json.loads(json.dumps(
+        robot))))                       # the loader's tagged mapping, as plain data
+    arm.ResolvePaths(Path(path).resolve().parent)
+    names = [joint.name() for joint in arm_joints(FloatingBaseModel(MakeRobotPlant(arm)))]
+    for name in mapping:
+        if name not in names:
+            close = difflib.get_close_matches(str(name), names, n=1)
+            raise ConfigError(
+                f"q0.{name} is not a joint of the arm"
+                + (f" (did you mean {close[0]!r}?)" if close else "")
+                + f"; allowed: {', '.join(names)}")
+    missing = [name for name in names if name not in mapping]
+    if missing:
+        raise ConfigError(f"q0 leaves out the joints {', '.join(missing)}; allowed: "
+                          f"every joint of the arm by name ({', '.join(names)}), or "
+                          "no q0 (a start is chosen)")
+    return [float(mapping[name]) for name in names]
 
 
 def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dict]:

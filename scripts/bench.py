@@ -180,7 +180,10 @@ def _spatial_plant_alone_wall(scenario, duration: float) -> float:
 # second against the planar DAC loop's of the same run, and the model-based loop's
 # against it too).
 SPATIAL_ROBOTS_BENCHED = (("satellite_6dof", "satellite_6dof", 1.5),
-                          ("panda, 7 joints", ROOT / "scenarios" / "panda.yaml", 2.0))
+                          ("panda, 7 joints", ROOT / "scenarios" / "panda.yaml", 2.0),
+                          # Its joint damping sets a 62.5 us step (scripts/zoo.py).
+                          ("xarm7, 7 joints, damped", ROOT / "results" / "zoo" / "files"
+                           / "xarm7.yaml", 2.0))
 
 
 def bench_spatial(duration: float, planar_dac: float):

@@ -226,12 +226,18 @@ def test_a_scenario_file_runs_dac_on_the_mounted_arm(arm_file, tmp_path, capsys)
     assert np.all(np.isfinite(clearance)) and clearance.min() > 0.1
 
 
-def test_the_descriptions_joint_damping_is_counted_or_zeroed(arm_file, caplog):
-    """A description's joint damping acts in the ground truth beside the port's D~:
-    with robot.joint_damping "keep" (default) the logged D~ (true_matrices) includes
-    it, so the D errors compare against what acts; "zero" removes it from the plant
-    with a note."""
+def test_the_descriptions_joint_damping_is_part_of_the_lhs_model_or_zeroed(arm_file,
+                                                                          caplog):
+    """A description's joint damping b acts in the ground truth (the plant applies
+    it) and, with robot.joint_damping "keep" (default), is part of the LHS model as
+    the inertias are: the model's joint_damping is b, the attitude controller
+    requests b nu and the port observer adds b qdot, so the logged port D~
+    (true_matrices) is the RHS's alone, the same with or without b; "zero" removes
+    b from the plant and the model with a note. In a DAC run with b the observed
+    port torque is the true RHS's B~ u - D~ qdot + d (what acts beyond b)."""
     from dacph_drake.controllers import build_closed_loop
+    from dacph_drake.dynamics.plant import trial_coordinates
+    from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario import satellite_3dof_scenario
     damped = _joint2_as(arm_file, "damped.urdf", '<joint name="joint2" '
                         'type="continuous"><dynamics damping="0.03"/>')
@@ -242,8 +248,9 @@ def test_the_descriptions_joint_damping_is_counted_or_zeroed(arm_file, caplog):
         scenario.robot.joint_damping = setting
         with caplog.at_level("WARNING"):
             loop = build_closed_loop("model-based", scenario)
-        joint = loop.plant.GetJointByName("joint2")
-        assert joint.default_damping() == (0.03 if setting == "keep" else 0.0)
+        b = 0.03 if setting == "keep" else 0.0
+        assert loop.plant.GetJointByName("joint2").default_damping() == b
+        np.testing.assert_array_equal(loop.model.joint_damping, [0.0, b, 0.0])
         truth = loop.systems["true_rhs"]
         context = truth.CreateDefaultContext()
         plant_context = loop.plant.CreateDefaultContext()
@@ -254,8 +261,20 @@ def test_the_descriptions_joint_damping_is_counted_or_zeroed(arm_file, caplog):
         truth.GetInputPort("u").FixValue(context, np.zeros(3))
         truth.GetInputPort("disturbance_model").FixValue(context, np.zeros(3 + 5 * 3))
         logged[setting] = truth.GetOutputPort("true_matrices").Eval(context)[9:]
-    np.testing.assert_allclose(logged["keep"] - logged["zero"], [0.0, 0.03, 0.0])
+    np.testing.assert_array_equal(logged["keep"], logged["zero"])
     assert "joint damping of joint2 is set to zero" in caplog.text
+    scenario = satellite_3dof_scenario()
+    scenario.robot.description, scenario.robot.base = str(damped), MOUNT
+    scenario.robot.joint_damping = "keep"
+    logs = simulate(scenario, "dac", duration=1.0).logs
+    coordinates = trial_coordinates(build_closed_loop("dac", scenario).plant)[0]
+    qdot = logs["state"][:, len(coordinates.base_q) + len(coordinates.joint_q)
+                         + len(coordinates.base_v):][:, :3]
+    late = logs["time"] > 0.4              # past the start's fast transient
+    miss = logs["tau_observed"][late] - logs["tau"][late]
+    damping_torque = 0.03 * qdot[late, 1]
+    assert np.sqrt(np.mean(miss[:, 1] ** 2)) < 0.1 * np.sqrt(np.mean(
+        damping_torque ** 2))
 
 
 def _stl(triangles: np.ndarray, binary: bool) -> bytes:

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from dacph_drake.arm_defaults import DAMPING_RATE, arm_scenario
+from dacph_drake.robots.start_pose import rehearse
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import MODELS, MakeRobotPlant
@@ -57,9 +58,12 @@ def test_a_file_naming_only_the_arm_gets_settings_sized_to_it(arm_alone, tmp_pat
     AMENT_PREFIX_PATH, its world weld dropped with a note; its own end_effector
     frame), base and q0 loads with every per-joint setting sized to the arm by arm_defaults' rule:
     D0 = DAMPING_RATE M_jj(q0), the linear group adding 0.5 D0 at the momentum
-    p_j = M_jj w, the disturbance's offsets 0.3 M_jj w (2 pi / T) with alternating
-    signs; the same as arm_scenario from Python. A per-joint list of the wrong
-    length given in the file is still named in one line."""
+    p_j = max(M_jj w, the rehearsal's peak |p_j| past the warm-up) (the coupled
+    inertia: never below the diagonal's scale), the disturbance's offsets 0.3
+    max(M_jj w (2 pi / T), the rehearsal's peak |dp_j/dt| past the warm-up) with
+    alternating signs; the same as arm_scenario
+    from Python. A per-joint list of the wrong length given in the file is still
+    named in one line."""
     monkeypatch.setenv("AMENT_PREFIX_PATH", str(arm_alone))
     body = ("robot: !DescribedArm\n"
             "  description: package://my_arm/arm.urdf\n"
@@ -74,11 +78,17 @@ def test_a_file_naming_only_the_arm_gets_settings_sized_to_it(arm_alone, tmp_pat
     reference = scenario.task.reference
     w = 2 * np.pi * reference.amplitude / reference.period
     u, d = scenario.uncertainty, scenario.disturbance
+    rehearsal = rehearse(model, [0.3, -0.8, 1.6], scenario.task,
+                         scenario.phases.warmup + reference.period)
+    steady = rehearsal.time >= scenario.phases.warmup
+    p = np.maximum(M * w, np.abs(rehearsal.p[steady]).max(axis=0))
+    torque = np.maximum(M * w * 2 * np.pi / reference.period,
+                        np.abs(rehearsal.p_rate[steady]).max(axis=0))
+    assert np.any(p > M * w)            # the coupling moves a joint beyond M_jj w
     np.testing.assert_allclose(u.D0, DAMPING_RATE * M, rtol=1e-12)
-    np.testing.assert_allclose(np.asarray(u.D_offset) + np.asarray(u.D_linear) * M * w,
+    np.testing.assert_allclose(np.asarray(u.D_offset) + np.asarray(u.D_linear) * p,
                                0.5 * np.asarray(u.D0), rtol=1e-12)
-    np.testing.assert_allclose(d.lf_offset, [0.3, -0.3, 0.3] * M * w * 2 * np.pi
-                               / reference.period, rtol=1e-12)
+    np.testing.assert_allclose(d.lf_offset, [0.3, -0.3, 0.3] * torque, rtol=1e-12)
     assert u.B0 == [1.0] * 3 and len(u.B_linear) == 3 and len(d.hf_direction) == 3
     assert scenario.phases.end == 14.0 and scenario.periods.rhs == 5e-4
     assert scenario == arm_scenario(scenario.robot, [0.3, -0.8, 1.6])

@@ -185,7 +185,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
     # The learner's excitation tau_pe enters the s dynamics as a known input.
-    excitation_norm = scenario.excitation.amplitude * np.sqrt(n)
+    excitation_norm = float(np.linalg.norm(scenario.excitation.Amplitudes(n)))
     envelope = check_envelope(t, lhs.V, e_norm, chi, lhs.constants,
                               excitation_norm=excitation_norm)
     per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))

@@ -6,6 +6,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from dacph_drake.loop.threads import single_threaded
 from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed_loop
 # The built-in scenarios' names (scenario.BUILT_IN_SCENARIOS), without loading Drake.
 BUILT_IN_SCENARIO_NAMES = ("paper", "short", "satellite_6dof", "satellite_3dof")
@@ -362,7 +363,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(format="dacph: note: %(message)s", level=logging.WARNING)
     try:
-        return args.run(args)
+        with single_threaded():         # verify and report too (loop.threads)
+            return args.run(args)
     except ConfigError as e:
         print(f"dacph: error: {e}", file=sys.stderr)
         return 2

@@ -96,7 +96,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         num_joints=model.num_joints, sample_period=periods.rhs,
         noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],
-        anti_alias_cutoff=settings.band[1] if regularized else 0.0))
+        anti_alias_cutoff=settings.band[1] if regularized else 0.0,
+        joint_damping=model.joint_damping))
     trials = [LearnerTrial(model=robot.model, B0=s.uncertainty.B0, D0=s.uncertainty.D0,
                            seed=s.seed, q0=s.q0)
               for robot, s in zip(loop.robots, loop.scenarios)]

@@ -14,8 +14,11 @@ class ReducedModel(Protocol):
 
     Attributes:
         num_joints: The number of the arm's joints n.
+        joint_damping: The description's joint damping b (n) [N m s/rad], part of
+            the LHS model (zero for the planar arms).
     """
     num_joints: int
+    joint_damping: np.ndarray
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """The port's momentum p = M(q) qdot.

@@ -32,7 +32,7 @@ from pydrake.multibody.tree import Frame
 
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
-from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.plant import ArmCoordinates, joint_damping
 from dacph_drake.kernels import spatial
 
 
@@ -55,6 +55,11 @@ class FloatingBaseModel:
         self._inertial_parameters = self.parameters.FromContext(self._context)
         self._inertias = self.tree.Inertias(self._context)
         self._frames = {}
+
+    @property
+    def joint_damping(self) -> np.ndarray:
+        """The description's joint damping b (n) [N m s/rad] (dynamics.ReducedModel)."""
+        return joint_damping(self._plant, self.coordinates.joint_v)
 
     @property
     def inertial_parameters(self) -> np.ndarray:

@@ -32,7 +32,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame, JacobianWrtVariable
 
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
-from dacph_drake.dynamics.plant import ArmCoordinates, END_EFFECTOR, link_name
+from dacph_drake.dynamics.plant import (ArmCoordinates, END_EFFECTOR, joint_damping,
+                                        link_name)
 
 @dataclass(slots=True)
 class ReducedDynamics:
@@ -95,6 +96,11 @@ class ReducedOrderModel:
     @property
     def plant(self) -> MultibodyPlant:
         return self._plant
+
+    @property
+    def joint_damping(self) -> np.ndarray:
+        """The plant's joint damping b (n) [N m s/rad] (dynamics.ReducedModel)."""
+        return joint_damping(self._plant, self._coordinates.joint_v)
 
     @property
     def num_joints(self) -> int:

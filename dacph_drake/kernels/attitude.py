@@ -252,10 +252,12 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
         end_effector: (node, R_CE) (task_rates).
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate along the motion (n) [rad/s^2].
-        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate).
+        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate, b_1,
+            ..., b_n), b the description's joint damping [N m s/rad].
         chi: The robust term's gain chi (input ``chi``: in DAC the RHS loop's
             bound on ||e_tau||) [N m].
-        excitation: (amplitude, 2 pi f_1, ..., 2 pi f_n) of tau_pe.
+        excitation: (a_1, ..., a_n, 2 pi f_1, ..., 2 pi f_n) of tau_pe (the
+            amplitudes [N m], scenario.Excitation.Amplitudes).
 
     Returns:
         (tau, M, C', [e, |e|, ||s||, V], the quaternion of R_d)."""
@@ -275,9 +277,9 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
     phi = epsilon + chi / boundary_rate
     tau = matvec(M, nu_dot) + matvec(C, nu) - damping_rate * Ms
     for i in range(q.shape[0]):
-        tau[i] -= chi * np.tanh(M[i, i] * s[i] / phi)
-        if excitation[0] > 0:
-            tau[i] += excitation[0] * np.sin(excitation[1 + i] * t)
+        tau[i] += gains[5 + i] * nu[i] - chi * np.tanh(M[i, i] * s[i] / phi)
+        if excitation[i] > 0:
+            tau[i] += excitation[i] * np.sin(excitation[q.shape[0] + i] * t)
     log = np.array([e[0], e[1], e[2], np.sqrt(np.sum(e * e)), np.sqrt(np.sum(s * s)),
                     0.5 * np.sum(s * Ms)])
     return tau, M, C, log, rotation_quaternion(R_d)

@@ -510,7 +510,7 @@ def pack_lhs(ranges: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
         reference: [alpha0 [rad], amplitudes (m) [rad], omegas (m) [rad/s]]
             (lhs_control).
         gains: [Kd, Lambda, epsilon, eta, layer_per_chi] (lhs_control).
-        excitation: [amplitude [N m], omegas (n) [rad/s]] (lhs_control).
+        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] (lhs_control).
 
     Returns:
         [number of potential points, number of reference terms, vec(ranges),
@@ -557,7 +557,7 @@ def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: fl
     reference = packed[o:o + 1 + 2 * terms]
     o += 1 + 2 * terms
     gains = packed[o:o + 5]
-    excitation = packed[o + 5:o + 6 + n]
+    excitation = packed[o + 5:o + 5 + 2 * n]
     tau, log, M, C = lhs_control(t, theta0, q, qdot, chi, coefficients, ranges,
                                  geometry, link_of,
                                  fraction, radius, potential_gains, reference, gains,
@@ -637,7 +637,7 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
         reference: [alpha0 [rad], amplitudes (m) [rad], omegas (m) [rad/s]] of
             alpha_d(t) = alpha0 + sum_j a_j sin(omega_j t).
         gains: [Kd, Lambda, epsilon, eta, layer_per_chi] (5).
-        excitation: [amplitude [N m], omegas (n) [rad/s]] of tau_pe(t)
+        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] of tau_pe(t)
             (amplitude 0: off).
 
     Returns:
@@ -691,8 +691,8 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
         for j in range(n):
             tau[i] += M[i, j] * nu_dot[j] + C[i, j] * nu[j]
             V += 0.5 * s[i] * M[i, j] * s[j]
-        if excitation[0] > 0:
-            tau[i] += excitation[0] * np.sin(excitation[1 + i] * t)
+        if excitation[i] > 0:
+            tau[i] += excitation[i] * np.sin(excitation[n + i] * t)
     log = np.empty(n + 4)
     log[:n] = s
     log[n], log[n + 1], log[n + 2], log[n + 3] = alpha_error, alpha_d, V, U
@@ -706,8 +706,9 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
     """One port-observer sample (PortObserver) at joint state (q, qdot).
 
     qddot = (qdot(k) - qdot(k-1)) / h, qdot_mid = (qdot(k) + qdot(k-1)) / 2,
-    tau_obs = M qddot + C' qdot_mid + noise; port_sample = [q, p = M qdot_mid,
-    r], r <- r + a ([qdot_mid, u, tau_obs] - r).
+    tau_obs = M qddot + C' qdot_mid + b qdot_mid + noise (b the LHS model's joint
+    damping); port_sample = [q, p = M qdot_mid, r], r <- r + a ([qdot_mid, u,
+    tau_obs] - r).
 
     Args:
         q: The joint angles [rad] (n).
@@ -716,7 +717,7 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
         model: [vec(M), vec(C')] (2 n^2, row-major).
         u: The command held over the interval [N m] (n).
         noise: The measurement noise on tau_obs [N m] (n).
-        constants: [h [s], anti-alias factor a].
+        constants: [h [s], anti-alias factor a, b (n) [N m s/rad]].
 
     Returns:
         [tau_obs (n), qdot(k) (n), port_sample (5 n)]."""
@@ -725,7 +726,8 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
     M = model[:n * n].reshape(n, n)
     C = model[n * n:].reshape(n, n)
     qdot_mid = 0.5 * (qdot + memory[:n])
-    tau = matvec(M, (qdot - memory[:n]) / h) + matvec(C, qdot_mid) + noise
+    tau = (matvec(M, (qdot - memory[:n]) / h) + matvec(C, qdot_mid)
+           + constants[2:2 + n] * qdot_mid + noise)
     out = np.empty(7 * n)
     out[:n] = tau
     out[n:2 * n] = qdot
@@ -753,7 +755,8 @@ def observer_samples(trials: int, q: np.ndarray, qdot: np.ndarray, memory: np.nd
         model: The trials' [vec(M), vec(C')] (trials 2 n^2).
         u: The trials' commands [N m] (trials n).
         noise: The trials' measurement noise [N m] (trials n).
-        constants: [h [s], anti-alias factor a], every trial's.
+        constants: [h [s], anti-alias factor a, b (n) [N m s/rad]], every
+            trial's.
 
     Returns:
         (the trials' tau_obs [N m], their memories [qdot(k), port_sample]), each

@@ -16,6 +16,7 @@ from pydrake.systems.framework import Context
 from dacph_drake.controllers import build_closed_loop, require_controller
 from dacph_drake.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
+from dacph_drake.loop.threads import single_threaded
 from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
                                         require_one_scenario, save_run)
@@ -173,7 +174,15 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
               meshcat=None) -> List[RunResult]:
     """The run of a batch (one trial: a single run), each trial's result;
     ``checkpoint`` = (wall seconds, save) calls save with the partial result of a
-    single run that often; ``meshcat`` gets a LiveView."""
+    single run that often; ``meshcat`` gets a LiveView. One thread for the
+    numerical libraries throughout (loop.threads)."""
+    with single_threaded():
+        return _SimulateLoop(scenarios, controller, duration, progress, interruptible,
+                             checkpoint, meshcat)
+
+
+def _SimulateLoop(scenarios, controller, duration, progress, interruptible, checkpoint,
+                  meshcat) -> List[RunResult]:
     loop = build_closed_loop(controller, *scenarios)
     live_view = loop.robot.LiveView(loop, meshcat) if meshcat is not None else None
     simulator = loop.CreateSimulator()

@@ -21,8 +21,9 @@ from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameter
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.dynamics.plant import AddClonedArms, ArmCoordinates
-from dacph_drake.scenario import Excitation, Scenario
+from dacph_drake.scenario import ClearancePotential, Excitation, Scenario
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
+from dacph_drake.robots.start_pose import task_singularity
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
@@ -107,8 +108,9 @@ class DescribedRobot:
         self.model = FloatingBaseModel(self.parsed.plant)
         self.num_joints = self.model.num_joints
         require_every_joint_moves_inertia(self.model, arm.description)
-        arm.Validate(len(self.model.parameters.bodies))
-        scenario.ValidateShared(self.num_joints)
+        arm.Validate([body.name() for body in self.model.parameters.bodies])
+        scenario.ValidateShared(self.num_joints,
+                                [joint.name() for joint in arm_joints(self.model)])
         if arm.nominal_inertia_scale:
             self.model.SetInertialParameters(self.model.inertial_parameters * np.repeat(
                 arm.nominal_inertia_scale, PER_BODY))
@@ -178,6 +180,11 @@ class DescribedRobot:
         if reason:
             raise ConfigError(f"q0 = {list(self.scenario.q0)}: {reason}; allowed: a q0 "
                               "within the limits, or robot.joint_limits: ignore")
+        singular = task_singularity(self.model, self.scenario.q0)
+        if singular:
+            raise ConfigError(f"q0 = {list(self.scenario.q0)}: {singular}; allowed: a "
+                              "q0 away from the task's singularities, or none (a start "
+                              "is then chosen: robots.start_pose.choose_start)")
         require_clear_start(self.scenario.q0, self.Clearance())
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
@@ -269,10 +276,7 @@ class DescribedRobot:
 
         Returns:
             q -> the clearance [m]."""
-        measure = BaseClearancePotential(parsed=self.parsed, model=self.model, gain=0.0,
-                                         margin=CONTACT_QUERY,
-                                         query_distance=CONTACT_QUERY)
-        return lambda q: measure.Evaluate(q, _BASE_AT_REST).min_distance
+        return link_base_clearance(self.parsed, self.model, CONTACT_QUERY)
 
     def LiveView(self, loop: "ClosedLoop", meshcat: Meshcat) -> "viewers.LiveView":
         """Makes a viewers.LiveView drawing the loop's ground truth.
@@ -422,6 +426,43 @@ class DescribedRobot:
                                                  gains.damping_rate),
             settings={"inf_lambda_min_M": lambda_min_M,
                       "sup_max_diagonal_M": max_diagonal_M})
+
+
+def link_base_clearance(parsed: ParsedDescription, model: FloatingBaseModel,
+                        query_distance: float = 1.0) -> Callable[[np.ndarray], float]:
+    """The smallest signed distance between a link's collision geometry and the
+    base's, as the clearance potential measures it (with its own contexts).
+
+    Args:
+        parsed: The arm's parsed description.
+        model: Its model.
+        query_distance: How far the distance is measured [m] (inf beyond).
+
+    Returns:
+        q -> the clearance [m]."""
+    measure = BaseClearancePotential(parsed=parsed, model=model, gain=0.0,
+                                     margin=query_distance, query_distance=query_distance)
+    return lambda q: measure.Evaluate(q, _BASE_AT_REST).min_distance
+
+
+def null_space_rate(parsed: ParsedDescription, model: FloatingBaseModel,
+                    potential: ClearancePotential
+                    ) -> Optional[Callable[[np.ndarray], float]]:
+    """The clearance potential's null-space rate ||xi|| = eta ||grad U||.
+
+    Args:
+        parsed: The arm's parsed description.
+        model: Its model.
+        potential: The robot's potential settings (robot.potential).
+
+    Returns:
+        q -> ||xi|| [rad/s], or None with a zero gain or eta."""
+    if potential.gain <= 0 or potential.eta <= 0:
+        return None
+    measure = BaseClearancePotential(parsed=parsed, model=model, gain=potential.gain,
+                                     margin=potential.margin)
+    return lambda q: potential.eta * float(np.linalg.norm(
+        measure.Evaluate(q, _BASE_AT_REST).gradient))
 
 
 def _RequireOneTree(trials) -> None:

@@ -4,8 +4,10 @@ so nq = nv + 1), every revolute joint of the arm is actuated, gravity is zero.
 
 The project ships its own descriptions (Drake's bundled models are fetched from the
 internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
+import difflib
 import logging
 import os
+import re
 import sysconfig
 from pathlib import Path
 from typing import Optional, Tuple, Union
@@ -22,6 +24,8 @@ from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PrismaticJoint,
 from pydrake.systems.framework import Context, DiagramBuilder
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_xacro,
+                                                   without_duplicate_materials)
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
@@ -50,6 +54,8 @@ class _EachWarningOnce(logging.Filter):
 
 logging.getLogger("drake").addFilter(_EachWarningOnce())
 logging.getLogger(__name__).addFilter(_EachWarningOnce())
+# The description formats Drake's parser reads: URDF, SDF and MJCF (MuJoCo's .xml).
+DESCRIPTION_SUFFIXES = (".urdf", ".sdf", ".xml")
 # scripts/make_spatial_models.py writes them.
 SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
                   "satellite_6dof": MODELS / "satellite_6dof.urdf"}
@@ -84,10 +90,13 @@ def robot_description(name_or_path: Union[str, Path],
         path = Path(package_map.GetPath(package)) / rest
     else:
         path = Path(name_or_path)
-    if path.suffix not in (".urdf", ".sdf") or not path.is_file():
+    if path.name.endswith(".xacro") and path.is_file():
+        refuse_xacro(path, "")
+    if path.suffix not in DESCRIPTION_SUFFIXES or not path.is_file():
         raise ConfigError(f"robot description {text!r}: no such .urdf or .sdf file; "
                           f"allowed: a file, or one of {', '.join(SPATIAL_ROBOTS)}, or "
-                          "a package:// URI of a file")
+                          "a package:// URI of a file (.urdf, .sdf, or MuJoCo's MJCF "
+                          ".xml)")
     return path
 
 
@@ -205,17 +214,22 @@ def PopulateFromDescription(plant: MultibodyPlant,
         parser = Parser(plant)
         path = robot_description(arm.description,
                                  package_map_of(arm, parser.package_map()))
-        converted = (urdf_with_obj_meshes(path, parser.package_map())
-                     if path.suffix == ".urdf" else None)
+        converted = None
+        if path.suffix == ".urdf":
+            text = path.read_text(encoding="utf-8")
+            refuse_xacro(path, text)
+            converted = urdf_with_obj_meshes(path, parser.package_map(),
+                                             without_duplicate_materials(text, path)[0])
         efforts = (_UrdfEffortLimits(path) if path.suffix == ".urdf"
                    and arm.effort_limits == "saturate" else {})
         try:
-            instances = (parser.AddModels(str(path)) if converted is None
-                         else parser.AddModelsFromString(converted, "urdf"))
+            with parser_warnings_once(path):
+                instances = (parser.AddModels(str(path)) if converted is None
+                             else parser.AddModelsFromString(converted, "urdf"))
             if arm.base.mass > 0:
                 _MountOnBase(plant, instances, arm.base)
         except RuntimeError as e:
-            raise ConfigError(f"{path}: {str(e).splitlines()[0]}") from e
+            raise ConfigError(f"{path}: {_DrakeMessage(e, path)}") from e
         _LockJoints(plant, arm.locked_joints, path)
     moving = [plant.get_joint(i) for i in plant.GetJointIndices()
               if plant.get_joint(i).num_velocities() > 0]
@@ -247,6 +261,12 @@ def PopulateFromDescription(plant: MultibodyPlant,
             logging.getLogger(__name__).warning(
                 "%s: the joint damping of %s is set to zero (robot.joint_damping: zero)",
                 path, ", ".join(joint.name() for joint in damped))
+
+
+def _DrakeMessage(error: RuntimeError, path: Path) -> str:
+    """The first line of a parser error, located in the user's file rather than in
+    Drake's <literal-string>.urdf (the parsed text keeps the file's lines)."""
+    return re.sub(r"<literal-string>\.urdf", path.name, str(error).splitlines()[0])
 
 
 def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
@@ -357,8 +377,13 @@ def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path)
                 "last link)")
         return
     if not plant.HasFrameNamed(end_effector.frame):
+        frames = [plant.get_body(BodyIndex(i)).name() for i in range(1, plant.num_bodies())
+                  if plant.get_body(BodyIndex(i)).name() != "base"]
+        close = difflib.get_close_matches(end_effector.frame, frames, n=1)
         raise ConfigError(f"robot.end_effector.frame = {end_effector.frame!r} is not a "
-                          f"frame of {path}; allowed: one of its frames (its links')")
+                          f"frame of {path}"
+                          + (f" (did you mean {close[0]!r}?)" if close else "")
+                          + f"; allowed: one of its link frames: {', '.join(frames)}")
     if plant.HasFrameNamed(END_EFFECTOR):
         raise ConfigError(f"robot.end_effector.frame = {end_effector.frame!r} with "
                           f"{path}, which has its own frame {END_EFFECTOR!r}; allowed: "

@@ -30,29 +30,33 @@ _MESH = re.compile(r'(<mesh\s[^>]*filename\s*=\s*")([^"]+)(")')
 _COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
 
 
-def urdf_with_obj_meshes(path: Path, package_map: PackageMap) -> Optional[str]:
+def urdf_with_obj_meshes(path: Path, package_map: PackageMap,
+                         text: Optional[str] = None) -> Optional[str]:
     """A URDF's text with its meshes converted as the module docstring's rule says.
 
     Args:
         path: The URDF file.
         package_map: Resolves its package:// mesh URIs.
+        text: The file's text as read so far (default: the file's; a text that
+            differs from the file's is always returned, to be parsed as a string).
 
     Returns:
         The text with its STL meshes and its collision .dae meshes replaced by
             converted OBJs and its relative mesh paths made absolute, or None when it
-            names no mesh to convert.
+            names no mesh to convert and is the file's own.
 
     Raises:
         ConfigError: A mesh names an unknown package, or cannot be read or
             converted (naming it)."""
-    text = path.read_text(encoding="utf-8")
+    original = path.read_text(encoding="utf-8")
+    text = original if text is None else text
     collision = [match.span() for match in _COLLISION.finditer(text)]
 
     def converted(match) -> bool:
         suffix = Path(match.group(2)).suffix.lower()
         return suffix == ".stl" or (suffix == ".dae" and any(
             start <= match.start() < end for start, end in collision))
-    if not any(converted(match) for match in _MESH.finditer(text)):
+    if text == original and not any(converted(match) for match in _MESH.finditer(text)):
         return None
 
     def replace(match):

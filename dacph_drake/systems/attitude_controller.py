@@ -44,11 +44,15 @@ class AttitudeController(LeafSystem):
         e   = attitude_error(R_WE, R_d(t)),   D = angular rows of the end effector's GJM
         nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
         s   = qdot - nu
-        tau = M nu_dot + C' nu - damping_rate M s - chi tanh(diag(M) s / phi)
+        tau = M nu_dot + C' nu + b nu - damping_rate M s - chi tanh(diag(M) s / phi)
               + tau_pe(t),   phi = epsilon + chi / boundary_rate
 
-    so that V = s^T M s / 2 has dV/dt = -2 damping_rate V - chi s^T tanh(...) + s^T
-    (e_tau + tau_pe) (Mdot - 2C' skew), with chi from input ``chi`` (the RHS loop's
+    with b the description's joint damping (the model's joint_damping), which the
+    LHS model holds as it holds M: the port observer adds b qdot to the port
+    torque, so V = s^T M s / 2 has dV/dt = -2 damping_rate V - s^T b s - chi s^T
+    tanh(...) + s^T (e_tau + tau_pe) (Mdot - 2C' skew); the heavy damping of a
+    light wrist (xArm7: 2 N m s/rad on 1e-4 kg m^2) then damps s instead of
+    leaving the RHS loop a torque b qdot to supply. chi from input ``chi`` (the RHS loop's
     bound on ||e_tau|| in DAC, a constant in the baseline) and tau_pe the
     learner's excitation (``excitation``, scenario.Excitation). nu_dot
     is nu's exact rate along the current motion (joints at qdot, the base turning
@@ -95,11 +99,11 @@ class AttitudeController(LeafSystem):
         model = trials[0].model
         n, count = model.num_joints, len(trials)
         self._n, self._reference, self._gains, self._eta = n, reference, gains, eta
-        self._excitation = np.concatenate([[excitation.amplitude],
+        self._excitation = np.concatenate([excitation.Amplitudes(n),
                                            2 * np.pi * excitation.Frequencies(n)])
-        self._gain_arguments = np.array([gains.Lambda, gains.task_damping,
-                                         gains.damping_rate, gains.epsilon,
-                                         gains.boundary_rate], float)
+        self._gain_arguments = np.concatenate([
+            [gains.Lambda, gains.task_damping, gains.damping_rate, gains.epsilon,
+             gains.boundary_rate], model.joint_damping]).astype(float)
         end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         node, X_CE = model.FrameNode(end_effector)
         self._end_effector_node = (node, np.ascontiguousarray(X_CE[:3, :3]))

@@ -93,7 +93,7 @@ class LhsController(LeafSystem):
         super().__init__()
         n = trials[0].model.num_joints
         self._n, self._trials = n, len(trials)
-        excitation_arguments = np.concatenate([[excitation.amplitude],
+        excitation_arguments = np.concatenate([excitation.Amplitudes(n),
                                                2 * np.pi * excitation.Frequencies(n)])
         # The kernel's constant arguments (kernels.loop.lhs_sample), per trial.
         self._coefficients = np.array([trial.model.trigonometric_representation[0]

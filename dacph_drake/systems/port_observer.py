@@ -9,12 +9,15 @@ from dacph_drake.kernels.loop import observer_samples
 
 
 class PortObserver(LeafSystem):
-    """tau_obs = M(q) qddot + C'(q, qdot) qdot (+ seeded Gaussian measurement noise)
-    from the measured joint rates, over each sample interval [t_k-1, t_k] of length
-    h = ``sample_period`` (the RHS period):
+    """tau_obs = M(q) qddot + C'(q, qdot) qdot + b qdot (+ seeded Gaussian
+    measurement noise) from the measured joint rates, over each sample interval
+    [t_k-1, t_k] of length h = ``sample_period`` (the RHS period):
 
         qddot = (qdot(t_k) - qdot(t_k-1)) / h,   qdot_mid = (qdot(t_k) + qdot(t_k-1)) / 2
-        tau_obs(k) = M qddot + C' qdot_mid
+        tau_obs(k) = M qddot + C' qdot_mid + b qdot_mid
+
+    b is the description's joint damping (``joint_damping``), part of the LHS
+    model like M: the port's RHS B~ u - D~ qdot + d is what acts beyond it.
 
     the port torque at the interval's midpoint (second-order accurate: the mean
     of the port torque over the interval, during which the plant received the held
@@ -43,10 +46,13 @@ class PortObserver(LeafSystem):
         noise_std: The standard deviation of the measurement noise on tau_obs [N m].
         seeds: Each trial's noise seed.
         anti_alias_cutoff: The anti-alias filter's cutoff [Hz] (0: none).
+        joint_damping: b (n) [N m s/rad] (the LHS model's ReducedModel.joint_damping;
+            none: zero).
     """
 
     def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,
-                 seeds: Sequence[int], anti_alias_cutoff: float = 0.0):
+                 seeds: Sequence[int], anti_alias_cutoff: float = 0.0,
+                 joint_damping: Sequence[float] = ()):
         super().__init__()
         n, trials = num_joints, len(seeds)
         self._n, self._trials = n, trials
@@ -60,7 +66,9 @@ class PortObserver(LeafSystem):
         self._reduced_model = self.DeclareVectorInputPort("reduced_model",
                                                           2 * n * n * trials)
         self._u = self.DeclareVectorInputPort("u", n * trials)
-        self._constants = np.array([sample_period, self._anti_alias])
+        self._constants = np.concatenate([
+            [sample_period, self._anti_alias],
+            np.asarray(joint_damping, float) if len(joint_damping) else np.zeros(n)])
         self._no_noise, self._no_u = np.zeros(n * trials), np.zeros(n * trials)
         self._tau_index = self.DeclareDiscreteState(n * trials)
         # Memory: per trial [qdot(k-1) (n), port_sample (5 n)].

@@ -6,7 +6,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
-from dacph_drake.dynamics.plant import effort_limits, joint_damping, trial_coordinates
+from dacph_drake.dynamics.plant import effort_limits, trial_coordinates
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
 from dacph_drake.kernels.loop import (pack_true_rhs, spatial_true_torques, stack_packs,
                                       true_matrices)
@@ -30,9 +30,9 @@ class SpatialTrueRhs(TrueRhsSystem):
     time, so it adds no delay; it feeds the plant's actuation input. u is clipped
     to the actuators' effort limits (scenario.DescribedArm.effort_limits; output
     ``saturated``: 1 for each joint whose command was clipped). Output
-    ``true_matrices`` = [vec(B~) (row-major), diag(D~)] per trial for the metrics,
-    D~ with the description's joint damping, which the plant applies itself
-    (scenario.DescribedArm.joint_damping "keep"; zero otherwise). ``plant`` is
+    ``true_matrices`` = [vec(B~) (row-major), diag(D~)] per trial for the metrics:
+    the port's, beyond the description's joint damping b, which the plant applies
+    itself and the LHS model knows (PortObserver, AttitudeController). ``plant`` is
     the batch's ground truth (finalized), ``arms`` each trial's arm as a plant of
     its own (its inertias the defaults), ``uncertainties`` and ``phases`` each
     trial's.
@@ -53,8 +53,6 @@ class SpatialTrueRhs(TrueRhsSystem):
         self._indices = np.array([np.concatenate([
             c.base_q, nq + c.base_v, c.joint_q, nq + c.joint_v]) for c in coordinates])
         n = coordinates[0].num_joints
-        self._joint_damping = np.array([joint_damping(plant, c.joint_v)
-                                        for c in coordinates])
         self._effort_limit = np.array([effort_limits(plant, c.joint_v)
                                        for c in coordinates])
         trees = [KinematicTree.FromPlant(arm) for arm in arms]
@@ -100,5 +98,5 @@ class SpatialTrueRhs(TrueRhsSystem):
                                *(inertia[i] for inertia in self._inertias), arm[:7],
                                arm[7:13], q, qdot)
             B, D = true_matrices(t, q, p, *uncertainty)
-            matrices += [B.reshape(-1), D + self._joint_damping[i]]
+            matrices += [B.reshape(-1), D]
         output.SetFromVector(np.concatenate(matrices))

@@ -1,0 +1,131 @@
+"""Descriptions as their makers ship them: what Drake's parser refuses or repeats,
+made into one line per kind naming the user's file.
+
+- A URDF that defines one material name more than once (Kinova's j2s6s200 defines
+  'carbon_fiber' in every link's visual): Drake refuses the file. The first
+  definition is kept and every later one is read as a reference to it when it is
+  the same, or renamed NAME__K when its colour or texture differs; each line of
+  the file keeps its number.
+- A xacro macro file (a .xacro name, or a URDF with xacro: elements) is refused
+  with the command that expands it.
+- Drake's parser warnings (unsupported tags such as safety_controller or
+  transmission details, one per occurrence) are collected while a description is
+  parsed and logged once per kind and file, with the first line and the count,
+  naming the user's file instead of Drake's <literal-string>.urdf."""
+import logging
+import re
+from collections import OrderedDict
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator, List, Tuple
+
+from dacph_drake.errors import ConfigError
+
+_MATERIAL = re.compile(r'<material\s+name\s*=\s*"([^"]*)"\s*>(.*?)</material>', re.S)
+_LOCATION = re.compile(r"^(?:[^:\s]*<literal-string>[^:]*|[^:\s]+\.(?:urdf|sdf|xml)):"
+                       r"(\d+):\s*(?:warning:\s*)?")
+_QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")     # names and values within a kind
+_logger = logging.getLogger(__name__)
+_reported: set = set()
+
+
+def refuse_xacro(path: Path, text: str) -> None:
+    """Refuses a xacro macro file, naming the command that expands it.
+
+    Args:
+        path: The description's path.
+        text: Its text.
+
+    Raises:
+        ConfigError: The file is a xacro file."""
+    if path.name.endswith(".xacro") or "<xacro:" in text:
+        expanded = path.name.removesuffix(".xacro")
+        expanded = expanded if expanded.endswith(".urdf") else expanded + ".urdf"
+        raise ConfigError(
+            f"robot.description {str(path)!r} is a xacro macro file, which Drake does "
+            f"not expand; allowed: the URDF it expands to, made with `xacro {path} -o "
+            f"{path.parent / expanded}` (pip install xacro), named in robot.description")
+
+
+def without_duplicate_materials(text: str, path: Path) -> Tuple[str, bool]:
+    """A URDF's text with each material name defined once (module docstring).
+
+    Args:
+        text: The URDF's text.
+        path: Its path (named in the note).
+
+    Returns:
+        (text, changed): the text, every line at its number, and whether a
+            definition was changed."""
+    first = {}
+    repeated: "OrderedDict[str, List[int]]" = OrderedDict()
+    renamed = {}
+
+    def replace(match):
+        name, body = match.group(1), match.group(2)
+        if name not in first:
+            first[name] = body.strip()
+            return match.group(0)
+        line = text.count("\n", 0, match.start()) + 1
+        repeated.setdefault(name, []).append(line)
+        blank = "\n" * match.group(0).count("\n")
+        if body.strip() == first[name] or not body.strip():
+            return f'<material name="{name}"/>' + blank
+        renamed[name] = renamed.get(name, 1) + 1
+        return (f'<material name="{name}__{renamed[name]}">'
+                f'{" ".join(body.split())}</material>' + blank)
+    changed = _MATERIAL.sub(replace, text)
+    for name, lines in repeated.items():
+        _Once(f"{path}: material {name!r} is defined again on {len(lines)} lines "
+              f"({_Lines(lines)}): "
+              + ("read as the first where the same, renamed where its colour differs"
+                 if name in renamed else "each read as the first"))
+    return changed, bool(repeated)
+
+
+@contextmanager
+def parser_warnings_once(path: Path) -> Iterator[None]:
+    """Collects Drake's parser warnings while a description is parsed, then logs
+    one line per kind (module docstring).
+
+    Args:
+        path: The description's path (named in each line).
+
+    Yields:
+        Nothing; the warnings are logged on exit."""
+    drake = logging.getLogger("drake")
+    kinds: "OrderedDict[str, list]" = OrderedDict()    # kind -> [first text, lines]
+
+    class Collect(logging.Filter):
+        def filter(self, record) -> bool:
+            message = record.getMessage()
+            location = _LOCATION.match(message)
+            line = int(location.group(1)) if location else 0
+            text = message[location.end():] if location else message
+            kind = _QUOTED.sub("'...'", text)
+            kinds.setdefault(kind, [text, []])[1].append(line)
+            return False
+    collect = Collect()
+    drake.addFilter(collect)
+    try:
+        yield
+    finally:
+        drake.removeFilter(collect)
+        for first, lines in kinds.values():
+            where = f"{path}:{lines[0]}" if lines[0] else str(path)
+            more = (f" ({len(lines)} lines of this kind: {_Lines(lines)})"
+                    if len(lines) > 1 else "")
+            _Once(f"{where}: {first}{more}")
+
+
+def _Lines(lines: List[int]) -> str:
+    shown = ", ".join(str(line) for line in lines[:6])
+    return shown + (", ..." if len(lines) > 6 else "")
+
+
+def _Once(message: str) -> None:
+    """Logs a warning once per process (a run parses its description several times:
+    the ground truth, the controller's model, the clearance potential, each trial)."""
+    if message not in _reported:
+        _reported.add(message)
+        _logger.warning(message)

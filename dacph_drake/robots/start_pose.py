@@ -1,0 +1,292 @@
+"""Where a described arm starts and what the attitude task asks of it.
+
+A kinematic rehearsal of the task (ReferenceRehearsal): from q0 the joints follow
+the task's law without dynamics,
+
+    qdot = D^+ (omega_d(t) - Lambda e),    D = the generalized Jacobian's angular
+                                           rows (docs/equations.md E5-E9),
+
+the base turning as zero momentum implies, for one warm-up and one reference
+period. Its joint momenta p = M(q) qdot and their rates are the scales the sizing
+rule needs (arm_defaults): the coupled inertia M_jk qdot_k, not M_jj alone,
+decides how far a joint's momentum goes. Its excursion decides whether a start
+keeps every joint within its limits. choose_start picks the start a file does not
+give; task_singularity names the joints of a start at which the task has no
+solution."""
+from dataclasses import dataclass
+from typing import Callable, List, Optional, Sequence
+
+import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RotationMatrix
+from pydrake.multibody.tree import Frame
+
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.plant import END_EFFECTOR
+from dacph_drake.scenario import EndEffectorAttitude
+from dacph_drake.tasks.attitude import attitude_error, damped_pseudo_inverse
+
+# The smallest singular value of D (rad/s of the end effector per rad/s of the
+# joints) a start must have: below it, one end-effector rate asks for joint rates
+# 1 / SINGULAR_BOUND times larger. REFUSED_SINGULAR_VALUE: a given q0 closer than this
+# to a singularity is refused.
+SINGULAR_BOUND, REFUSED_SINGULAR_VALUE = 0.2, 0.02
+LIMIT_MARGIN = 0.1          # [-] share of a joint's range kept free at each end
+CLEARANCE_BOUND = 0.05      # [m] link-base clearance a chosen start keeps
+CANDIDATES = 256            # starts sampled by choose_start
+REHEARSED = 24              # of which those with the largest singular value rehearsed
+IDLE_NULL_SPACE_RATE = 1e-3     # [rad/s] the clearance potential's ||xi|| counted as idle
+IDLE_CHECK_STRIDE = 25          # rehearsal samples between checks of it (0.5 s)
+REHEARSAL_STEP = 0.02       # [s]
+
+
+@dataclass
+class ReferenceRehearsal:
+    """The task followed kinematically from a start (module docstring).
+
+    Attributes:
+        time: The samples' times (T) [s].
+        q: The joint angles at each sample (T x n) [rad].
+        p: The joint momenta M(q) qdot (T x n) [kg m^2/s].
+        p_rate: Their time derivatives (T x n) [N m].
+        singular_value: The smallest singular value of D at each sample (T)."""
+    time: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    p_rate: np.ndarray
+    singular_value: np.ndarray
+
+
+def end_effector_frame(model: FloatingBaseModel) -> Frame:
+    """The plant frame the attitude task tracks.
+
+    Args:
+        model: The arm's model.
+
+    Returns:
+        Its END_EFFECTOR frame."""
+    return model.plant.GetFrameByName(END_EFFECTOR)
+
+
+def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
+                  base_positions: Optional[np.ndarray] = None) -> np.ndarray:
+    """D(q), the generalized Jacobian's angular rows (3 x n).
+
+    Args:
+        model: The arm's model.
+        q: The joint angles [rad].
+        base_positions: The base joint's coordinates (default: the identity pose).
+
+    Returns:
+        D (3 x n)."""
+    return model.GeneralizedJacobian(np.asarray(q, float), end_effector_frame(model),
+                                     base_positions=base_positions)[:3]
+
+
+def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAttitude,
+             duration: float) -> ReferenceRehearsal:
+    """Follows the task's reference kinematically from q0 (module docstring).
+
+    Args:
+        model: The arm's model.
+        q0: The start [rad].
+        task: The task (its reference, Lambda and task_damping).
+        duration: How long [s].
+
+    Returns:
+        The rehearsal."""
+    frame, reference, gains = end_effector_frame(model), task.reference, task.gains
+    q = np.asarray(q0, float).copy()
+    base = RotationMatrix()
+    R_d0 = reference.Start(RotationMatrix(model.FramePose(frame, model.Evaluate(
+        q, derivatives=False))))
+    steps = max(int(np.ceil(duration / REHEARSAL_STEP)), 2)
+    qs, ps, sigmas = [], [], []
+    for k in range(steps + 1):
+        positions = np.concatenate([base.ToQuaternion().wxyz(), np.zeros(3)])
+        evaluation = model.Evaluate(q, derivatives=False)
+        R_WE = RotationMatrix(model.FramePose(frame, evaluation, positions))
+        R_d, omega_d = reference.At(R_d0, k * REHEARSAL_STEP)
+        D = model.GeneralizedJacobian(q, frame, base_positions=positions,
+                                      evaluation=evaluation)[:3]
+        qdot = damped_pseudo_inverse(D, gains.task_damping) @ (
+            omega_d - gains.Lambda * attitude_error(R_WE, R_d))
+        qs.append(q.copy())
+        ps.append(evaluation[0] @ qdot)
+        sigmas.append(np.linalg.svd(D, compute_uv=False)[-1])
+        omega_base = model.BaseVelocity(q, qdot, positions)[:3]
+        angle = np.linalg.norm(omega_base) * REHEARSAL_STEP
+        if angle > 0:
+            base = RotationMatrix(AngleAxis(angle, omega_base / np.linalg.norm(
+                omega_base))) @ base
+        q = q + REHEARSAL_STEP * qdot
+    p = np.array(ps)
+    return ReferenceRehearsal(time=REHEARSAL_STEP * np.arange(len(qs)),
+                              q=np.array(qs), p=p,
+                              p_rate=np.gradient(p, REHEARSAL_STEP, axis=0),
+                              singular_value=np.array(sigmas))
+
+
+def joint_limits(model: FloatingBaseModel) -> tuple:
+    """The position limits of the arm's joints.
+
+    Args:
+        model: The arm's model.
+
+    Returns:
+        (lower, upper) [rad], +-inf where a joint has none."""
+    plant, joint_q = model.plant, model.coordinates.joint_q
+    return (plant.GetPositionLowerLimits()[joint_q],
+            plant.GetPositionUpperLimits()[joint_q])
+
+
+def _allowed_box(model: FloatingBaseModel) -> tuple:
+    """The range a start samples each joint from: its limits less LIMIT_MARGIN of
+    the range at each end, [-pi, pi] for a joint without limits (or with a range
+    over 2 pi)."""
+    lower, upper = joint_limits(model)
+    wide = ~(np.isfinite(lower) & np.isfinite(upper)) | (upper - lower > 2 * np.pi)
+    margin = LIMIT_MARGIN * (upper - lower)
+    low = np.where(wide, -np.pi, lower + margin)
+    high = np.where(wide, np.pi, upper - margin)
+    return low, high
+
+
+def within_limits(model: FloatingBaseModel, q: np.ndarray) -> bool:
+    """Whether joint angles keep LIMIT_MARGIN of each joint's range free of its
+    limits (joints without limits: always).
+
+    Args:
+        model: The arm's model.
+        q: Joint angles, one sample (n) or many (k x n) [rad].
+
+    Returns:
+        True when every sample does."""
+    lower, upper = joint_limits(model)
+    finite = np.isfinite(lower) & np.isfinite(upper)
+    margin = np.where(finite, LIMIT_MARGIN * (upper - lower), 0.0)
+    q = np.atleast_2d(q)
+    return bool(np.all((q >= lower + margin) & (q <= upper - margin)))
+
+
+def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
+                 clearance: Callable[[np.ndarray], float],
+                 null_space_rate: Optional[Callable[[np.ndarray], float]],
+                 duration: float) -> np.ndarray:
+    """The start a scenario file does not give.
+
+    Candidates: the middle of the limits and CANDIDATES quasi-random points of the
+    joints' ranges (each joint's limits less LIMIT_MARGIN of its range; [-pi, pi]
+    without limits), in a fixed order. A start qualifies when D's smallest singular
+    value is above SINGULAR_BOUND there and along its rehearsal of the task, the
+    rehearsal keeps every joint within that margin of its limits, and its links are
+    CLEARANCE_BOUND clear of the base (or half the best clearance of the
+    candidates, where a link next to the root never gets that far: a UR5's
+    shoulder sits 3 cm above its mount). The REHEARSED candidates whose clearance
+    potential pushes least at the start (its null-space rate ||xi||, counted as
+    idle below IDLE_NULL_SPACE_RATE), then with the largest singular value, are
+    rehearsed; of those that qualify, the one whose potential pushes least along
+    the rehearsal (a potential pushing at 0.009 rad/s while the task moves cost
+    the UR5 a 300x larger error), then with the largest smallest singular value
+    along it.
+
+    Args:
+        model: The arm's model.
+        task: The task.
+        clearance: q -> the link-base clearance [m].
+        null_space_rate: q -> ||xi|| of the clearance potential [rad/s] (None: no
+            potential).
+        duration: How long the rehearsal runs [s].
+
+    Returns:
+        q0 [rad].
+
+    Raises:
+        ValueError: No candidate qualifies (the message says which test failed
+            most)."""
+    low, high = _allowed_box(model)
+    n = model.num_joints
+    points = _halton(CANDIDATES, n)
+    candidates = np.vstack([0.5 * (low + high), low + points * (high - low)])
+    sigma = np.array([np.linalg.svd(task_jacobian(model, q), compute_uv=False)[-1]
+                      for q in candidates])
+    best, best_key = None, None
+    failures = {"limits": 0, "singular": 0, "clearance": 0}
+    regular = np.flatnonzero(sigma >= SINGULAR_BOUND)
+    failures["singular"] = len(candidates) - len(regular)
+    clearances = np.array([clearance(candidates[k]) for k in regular])
+    bound = min(CLEARANCE_BOUND, 0.5 * float(np.max(clearances, initial=0.0)))
+    clear = regular[clearances > max(bound, 0.0)]
+    failures["clearance"] = len(regular) - len(clear)
+    pushing = np.array([null_space_rate(candidates[k]) if null_space_rate else 0.0
+                        for k in clear])
+    order = sorted(range(len(clear)), key=lambda i: (
+        max(pushing[i], IDLE_NULL_SPACE_RATE), -sigma[clear[i]]))
+    for k in clear[order[:REHEARSED]]:
+        q = candidates[k]
+        rehearsal = rehearse(model, q, task, duration)
+        if not within_limits(model, rehearsal.q):
+            failures["limits"] += 1
+            continue
+        smallest = float(np.min(rehearsal.singular_value))
+        if smallest < SINGULAR_BOUND:
+            failures["singular"] += 1
+            continue
+        push = (0.0 if null_space_rate is None else max(
+            null_space_rate(x) for x in rehearsal.q[::IDLE_CHECK_STRIDE]))
+        key = (max(push, IDLE_NULL_SPACE_RATE), -smallest)
+        if best_key is None or key < best_key:
+            best, best_key = q, key
+    if best is None:
+        raise ValueError(f"no start of {len(candidates)} tried qualifies ({failures})")
+    return best.copy()
+
+
+def task_singularity(model: FloatingBaseModel, q0: Sequence[float]
+                     ) -> Optional[str]:
+    """Whether the attitude task is (nearly) singular at q0, and at which joints.
+
+    Args:
+        model: The arm's model.
+        q0: The start [rad].
+
+    Returns:
+        None when D's smallest singular value is at least REFUSED_SINGULAR_VALUE;
+            otherwise a sentence naming the value and the joints whose motion
+            turns the end effector least (the right singular vector's largest
+            entries)."""
+    from dacph_drake.robots.described import arm_joints
+    D = task_jacobian(model, q0)
+    _, sigma, Vt = np.linalg.svd(D)
+    if sigma[-1] >= REFUSED_SINGULAR_VALUE:
+        return None
+    # The joint-rate directions that leave the end effector's attitude (nearly)
+    # still beyond the null space a redundant arm has anyway.
+    direction = Vt[len(sigma) - 1]
+    names = [joint.name() for joint in arm_joints(model)]
+    involved = [names[k] for k in np.argsort(-np.abs(direction))
+                if abs(direction[k]) >= 0.3]
+    return (f"the end effector's attitude is singular there (the task Jacobian's "
+            f"smallest singular value {sigma[-1]:.2g} < {REFUSED_SINGULAR_VALUE:g}): "
+            f"joints {', '.join(repr(name) for name in involved)} turn it about the "
+            "same axis")
+
+
+def _halton(count: int, dimension: int) -> np.ndarray:
+    """The first ``count`` points of the Halton sequence in [0, 1)^dimension."""
+    primes: List[int] = []
+    candidate = 2
+    while len(primes) < dimension:
+        if all(candidate % p for p in primes):
+            primes.append(candidate)
+        candidate += 1
+    points = np.zeros((count, dimension))
+    for d, base in enumerate(primes):
+        for i in range(count):
+            f, r, k = 1.0, 0.0, i + 1
+            while k:
+                f /= base
+                r += f * (k % base)
+                k //= base
+            points[i, d] = r
+    return points

@@ -1,0 +1,218 @@
+"""The zoo: arms as their makers ship them, each from a scenario file of at most six
+lines (run: .venv/bin/python scripts/zoo.py --out results/zoo).
+
+Every manipulator of example-robot-data (Panda, UR3/5/10, Kinova j2s6s200, xArm7,
+Unitree Z1, SO-100, SO-101) and arms of our own with extreme properties (heavy
+joint damping, a tiny wrist, a chain of 9 joints, a heavy tool, a light base:
+URDFs written by this script), each from a file naming only the description, the
+base's mass, the end-effector frame and the locked gripper joints. For each arm,
+in a fresh process each: DAC, dac-nominal (the learning ablation) and the
+model-based baseline through every phase, then `verify` on the DAC run: status,
+RMS attitude error per phase, DAC / baseline in phases 2-3, verify's verdict and
+time, wall time, the derived integration step, and the warning lines the run
+printed. Rows go to OUT/rows.jsonl as they finish (a re-run skips the arms done);
+OUT/table.md is the docs' results page table.
+
+--quick runs the arms named by --arms (default: the CI short version's three) for
+--duration seconds without verify.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from dacph_drake.robots.serial_arm import SerialLink, serial_arm_urdf
+
+EXAMPLE = "package://example-robot-data/robots"
+# name -> (description, end-effector frame, locked joints)
+SHIPPED = {
+    "panda": (f"{EXAMPLE}/panda_description/urdf/panda.urdf", "panda_link8", ""),
+    "ur3": (f"{EXAMPLE}/ur_description/urdf/ur3_robot.urdf", "tool0", ""),
+    "ur5": (f"{EXAMPLE}/ur_description/urdf/ur5_robot.urdf", "tool0", ""),
+    "ur10": (f"{EXAMPLE}/ur_description/urdf/ur10_robot.urdf", "tool0", ""),
+    "kinova_j2s6s200": (f"{EXAMPLE}/kinova_description/robots/kinova.urdf",
+                        "j2s6s200_end_effector", ""),
+    "xarm7": (f"{EXAMPLE}/xarm_description/urdf/xarm7.urdf", "link7", ""),
+    "z1": (f"{EXAMPLE}/z1_description/urdf/z1.urdf", "link06", "jointGripper: 0.0"),
+    "so100": (f"{EXAMPLE}/so_arm_description/urdf/so100.urdf", "gripper",
+              "gripper: 0.0"),
+    "so101": (f"{EXAMPLE}/so_arm_description/urdf/so101.urdf", "gripper_link",
+              "gripper: 0.0"),
+}
+# Arms of our own (robots.serial_arm): (links as (mass [kg], length [m], damping
+# [N m s/rad]), tool mass [kg], base mass [kg]).
+OWN = {
+    "heavy_damping": ([(4.0, 0.4, 20.0), (3.0, 0.35, 20.0), (2.0, 0.3, 10.0),
+                       (1.0, 0.2, 5.0), (0.5, 0.1, 5.0), (0.3, 0.08, 5.0)], 0.0, 200.0),
+    "tiny_wrist": ([(4.0, 0.4, 0.0), (3.0, 0.35, 0.0), (2.0, 0.3, 0.0),
+                    (0.05, 0.03, 0.0), (0.02, 0.02, 0.0), (0.01, 0.02, 0.0)], 0.0, 200.0),
+    "chain9": ([(2.0 * 0.85**k, 0.3 * 0.9**k, 0.0) for k in range(9)], 0.0, 200.0),
+    "heavy_tool": ([(4.0, 0.4, 0.0), (3.0, 0.35, 0.0), (2.0, 0.3, 0.0),
+                    (1.0, 0.2, 0.0), (0.5, 0.1, 0.0), (0.3, 0.08, 0.0)], 5.0, 200.0),
+    "light_base": ([(4.0, 0.4, 0.0), (3.0, 0.35, 0.0), (2.0, 0.3, 0.0),
+                    (1.0, 0.2, 0.0), (0.5, 0.1, 0.0), (0.3, 0.08, 0.0)], 0.0, 20.0),
+}
+QUICK = ("xarm7", "heavy_damping", "z1")
+CONTROLLERS = ("dac", "dac-nominal", "model-based")
+
+CHILD = r"""
+import json, sys, time, io, logging
+stream = io.StringIO()
+handler = logging.StreamHandler(stream)
+logging.getLogger().addHandler(handler)
+from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.analysis.verify import verify_logs
+from dacph_drake.loop.simulate import simulate
+from dacph_drake.scenario_files import load_scenario
+path, duration, with_verify = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1"
+row = {}
+start = time.perf_counter()
+try:
+    scenario = load_scenario(path)
+except Exception as e:
+    print(json.dumps({"error": f"{type(e).__name__}: {e}",
+                      "warnings": stream.getvalue().splitlines()}))
+    sys.exit(0)
+row["load_s"] = time.perf_counter() - start
+row["step"] = scenario.simulator.max_step_size
+row["num_joints"] = len(scenario.q0)
+row["q0"] = [round(x, 3) for x in scenario.q0]
+for controller in ("dac", "dac-nominal", "model-based"):
+    try:
+        result = simulate(scenario, controller,
+                          duration=None if duration <= 0 else duration)
+    except Exception as e:
+        row[controller] = {"error": f"{type(e).__name__}: {e}"}
+        continue
+    metrics = run_metrics(result.logs, scenario)
+    row[controller] = {"status": result.status, "reason": result.reason,
+                       "wall_s": result.wall_time,
+                       "rms": [metrics.get(f"phase{k}.tracking_error_rms")
+                               for k in (1, 2, 3)]}
+    if controller == "dac" and with_verify and result.status == "ok":
+        start = time.perf_counter()
+        report = verify_logs(result.logs, scenario, {"status": result.status,
+                                                    "final_time": result.final_time})
+        row["verify"] = {"ok": report["ok"], "seconds": time.perf_counter() - start,
+                         "failed": [k for k, c in report["checks"].items()
+                                    if not c["ok"]]}
+row["warnings"] = [line for line in stream.getvalue().splitlines() if line.strip()]
+print(json.dumps(row, default=float))
+"""
+
+
+def scenario_file(folder: Path, name: str) -> Path:
+    """The arm's scenario file (at most six lines)."""
+    if name in SHIPPED:
+        description, frame, locked = SHIPPED[name]
+        base = 250.0
+    else:
+        links, tool, base = OWN[name]
+        urdf = folder / f"{name}.urdf"
+        urdf.write_text(serial_arm_urdf(name, [SerialLink(*link) for link in links],
+                                        tool))
+        description, frame, locked = urdf.name, "tool", ""
+    lines = ["robot: !DescribedArm", f"  description: {description}",
+             f"  base: {{mass: {base:g}}}", f"  end_effector: {{frame: {frame}}}"]
+    if locked:
+        lines.append(f"  locked_joints: {{{locked}}}")
+    path = folder / f"{name}.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _cell(value, form="{:.2e}") -> str:
+    return "-" if value is None or value != value else form.format(value)
+
+
+def table(rows) -> str:
+    """The results page's table of the rows (one line per arm)."""
+    lines = ["| arm | n | step [s] | DAC RMS phases 1 / 2 / 3 [rad] | dac-nominal 2 / 3 "
+             "| model-based 2 / 3 | DAC / baseline (2, 3) | verify | warning lines | "
+             "wall DAC [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for row in rows:
+        if "error" in row:
+            lines.append(f"| {row['arm']} | | | refused: {row['error'][:120]} "
+                         "| | | | | | |")
+            continue
+        dac, nominal, base = (row.get(c, {}) for c in CONTROLLERS)
+
+        def rms(run, phases):
+            if "error" in run:
+                return "error"
+            if run.get("status") != "ok":
+                return f"{run.get('status')}: {run.get('reason', '')[:60]}"
+            return " / ".join(_cell(run["rms"][k - 1]) for k in phases)
+        ratio = "-"
+        if dac.get("status") == "ok" and base.get("status") == "ok":
+            ratio = " / ".join(f"{dac['rms'][k] / base['rms'][k]:.3f}" for k in (1, 2))
+        check = row.get("verify")
+        verdict = ("-" if check is None else
+                   f"{'PASS' if check['ok'] else 'FAIL ' + ','.join(check['failed'])} "
+                   f"({check['seconds']:.0f} s)")
+        lines.append(f"| {row['arm']} | {row['num_joints']} | {row['step']:.3g} | "
+                     f"{rms(dac, (1, 2, 3))} | {rms(nominal, (2, 3))} | "
+                     f"{rms(base, (2, 3))} | {ratio} | {verdict} | "
+                     f"{len(row['warnings'])} | {_cell(dac.get('wall_s'), '{:.1f}')} |")
+    return "\n".join(lines) + "\n"
+
+
+def run_arm(folder: Path, name: str, duration: float, with_verify: bool) -> dict:
+    """One arm in a fresh process (one thread for the numerical libraries)."""
+    path = scenario_file(folder, name)
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+           "MKL_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "-c", CHILD, str(path), str(duration),
+                           "1" if with_verify else "0"], capture_output=True, text=True,
+                          cwd=folder, env=env)
+    lines = done.stdout.strip().splitlines()
+    try:
+        row = json.loads(lines[-1])
+    except (IndexError, json.JSONDecodeError):
+        row = {"error": f"exit {done.returncode}: {done.stderr.strip()[-300:]}"}
+    return {"arm": name, "file_lines": len(path.read_text().splitlines()), **row}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--arms", nargs="+", default=None,
+                        help=f"default: all ({', '.join([*SHIPPED, *OWN])}); with "
+                             f"--quick: {', '.join(QUICK)}")
+    parser.add_argument("--out", default="results/zoo", help="folder of rows and table")
+    parser.add_argument("--quick", action="store_true",
+                        help="short runs (--duration), no verify")
+    parser.add_argument("--duration", type=float, default=3.0,
+                        help="[s] of each --quick run")
+    args = parser.parse_args()
+    arms = args.arms or (list(QUICK) if args.quick else [*SHIPPED, *OWN])
+    unknown = [a for a in arms if a not in SHIPPED and a not in OWN]
+    if unknown:
+        parser.error(f"--arms: unknown {unknown}; allowed: {[*SHIPPED, *OWN]}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "files").mkdir(exist_ok=True)
+    rows_path = out / "rows.jsonl"
+    done = {json.loads(line)["arm"]: json.loads(line)
+            for line in rows_path.read_text().splitlines()} if rows_path.exists() else {}
+    for name in arms:
+        if name in done:
+            continue
+        start = time.perf_counter()
+        row = run_arm((out / "files").resolve(), name,
+                      args.duration if args.quick else 0.0, not args.quick)
+        row["total_s"] = time.perf_counter() - start
+        done[name] = row
+        with rows_path.open("a") as f:
+            f.write(json.dumps(row, default=float) + "\n")
+        print(table([row]).splitlines()[-1], flush=True)
+    rows = [done[name] for name in [*SHIPPED, *OWN] if name in done]
+    (out / "table.md").write_text(table(rows))
+    print(table(rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,232 @@
+"""Any arm as its maker ships it (issue 38): a heavily damped arm integrated stably
+through every phase, quirks of real descriptions tolerated with one line per
+kind, SDF and MJCF through the URDF's path, xacro refused with its command, a
+singular start refused by its joints' names, an automatic start within limits
+and clear of the base, errors naming joints and frames, one thread for the
+numerical libraries in a run, and the zoo's short version (scripts/zoo.py)."""
+import json
+import logging
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info
+
+from dacph_drake.arm_defaults import DEFAULT_STEP, arm_scenario
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.errors import ConfigError
+from dacph_drake.loop.simulate import simulate
+from dacph_drake.loop.threads import single_threaded
+from dacph_drake.robots.described import DescribedRobot, link_base_clearance
+from dacph_drake.robots.description import MakeRobotPlant, ParsedDescription
+from dacph_drake.robots.serial_arm import SerialLink, serial_arm_urdf
+from dacph_drake.robots.start_pose import (CLEARANCE_BOUND, SINGULAR_BOUND,
+                                           rehearse, task_jacobian, within_limits)
+from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
+from dacph_drake.scenario_files import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+needs_example_robot_data = pytest.mark.skipif(
+    not (Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share"
+         / "example-robot-data").is_dir(),
+    reason="example-robot-data is not installed (pip install 'dacph-drake[robots]')")
+ARMS = Path(__file__).resolve().parent / "data" / "arms"
+SIX = [SerialLink(4.0, 0.4), SerialLink(3.0, 0.35), SerialLink(2.0, 0.3),
+       SerialLink(1.0, 0.2), SerialLink(0.5, 0.1), SerialLink(0.3, 0.08)]
+
+
+def _arm_file(tmp_path: Path, name: str, urdf: str, extra: str = "") -> Path:
+    """A scenario file of at most six lines naming the description, the base's
+    mass and the end-effector frame."""
+    (tmp_path / f"{name}.urdf").write_text(urdf)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(f"robot: !DescribedArm\n  description: {name}.urdf\n"
+                    f"  base: {{mass: 200.0}}\n  end_effector: {{frame: tool}}\n{extra}")
+    return path
+
+
+def test_a_heavily_damped_arm_runs_every_phase_on_a_step_its_damping_allows(tmp_path):
+    """Joint damping of 20 N m s/rad on a 1.6e-4 kg m^2 wrist decays at ~1e5 1/s,
+    far beyond the default 0.25 ms RK2 step's stability (h lambda <= 2): the sized
+    step keeps h lambda <= 1 for the fastest mode, and every controller runs every
+    (shortened) phase with the momentum conserved."""
+    links = [SerialLink(link.mass, link.length, damping) for link, damping
+             in zip(SIX, (20.0, 20.0, 10.0, 5.0, 5.0, 5.0))]
+    path = _arm_file(tmp_path, "damped", serial_arm_urdf("damped", links),
+                     "phases: {warmup: 0.3, linear: 0.3, nonlinear: 0.3, "
+                     "disturbance: 0.3}\n")
+    scenario = load_scenario(path)
+    assert scenario.simulator.max_step_size < DEFAULT_STEP / 2
+    model = FloatingBaseModel(MakeRobotPlant(scenario.robot))
+    M = model.MassMatrix(np.asarray(scenario.q0))
+    L = np.linalg.inv(np.linalg.cholesky(M))
+    damping = np.diag([20.0, 20.0, 10.0, 5.0, 5.0, 5.0])
+    fastest = np.max(np.linalg.eigvalsh(L @ damping @ L.T))
+    assert fastest * DEFAULT_STEP > 2                  # the default step would blow up
+    assert fastest * scenario.simulator.max_step_size <= 1.0
+    for controller in ("dac", "dac-nominal", "model-based"):
+        result = simulate(scenario, controller)
+        assert result.status == "ok", (controller, result.reason)
+        assert result.final_time == pytest.approx(scenario.phases.end)
+
+
+def test_duplicate_materials_load_with_one_line_per_kind(tmp_path, caplog):
+    """A URDF defining one material in every link (as Kinova's does), with an
+    unsupported tag on every joint: Drake alone refuses the file; here it loads,
+    each quirk reported once, naming the user's file and its lines."""
+    text = serial_arm_urdf("quirky", SIX)
+    text = text.replace("<collision>", '<visual><geometry><box size="0.01 0.01 0.01"/>'
+                        '</geometry><material name="carbon"><color rgba="0.3 0.3 0.3 1"/>'
+                        '</material></visual><collision>')
+    text = text.replace("<dynamics", '<safety_controller soft_lower_limit="-2"/><dynamics')
+    text = text.replace("><", ">\n<")               # lines to name
+    path = _arm_file(tmp_path, "quirky", text, "q0: [0.3, -0.8, 1.2, 0.2, 0.6, -0.3]\n")
+    with caplog.at_level(logging.WARNING):
+        scenario = load_scenario(path)
+        DescribedRobot(scenario)
+    lines = [r.getMessage() for r in caplog.records]
+    materials = [line for line in lines if "material 'carbon'" in line]
+    tags = [line for line in lines if "safety_controller" in line]
+    assert len(materials) == 1 and len(tags) == 1, lines
+    assert "quirky.urdf" in materials[0] and "defined again on 6 lines" in materials[0]
+    assert tags[0].startswith(str(tmp_path / "quirky.urdf") + ":")
+    assert "6 lines of this kind" in tags[0]
+    assert not any("<literal-string>" in line for line in lines)
+
+
+def test_xacro_is_refused_with_the_command_that_expands_it(tmp_path):
+    (tmp_path / "arm.urdf.xacro").write_text('<robot xmlns:xacro="http://www.ros.org/'
+                                             'wiki/xacro"><xacro:property/></robot>')
+    with pytest.raises(ConfigError, match=r"xacro macro file.*`xacro .*arm\.urdf\.xacro "
+                                          r"-o .*arm\.urdf`"):
+        MakeRobotPlant(DescribedArm(description=str(tmp_path / "arm.urdf.xacro"),
+                                    base=ArmBase(mass=100.0)))
+
+
+def test_sdf_and_mjcf_go_through_the_same_path_as_urdf():
+    """The same three-joint arm in MJCF (its root welded to the world: dropped) and
+    SDFormat: the same joints, mass matrix and chosen start."""
+    starts, matrices = [], []
+    for name in ("arm3.xml", "arm3.sdf"):
+        arm = DescribedArm(description=str(ARMS / name), base=ArmBase(mass=100.0),
+                           end_effector=EndEffectorFrame(frame="link3"))
+        scenario = arm_scenario(arm)
+        model = FloatingBaseModel(MakeRobotPlant(arm))
+        starts.append(scenario.q0)
+        matrices.append(model.MassMatrix(np.asarray(scenario.q0)))
+    np.testing.assert_allclose(starts[0], starts[1], rtol=1e-12)
+    np.testing.assert_allclose(matrices[0], matrices[1], rtol=1e-9, atol=1e-12)
+
+
+def test_a_start_at_a_task_singularity_is_refused_by_name(tmp_path):
+    """Axes z, y, z with the middle joint at 0: joints 1 and 3 turn the end
+    effector about the same axis (gimbal lock): refused, naming them."""
+    urdf = serial_arm_urdf("gimbal", SIX[:3], axes=("0 0 1", "0 1 0", "0 0 1"))
+    path = _arm_file(tmp_path, "gimbal", urdf, "q0: [0.4, 0.0, -0.2]\n")
+    scenario = load_scenario(path)
+    with pytest.raises(ConfigError, match=r"q0 = \[0.4, 0.0, -0.2\]: the end "
+                                          r"effector's attitude is singular there .*"
+                                          r"joints ('joint1', 'joint3'|'joint3', "
+                                          r"'joint1') turn it"):
+        DescribedRobot(scenario).RequireRunnableStart()
+    path.write_text(path.read_text().replace("q0: [0.4, 0.0, -0.2]",
+                                             "q0: [0.4, 0.7, -0.2]"))
+    DescribedRobot(load_scenario(path)).RequireRunnableStart()
+
+
+@pytest.mark.parametrize("name, links, tool", [
+    ("tiny_wrist", SIX[:3] + [SerialLink(0.05, 0.03), SerialLink(0.02, 0.02),
+                              SerialLink(0.01, 0.02)], 0.0),
+    ("chain9", [SerialLink(2.0 * 0.85**k, 0.3 * 0.9**k) for k in range(9)], 0.0),
+    ("heavy_tool", SIX, 5.0)])
+def test_the_automatic_start_is_within_limits_clear_of_the_base_and_regular(
+        tmp_path, name, links, tool):
+    """Without q0 a start is chosen: its rehearsal of the task keeps every joint
+    within 10 % of its range from its limits and D's smallest singular value above
+    SINGULAR_BOUND; its links are CLEARANCE_BOUND clear of the base."""
+    path = _arm_file(tmp_path, name, serial_arm_urdf(name, links, tool))
+    scenario = load_scenario(path)
+    parsed = ParsedDescription(scenario.robot)
+    model = FloatingBaseModel(parsed.plant)
+    q0 = np.asarray(scenario.q0)
+    assert link_base_clearance(parsed, model)(q0) >= CLEARANCE_BOUND   # these arms
+    #                                                    can reach that far
+    rehearsal = rehearse(model, q0, scenario.task,
+                         scenario.phases.warmup + scenario.task.reference.period)
+    assert within_limits(model, rehearsal.q)
+    assert np.min(rehearsal.singular_value) >= SINGULAR_BOUND
+    assert np.linalg.svd(task_jacobian(model, q0), compute_uv=False)[-1] >= SINGULAR_BOUND
+    DescribedRobot(scenario).RequireRunnableStart()
+
+
+def test_errors_name_the_joints_frames_and_bodies(tmp_path):
+    path = _arm_file(tmp_path, "named", serial_arm_urdf("named", SIX[:3]),
+                     "q0: [0.1, 0.2]\n")
+    with pytest.raises(ConfigError, match=r"q0 has 2 entries; allowed: 3 \(one per "
+                                          r"joint\); the joints in q0's order: joint1, "
+                                          r"joint2, joint3$"):
+        DescribedRobot(load_scenario(path))
+    arm = DescribedArm(description=str(tmp_path / "named.urdf"), base=ArmBase(mass=1.0),
+                       end_effector=EndEffectorFrame(frame="tol"))
+    with pytest.raises(ConfigError, match=r"frame = 'tol' is not a frame of .*named"
+                                          r"\.urdf \(did you mean 'tool'\?\); allowed: "
+                                          r"one of its link frames: root, link1, link2, "
+                                          r"link3, tool"):
+        MakeRobotPlant(arm)
+    path.write_text(path.read_text().replace("q0: [0.1, 0.2]", "q0: [0.1, 0.2, 0.3]"))
+    scenario = load_scenario(path)
+    scenario.robot.nominal_inertia_scale = [1.0]
+    with pytest.raises(ConfigError, match=r"nominal_inertia_scale has 1 entries; "
+                                          r"allowed: 5, one per body with mass in this "
+                                          r"order: root, link1, link2, link3, base"):
+        DescribedRobot(scenario)
+
+
+def test_a_run_limits_blas_and_openmp_to_one_thread():
+    """Inside a run (loop.threads.single_threaded) every BLAS and OpenMP pool has
+    one thread, and the caller's settings come back afterwards."""
+    before = {(i["internal_api"], i["prefix"]): i["num_threads"]
+              for i in threadpool_info()}
+    with single_threaded():
+        assert all(i["num_threads"] == 1 for i in threadpool_info())
+    assert {(i["internal_api"], i["prefix"]): i["num_threads"]
+            for i in threadpool_info()} == before
+
+
+@needs_example_robot_data
+def test_the_zoo_short_version(tmp_path):
+    """scripts/zoo.py --quick: the xArm7 (damping 2-10 N m s/rad on light wrists),
+    an arm of our own with heavier damping and the Unitree Z1 (its gripper locked,
+    its rest pose on a joint limit), each from its file of at most six lines, run
+    the warm-up and the start of the first phase under all three controllers."""
+    done = subprocess.run([sys.executable, str(ROOT / "scripts" / "zoo.py"), "--quick",
+                           "--duration", "2.2", "--out", str(tmp_path)],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = [json.loads(line) for line in (tmp_path / "rows.jsonl").read_text()
+            .splitlines()]
+    assert [row["arm"] for row in rows] == ["xarm7", "heavy_damping", "z1"]
+    for row in rows:
+        assert row["file_lines"] <= 6
+        for controller in ("dac", "dac-nominal", "model-based"):
+            assert row[controller]["status"] == "ok", (row["arm"], row[controller])
+
+
+def test_q0_by_joint_name(tmp_path):
+    """q0 as a mapping joint name -> angle reads as the list in q's order; a name
+    the arm does not have is named with the closest one, a joint left out too."""
+    urdf = serial_arm_urdf("named", SIX[:3])
+    path = _arm_file(tmp_path, "named", urdf,
+                     "q0: {joint3: -0.2, joint1: 0.4, joint2: 0.7}\n")
+    assert load_scenario(path).q0 == [0.4, 0.7, -0.2]
+    path.write_text(path.read_text().replace("joint3: -0.2", "jiont3: -0.2"))
+    with pytest.raises(ConfigError, match=r"^q0.jiont3 is not a joint of the arm \(did "
+                                          r"you mean 'joint3'\?\); allowed: joint1, "
+                                          r"joint2, joint3$"):
+        load_scenario(path)
+    path.write_text(path.read_text().replace("jiont3: -0.2, ", ""))
+    with pytest.raises(ConfigError, match=r"^q0 leaves out the joints joint3; "):
+        load_scenario(path)
