@@ -274,7 +274,9 @@ class AttitudeGains:
         task_damping: mu of the damped pseudo-inverse D^+ [-], >= 0.
         epsilon: The boundary layer's thickness at chi = 0 [N m s], > 0.
         boundary_rate: The most the boundary layer's slope adds to a joint's rate
-            [1/s], > 0, with (damping_rate + boundary_rate) * periods.lhs <= 0.5.
+            [1/s], > 0, with (damping_rate + boundary_rate) * periods.lhs <= 0.5
+            (on an arm whose coupled motion is much lighter than its joints'
+            inertias, the layer thickens to keep that: AttitudeController).
         chi_model_based: The fixed chi of the model-based baseline [N m], >= 0."""
     Lambda: float = 2.0             # [1/s]
     damping_rate: float = 20.0      # [1/s]

@@ -11,8 +11,10 @@ import numpy as np
 from numba import njit
 
 from dacph_drake.kernels.arm import inverse3, matmul, matvec
-from dacph_drake.kernels.spatial import (_cross, _rotation, _skew, christoffel,
-                                         reduced_model)
+from dacph_drake.kernels.spatial import (_cholesky_solve, _cross, _rotation, _skew,
+                                         christoffel, reduced_model)
+
+COUPLING_ITERATIONS = 40        # power iterations of coupling_ratio (rho to ~1e-3)
 
 
 @njit(cache=True)
@@ -232,6 +234,35 @@ def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
 
 
 @njit(cache=True)
+def coupling_ratio(M: np.ndarray) -> float:
+    """rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1: how much lighter the
+    lightest coupled motion is than the joints' own inertias M_ii say (1 for a
+    diagonal M), by power iteration on the normalized inverse.
+
+    Args:
+        M: The reduced mass matrix (n x n), symmetric positive definite.
+
+    Returns:
+        rho."""
+    n = M.shape[0]
+    root = np.empty(n)
+    for i in range(n):
+        root[i] = np.sqrt(M[i, i])
+    normalized = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            normalized[i, j] = M[i, j] / (root[i] * root[j])
+    inverse = _cholesky_solve(normalized, np.eye(n))
+    v = np.ones(n) / np.sqrt(n)
+    rho = 1.0
+    for _ in range(COUPLING_ITERATIONS):
+        w = matvec(inverse, v)
+        rho = np.sqrt(np.sum(w * w))
+        v = w / rho
+    return rho
+
+
+@njit(cache=True)
 def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np.ndarray,
                     omega_base: np.ndarray, t: float, reference: tuple,
                     end_effector: tuple, xi: np.ndarray, xi_dot: np.ndarray,
@@ -252,8 +283,10 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
         end_effector: (node, R_CE) (task_rates).
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate along the motion (n) [rad/s^2].
-        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate, b_1,
-            ..., b_n), b the description's joint damping [N m s/rad].
+        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate,
+            rho_allowed, b_1, ..., b_n), b the description's joint damping
+            [N m s/rad] and rho_allowed the largest coupling rho the boundary
+            layer takes at its nominal thickness (AttitudeController).
         chi: The robust term's gain chi (input ``chi``: in DAC the RHS loop's
             bound on ||e_tau||) [N m].
         excitation: (a_1, ..., a_n, 2 pi f_1, ..., 2 pi f_n) of tau_pe (the
@@ -274,10 +307,10 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
     C = christoffel(dM, qdot)
     s = qdot - nu
     Ms = matvec(M, s)
-    phi = epsilon + chi / boundary_rate
+    phi = epsilon + chi * max(1.0, coupling_ratio(M) / gains[5]) / boundary_rate
     tau = matvec(M, nu_dot) + matvec(C, nu) - damping_rate * Ms
     for i in range(q.shape[0]):
-        tau[i] += gains[5 + i] * nu[i] - chi * np.tanh(M[i, i] * s[i] / phi)
+        tau[i] += gains[6 + i] * nu[i] - chi * np.tanh(M[i, i] * s[i] / phi)
         if excitation[i] > 0:
             tau[i] += excitation[i] * np.sin(excitation[q.shape[0] + i] * t)
     log = np.array([e[0], e[1], e[2], np.sqrt(np.sum(e * e)), np.sqrt(np.sum(s * s)),

@@ -37,6 +37,10 @@ class AttitudeTrial:
     q0: Sequence[float]
 
 
+# The most the sampled LHS's linear slope may take per period (the gains' rule
+# (damping_rate + boundary_rate) * periods.lhs <= 0.5, scenario.AttitudeGains).
+SAMPLED_SLOPE = 0.5
+
 class AttitudeController(LeafSystem):
     """Every ``period`` seconds, from the measured state (inputs ``base_pose`` =
     (qw, qx, qy, qz, x, y, z), ``base_velocity`` = (omega_W, v_W), ``q``, ``qdot``):
@@ -45,7 +49,16 @@ class AttitudeController(LeafSystem):
         nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
         s   = qdot - nu
         tau = M nu_dot + C' nu + b nu - damping_rate M s - chi tanh(diag(M) s / phi)
-              + tau_pe(t),   phi = epsilon + chi / boundary_rate
+              + tau_pe(t),   phi = epsilon + chi max(1, rho / rho_allowed) / boundary_rate
+
+    rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1 is how much lighter the
+    lightest coupled motion is than the joints' own inertias say: the layer's
+    slope chi diag(M) / phi adds up to boundary_rate rho to that motion's rate, so
+    the layer thickens where (damping_rate + boundary_rate rho) periods.lhs would
+    pass SAMPLED_SLOPE (rho_allowed = (SAMPLED_SLOPE / periods.lhs - damping_rate)
+    / boundary_rate; 24 for the default gains). A 5-joint arm with a 4 kg tool
+    (rho = 195) ran away in its first 22 ms without it; the shipped arms (rho 1-4)
+    never reach it.
 
     with b the description's joint damping (the model's joint_damping), which the
     LHS model holds as it holds M: the port observer adds b qdot to the port
@@ -101,9 +114,11 @@ class AttitudeController(LeafSystem):
         self._n, self._reference, self._gains, self._eta = n, reference, gains, eta
         self._excitation = np.concatenate([excitation.Amplitudes(n),
                                            2 * np.pi * excitation.Frequencies(n)])
+        rho_allowed = ((SAMPLED_SLOPE - gains.damping_rate * period)
+                       / (gains.boundary_rate * period))
         self._gain_arguments = np.concatenate([
             [gains.Lambda, gains.task_damping, gains.damping_rate, gains.epsilon,
-             gains.boundary_rate], model.joint_damping]).astype(float)
+             gains.boundary_rate, rho_allowed], model.joint_damping]).astype(float)
         end_effector = model.plant.GetFrameByName(END_EFFECTOR)
         node, X_CE = model.FrameNode(end_effector)
         self._end_effector_node = (node, np.ascontiguousarray(X_CE[:3, :3]))
