@@ -244,7 +244,8 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
     of 2 N m s/rad on a 1e-4 kg m^2 wrist decays at 2e4 1/s: h <= 5e-5 s), over
     the configurations given. At most the default step (loop.simulator), and
     dividing the RHS period evenly (the discrete updates stop the integrator at
-    every RHS sample anyway).
+    every RHS sample anyway); at least 1e-7 s (simulator.max_step_size's lower
+    bound).
 
     Args:
         model: The arm's model (its plant's joint damping).
@@ -265,7 +266,9 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
         rate = max(rate, float(np.max(np.linalg.eigvalsh(
             Linv @ np.diag(damping) @ Linv.T))))
     step = min(DEFAULT_STEP, STEP_RATE_PRODUCT / rate) if rate > 0 else DEFAULT_STEP
-    return rhs_period / int(np.ceil(rhs_period / step - 1e-9))
+    # Never below what simulator.max_step_size allows: a description that asks for
+    # less is refused at the build, naming its joint (DescribedRobot).
+    return max(rhs_period / int(np.ceil(rhs_period / step - 1e-9)), 1e-7)
 
 
 def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,

@@ -258,3 +258,18 @@ def test_a_strongly_coupled_arm_runs_its_start(tmp_path):
         "nonlinear: 0.1, disturbance: 0.1}\n")
     result = simulate(load_scenario(path), "dac")
     assert result.status == "ok", result.reason
+
+
+def test_a_damping_too_stiff_to_integrate_is_refused_by_name(tmp_path):
+    """18 N m s/rad on a 6 g, 3 cm link asks for a step of ~0.1 us: refused at the
+    build, naming the step and the joint, instead of a run of hours."""
+    links = [SerialLink(1.15, 0.40, 0.27), SerialLink(0.056, 0.28, 0.94),
+             SerialLink(0.0064, 0.03, 18.4)]
+    path = _arm_file(tmp_path, "stiff", serial_arm_urdf("stiff", links),
+                     "q0: [0.3, 0.8, -0.4]\n")
+    scenario = load_scenario(path)
+    assert scenario.simulator.max_step_size < 1e-6
+    with pytest.raises(ConfigError, match=r"^simulator.max_step_size = .* s, the step "
+                                          r"the description's joint damping asks for "
+                                          r"\(joint 'joint3': 18.4 N m s/rad on"):
+        DescribedRobot(scenario).RequireRunnableStart()

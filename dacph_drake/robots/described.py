@@ -79,6 +79,9 @@ def require_every_joint_moves_inertia(model: FloatingBaseModel, description: str
             "robot.locked_joints naming that joint")
 
 
+# [s] the shortest ground-truth step a run takes (4.95 us was the family's shortest
+# that ran, in 245 s for a 14 s run).
+MIN_TRUTH_STEP = 1e-6
 # [m] how far the clearance the monitor checks (DescribedRobot.Clearance) is measured:
 # it asks only whether a link touches the base.
 CONTACT_QUERY = 0.01
@@ -172,9 +175,25 @@ class DescribedRobot:
         "stop"), with every link's collision geometry outside the base's
         (Clearance).
 
+        The ground truth's step must be at least MIN_TRUTH_STEP: a description
+        whose joint damping over its inertia asks for less (18 N m s/rad on a 6 g
+        link: 0.12 us, 1e8 steps for a 14 s run) is named instead of run for hours.
+
         Raises:
-            ConfigError: Naming the first joint beyond its limits, or q0 putting a
-                link into the base."""
+            ConfigError: Naming the first joint beyond its limits, q0 putting a
+                link into the base, or the step and the most damped joint."""
+        step = self.scenario.simulator.max_step_size
+        if step < MIN_TRUTH_STEP:
+            damping = self.model.joint_damping
+            rates = damping / np.diag(self.model.MassMatrix(np.asarray(
+                self.scenario.q0, float)))
+            k = int(np.argmax(rates))
+            raise ConfigError(
+                f"simulator.max_step_size = {step:.3g} s, the step the description's "
+                f"joint damping asks for (joint {arm_joints(self.model)[k].name()!r}: "
+                f"{damping[k]:g} N m s/rad on {damping[k] / rates[k]:.3g} kg m^2); "
+                f"allowed: >= {MIN_TRUTH_STEP:g} s: robot.joint_damping: zero, or a "
+                "description with less damping on its light joints")
         violation = self.LimitViolation()
         reason = violation(np.asarray(self.scenario.q0, float)) if violation else None
         if reason:
