@@ -115,9 +115,10 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     task = EndEffectorAttitude() if task is None else task
     reference = task.reference
     rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
+    clearance = link_base_clearance(parsed, model)     # one SceneGraph context
     if q0 is None:
         try:
-            q0 = choose_start(model, task, link_base_clearance(parsed, model),
+            q0 = choose_start(model, task, clearance,
                               null_space_rate(parsed, model, robot.potential),
                               rehearsal_time)
         except ValueError as e:
@@ -128,15 +129,16 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     q0 = np.asarray(q0, float)
     robot = copy.deepcopy(robot)
     if len(q0) == model.num_joints:
-        robot.potential.margin = potential_margin(
-            robot.potential.margin, link_base_clearance(parsed, model)(q0))
+        robot.potential.margin = potential_margin(robot.potential.margin,
+                                                  clearance(q0))
     scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
                         phases=Phases(**SATELLITE_PHASES), rhs=described_arm_rhs(),
                         periods=described_arm_periods(), learner=described_arm_learner())
     if len(q0) != model.num_joints:
         return scenario         # Validate names q0's length; nothing to size by
     rate = 2 * np.pi * max(reference.amplitude, MIN_AMPLITUDE) / reference.period
-    inertia = np.diag(model.MassMatrix(q0))
+    M = model.MassMatrix(q0)
+    inertia = np.diag(M)
     rehearsal = rehearse(model, q0, task, rehearsal_time)
     # Past the warm-up: the uncertainty and the disturbance act from phase 1 on, when
     # the start's error has decayed (the rehearsal also starts with a jump in p).
@@ -155,9 +157,8 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
             np.asarray(scenario.uncertainty.B_q1_squared) / reach).tolist()
     scenario.disturbance = sized_disturbance(torque)
     scenario.disturbance.scale = disturbance_scale(
-        scenario.disturbance, model.MassMatrix(q0), rate * 2 * np.pi / reference.period)
-    scenario.excitation.joint_scale = excitation_scale(scenario.excitation,
-                                                       model.MassMatrix(q0))
+        scenario.disturbance, M, rate * 2 * np.pi / reference.period)
+    scenario.excitation.joint_scale = excitation_scale(scenario.excitation, M)
     scenario.simulator = FixedStepConfig(step=truth_step(
         model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs))
     return scenario
@@ -255,9 +256,7 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
 
     Returns:
         The step [s]."""
-    from dacph_drake.dynamics.plant import joint_damping
-    damping = (joint_damping(model.plant, model.coordinates.joint_v)
-               + 1.5 * np.asarray(uncertainty.D0, float))
+    damping = model.joint_damping + 1.5 * np.asarray(uncertainty.D0, float)
     rate = 0.0
     for q in configurations[::max(len(configurations) // 16, 1)]:
         M = model.MassMatrix(q)
