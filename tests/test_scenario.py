@@ -58,6 +58,10 @@ BAD_SCENARIO_FILES = [
      r"excitation.frequencies\[1\] = 4.0 .*in \[5, 500\] Hz"),
     ("excitation: {frequencies: [0.5, 4.0]}\n",
      r"excitation.frequencies = \[0.5, 4.0\] Hz lie outside learner.band"),
+    ("excitation: {joint_scale: [0.5]}\n",
+     r"excitation.joint_scale has 1 entries; allowed: 2 \(one per joint, or none\)"),
+    ("excitation: {joint_scale: [0.5, 1.5]}\n",
+     r"excitation.joint_scale\[1\] = 1.5 .*\[0, 1\]"),
     # Non-finite numbers anywhere, and settings that cannot run together.
     ("q0: [.nan, 1.0]\n", r"q0\[0\] = nan is not finite; allowed: a finite number"),
     ("q0: [0.3, .inf]\n", r"q0\[1\] = inf is not finite"),
