@@ -35,9 +35,10 @@ by them, with signs alternating over the joints as the paper's two:
         0.05 + 0.01 j Hz, hf_amplitude = 0.05 max_j tau_j along hf_direction_j =
         +-tau_j / max_k tau_k (at the paper's 20 Hz)
 
-For a described arm, four factors on top: B_q1_squared is divided by the largest
+For a described arm, five factors on top: B_q1_squared is divided by the largest
 q1^2 past the warm-up where that exceeds 1 rad^2 (the paper's arm keeps |q1| <= 1
-rad; the term is the paper's at those angles); d's scale keeps the accelerations it
+rad; the term is the paper's at those angles); B~'s couplings (j, k) are
+multiplied by min(1, tau_j / tau_k) (scale_couplings); d's scale keeps the accelerations it
 causes through M^-1 within DISTURBANCE_ACCELERATION times the reference's
 (disturbance_scale), the excitation's per-joint scale keeps the motion it causes
 within EXCITATION_MOTION (excitation_scale), and the clearance potential's margin
@@ -155,6 +156,7 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     if reach > 1.0:
         scenario.uncertainty.B_q1_squared = (
             np.asarray(scenario.uncertainty.B_q1_squared) / reach).tolist()
+    scale_couplings(scenario.uncertainty, torque)
     scenario.disturbance = sized_disturbance(torque)
     scenario.disturbance.scale = disturbance_scale(
         scenario.disturbance, M, rate * 2 * np.pi / reference.period)
@@ -162,6 +164,27 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     scenario.simulator = FixedStepConfig(step=truth_step(
         model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs))
     return scenario
+
+
+def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
+    """Scales the true actuators' couplings to the joint they act on.
+
+    B~'s off-diagonal entry (j, k) (B_linear and B_q1_squared) puts a fraction of
+    actuator k's command u_k ~ tau_k into joint j; the paper's fractions (0.05 to
+    0.4) are between joints of similar size. Each is multiplied by
+    min(1, tau_j / tau_k), so that a heavy joint's actuator leaks into a light
+    one at most that fraction of the light joint's own torque (unscaled, the
+    q1^2 coupling turned on at the nonlinear phase's start put 20 times a light
+    joint's torque scale into it and every controller ran away).
+
+    Args:
+        uncertainty: The sized uncertainty (changed in place).
+        torque: The joints' torque scales tau_j [N m]."""
+    torque = np.asarray(torque, float)
+    ratio = np.minimum(1.0, torque[:, None] / torque[None, :])
+    np.fill_diagonal(ratio, 1.0)
+    uncertainty.B_linear = (np.asarray(uncertainty.B_linear) * ratio).tolist()
+    uncertainty.B_q1_squared = (np.asarray(uncertainty.B_q1_squared) * ratio).tolist()
 
 
 def potential_margin(margin: float, clearance: float) -> float:

@@ -1133,16 +1133,18 @@ class DescribedArm:
                               base: Optional[float], num_joints: int) -> None:
         """Applies the controller's model error of a sweep trial.
 
-        nominal_inertia_scale = [base, links...] (1 where not sampled; one link
-        per joint).
+        nominal_inertia_scale in the plant's body order: ``base`` on the free
+        base's body, links[j] on the body joint j moves, 1 elsewhere
+        (robots.described.model_error_scale).
 
         Args:
-            links: One factor per link, or None.
+            links: One factor per joint, or None.
             base: The base's factor, or None.
-            num_joints: The number of joints (the links when ``links`` is None)."""
+            num_joints: The number of joints (not needed: the description has
+                them)."""
         if links is not None or base is not None:
-            self.nominal_inertia_scale = ([1.0 if base is None else base]
-                                          + list(links or [1.0] * num_joints))
+            from dacph_drake.robots.described import model_error_scale
+            self.nominal_inertia_scale = model_error_scale(self, links, base)
 
     OLDER_LAYOUTS = ()              # runs of described arms were first fingerprinted
     #                                 in the current layout

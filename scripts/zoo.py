@@ -124,9 +124,12 @@ for controller in ("dac", "dac-nominal", "model-based"):
         start = time.perf_counter()
         report = verify_logs(result.logs, scenario, {"status": result.status,
                                                     "final_time": result.final_time})
+        region = report["checks"]["region_of_attraction"]
         row["verify"] = {"ok": report["ok"], "seconds": time.perf_counter() - start,
                          "failed": [k for k, c in report["checks"].items()
-                                    if not c["ok"]]}
+                                    if not c["ok"]],
+                         "s0_norm": region["s0_norm"],
+                         "frozen_radius": region.get("frozen_radius")}
 row["warnings"] = [line for line in stream.getvalue().splitlines() if line.strip()]
 print(json.dumps(row, default=float))
 """

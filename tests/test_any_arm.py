@@ -273,3 +273,48 @@ def test_a_damping_too_stiff_to_integrate_is_refused_by_name(tmp_path):
                                           r"the description's joint damping asks for "
                                           r"\(joint 'joint3': 18.4 N m s/rad on"):
         DescribedRobot(scenario).RequireRunnableStart()
+
+
+def test_a_sweeps_model_error_lands_on_the_bodies_it_names(tmp_path):
+    """A sweep's nominal_link_mass_scale and nominal_base_mass_scale on a mounted arm
+    (its description's root first, robot.base's box last): the base's factor on the
+    free base's body, joint j's on the body joint j moves, 1 on the description's
+    root; the controller's model then has those bodies' masses, the truth its own."""
+    path = _arm_file(tmp_path, "swept", serial_arm_urdf("swept", SIX[:3]))
+    scenario = load_scenario(path)
+    scenario.robot.ApplyModelErrorSample([2.0, 3.0, 4.0], 5.0, 3)
+    assert scenario.robot.nominal_inertia_scale == [1.0, 2.0, 3.0, 4.0, 5.0]
+    robot = DescribedRobot(scenario)
+    mass = {body.name(): body.default_mass() for body in robot.model.parameters.bodies}
+    nominal = robot.model.inertial_parameters.reshape(-1, 10)[:, 0]
+    np.testing.assert_allclose(nominal, [mass["root"], 2 * mass["link1"],
+                                         3 * mass["link2"], 4 * mass["link3"],
+                                         5 * mass["base"]], rtol=1e-12)
+    scenario.robot.ApplyModelErrorSample(None, 0.5, 3)
+    assert scenario.robot.nominal_inertia_scale == [1.0, 1.0, 1.0, 1.0, 0.5]
+
+
+def test_a_heavy_joints_actuator_leaks_into_a_light_one_at_its_own_scale(tmp_path):
+    """On an arm whose shoulder carries 60x the torque of the joint after it (a
+    random arm's, tests/data/arms/coupled_light_joints.urdf, base 37 kg), the sized
+    couplings of the true actuators put at most the paper's fractions of the
+    receiving joint's own torque scale into it (|B_jk| tau_k <= 0.4 tau_j for the
+    q1^2 coupling at |q1| = 1 rad, 0.05 tau_j for the linear block), and the
+    model-based baseline runs through the start of the nonlinear phase, where with
+    the paper's unscaled fractions every controller ran away (t = 6.03-6.05 s)."""
+    urdf = (ARMS / "coupled_light_joints.urdf").read_text()
+    path = tmp_path / "coupled.yaml"
+    (tmp_path / "coupled.urdf").write_text(urdf)
+    path.write_text("robot: !DescribedArm\n  description: coupled.urdf\n"
+                    "  base: {mass: 37.0301}\n  end_effector: {frame: tool}\n")
+    scenario = load_scenario(path)
+    d = scenario.disturbance
+    torque = np.abs(np.asarray(d.hf_direction)) * d.hf_amplitude / 0.05
+    assert torque[0] > 20 * torque[1]
+    u = scenario.uncertainty
+    for matrix, fraction in ((u.B_q1_squared, 0.4), (u.B_linear, 0.05)):
+        leak = np.abs(np.asarray(matrix)) * torque[None, :]
+        np.fill_diagonal(leak, 0.0)
+        assert np.all(leak <= fraction * torque[:, None] * (1 + 1e-12))
+    result = simulate(scenario, "model-based", duration=6.5)
+    assert result.status == "ok", result.reason

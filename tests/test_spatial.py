@@ -462,6 +462,50 @@ def test_the_homogeneous_region_of_attraction_is_the_full_programs(rng):
     assert max(Vdot) < 0
 
 
+def test_the_moving_configuration_region_holds_far_beyond_the_frozen_one():
+    """verify's spatial certificate (every s, by the skew symmetry of Mdot - 2 C'):
+    on the 6-DOF arm, from an s(0) three times beyond the frozen certificate's
+    level along its worst direction (where the frozen dynamics M sdot = -C'(q0, s) s
+    - 20 M s grow V), the sliding dynamics with the configuration moving (qdot = s)
+    keep dV/dt = -40 V (V within 1e-6 of V0 exp(-40 t) over 0.2 s, RK4 at 0.1 ms);
+    the certificate fails when C' is not the Christoffel form of M's derivative
+    (C' scaled by 1.01)."""
+    from dacph_drake.analysis.region_of_attraction import moving_region_of_attraction
+    model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
+    q0 = np.array([0.3, -0.8, 1.6, 0.2, 0.6, -0.3])
+    assert moving_region_of_attraction(model, q0, 20.0).Contains(1e9)
+    M0 = model.MassMatrix(q0)
+    eigenvalues, eigenvectors = np.linalg.eigh(M0)
+    L = eigenvectors @ np.diag(eigenvalues**-0.5) @ eigenvectors.T      # M^-1/2
+    # s = L w r (V = r^2 / 2): the frozen dV/dt = -20 r^2 - c(w) r^3,
+    # c(w) = s^T C'(q0, s) s at r = 1; the worst w of 4000.
+    directions = np.random.default_rng(3).normal(size=(4000, 6))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    c = [(L @ w) @ model.Coriolis(q0, L @ w) @ (L @ w) for w in directions]
+    worst = int(np.argmin(c))
+    r = 3 * 20.0 / -c[worst]
+    s0 = L @ directions[worst] * r
+    assert -s0 @ model.Coriolis(q0, s0) @ s0 - 20.0 * s0 @ M0 @ s0 > 0
+
+    def moving(x):
+        q, s = x[:6], x[6:]
+        M, C = model.MassAndCoriolis(q, s)
+        return np.concatenate([s, np.linalg.solve(M, -C @ s - 20.0 * M @ s)])
+
+    def rk4(f, x, h):
+        k1 = f(x); k2 = f(x + h / 2 * k1); k3 = f(x + h / 2 * k2); k4 = f(x + h * k3)
+        return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    h, x, V0 = 1e-4, np.concatenate([q0, s0]), 0.5 * r**2
+    for step in range(1, 2001):
+        x = rk4(moving, x, h)
+        if step % 200 == 0:
+            V = 0.5 * x[6:] @ model.MassMatrix(x[:6]) @ x[6:]
+            assert V == pytest.approx(V0 * np.exp(-40 * step * h), rel=1e-6)
+
+    christoffel = model.Coriolis
+    model.Coriolis = lambda q, qdot: 1.01 * christoffel(q, qdot)
+    assert not moving_region_of_attraction(model, q0, 20.0).Contains(0.0)
+
 @pytest.mark.parametrize("robot", [*SPATIAL_ROBOTS, "planar 3 links"])
 def test_the_compiled_model_is_drakes(robot, rng):
     """FloatingBaseModel's compiled kernel (kernels/spatial.py) against Drake at

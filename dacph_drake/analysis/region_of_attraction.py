@@ -67,6 +67,64 @@ class RegionCertificate:
         """This certificate as a plain dict (for JSON)."""
         return asdict(self)
 
+    def Contains(self, s0_norm: float) -> bool:
+        """Whether the ball this certificate gives holds s(0).
+
+        Args:
+            s0_norm: ||s(0)|| [rad/s].
+
+        Returns:
+            s0_norm <= radius."""
+        return s0_norm <= self.radius
+
+
+@dataclass
+class MovingConfigurationCertificate:
+    """The spatial LHS's region of attraction with nothing frozen: every s.
+
+    C' is the Christoffel form of dM, so Mdot - 2 C' is skew-symmetric and along
+    the sliding dynamics (eq. E26, the configuration moving with any nu)
+
+        M sdot = -C'(q, qdot) s - damping_rate M s - b s - chi tanh(w s) + e_tau,
+        dV/dt = -2 damping_rate V - s^T b s - chi sum_i s_i tanh(w_i s_i)
+                <= -2 damping_rate V        (e_tau = 0),
+
+    for every s and q (the paper's proof, docs/equations.md E26-E28). The region is the whole
+    space; what it rests on, dM = dM/dq, is checked: C'(q, e_k) + C'(q, e_k)^T
+    against central differences of M (step FD_STEP) at the run's q0 and sampled
+    configurations. The frozen-configuration certificate (attitude_region_of_attraction:
+    C'(q, s) s kept, the Mdot it comes with dropped, so it is stricter than the
+    closed loop) is reported beside it.
+
+    Attributes:
+        configurations: How many configurations were checked.
+        residual: max |C'_k + C'_k^T - dM/dq_k| / max |M| over them [-].
+        tolerance: The residual allowed [-].
+        frozen_radius: The frozen-configuration certificate's ball at q0 [rad/s].
+        assumptions: The model's assumptions (part of the certificate).
+        skipped: Always "" (nothing is budgeted).
+    """
+    configurations: int
+    residual: float
+    tolerance: float
+    frozen_radius: float
+    assumptions: str
+    skipped: str = ""
+
+    def as_dict(self) -> dict:
+        """This certificate as a plain dict (for JSON)."""
+        return {"region": "every s", **asdict(self)}
+
+    def Contains(self, s0_norm: float) -> bool:
+        """Whether s(0) is in the region: every s is, when dM is M's derivative.
+
+        Args:
+            s0_norm: ||s(0)|| [rad/s] (any).
+
+        Returns:
+            residual <= tolerance."""
+        return self.residual <= self.tolerance
+
 
 ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; tanh replaced by its "
                "cubic Taylor polynomial; candidate V = s^T M(q) s / 2")
@@ -132,6 +190,42 @@ def attitude_region_of_attraction(model: FloatingBaseModel, q: np.ndarray,
     return RegionCertificate(q=[float(v) for v in q], rho=rho,
                              radius=float(np.sqrt(2 * rho / eigenvalues[-1])),
                              assumptions=SPATIAL_ASSUMPTIONS)
+
+
+MOVING_ASSUMPTIONS = ("the configuration moving (any nu); e_tau = 0 (the envelope "
+                      "check bounds it); the robust term and b dropped (dissipative for "
+                      "every chi); candidate V = s^T M(q) s / 2; Mdot = C' + C'^T")
+FD_STEP = 1e-6                 # central-difference step of dM/dq [rad]
+SKEW_TOLERANCE = 1e-6          # relative residual of C' + C'^T = Mdot allowed
+SKEW_CONFIGURATIONS = 16       # q0 and random configurations checked
+
+
+def moving_region_of_attraction(model: FloatingBaseModel, q0: np.ndarray,
+                                damping_rate: float) -> MovingConfigurationCertificate:
+    """The spatial LHS's certificate with nothing frozen (MovingConfigurationCertificate).
+
+    Args:
+        model: The arm's model (floating_model.FloatingBaseModel).
+        q0: The run's start [rad] (n).
+        damping_rate: The LHS's damping rate [1/s] (for the frozen certificate).
+
+    Returns:
+        The certificate."""
+    n = model.num_joints
+    samples = np.random.default_rng(0).uniform(-np.pi, np.pi,
+                                               (SKEW_CONFIGURATIONS - 1, n))
+    residual = 0.0
+    for q in [np.asarray(q0, float), *samples]:
+        scale = float(np.abs(model.MassMatrix(q)).max())
+        for k in range(n):
+            step = FD_STEP * np.eye(n)[k]
+            dM = (model.MassMatrix(q + step) - model.MassMatrix(q - step)) / (2 * FD_STEP)
+            C = model.Coriolis(q, np.eye(n)[k])
+            residual = max(residual, float(np.abs(C + C.T - dM).max()) / scale)
+    frozen = attitude_region_of_attraction(model, np.asarray(q0, float), damping_rate)
+    return MovingConfigurationCertificate(
+        configurations=SKEW_CONFIGURATIONS, residual=residual, tolerance=SKEW_TOLERANCE,
+        frozen_radius=frozen.radius, assumptions=MOVING_ASSUMPTIONS)
 
 
 def cubic_maximum_on_sphere(T: np.ndarray) -> float:

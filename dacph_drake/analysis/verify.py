@@ -16,8 +16,10 @@
    (kernels.certificate.box_certificate: time-scale separation and spectral
    radius for every B of the box): an estimate adopted outside its certificate
    (the point rule, rhs.adoption trust_band) fails the run.
-3. A region-of-attraction certificate of the sliding dynamics at the initial
-   configuration (region_of_attraction), checked to contain s(0).
+3. A region-of-attraction certificate of the sliding dynamics
+   (region_of_attraction), checked to contain s(0): by sums of squares at the
+   initial configuration for a planar arm, the whole space by the skew symmetry
+   of Mdot - 2 C' (checked) for a spatial arm.
 The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
 Every robot's runs are checked alike; what the checks need of the LHS comes from
 the robot (robots.Robot.VerifyLhs: a described arm's LHS has K_d = damping_rate M
@@ -204,7 +206,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
         # A region the budget did not allow is reported as skipped, with why.
         "region_of_attraction": {**lhs.region.as_dict(), "s0_norm": lhs.s0_norm,
                                  "ok": bool(lhs.region.skipped)
-                                 or lhs.s0_norm <= lhs.region.radius},
+                                 or lhs.region.Contains(lhs.s0_norm)},
     }
     estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
                  "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
@@ -297,7 +299,7 @@ def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants,
 # Units of the report's quantities (verification.json keeps full precision).
 _UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time": "s",
           "worst_time": "s", "min_margin_time": "s", "first_failure_time": "s",
-          "first_rejection_time": "s", "radius": "rad/s", "s0_norm": "rad/s",
+          "first_rejection_time": "s", "radius": "rad/s", "frozen_radius": "rad/s", "s0_norm": "rad/s",
           "rho": "J", "q": "rad", "fraction_inside": "-", "worst_violation": "-",
           "min_margin": "-", "min_separation": "-", "max_spectral_radius": "-"}
 

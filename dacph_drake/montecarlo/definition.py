@@ -86,7 +86,8 @@ class Distributions:
             trial_seed).
         nominal_link_mass_scale: The controller's model error (the ground truth
             keeps its robot): one factor per link on nominal_robot's link mass and
-            inertia (a spatial scenario: nominal_inertia_scale = [base, links...]).
+            inertia (a described arm: the body each joint moves, in
+            robot.nominal_inertia_scale).
         nominal_base_mass_scale: The controller's model error: one factor on the
             nominal base's mass and inertia.
         actuator_gain_log10: x_j, one per joint: B~'s row j times 10^x_j
@@ -113,8 +114,8 @@ class Distributions:
     learner_seed: Optional[ScalarDistribution] = None   # integers; None: the trial's
     #                                                     own seed (see trial_seed)
     # The controller's model error (the ground truth keeps its robot): one factor per
-    # link on nominal_robot's link mass and inertia, one on its base's (a spatial
-    # scenario: nominal_inertia_scale = [base, links...]).
+    # link on nominal_robot's link mass and inertia, one on its base's (a described
+    # arm: the body each joint moves, in robot.nominal_inertia_scale).
     nominal_link_mass_scale: Optional[VectorDistribution] = None
     nominal_base_mass_scale: Optional[ScalarDistribution] = None
     # Actuators: B~'s row j times 10^x_j (uncertainty.B_scale), and one fault: from

@@ -54,6 +54,53 @@ def arm_joints(model: FloatingBaseModel) -> list:
     return [joints[int(i)] for i in model.coordinates.joint_q]
 
 
+def model_error_scale(arm: "DescribedArm", links: Optional[Sequence[float]],
+                      base: Optional[float]) -> list:
+    """robot.nominal_inertia_scale for a sweep's model-error sample, in the plant's
+    body order: ``base`` on the free base's body, links[j] on the body joint j moves
+    (its child), 1 on every other body (a welded tool, a locked finger, a mounted
+    description's own root); an entry left out is 1.
+
+    Args:
+        arm: The robot section (its description is parsed once per process and
+            section).
+        links: One factor per joint, or None.
+        base: The base body's factor, or None.
+
+    Returns:
+        One factor per body with mass."""
+    names, base_index, child_index = _body_roles(arm)
+    scale = [1.0] * len(names)
+    if base is not None:
+        scale[base_index] = float(base)
+    for j, factor in zip(child_index, links or []):
+        if j is not None:
+            scale[j] = float(factor)
+    return scale
+
+
+_BODY_ROLES: Dict[str, Tuple[list, int, list]] = {}
+
+
+def _body_roles(arm: "DescribedArm") -> Tuple[list, int, list]:
+    """(body names with mass in the plant's order, the free base's index, each
+    joint's child's index or None where that body has no mass), cached per robot
+    section (its model error left out: the bodies do not depend on it)."""
+    import copy
+    section = copy.copy(arm)
+    section.nominal_inertia_scale = []
+    key = repr(section)
+    if key not in _BODY_ROLES:
+        model = FloatingBaseModel(ParsedDescription(section).plant)
+        bodies = [body.name() for body in model.parameters.bodies]
+        plant = model.plant
+        base = plant.get_body(next(iter(plant.GetFloatingBaseBodies()))).name()
+        children = [joint.child_body().name() for joint in arm_joints(model)]
+        _BODY_ROLES[key] = (bodies, bodies.index(base),
+                            [bodies.index(c) if c in bodies else None for c in children])
+    return _BODY_ROLES[key]
+
+
 def require_every_joint_moves_inertia(model: FloatingBaseModel, description: str
                                       ) -> None:
     """Requires every actuated joint of a described arm to move some inertia.
@@ -412,15 +459,15 @@ class DescribedRobot:
         Args:
             logs: The run's logs (RunResult.logs).
             region_budget: The wall time [s] after which the region of
-                attraction's program is stopped; the region of attraction is the
-                homogeneous certificate (milliseconds for any arm), so it does not
-                bind it.
+                attraction's program is stopped; the spatial certificate
+                (region_of_attraction.moving_region_of_attraction) takes
+                milliseconds, so it does not bind it.
 
         Returns:
             The analysis.verify.LhsSide."""
         from dacph_drake.analysis.lyapunov_envelope import EnvelopeConstants
         from dacph_drake.analysis.region_of_attraction import (
-            attitude_region_of_attraction)
+            moving_region_of_attraction)
         from dacph_drake.analysis.verify import LhsSide
         from dacph_drake.dynamics.inertia_bound import search_inertia_bound
         scenario, model = self.scenario, self.model
@@ -441,8 +488,8 @@ class DescribedRobot:
                 gains.damping_rate, lambda_min_M, max_diagonal_M, gains.epsilon,
                 gains.boundary_rate, n),
             lambda_lhs=2 * gains.damping_rate,
-            region=attitude_region_of_attraction(model, np.asarray(scenario.q0),
-                                                 gains.damping_rate),
+            region=moving_region_of_attraction(model, np.asarray(scenario.q0),
+                                               gains.damping_rate),
             settings={"inf_lambda_min_M": lambda_min_M,
                       "sup_max_diagonal_M": max_diagonal_M})
 
