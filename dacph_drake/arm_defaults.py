@@ -38,8 +38,8 @@ by them, with signs alternating over the joints as the paper's two:
 For a described arm, five factors on top: B_q1_squared is divided by the largest
 q1^2 past the warm-up where that exceeds 1 rad^2 (the paper's arm keeps |q1| <= 1
 rad; the term is the paper's at those angles); B~'s couplings (j, k) are
-multiplied by min(1, tau_j / tau_k) (scale_couplings); d's scale keeps the accelerations it
-causes through M^-1 within DISTURBANCE_ACCELERATION times the reference's
+multiplied by min(1, tau_j / tau_k) (scale_couplings); d's scale keeps the
+accelerations it causes through M^-1 within DISTURBANCE_ACCELERATION times the reference's
 (disturbance_scale), the excitation's per-joint scale keeps the motion it causes
 within EXCITATION_MOTION (excitation_scale), and the clearance potential's margin
 is at most half the start's clearance (potential_margin). The ground truth's fixed
@@ -173,9 +173,9 @@ def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
     actuator k's command u_k ~ tau_k into joint j; the paper's fractions (0.05 to
     0.4) are between joints of similar size. Each is multiplied by
     min(1, tau_j / tau_k), so that a heavy joint's actuator leaks into a light
-    one at most that fraction of the light joint's own torque (unscaled, the
-    q1^2 coupling turned on at the nonlinear phase's start put 20 times a light
-    joint's torque scale into it and every controller ran away).
+    one at most that fraction of the light joint's own torque: unscaled, the leak
+    can be many times the light joint's torque scale, and its true RHS is then
+    no longer dominated by its own actuator.
 
     Args:
         uncertainty: The sized uncertainty (changed in place).

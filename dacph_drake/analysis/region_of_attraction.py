@@ -89,12 +89,12 @@ class MovingConfigurationCertificate:
         dV/dt = -2 damping_rate V - s^T b s - chi sum_i s_i tanh(w_i s_i)
                 <= -2 damping_rate V        (e_tau = 0),
 
-    for every s and q (the paper's proof, docs/equations.md E26-E28). The region is the whole
-    space; what it rests on, dM = dM/dq, is checked: C'(q, e_k) + C'(q, e_k)^T
-    against central differences of M (step FD_STEP) at the run's q0 and sampled
-    configurations. The frozen-configuration certificate (attitude_region_of_attraction:
-    C'(q, s) s kept, the Mdot it comes with dropped, so it is stricter than the
-    closed loop) is reported beside it.
+    for every s and q (the paper's proof, docs/equations.md E26-E28). The region
+    is the whole space; what it rests on, dM = dM/dq, is checked: C'(q, e_k) +
+    C'(q, e_k)^T against central differences of M (step FD_STEP) at the run's q0
+    and sampled configurations. The frozen-configuration certificate
+    (attitude_region_of_attraction: C'(q, s) s kept, the Mdot it comes with
+    dropped, so it is stricter than the closed loop) is reported beside it.
 
     Attributes:
         configurations: How many configurations were checked.

@@ -299,7 +299,8 @@ def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants,
 # Units of the report's quantities (verification.json keeps full precision).
 _UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time": "s",
           "worst_time": "s", "min_margin_time": "s", "first_failure_time": "s",
-          "first_rejection_time": "s", "radius": "rad/s", "frozen_radius": "rad/s", "s0_norm": "rad/s",
+          "first_rejection_time": "s", "radius": "rad/s", "frozen_radius": "rad/s",
+          "s0_norm": "rad/s",
           "rho": "J", "q": "rad", "fraction_inside": "-", "worst_violation": "-",
           "min_margin": "-", "min_separation": "-", "max_spectral_radius": "-"}
 

@@ -5,6 +5,7 @@ the free base) tracking its end effector's 3D attitude
 controller's model evaluates in contexts of its own with its inertias scaled
 (floating_model.FloatingBaseModel) and the clearance potential queries with its
 collision geometry; and the AttitudeController."""
+import copy
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Dict, Optional, Sequence, Tuple, Union
 
@@ -86,7 +87,6 @@ def _body_roles(arm: "DescribedArm") -> Tuple[list, int, list]:
     """(body names with mass in the plant's order, the free base's index, each
     joint's child's index or None where that body has no mass), cached per robot
     section (its model error left out: the bodies do not depend on it)."""
-    import copy
     section = copy.copy(arm)
     section.nominal_inertia_scale = []
     key = repr(section)
