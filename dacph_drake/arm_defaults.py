@@ -4,8 +4,7 @@ per-joint setting sized to the arm, so that a scenario naming only the robot (an
 q0) runs DAC (scenario files: scenario_files.load_scenario starts from it; Python:
 arm_scenario, planar_arm_scenario).
 
-The rule. Scales per joint j, from the description at q0 and the task's
-reference:
+The rule. Scales per joint j, from the description at q0 and the task's reference:
 
     M_j = M_jj(q0)      the joint's inertia in the reduced model (docs/equations.md
                         E5-E9: base free, zero momentum) [kg m^2]
@@ -16,14 +15,11 @@ reference:
                         (t past the warm-up, when the uncertainty starts)
 
 with p(t) = M(q) qdot along a kinematic rehearsal of the task from q0 for the
-warm-up and one reference period (robots.start_pose.rehearse): the coupling
-M_jk qdot_k drives a light joint's momentum far beyond M_j w (Kinova j2s6s200's
-joint 4: 4-5x), where the quadratic terms below would take its true actuator gain
-through zero; for a described arm (a planar arm: M_j w and M_j times the peak
-acceleration)
-
-and the ground truth's RHS of the paper's form (eq. 19, scenario.Uncertainty) sized
-by them, with signs alternating over the joints as the paper's two:
+warm-up and one reference period (robots.start_pose.rehearse; a planar arm: M_j w
+and M_j times the peak acceleration): the coupling M_jk qdot_k drives a light
+joint's momentum far beyond M_j w, where the quadratic terms below would take its
+true actuator gain through zero; and the ground truth's RHS of the paper's form
+(eq. 19, scenario.Uncertainty) sized by them, signs alternating as the paper's two:
 
     B0_j = 1,  D0_j = DAMPING_RATE M_j
     D_offset_j = 0.25 D0_j,  D_linear_j = 0.25 D0_j / p_j,  D_quadratic_j = -+0.1 D0_j / p_j^2
@@ -37,33 +33,31 @@ by them, with signs alternating over the joints as the paper's two:
 
 For a described arm, five factors on top: B_q1_squared is divided by the largest
 q1^2 past the warm-up where that exceeds 1 rad^2 (the paper's arm keeps |q1| <= 1
-rad; the term is the paper's at those angles); B~'s couplings (j, k) are
-multiplied by min(1, tau_j / tau_k) (scale_couplings); d's scale keeps the
-accelerations it causes through M^-1 within DISTURBANCE_ACCELERATION times the reference's
-(disturbance_scale), the excitation's per-joint scale keeps the motion it causes
-within EXCITATION_MOTION (excitation_scale), and the clearance potential's margin
-is at most half the start's clearance (potential_margin). The ground truth's fixed
-RK2 step is the largest that keeps h lambda <= 1 for the fastest damping mode
-(truth_step). A described arm's q0, when the file gives none, is
-robots.start_pose.choose_start's. The other sections are those of the shipped
-spatial scenarios (satellite_6dof):
-scenario.SATELLITE_PHASES, described_arm_periods, described_arm_rhs and
-described_arm_learner. A planar arm's are the paper's (Scenario's defaults); its
-reference alpha_d = sum_i a_i sin(2 pi t / T_i) gives w = sum_i 2 pi a_i / T_i and
-the peak acceleration sum_i a_i (2 pi / T_i)^2 (tau_j = M_j times it), M_j from the
-true arm."""
+rad); B~'s couplings (j, k) are multiplied by min(1, tau_j / tau_k)
+(scale_couplings); d's scale keeps the accelerations it causes through M^-1 within
+DISTURBANCE_ACCELERATION times the reference's (disturbance_scale); the excitation's
+per-joint scale keeps the motion it causes within EXCITATION_MOTION
+(excitation_scale); the clearance potential's margin is at most half the start's
+clearance (potential_margin). The ground truth's fixed RK2 step is the largest that
+keeps h lambda <= 1 for the fastest damping mode (truth_step). A described arm's q0,
+when the file gives none, is robots.start_pose.choose_start's; its other sections
+are the shipped spatial scenarios' (satellite_6dof: scenario.SATELLITE_PHASES,
+described_arm_periods, described_arm_rhs, described_arm_learner). A planar arm's are
+the paper's (Scenario's defaults); its reference alpha_d = sum_i a_i sin(2 pi t / T_i)
+gives w = sum_i 2 pi a_i / T_i and the peak acceleration sum_i a_i (2 pi / T_i)^2
+(tau_j = M_j times it), M_j from the true arm."""
 import copy
-from typing import TYPE_CHECKING, Optional, Sequence
+from typing import TYPE_CHECKING, Optional, Sequence, Union
 
 import numpy as np
 
+from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulator import FixedStepConfig
-from dacph_drake.scenario import (SATELLITE_PHASES, DescribedArm, Disturbance,
-                                  EndEffectorAngle, EndEffectorAttitude, Excitation,
-                                  Phases,
-                                  PlanarArm, Scenario, Uncertainty,
-                                  described_arm_learner, described_arm_periods,
-                                  described_arm_rhs)
+from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAngle,
+                                  EndEffectorAttitude, Excitation, Phases, PlanarArm,
+                                  Scenario, Uncertainty)
+from dacph_drake.built_in_scenarios import (SATELLITE_PHASES, described_arm_learner,
+                                            described_arm_periods, described_arm_rhs)
 
 if TYPE_CHECKING:
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
@@ -86,30 +80,24 @@ DISTURBANCE_ACCELERATION = 5.0  # the most d accelerates a joint, per reference'
 
 def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                  task: Optional[EndEffectorAttitude] = None) -> Scenario:
-    """The scenario of an arm, its per-joint settings sized by the module's rule.
+    """The scenario of an arm, its per-joint settings sized by the module's rule
+    (unsized where q0 has not one entry per joint: its validation names q0's length).
 
     Args:
         robot: The arm's robot section.
-        q0: The initial joint angles [rad] (default: robots.start_pose.choose_start,
-            a start within the limits, clear of the base, away from the task's
-            singularities along the reference).
+        q0: The initial joint angles [rad] (default: robots.start_pose.choose_start).
         task: The task it tracks (default EndEffectorAttitude()).
 
-    Returns:
-        The scenario (unsized where q0 does not have one entry per joint: its
-            validation names q0's length).
-
     Raises:
-        ConfigError: The robot section's assembly settings are invalid
-            (DescribedArm.ValidateAssembly), its description cannot be loaded, or
-            no start qualifies where q0 is not given."""
+        ConfigError: Bad assembly settings, an unloadable description, no start found."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
     from dacph_drake.errors import ConfigError
     from dacph_drake.robots.described import (link_base_clearance, null_space_rate,
                                               require_every_joint_moves_inertia)
     from dacph_drake.robots.description import ParsedDescription
+    from dacph_drake.robots.described import validate_assembly
     from dacph_drake.robots.start_pose import choose_start, rehearse
-    robot.ValidateAssembly()
+    validate_assembly(robot)
     parsed = ParsedDescription(robot)
     model = FloatingBaseModel(parsed.plant)
     require_every_joint_moves_inertia(model, robot.description)
@@ -167,15 +155,12 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
 
 
 def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
-    """Scales the true actuators' couplings to the joint they act on.
-
-    B~'s off-diagonal entry (j, k) (B_linear and B_q1_squared) puts a fraction of
-    actuator k's command u_k ~ tau_k into joint j; the paper's fractions (0.05 to
-    0.4) are between joints of similar size. Each is multiplied by
-    min(1, tau_j / tau_k), so that a heavy joint's actuator leaks into a light
-    one at most that fraction of the light joint's own torque: unscaled, the leak
-    can be many times the light joint's torque scale, and its true RHS is then
-    no longer dominated by its own actuator.
+    """Scales the true actuators' couplings to the joint they act on: B~'s off-diagonal
+    entry (j, k) (B_linear and B_q1_squared) puts a fraction of actuator k's command
+    u_k ~ tau_k into joint j (the paper's 0.05 to 0.4, between joints of similar size);
+    each is multiplied by min(1, tau_j / tau_k), so that a heavy joint's actuator leaks
+    into a light one at most that fraction of the light joint's own torque (unscaled,
+    its true RHS may no longer be dominated by its own actuator).
 
     Args:
         uncertainty: The sized uncertainty (changed in place).
@@ -188,44 +173,31 @@ def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
 
 
 def potential_margin(margin: float, clearance: float) -> float:
-    """The clearance potential's margin for a start's link-base clearance.
-
-    At most half the start's clearance: a link that always stays near the base (a
-    UR arm's shoulder, 3-5 cm above its mount) otherwise keeps the potential
-    pushing through the whole run, and its gradient jumps as the nearest mesh
-    features change (the UR10 from a start chosen for it: 8.3e-4 rad RMS in phase
-    3 with the 0.1 m margin, 4e-5 with 0.025 m).
+    """The clearance potential's margin [m] for a start's link-base clearance: at most
+    half of it (unchanged for a start inside the base, which validation refuses). A
+    link that always stays near the base (a UR arm's shoulder) otherwise keeps the
+    potential pushing through the whole run, its gradient jumping as the nearest mesh
+    features change.
 
     Args:
         margin: The margin otherwise (robot.potential.margin) [m].
-        clearance: The start's link-base clearance [m] (inf: beyond the query).
-
-    Returns:
-        The margin [m] (unchanged for a start inside the base: its validation
-            refuses it)."""
+        clearance: The start's link-base clearance [m] (inf: beyond the query)."""
     return min(margin, 0.5 * clearance) if clearance > 0 else margin
 
 
 def disturbance_scale(disturbance: Disturbance, M: np.ndarray,
                       acceleration: float) -> float:
-    """The disturbance's factor that keeps the accelerations it causes within
-    DISTURBANCE_ACCELERATION times the reference's peak.
-
-    d_j's peak |lf_offset_j| + lf_amplitude_j + hf_amplitude |hf_direction_j|
-    accelerates joint i by up to sum_j |(M^-1)_ij| d_j: on arms whose light joints
-    are coupled to heavy ones (a tiny wrist, a chain of nine joints, a heavy tool)
-    the torques sized to each joint's coupled inertial torque reach 13-38 times
-    the reference's acceleration, where the model-based baseline ran away in phase
-    3; the shipped Panda and UR5 stay at 4.6 and 2.5 times it (factor 1).
+    """disturbance.scale = min(1, DISTURBANCE_ACCELERATION acceleration / max_i
+    sum_j |(M^-1)_ij| d_j): it keeps the accelerations the disturbance causes within
+    DISTURBANCE_ACCELERATION times the reference's peak, as d_j's peak |lf_offset_j| +
+    lf_amplitude_j + hf_amplitude |hf_direction_j| accelerates joint i by up to
+    sum_j |(M^-1)_ij| d_j (on arms whose light joints are coupled to heavy ones: a tiny
+    wrist, a chain of nine joints, a heavy tool).
 
     Args:
         disturbance: The sized disturbance (its factor not yet applied).
         M: The reduced mass matrix at the start [kg m^2] (n x n).
-        acceleration: The reference's peak angular acceleration [rad/s^2].
-
-    Returns:
-        disturbance.scale: min(1, DISTURBANCE_ACCELERATION acceleration / max_i
-            sum_j |(M^-1)_ij| d_j)."""
+        acceleration: The reference's peak angular acceleration [rad/s^2]."""
     peak = (np.abs(disturbance.lf_offset) + np.abs(disturbance.lf_amplitude)
             + disturbance.hf_amplitude * np.abs(disturbance.hf_direction))
     reach = float(np.max(np.abs(np.linalg.inv(M)) @ peak))
@@ -234,21 +206,14 @@ def disturbance_scale(disturbance: Disturbance, M: np.ndarray,
 
 
 def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
-    """The excitation's per-joint factors that keep every joint's motion under it
-    at most EXCITATION_MOTION.
-
-    The request a_j sin(omega_j t) on joint j moves joint i by about
-    |(M^-1)_ij| a_j / omega_j^2 (the coupled inertia: on the SO-100 a request on
-    its shoulder moves the 6.5e-5 kg m^2 wrist roll further than one on the wrist
-    itself), so a_j <= EXCITATION_MOTION omega_j^2 / max_i |(M^-1)_ij|.
+    """excitation.joint_scale: each factor min(1, EXCITATION_MOTION omega_j^2 /
+    (amplitude max_i |(M^-1)_ij|)), or none where every factor is 1, so that every
+    joint's motion under the excitation is at most EXCITATION_MOTION: the request
+    a_j sin(omega_j t) on joint j moves joint i by about |(M^-1)_ij| a_j / omega_j^2.
 
     Args:
         excitation: The excitation (its amplitude and frequencies).
-        M: The reduced mass matrix at the start [kg m^2] (n x n).
-
-    Returns:
-        excitation.joint_scale: each factor min(1, EXCITATION_MOTION omega_j^2 /
-            (amplitude max_i |(M^-1)_ij|)), or none where every factor is 1."""
+        M: The reduced mass matrix at the start [kg m^2] (n x n)."""
     if excitation.amplitude <= 0:
         return []
     omega = 2 * np.pi * excitation.Frequencies(len(M))
@@ -259,13 +224,12 @@ def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
 
 def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
                uncertainty: Uncertainty, rhs_period: float) -> float:
-    """The ground truth's fixed RK2 step for an arm's fastest damping mode.
+    """The ground truth's fixed RK2 step [s] for an arm's fastest damping mode.
 
     The explicit scheme is stable for a mode decaying at rate lambda while
     h lambda <= 2; the step keeps h lambda <= STEP_RATE_PRODUCT for the fastest
     mode, the largest generalized eigenvalue of (D, M(q)) with D the description's
-    joint damping plus D0, D_offset and D_linear at the sized momentum (a damping
-    of 2 N m s/rad on a 1e-4 kg m^2 wrist decays at 2e4 1/s: h <= 5e-5 s), over
+    joint damping plus D0, D_offset and D_linear at the sized momentum, over
     the configurations given. At most the default step (loop.simulator), and
     dividing the RHS period evenly (the discrete updates stop the integrator at
     every RHS sample anyway); at least 1e-7 s (simulator.max_step_size's lower
@@ -275,10 +239,7 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
         model: The arm's model (its plant's joint damping).
         configurations: Joint angles to take the largest rate over (k x n) [rad].
         uncertainty: The sized RHS (D0 and its offset).
-        rhs_period: periods.rhs [s].
-
-    Returns:
-        The step [s]."""
+        rhs_period: periods.rhs [s]."""
     damping = model.joint_damping + 1.5 * np.asarray(uncertainty.D0, float)
     rate = 0.0
     for q in configurations[::max(len(configurations) // 16, 1)]:
@@ -300,23 +261,20 @@ def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
     and the reference's rates; without a task, the LHS damping K_d = Kd I at most
     LHS_DAMPING_RATE inf_q lambda_min(M), so that the sampled LHS loop stays well
     damped on an arm with light distal links; periods.rhs shortened where the gain
-    rule asks for it (rhs_period: c grows as Kd / inf lambda_min).
+    rule asks for it (rhs_period: c grows as Kd / inf lambda_min); the paper's phases,
+    periods, RHS and learner settings.
 
     Args:
-        robot: The robot section; the defaults' nominal arm is a copy of its truth
-            (a file that names robot.nominal overrides it).
-        q0: The start (default: the paper's q1 = 0.3 rad and its elbow's 1 rad
-            spread evenly over the other joints).
-        task: The task (default EndEffectorAngle(): the paper's reference and gains).
-
-    Returns:
-        The scenario (the paper's phases, periods, RHS and learner settings)."""
+        robot: The robot section (the defaults' nominal arm: a copy of its truth).
+        q0: The start (default: the paper's q1 = 0.3 rad, its elbow's 1 rad spread evenly).
+        task: The task (default EndEffectorAngle(): the paper's reference and gains)."""
     from dacph_drake.dynamics.plant import MakeArmPlant
+    from dacph_drake.robots.planar import validate_planar_arm
     from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
     n = robot.truth.num_links
     robot = copy.deepcopy(robot)
     robot.nominal = copy.deepcopy(robot.truth)
-    robot.Validate()            # names a bad link before its plant is built
+    validate_planar_arm(robot)  # names a bad link before its plant is built
     nominal = ReducedOrderModel(MakeArmPlant(robot.nominal))
     if task is None:
         task = EndEffectorAngle()
@@ -344,7 +302,7 @@ def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
 
 
 def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
-    """The scenario's periods.rhs, or a shorter one where the gain rule asks for it.
+    """The scenario's periods.rhs [s], or a shorter one where the gain rule asks for it.
 
     The RHS loop's largest rate c = (1 + rhs.c_margin) c_min(rhs.beta_max) (eq. 48)
     grows as 1 / inf_q lambda_min(M): an arm with light distal links needs a
@@ -353,10 +311,7 @@ def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
 
     Args:
         scenario: The scenario (its rhs settings, task.gains.Kd and periods).
-        nominal: The controller's model of the arm (mass_matrix_bounds).
-
-    Returns:
-        periods.rhs [s]."""
+        nominal: The controller's model of the arm (mass_matrix_bounds)."""
     from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
     from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound
     rhs, periods = scenario.rhs, scenario.periods
@@ -373,14 +328,11 @@ def _alternating(n: int, first: float = 1.0) -> np.ndarray:
 
 
 def sized_uncertainty(inertia: np.ndarray, momentum: np.ndarray) -> Uncertainty:
-    """The ground truth's RHS sized to the joints (module docstring).
+    """The ground truth's RHS (Uncertainty section) sized to the joints (module docstring).
 
     Args:
         inertia: The joints' inertias M_j [kg m^2].
-        momentum: The joints' momentum scales p_j [kg m^2/s].
-
-    Returns:
-        The Uncertainty section."""
+        momentum: The joints' momentum scales p_j [kg m^2/s]."""
     n = len(inertia)
     D0 = DAMPING_RATE * inertia
     p = np.asarray(momentum, float)
@@ -401,14 +353,10 @@ def sized_uncertainty(inertia: np.ndarray, momentum: np.ndarray) -> Uncertainty:
 
 
 def sized_disturbance(torque: np.ndarray) -> Disturbance:
-    """The disturbance d(t) sized to the joints (module docstring).
+    """The disturbance d(t) (Disturbance section) sized to the joints (module docstring).
 
     Args:
-        torque: The joints' inertial torques tau_j at the reference's peak
-            acceleration [N m].
-
-    Returns:
-        The Disturbance section."""
+        torque: The joints' inertial torques tau_j at the reference's peak [N m]."""
     n, largest = len(torque), float(np.max(torque))
     return Disturbance(
         lf_offset=(_alternating(n, 0.3) * torque).tolist(),
@@ -416,3 +364,20 @@ def sized_disturbance(torque: np.ndarray) -> Disturbance:
         lf_frequency=(0.05 + 0.01 * np.arange(n)).tolist(),
         hf_amplitude=0.05 * largest,
         hf_direction=(_alternating(n) * torque / largest).tolist())
+
+
+def sized_defaults(robot: Union[PlanarArm, DescribedArm], q0: Optional[Sequence[float]],
+                   task: Optional[object]) -> Optional[Scenario]:
+    """The scenario a file naming this robot starts from: every per-joint setting sized
+    to the arm (planar_arm_scenario or arm_scenario), so that a file naming only the
+    robot (and q0) runs; None for the paper's planar arm (Scenario's defaults).
+
+    Args:
+        robot: The file's robot section.
+        q0: The file's q0 [rad] (None where it leaves it out).
+        task: The file's task (None where it leaves it out)."""
+    if isinstance(robot, DescribedArm):
+        return arm_scenario(robot, q0, task)
+    if robot.truth == RobotParams():
+        return None
+    return planar_arm_scenario(robot, q0, task)

@@ -1,14 +1,7 @@
-"""Description of a planar free-floating arm: a base on a free planar joint and a
-serial chain of n revolute links, all moving in the x-y plane, zero gravity.
-
-The paper's robot (docs/equations.md, SPEC settings) is the default: base (m, a, I) = (2 kg, 0.245 m
-square, 0.02 kg m^2) with the shoulder 0.1225 m from its centre on the base x
-axis; two uniform links (1 kg, 0.3464 m, 0.01 kg m^2), centre of mass mid-link.
-
-Each link's frame sits at its proximal joint with x along the link; its centre of
-mass lies ``com`` metres along x; the next joint (or the end effector) sits at
-``length``. Descriptions load from YAML with ``pydrake.common.yaml``.
-"""
+"""Description of a planar free-floating arm: a base on a free planar joint and a serial
+chain of n revolute links in the x-y plane, zero gravity; the defaults are the paper's
+robot (docs/equations.md). Each link's frame sits at its proximal joint with x along the
+link. Descriptions load from YAML with ``pydrake.common.yaml``."""
 import dataclasses
 import logging
 import typing
@@ -30,12 +23,10 @@ class BaseParams:
 
     Attributes:
         mass: The base's mass m [kg], > 0.
-        inertia: Its inertia I about its centre of mass, z axis [kg m^2], with
-            0 < I <= m a^2 / 2 (RobotParams.Validate).
+        inertia: Its central inertia I about the z axis [kg m^2], 0 < I <= m a^2 / 2.
         size: The side a of the square [m], > 0.
-        shoulder_offset: The base centre to the shoulder joint, along the base x
-            axis [m], in [size / 2, 100 size] (the shoulder sits on or outside the
-            base's side)."""
+        shoulder_offset: Base centre to shoulder joint along the base x axis [m], in
+            [size / 2, 100 size] (the shoulder sits on or outside the base's side)."""
     mass: float = 2.0               # [kg]
     inertia: float = 0.02           # about its centre of mass, z axis [kg m^2]
     size: float = 0.245             # side of the square [m]
@@ -48,12 +39,10 @@ class LinkParams:
 
     Attributes:
         mass: The link's mass m [kg], > 0.
-        length: Its proximal joint to the next joint (or the end effector) l [m],
-            > 0.
-        inertia: Its inertia I about its centre of mass, z axis [kg m^2], with
+        length: Proximal joint to the next joint (or the end effector) l [m], > 0.
+        inertia: Its inertia I about its centre of mass, z axis [kg m^2],
             0 < I <= m (c (l - c) + w^2 / 4) (link_inertia_bound).
-        com: The proximal joint to the centre of mass c, along x [m], in
-            [0, length].
+        com: Proximal joint to the centre of mass c, along x [m], in [0, length].
         width: Its extent w across the link (geometry, inertia bound) [m], > 0."""
     mass: float = 1.0               # [kg]
     length: float = 0.3464          # joint to next joint (or end effector) [m]
@@ -81,22 +70,15 @@ class RobotParams:
         return len(self.links)
 
     def Validate(self, name: str = "robot") -> None:
-        """Checks every field against its allowed range.
-
-        Inertia bounds (mass confined to the body's outline):
-          link:  0 < I <= m (c (l - c) + w^2 / 4)   ("rod bound": the along-link part
-                 m c (l - c) is the largest inertia of mass on [0, l] with centre c, the
-                 across part m w^2 / 4 the largest over the width);
-          base:  0 < I <= m a^2 / 2                 (all mass in the square's corners).
-        The 3D lamina tensor built from these satisfies the triangle inequality
-        Ixx + Iyy >= Izz (see dynamics/plant.py) exactly because of the bound.
+        """Checks every field against its allowed range. The inertia bounds confine the mass
+        to the body's outline (links: link_inertia_bound; base: 0 < I <= m a^2 / 2, all mass
+        in the corners), which makes the plant's lamina tensor satisfy Ixx + Iyy >= Izz.
 
         Args:
             name: The robot's setting path, for the messages (e.g. robot.truth).
 
         Raises:
-            ConfigError: Naming the first invalid field and its allowed range.
-        """
+            ConfigError: Naming the first invalid field and its allowed range."""
         b = self.base
         require_positive(f"{name}.base.mass", b.mass, "kg")
         require_positive(f"{name}.base.size", b.size, "m")
@@ -120,17 +102,21 @@ class RobotParams:
                 "kg m^2 (rod bound 0 < I <= m (c (l - c) + w^2 / 4))")
 
 
-def link_inertia_bound(link: LinkParams) -> float:
-    """The largest central inertia of a link's mass (the rod bound).
+def unequal_three_link_arm() -> RobotParams:
+    """A 3-link arm with unequal, off-centre links (nothing tied to two links): the
+    tests' and scripts' second planar arm."""
+    return RobotParams(links=[
+        LinkParams(mass=1.2, length=0.30, inertia=0.008, com=0.12),
+        LinkParams(mass=0.8, length=0.25, inertia=0.004, com=0.14),
+        LinkParams(mass=0.5, length=0.20, inertia=0.002, com=0.09)])
 
-    Of mass confined to the link's l x w rectangle with its centre of mass at
-    ``com``: m (c (l - c) + w^2 / 4).
+
+def link_inertia_bound(link: LinkParams) -> float:
+    """The rod bound m (c (l - c) + w^2 / 4) [kg m^2]: the largest central inertia of mass
+    confined to the link's l x w rectangle with its centre of mass at ``com``.
 
     Args:
-        link: The link.
-
-    Returns:
-        The bound [kg m^2]."""
+        link: The link."""
     return link.mass * (link.com * (link.length - link.com) + link.width**2 / 4)
 
 
@@ -140,12 +126,8 @@ def load_robot(path: str) -> RobotParams:
     Args:
         path: The YAML file.
 
-    Returns:
-        The validated robot.
-
     Raises:
-        ConfigError: The file cannot be read, does not fit RobotParams, or holds a
-            field out of range."""
+        ConfigError: An unreadable file, one not fitting RobotParams, or out of range."""
     robot = load_yaml_dataclass(path, RobotParams)
     robot.Validate()
     return robot
@@ -162,17 +144,14 @@ def save_robot(robot: RobotParams, path: str) -> None:
 
 
 def read_yaml(path: Union[str, Path]) -> Any:
-    """Reads a YAML file as plain Python values.
+    """Reads a YAML file as plain Python values (tagged mappings as _TaggedMapping; {} when
+    empty).
 
     Args:
         path: The file.
 
-    Returns:
-        The parsed YAML file (tagged mappings as _TaggedMapping), {} when empty.
-
     Raises:
-        ConfigError: Naming the file for malformed YAML (with its line and column)
-            or a file that cannot be read."""
+        ConfigError: Naming the file: malformed YAML (line and column) or unreadable."""
     try:
         with open(path, encoding="utf-8") as f:
             raw = yaml.load(f, Loader=_TaggedLoader)
@@ -195,20 +174,12 @@ def load_yaml_dataclass(path: str, schema: Type[_Schema],
     Args:
         path: The YAML file.
         schema: The dataclass it holds.
-        noted_defaults: The top-level sections that, where the file leaves them
-            out, are named in a logged warning (they take the schema's default).
-        migrate: ``migrate(raw, path)``, if given, returns the parsed file with
-            settings of an older layout moved to their current place (or None when
-            there is nothing to move).
-        defaults: The schema object whose settings the file's replace (default:
-            the schema's own).
-
-    Returns:
-        The loaded object.
+        noted_defaults: Top-level sections the file may omit, with a logged warning.
+        migrate: ``migrate(raw, path)``: the parsed file with older settings moved, or None.
+        defaults: The schema object the file's settings replace (default: the schema's).
 
     Raises:
-        ConfigError: Malformed YAML (with its line and column), a value of the
-            wrong kind (naming the setting), unknown keys."""
+        ConfigError: Malformed YAML, a value of the wrong kind, or unknown keys."""
     raw = read_yaml(path)
     migrated = migrate(raw, path) if migrate is not None else None
     raw = migrated if migrated is not None else raw
@@ -229,8 +200,7 @@ def load_yaml_dataclass(path: str, schema: Type[_Schema],
 
 
 class _TaggedLoader(yaml.SafeLoader):
-    """PyYAML's safe loader reading a tagged node (Drake's schema types such as
-    !Uniform {min, max}) as its untagged mapping, list or scalar."""
+    """PyYAML's safe loader reading a tagged node (e.g. !Uniform) as its untagged value."""
 
 
 class _TaggedMapping(dict):
@@ -261,10 +231,7 @@ _TaggedDumper.add_representer(_TaggedMapping, lambda dumper, mapping: (
 
 
 def _check_kinds(raw, schema, where: str, name: str = "") -> None:
-    """ConfigError naming the first setting of ``raw`` (parsed YAML) whose kind does
-    not fit ``schema`` (a dataclass type, List[...], float, int or str): a mapping
-    where a section belongs, a list where a list belongs, a number where a number
-    belongs. Unknown keys are left to yaml_load_typed."""
+    """Raises ConfigError at the first setting of ``raw`` not of ``schema``'s kind."""
     shown = name or "the file"
     if typing.get_origin(schema) is typing.Union and all(
             dataclasses.is_dataclass(member) for member in typing.get_args(schema)):
@@ -295,8 +262,7 @@ def _check_kinds(raw, schema, where: str, name: str = "") -> None:
 
 
 def _reads_as_number(raw) -> bool:
-    """Whether a parsed YAML scalar is a number to Drake's YAML reader (which, unlike
-    YAML 1.1, also reads 1e-3 without a dot)."""
+    """Whether a YAML scalar is a number to Drake's YAML reader (which also reads 1e-3)."""
     if isinstance(raw, bool) or raw is None or isinstance(raw, (list, dict)):
         return False
     try:

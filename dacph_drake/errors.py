@@ -80,12 +80,8 @@ def _require(name: str, value: float, ok: bool, allowed: str) -> None:
 
 
 def require_setting_types(name: str, value: object) -> None:
-    """Requires every setting of a dataclass to have its declared kind, walked
-    recursively: a number where a float or int is declared, a list where a list is,
-    a mapping where a mapping or a section is.
-
-    YAML files are checked so when they are read (yaml_load_typed); this checks the
-    sections a Python user set, before any range check compares them.
+    """Requires every setting of a dataclass, recursively, to have its declared kind
+    (number, list, mapping or section): YAML is checked when read, this checks Python's.
 
     Args:
         name: The setting's dotted path, for the message ("" for the root).
@@ -99,9 +95,7 @@ def require_setting_types(name: str, value: object) -> None:
 
 
 def _require_kind(name: str, value: object, declared: object) -> None:
-    """Requires ``value`` to be of the ``declared`` kind (require_setting_types);
-    kinds it does not know (str, bool, Drake's types) are left to their own
-    checks."""
+    """Requires ``value`` to be of the ``declared`` kind; unknown kinds pass."""
     origin, arguments = typing.get_origin(declared), typing.get_args(declared)
     if declared in (float, int):
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
@@ -135,18 +129,15 @@ def _require_kind(name: str, value: object, declared: object) -> None:
 
 
 def require_finite_numbers(name: str, value: object) -> None:
-    """Requires every number of a setting, walked recursively, to be finite.
-
-    Fields whose value is a string by design (names, modes) are left to their own
-    checks.
+    """Requires every number of a setting, walked recursively, to be finite (fields
+    that hold strings by design are left to their own checks).
 
     Args:
         name: The setting's dotted path, for the message.
         value: A dataclass, a list or a number.
 
     Raises:
-        ConfigError: Naming the first entry that is a NaN or an infinity, or a
-            string where a number belongs."""
+        ConfigError: Naming the first NaN, infinity, or string where a number belongs."""
     if dataclasses.is_dataclass(value):
         for f in dataclasses.fields(value):
             if not _holds_strings(f.type):
@@ -163,15 +154,13 @@ def require_finite_numbers(name: str, value: object) -> None:
 
 
 def _holds_strings(declared: object) -> bool:
-    """Whether a field declared so holds strings by design: str, a list of str, a
-    mapping to str (names, modes, paths)."""
+    """Whether a field declared so holds strings (str, or a list or mapping of str)."""
     arguments = typing.get_args(declared)
     return declared is str or (typing.get_origin(declared) in (list, dict)
                                and arguments[-1] is str)
 
 
 def _plain(value):
-    """A numpy scalar as the Python number it holds (its repr names the number,
-    not np.float64), anything else unchanged."""
+    """A numpy scalar as the Python number it holds (a plain repr), else unchanged."""
     return value.item() if type(value).__module__ == "numpy" and hasattr(value, "item") \
         else value

@@ -16,7 +16,7 @@ STABILITY_MARGIN = 0.05
 
 
 def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float) -> float:
-    """The RHS decay rate's lower bound of eq. (48).
+    """The RHS decay rate's lower bound c_min [1/s] of eq. (48):
 
     c_min = 2 Td^2 lambda_max(K_d) / inf_q lambda_min(M) (1 + ln(beta_hat) / 5).
 
@@ -24,16 +24,12 @@ def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float
         Td: The time-scale separation factor T_d.
         Kd_max: lambda_max(K_d) of the LHS damping.
         lambda_min_M: inf_q lambda_min(M).
-        beta_hat: The learner's uncertainty estimate (values below 1 count as 1;
-            an array gives one bound per entry).
-
-    Returns:
-        c_min [1/s]."""
+        beta_hat: The learner's uncertainty estimate (< 1: 1; an array: a bound each)."""
     return 2 * Td**2 * Kd_max / lambda_min_M * (1 + np.log(np.maximum(beta_hat, 1.0)) / 5)
 
 
 def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
-    """Eq. (48) for an LHS damping scaled to the inertia, K_d = damping_rate M(q).
+    """c_min [1/s] of eq. (48) for an LHS damping K_d = damping_rate M(q).
 
     The paper's fastest LHS sliding rate 2 lambda_max(K_d) / inf_q lambda_min(M)
     bounds dV/dt = -s^T K_d s against V = s^T M s / 2; with K_d = damping_rate M it
@@ -44,16 +40,15 @@ def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float
     Args:
         Td: The time-scale separation factor T_d.
         damping_rate: The LHS's damping rate [1/s].
-        beta_hat: The learner's uncertainty estimate.
-
-    Returns:
-        c_min [1/s]."""
+        beta_hat: The learner's uncertainty estimate."""
     return c_lower_bound(Td, damping_rate, 1.0, beta_hat)
 
 
 def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
                    ) -> Tuple[np.ndarray, np.ndarray, Union[bool, np.ndarray]]:
-    """The decentralized integral gains k_p = c / Re(lambda_hat_p) and the DIC check.
+    """The decentralized integral gains k_p = c / Re(lambda_hat_p) and the DIC check:
+    (k, the paired eigenvalues, dic_ok), each trial's for a stack, where dic_ok says
+    det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
 
     The eigenvalue paired with channel p is the one nearest B_hat[p, p] (for the
     near-diagonal B of a decentralized arm the modes are the channels), taken in
@@ -62,10 +57,6 @@ def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
     Args:
         B_hat: The estimated input matrix (n x n), or a stack (trials, n, n).
         c: The decay rate [1/s] (per trial for a stack).
-
-    Returns:
-        (k, the paired eigenvalues, dic_ok), each trial's for a stack, where dic_ok
-            says det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
     """
     n = B_hat.shape[-1]
     stack = np.reshape(B_hat, (-1, n, n))
@@ -88,25 +79,22 @@ def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
-    """The discrete RHS loop's state matrix (analysis.rhs_loop).
-
-    With the state (u_I, tau_obs), A = [[I, -h K], [B, 0]]; per decoupled mode its
-    polynomial is z^2 - z + h k_p lambda_p.
+    """The discrete RHS loop's state matrix A (2n x 2n) (analysis.rhs_loop): with the
+    state (u_I, tau_obs), A = [[I, -h K], [B, 0]]; per decoupled mode its polynomial
+    is z^2 - z + h k_p lambda_p.
 
     Args:
         B: The port's true input matrix (n x n).
         K: The integrator's gains (n).
-        period: The RHS period h [s].
-
-    Returns:
-        A (2n x 2n)."""
+        period: The RHS period h [s]."""
     n = B.shape[0]
     return np.block([[np.eye(n), -period * np.diag(K)], [B, np.zeros((n, n))]])
 
 
 def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
                           radius: float) -> bool:
-    """Checks a new estimate's gains against the estimate in use as the truth.
+    """Whether the loop's spectral radius stays within ``radius`` with a new estimate's
+    gains if the estimate in use is the truth.
 
     The evidence that makes the integrator adopt an estimate far from the one in
     use (RhsIntegrator) may be wrong (a filtered window that still holds a change's
@@ -117,52 +105,39 @@ def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
         B_in_use: The estimate in use, taken as the truth.
         K: The new estimate's gains.
         period: The RHS period h [s].
-        radius: The largest spectral radius allowed.
-
-    Returns:
-        Whether the loop's spectral radius stays within ``radius``."""
+        radius: The largest spectral radius allowed."""
     return bool(np.max(np.abs(np.linalg.eigvals(loop_matrix(B_in_use, K, period))))
                 <= radius)
 
 
 def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float
                  ) -> Union[bool, np.ndarray]:
-    """Checks the bounded-learning-error condition, made operational.
+    """The bounded-learning-error condition, made operational: whether every paired
+    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the anchor's ``nominal``
+    (B0's, or the estimate in use's: Rhs.trust_anchor), 1 / trust_ratio <=
+    Re(lambda_hat_p) / lambda0_p <= trust_ratio (a bool, or one per trial for a stack).
 
-    Every paired eigenvalue of B_hat must lie within a factor ``trust_ratio`` of the
-    anchor's ``nominal`` (B0's, or those of the estimate in use:
-    Rhs.trust_anchor), 1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <=
-    trust_ratio.
-
-    Why: the discrete RHS loop of mode p has the loop gain
-    g_p = h k_p lambda~_p = h c lambda~_p / Re(lambda_hat_p); it is stable for g_p < 1
-    and well damped for g_p <= 1/4. A learned eigenvalue far below the true one (a
-    biased estimate, e.g. while an unmodelled disturbance acts) makes g_p exceed 1
-    and the loop diverges within milliseconds. Rejecting such estimates keeps
-    g_p <= h c trust_ratio lambda~_p / lambda0_p. Anchored at the estimate in use,
-    one accepted refresh changes every mode's loop gain by at most trust_ratio:
-    a loop that ran on a right estimate stays certified after any accepted step
-    (analysis.rhs_loop: at the defaults the loop is certified for
-    lambda~_p / lambda_hat_p in [0.45, 4.2]), while an estimate that follows the
+    The discrete RHS loop of mode p has the loop gain g_p = h k_p lambda~_p =
+    h c lambda~_p / Re(lambda_hat_p), stable for g_p < 1 and well damped for
+    g_p <= 1/4; a learned eigenvalue far below the true one makes g_p exceed 1.
+    Rejecting such estimates keeps g_p <= h c trust_ratio lambda~_p / lambda0_p.
+    Anchored at the estimate in use, one accepted refresh changes every mode's loop
+    gain by at most trust_ratio: a loop that ran on a right estimate stays certified
+    after any accepted step (analysis.rhs_loop), while an estimate that follows the
     truth away from B0 is no longer refused.
 
     Args:
         paired: B_hat's paired eigenvalues (n), or a stack (trials, n).
         nominal: The anchor's eigenvalues.
-        trust_ratio: The allowed factor.
-
-    Returns:
-        Whether they are within it (a bool, or one per trial for a stack)."""
+        trust_ratio: The allowed factor."""
     ratio = paired.real / np.asarray(nominal, float)
     within = np.all((ratio >= 1.0 / trust_ratio) & (ratio <= trust_ratio), axis=-1)
     return bool(within) if within.ndim == 0 else within
 
 
 def check_period_order(periods: Periods) -> None:
-    """Refuses periods that break the time-scale separation.
-
-    The RHS must be faster than the LHS, the LHS no slower than the learner's
-    sampling, the sampling no slower than training.
+    """Refuses periods that break the time-scale separation: the RHS must be faster than
+    the LHS, the LHS no slower than the learner's sampling, nor the sampling than training.
 
     Args:
         periods: The scenario's periods.
@@ -184,15 +159,13 @@ def check_period_order(periods: Periods) -> None:
 
 def check_rhs_period(periods: Periods, c_nominal: float, c_largest: float,
                      beta_max: float) -> None:
-    """Refuses an RHS period that cannot realize the integrator's largest decay rate.
-
-    The loop must stay well damped, g = h c <= 1/4 (WELL_DAMPED_LOOP_GAIN).
+    """Refuses an RHS period that cannot realize the integrator's largest decay rate: the
+    loop must stay well damped, g = h c <= 1/4 (WELL_DAMPED_LOOP_GAIN).
 
     Args:
         periods: The scenario's periods.
         c_nominal: The rate at beta_hat = 1, where every run starts [1/s].
-        c_largest: The largest rate the integrator may run,
-            (1 + c_margin) c_min(beta_max) [1/s].
+        c_largest: The integrator's largest rate, (1 + c_margin) c_min(beta_max) [1/s].
         beta_max: rhs.beta_max, for the message.
 
     Raises:

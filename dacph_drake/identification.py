@@ -1,14 +1,11 @@
-"""Online identification of the RHS (paper section "RHS Control and Learning", SPEC
-section 6): the regression the learner solves, its band-pass prefilter and its
-change detector, free of Drake so they can be tested on synthetic data.
+"""Online identification of the RHS (paper section "RHS Control and Learning", SPEC section
+6), free of Drake: the learner's regression, its band-pass prefilter and its change
+detector. A port sample [q, p, qdot, u, tau_obs] (PortSample) is one instant of the port
+relation (the paper's tau_breve model)
 
-A port sample is one instant of the port relation (the paper's tau_breve model)
+    tau_obs = B~(x) u - D~(x) qdot + d(t),      x = (q, p),
 
-    tau_obs = B~(x) u - D~(x) qdot + d(t),      x = (q, p)
-
-laid out as [q, p, qdot, u, tau_obs] (PortSample). The learner fits the network's
-B_hat(x), D_hat(x) (network.RhsNetwork) to a window of such samples.
-"""
+to which the learner fits the network's B_hat(x), D_hat(x) (network.RhsNetwork)."""
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
 
@@ -20,13 +17,11 @@ from dacph_drake.scenario import Learner
 
 
 class PortSample:
-    """The column layout of a port sample [q, p, qdot, u, tau_obs] (n entries each).
-
-    The band-pass acts on the ``regressed`` part [qdot, u, tau_obs].
+    """The column layout [q, p, qdot, u, tau_obs] (n each) of a port sample; the band-pass
+    acts on its ``regressed`` part [qdot, u, tau_obs].
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         self.q, self.p = slice(0, n), slice(n, 2 * n)
@@ -37,22 +32,19 @@ class PortSample:
 
 
 class BandPassCascade:
-    """A cascade of first-order sections sampled at ``period`` h,
+    """A cascade of first-order sections sampled at h, high-pass ones then low-pass ones,
 
         low-pass  y_k = y_(k-1) + a (x_k - y_(k-1)),   a = 1 - exp(-2 pi f h)
-        high-pass x_k - (the low-pass of x at f)
+        high-pass x_k - (the low-pass of x at f),
 
-    ``high_sections`` high-pass sections at ``low`` Hz, then ``low_sections``
-    low-pass sections at ``high`` Hz. The state is one row per section (the
-    low-pass memory of that section), so it can live in a Drake Context.
+    its state one row per section (its low-pass memory), so it can live in a Drake Context.
 
     Args:
         low: The high-pass sections' corner frequency f [Hz].
         high: The low-pass sections' corner frequency f [Hz].
         high_sections: The number of high-pass sections.
         low_sections: The number of low-pass sections.
-        period: The sample period h [s].
-    """
+        period: The sample period h [s]."""
 
     def __init__(self, low: float, high: float, high_sections: int, low_sections: int,
                  period: float):
@@ -65,14 +57,11 @@ class BandPassCascade:
         return len(self.gains)
 
     def Step(self, state: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-        """Filters one input sample.
+        """Filters one input sample: (next state, output).
 
         Args:
             state: The cascade's state (num_sections, len(x)).
-            x: The input sample.
-
-        Returns:
-            (next state, output)."""
+            x: The input sample."""
         state = state.copy()
         y = np.asarray(x, float)
         for i, (a, high) in enumerate(zip(self.gains, self.is_high_pass)):
@@ -81,13 +70,10 @@ class BandPassCascade:
         return state, y
 
     def Filter(self, x: np.ndarray) -> np.ndarray:
-        """Filters a sequence from a zero state.
+        """Filters a sequence from a zero state (the output has x's shape).
 
         Args:
-            x: The sequence, one sample per row.
-
-        Returns:
-            The filtered sequence (x's shape)."""
+            x: The sequence, one sample per row."""
         state = np.zeros((self.num_sections, x.shape[1]))
         out = np.empty_like(x, dtype=float)
         for k, row in enumerate(x):
@@ -96,22 +82,15 @@ class BandPassCascade:
 
 
 class PortEvidence:
-    """Port samples' second moments with exponential forgetting.
-
-    The second moments of the regressed part z = [qdot, u, tau_obs] of port
-    samples with exponential forgetting, G <- a G + z z^T (a = exp(-h / window) per
-    sample period h), as a vector [vec(G) (3n x 3n), sum of weights] that can live
-    in a Drake Context; Residual(B, D) is then
-    sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2 for any constant B, diagonal D, with
-    no samples kept.
+    """Port samples' second moments G <- a G + z z^T, z = [qdot, u, tau_obs], a =
+    exp(-h/window), as a vector [vec(G) (3n x 3n), sum of weights] that can live in a Drake
+    Context: Residual(B, D) then needs no samples kept.
 
     Args:
         n: The number of joints.
         sample_period: The sample period h [s].
         window: The forgetting's time constant [s].
-        columns: Where [qdot, u, tau_obs] lie in a sample (default: the
-            PortSample layout's regressed part).
-    """
+        columns: Where [qdot, u, tau_obs] lie in a sample (None: PortSample.regressed)."""
 
     def __init__(self, n: int, sample_period: float, window: float,
                  columns: Optional[np.ndarray] = None):
@@ -121,15 +100,11 @@ class PortEvidence:
         self._columns = PortSample(n).regressed if columns is None else columns
 
     def Update(self, state: np.ndarray, sample: np.ndarray) -> np.ndarray:
-        """The statistics after one more port sample.
+        """The statistics after one more port sample (state's shape).
 
         Args:
             state: The statistics (size), or each trial's stacked (trials, size).
-            sample: The PortSample, or each trial's stacked (trials, PortSample
-                size).
-
-        Returns:
-            The new statistics (state's shape)."""
+            sample: The PortSample, or each trial's stacked (trials, PortSample size)."""
         m = 3 * self.n
         z = np.asarray(sample, float)[..., self._columns]
         out = self.decay * state
@@ -139,15 +114,12 @@ class PortEvidence:
         return out
 
     def Residual(self, state: np.ndarray, B: np.ndarray, D: np.ndarray) -> float:
-        """The weighted residual sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2.
+        """The weighted residual sum_k w_k ||tau_k - (B u_k - D qdot_k)||^2 per unit weight.
 
         Args:
             state: The statistics (size).
             B: The input matrix (n x n).
-            D: The damping's diagonal (n).
-
-        Returns:
-            The residual per unit weight."""
+            D: The damping's diagonal (n)."""
         n, m = self.n, 3 * self.n
         A = np.hstack([np.diag(D), -B, np.eye(n)])        # residual = A z
         G = state[:m * m].reshape(m, m)
@@ -155,57 +127,40 @@ class PortEvidence:
 
     @staticmethod
     def Weight(state: np.ndarray) -> float:
-        """The samples' total weight.
+        """The samples' total weight (in samples).
 
         Args:
-            state: The statistics (size).
-
-        Returns:
-            The weight (in samples)."""
+            state: The statistics (size)."""
         return float(state[-1])
 
 
 @dataclass
 class FitStatistics:
-    """The fit of the current network on the weighted window.
-
-    For a batch (RhsIdentifier.StatisticsOfTrials) each field holds every trial's.
+    """The fit of the current network on the weighted window (per trial for a batch).
 
     Attributes:
         loss: sum w ||r||^2, r the residual of the port relation.
         nominal_loss: The same for (B0, D0).
-        beta_hat: 1 + RMS residual / RMS tau (the gain rule's uncertainty
-            estimate).
-    """
+        beta_hat: 1 + RMS residual / RMS tau (the gain rule's uncertainty estimate)."""
     loss: float
     nominal_loss: float
     beta_hat: float
 
 
 class RhsIdentifier:
-    """The learner's regression on a window of port samples (rows [t, PortSample]).
+    """The learner's regression on windows of port samples (rows [t, PortSample]): Adam on
 
-    plain (the paper): Adam on mean ||tau - (B_hat(x) u - D_hat(x) qdot)||^2.
-    regularized: Adam on
+        plain (the paper): mean ||tau - (B_hat(x) u - D_hat(x) qdot)||^2,
+        regularized: [sum_k w_k ||r_k||^2
+                      + rho (sum_k w_k sum_ij E_ij (B_hat_ij(x_k) - B0_ij)^2
+                             + E_q sum_k w_k ||D_hat(x_k) - D0||^2)] / (E_u + E_q),
+        w_k = exp(-(t - t_k) / forgetting) (0 before window_start), sum_k w_k = 1,
+        E_u = sum w ||u||^2 / n,  E_q = sum w ||qdot||^2 / n,
+        E_ij = E_u ("pooled") or max(E_i, E_j), E_j = sum w u_j^2 ("per_input").
 
-        [sum_k w_k ||r_k||^2 + rho (sum_k w_k sum_ij E_ij (B_hat_ij(x_k) - B0_ij)^2
-                                   + E_q sum_k w_k ||D_hat(x_k) - D0||^2)] / (E_u + E_q)
-
-    with w_k = exp(-(t - t_k) / forgetting) (zero before ``window_start``),
-    normalized to sum 1, E_u = sum w ||u||^2 / n, E_q = sum w ||qdot||^2 / n, and
-    E_ij = E_u for every entry (settings.prior_scale "pooled") or
-    max(E_i, E_j), E_j = sum w u_j^2 ("per_input"). The prior term keeps at
-    (B0, D0) what the window does not inform; dividing by E_u + E_q makes rho
-    dimensionless and the loss O(1) for Adam. ``coupling`` is
-    the network's coupling scale F (network.coupling_factors; None: all ones).
-
-    One identifier serves a batch of trials (ForTrials; the constructor makes a
-    batch of one): the trials' networks are one network.StackedRhsNetworks and
-    Adam runs on the stacked parameters with moments and step counts per trial
-    (Adam is elementwise, so these are independent optimizers), so one forward and
-    backward pass fits every trial; the ...OfTrials methods take the trials'
-    windows stacked (trials, samples, 1 + PortSample size), which share their
-    sample times. The networks and Adam's moments are this object's state.
+    The prior term holds at (B0, D0) what the window does not inform; dividing by E_u + E_q
+    makes rho dimensionless and the loss O(1) for Adam. One identifier fits a batch
+    (ForTrials): one StackedRhsNetworks, Adam with moments per trial.
 
     Args:
         n: The number of joints.
@@ -213,9 +168,7 @@ class RhsIdentifier:
         B0: The prior B (n x n).
         D0: The prior diag D (n).
         seed: The seed of the network's initial weights.
-        coupling: The network's coupling scale F (network.coupling_factors; None:
-            all ones).
-    """
+        coupling: The network's coupling scale F (coupling_factors; None: all ones)."""
 
     def __init__(self, n: int, settings: Learner, B0: np.ndarray, D0: np.ndarray,
                  seed: int, coupling: Optional[np.ndarray] = None):
@@ -225,7 +178,7 @@ class RhsIdentifier:
     def ForTrials(cls, n: int, settings: Learner, B0s: Sequence[np.ndarray],
                   D0s: Sequence[np.ndarray], seeds: Sequence[int],
                   couplings: Sequence[Optional[np.ndarray]]) -> "RhsIdentifier":
-        """Makes an identifier of one network per trial.
+        """An identifier of one network per trial.
 
         Args:
             n: The number of joints.
@@ -233,10 +186,7 @@ class RhsIdentifier:
             B0s: Each trial's prior B (n x n).
             D0s: Each trial's prior diag D (n).
             seeds: Each trial's seed of its network's initial weights.
-            couplings: Each trial's coupling scale F (None: all ones).
-
-        Returns:
-            The identifier."""
+            couplings: Each trial's coupling scale F (None: all ones)."""
         self = object.__new__(cls)
         self._Build(n, settings, B0s, D0s, seeds, couplings)
         return self
@@ -267,17 +217,13 @@ class RhsIdentifier:
 
     def Weights(self, times: torch.Tensor, t_now: float, window_starts: Sequence[float]
                 ) -> torch.Tensor:
-        """The samples' weights, normalized to sum 1 per trial.
-
-        Uniform in plain mode.
+        """The samples' weights (trials, samples), normalized to sum 1 per trial (uniform in
+        plain mode).
 
         Args:
             times: The samples' times (trials, samples) [s].
             t_now: The current time [s].
-            window_starts: Each trial's window start [s] (zero weight before it).
-
-        Returns:
-            The weights (trials, samples)."""
+            window_starts: Each trial's window start [s] (zero weight before it)."""
         if not self._regularized:
             w = torch.ones_like(times)
         else:
@@ -310,29 +256,17 @@ class RhsIdentifier:
 
     def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float,
                     trial: int = 0) -> np.ndarray:
-        """The constant B that best fits a trial's window with the current D_hat.
-
-        The constant B that, with the current D_hat(x), minimizes the regularized
-        loss on the window (the loss restricted to B_hat independent of x): row i by
-        weighted ridge least squares of tau_i + D_hat_i(x) qdot_i on u, each B_ij
-        held to its prior B0_ij with the loss's weight rho E_ij divided by F_ij^2 for
-        the network's coupling scale F (network.coupling_factors): the network moves
-        B_ij in steps F_ij times its own, so a coupling from a heavy joint into a
-        light one (F_ij = m_i / m_j << 1) stays near its prior here as it does in
-        training (fitted freely, such a coupling's error of 0.007 from the 3-DOF
-        arm's shoulder into its forearm roll made the attitude error 6x the
-        learner-off loop's). D is left to Adam: on heavy joints it is hardly in the
-        data (a fitted D ended the 6-DOF arm's disturbance phase at 2.3 times the
-        prior's error).
+        """The constant B (n x n) that best fits a trial's window with the current D_hat(x):
+        row i by weighted ridge least squares of tau_i + D_hat_i qdot_i on u, B_ij held to
+        B0_ij with weight rho E_ij / F_ij^2, since the network moves B_ij in steps F_ij
+        times its own (a coupling into a light joint stays near its prior, as in training).
+        D is left to Adam: on heavy joints it is hardly in the data.
 
         Args:
             rows: Trial ``trial``'s window (samples, 1 + PortSample size).
             t_now: The current time [s].
             window_start: The window's start [s] (zero weight before it).
-            trial: The trial.
-
-        Returns:
-            B (n x n)."""
+            trial: The trial."""
         times, q, p, qdot, u, tau = self._Split(rows[None])
         w = self.Weights(times, t_now, [window_start])[0].numpy()
         with torch.no_grad():
@@ -356,14 +290,9 @@ class RhsIdentifier:
 
     def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float,
                   trial: int = 0) -> None:
-        """Restarts a trial's B_hat at the constant fit of its window.
-
-        Sets trial ``trial``'s B_hat to the constant fit of its window ``rows``
-        (ConstantFit: B's output layer with zero weights and the bias that gives
-        it) and restarts Adam's moments of that layer (only: fresh moments make
-        Adam's next steps about lr on every parameter they concern, which would
-        kick D_hat too): after a hold the new relation's best constant B, not the
-        old estimate, is where Adam starts.
+        """Restarts a trial's B_hat at its window's ConstantFit (after a hold Adam starts
+        from the new relation's best constant B) and Adam's moments of that layer only
+        (fresh moments make Adam's next steps about lr, which would kick D_hat).
 
         Args:
             rows: The trial's window (samples, 1 + PortSample size).
@@ -376,34 +305,26 @@ class RhsIdentifier:
         self._m[trial, head] = self._v[trial, head] = self._steps[trial, head] = 0.0
 
     def Fit(self, rows: np.ndarray, t_now: float, window_start: float = -np.inf) -> bool:
-        """FitTrials of a batch of one.
+        """FitTrials of a batch of one: whether its steps were kept.
 
         Args:
             rows: The window (samples, 1 + PortSample size).
             t_now: The current time [s].
-            window_start: The window's start [s].
-
-        Returns:
-            Whether its steps were kept."""
+            window_start: The window's start [s]."""
         return bool(self.FitTrials(rows[None], t_now, [window_start], np.array([True]))[0])
 
     def FitTrials(self, rows: np.ndarray, t_now: float, window_starts: Sequence[float],
                   fitting: np.ndarray) -> np.ndarray:
-        """Takes settings.steps_per_update Adam steps of some trials.
-
-        Each on its window. In regularized mode with settings.step_guard = G > 0 a
-        trial's steps are undone when its window's loss after them exceeds G times
-        its value before them, L_after > G L_before (Learner.step_guard: the
-        network's parameters go back, Adam's moments keep the gradients seen).
+        """Takes settings.steps_per_update Adam steps of some trials; in regularized mode
+        with step_guard G > 0 a trial's steps are undone if its loss after them exceeds G
+        times its loss before (Adam's moments keep the gradients seen). Returns which
+        trials' steps were kept (False for the others).
 
         Args:
             rows: The trials' windows (trials, samples, width).
             t_now: The current time [s].
             window_starts: Each trial's window start [s].
-            fitting: Which trials to fit (a mask, (trials,)).
-
-        Returns:
-            Which trials' steps were kept (False for the others)."""
+            fitting: Which trials to fit (a mask, (trials,))."""
         trials = np.flatnonzero(fitting)
         kept = np.zeros(len(fitting), bool)
         if not len(trials):
@@ -434,9 +355,7 @@ class RhsIdentifier:
         return kept
 
     def _AdamStep(self, trials: np.ndarray, every: bool) -> None:
-        """One Adam step (torch.optim.Adam's update, settings' learning rate, betas
-        and eps) of the trials ``trials`` (``every``: all of them), each parameter
-        of each trial with its own moments and step count."""
+        """One torch.optim.Adam step of ``trials`` (``every``: all), moments per trial."""
         s, flat = self._settings, self.network.flat
         rows = slice(None) if every else torch.as_tensor(trials)
         with torch.no_grad():
@@ -450,33 +369,26 @@ class RhsIdentifier:
 
     def Statistics(self, rows: np.ndarray, t_now: float,
                    window_start: float = -np.inf) -> FitStatistics:
-        """FitStatistics of a batch of one (StatisticsOfTrials).
+        """FitStatistics of a batch of one (StatisticsOfTrials), as floats.
 
         Args:
             rows: The window (samples, 1 + PortSample size).
             t_now: The current time [s].
-            window_start: The window's start [s].
-
-        Returns:
-            The FitStatistics, as floats."""
+            window_start: The window's start [s]."""
         stats = self.StatisticsOfTrials(rows[None], t_now, [window_start])
         return FitStatistics(*(float(x[0]) for x in (stats.loss, stats.nominal_loss,
                                                      stats.beta_hat)))
 
     def StatisticsOfTrials(self, rows: np.ndarray, t_now: float,
                            window_starts: Sequence[float]) -> FitStatistics:
-        """FitStatistics of each trial on its window.
-
-        Weighted by recency in regularized mode; by default the samples before a
-        change included: they show the stale model's misfit.
+        """FitStatistics (fields of shape (trials,)) of each trial on its window,
+        recency-weighted in regularized mode, the samples before a change included: they
+        show the stale model's misfit.
 
         Args:
             rows: The trials' windows (trials, samples, width).
             t_now: The current time [s].
-            window_starts: Each trial's window start [s].
-
-        Returns:
-            The FitStatistics, fields of shape (trials,)."""
+            window_starts: Each trial's window start [s]."""
         times, q, p, qdot, u, tau = self._Split(rows)
         w = self.Weights(times, t_now, window_starts)
         with torch.no_grad():
@@ -489,15 +401,11 @@ class RhsIdentifier:
                              beta_hat=1.0 + np.sqrt(loss / np.maximum(signal, 1e-300)))
 
     def RelativeResiduals(self, rows: np.ndarray) -> np.ndarray:
-        """Each trial's relative residual on its rows.
-
-        sqrt(sum ||r||^2 / sum ||tau||^2) of each trial's network.
+        """Each trial's relative residual sqrt(sum ||r||^2 / sum ||tau||^2) on its rows
+        (trials,).
 
         Args:
-            rows: The trials' rows (trials, samples, width).
-
-        Returns:
-            The residuals (trials,)."""
+            rows: The trials' rows (trials, samples, width)."""
         _, q, p, qdot, u, tau = self._Split(rows)
         with torch.no_grad():
             residual = tau - port_torque(*self.network(q, p), u, qdot)
@@ -506,15 +414,12 @@ class RhsIdentifier:
 
     def Estimate(self, q: np.ndarray, p: np.ndarray, trial: int = 0
                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """A trial's estimate at one state.
+        """A trial's estimate (B_hat (n x n), diag D_hat (n,)) at one state.
 
         Args:
             q: The joint angles (n) [rad].
             p: The port's momentum (n).
-            trial: The trial.
-
-        Returns:
-            (B_hat (n x n), diag D_hat (n,))."""
+            trial: The trial."""
         with torch.no_grad():
             B, D = self.network(torch.as_tensor(q)[None, None],
                                 torch.as_tensor(p)[None, None], [trial])
@@ -526,22 +431,16 @@ class RhsIdentifier:
 
 
 class ChangeDetector:
-    """Flags an abrupt change of the port relation.
-
-    Its state is a vector (so it can live in a Drake Context): [hold_until,
-    window_start, count, history (H)], the history holding the last H relative
-    residuals of the newest samples.
-
-    Update(state, t, e_new): while t < hold_until nothing happens; otherwise, when
-    at least MIN_HISTORY residuals are known and e_new > ratio * median(history) and
-    e_new > floor, a change is detected: hold_until = window_start = t + hold and the
+    """Flags an abrupt change of the port relation. State (a vector, for a Drake Context):
+    [hold_until, window_start, count, the newest samples' last HISTORY relative residuals].
+    Update: nothing while t < hold_until; a change if MIN_HISTORY residuals are known and
+    e_new > max(ratio median(history), floor): hold_until = window_start = t + hold, the
     history restarts; else e_new joins the history.
 
     Args:
         ratio: The jump over the history's median that is a change.
         floor: The smallest residual that is a change.
-        hold: How long training pauses after a change [s].
-    """
+        hold: How long training pauses after a change [s]."""
 
     HISTORY = 30
     MIN_HISTORY = 5
@@ -554,64 +453,44 @@ class ChangeDetector:
         """The state at the start: no history.
 
         Args:
-            hold_until: When > 0, as if a change had been detected at t = 0
-                (holding, window from hold_until) [s].
-
-        Returns:
-            The state."""
+            hold_until: When > 0, as if a change had been detected at t = 0 [s]."""
         return np.concatenate([[hold_until, hold_until, 0.0], np.zeros(cls.HISTORY)])
 
     @staticmethod
     def Holding(state: np.ndarray, t: float) -> bool:
-        """Whether training holds at time t after a change.
+        """Whether training holds at time t after a change: t < hold_until.
 
         Args:
             state: The detector's state.
-            t: The time [s].
-
-        Returns:
-            t < hold_until."""
+            t: The time [s]."""
         return t < state[0]
 
     @staticmethod
     def WindowStart(state: np.ndarray) -> float:
-        """The start of the window after the last change.
+        """window_start [s], the start of the window after the last change.
 
         Args:
-            state: The detector's state.
-
-        Returns:
-            window_start [s]."""
+            state: The detector's state."""
         return float(state[1])
 
     def Changed(self, state: np.ndarray, t: float) -> np.ndarray:
-        """The state after a change known at time t (not detected from the residual).
-
-        hold_until = window_start = t + hold, the history restarts.
+        """The state after a change known at time t (hold_until = window_start = t + hold).
 
         Args:
             state: The detector's state.
-            t: The change's time [s].
-
-        Returns:
-            The new state."""
+            t: The change's time [s]."""
         state = state.copy()
         state[0] = state[1] = t + self._hold
         state[2] = 0.0
         return state
 
     def Update(self, state: np.ndarray, t: float, e_new: float) -> np.ndarray:
-        """The state after the newest samples' relative residual.
-
-        See the class docstring.
+        """The state after the newest samples' relative residual (class docstring).
 
         Args:
             state: The detector's state.
             t: The time [s].
-            e_new: The newest samples' relative residual.
-
-        Returns:
-            The new state."""
+            e_new: The newest samples' relative residual."""
         state = state.copy()
         if t < state[0] or not np.isfinite(e_new):
             return state
@@ -627,15 +506,11 @@ class ChangeDetector:
 
 
 def NewestRows(rows: np.ndarray, t_now: float, period: float) -> np.ndarray:
-    """The rows sampled in the last ``period`` before t_now.
+    """The rows sampled in the last ``period`` before t_now (along the next-to-last axis).
 
     Args:
-        rows: A batch's windows (trials, samples, width), which share their sample
-            times, or one window (samples, width); the time in column 0.
+        rows: A batch's windows (trials, samples, width) or one; the time in column 0.
         t_now: The current time [s].
-        period: How far back to take the rows [s].
-
-    Returns:
-        Those rows, along the next-to-last axis."""
+        period: How far back to take the rows [s]."""
     times = rows.reshape((-1,) + rows.shape[-2:])[0, :, 0]       # the first window's
     return rows[..., times > t_now - period + 1e-12, :]

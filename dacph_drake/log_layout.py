@@ -1,10 +1,10 @@
 """Column layout of the controllers' logs, shared by the systems that write them
-(LhsController, RhsIntegrator, RhsLearner, AttitudeController) and the metrics, figures and checks that read them."""
+(LhsController, RhsIntegrator, RhsLearner, AttitudeController) and the metrics, figures
+and checks that read them."""
 
 
 class LhsLog:
-    """The columns of the LHS controller's log.
-
+    """The columns of the LHS controller's log,
     lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)].
 
     Args:
@@ -18,8 +18,7 @@ class LhsLog:
 
 
 class RhsLog:
-    """The columns of the RHS integrator's log.
-
+    """The columns of the RHS integrator's log,
     rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted,
     certified, set_slowest, set_fastest]: trusted is 1 when this refresh adopted
     the learner's estimate; certified 1 while the estimate in use was adopted on its
@@ -39,9 +38,8 @@ class RhsLog:
 
 
 class RhsState:
-    """The RHS integrator's two discrete-state groups (RhsIntegrator).
-
-    Read by index in kernels.loop.integrator_sample:
+    """The RHS integrator's two discrete-state groups (RhsIntegrator), read by index in
+    kernels.loop.integrator_sample:
 
     fast, every RHS period:  [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]
     model, every model period: [vec(B_hat^-1) (n*n), D_hat (n), K (n), c, c_min,
@@ -72,20 +70,17 @@ class RhsState:
 
 class LearnerLog:
     """learner_log = [loss, beta_hat, nominal loss, holding, network published,
-    undetermined, restarts, physical]: the learner's fitted model's weighted squared
-    residual on the window, the gain rule's uncertainty estimate 1 + RMS residual /
-    RMS tau_obs, the same residual of the nominal RHS (B0, D0) on the same samples,
-    1 while nothing is learned (training paused after a change,
-    identification.ChangeDetector; no row of the local model determined), 1 while
-    some published quantity is learned, 0 while all are the prior's
-    (Learner.prior_fallback, a local model's undetermined rows; 0 in the
-    learner-off ablation), the share of the n^2 + n quantities [B, diag D]
-    published at the prior, the rows restarted this update (a change in their
-    newest samples, learning.local_bayes), and physical: 1 while the observed port
-    is in physical units, 0 once the inertial identifier reported the
-    controller's kinematics mismatched (scenario.inertia.fit_tolerance): the
-    learned B and D are then the port's as the model sees it, which serves the
-    loop, and the metrics count them as the prior against the truth."""
+    undetermined, restarts, physical]: the fitted model's weighted squared residual on
+    the window; the gain rule's 1 + RMS residual / RMS tau_obs; the nominal RHS's (B0,
+    D0) residual on the same samples; 1 while nothing is learned (training paused after
+    a change, identification.ChangeDetector; no row of the local model determined); 1
+    while some published quantity is learned, 0 while all are the prior's
+    (Learner.prior_fallback, a local model's undetermined rows; 0 in the learner-off
+    ablation); the share of the n^2 + n quantities [B, diag D] published at the prior;
+    the rows restarted this update (learning.local_bayes); physical: 1 while the
+    observed port is in physical units, 0 once the inertial identifier reported the
+    kinematics mismatched (scenario.inertia.fit_tolerance): the learned B and D are then
+    the port's as the model sees it, and the metrics count them as the prior."""
 
     def __init__(self):
         (self.loss, self.beta_hat, self.nominal_loss, self.holding,
@@ -103,3 +98,14 @@ class AttitudeLog:
         self.e_norm, self.s_norm, self.lyapunov_V, self.clearance = 3, 4, 5, 6
         self.desired = slice(7, 11)
         self.size = 11
+
+
+class PoseLog(AttitudeLog):
+    """pose_log = attitude_log's columns, then e_p = p_E - p_d (3), |e_p|, p_d (3), in
+    m (the pose task's AttitudeController)."""
+
+    def __init__(self):
+        super().__init__()
+        self.e_position, self.e_position_norm = slice(11, 14), 14
+        self.desired_position = slice(15, 18)
+        self.size = 18

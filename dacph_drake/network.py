@@ -5,12 +5,9 @@
     D_hat(x) = diag(softplus(W_D h_D + b_D))      (positive definite)
     tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
 
-Trained in torch (float64); the fast loops evaluate an exported copy of the
-weights, compiled (``ExportedNetwork.Evaluate``), so torch never runs inside them.
-The output layers start at zero with biases vec(B0 / F) and softplus^-1(D0): the first estimate is the
-nominal RHS. F is the coupling scale (``coupling_factors``): all ones (the paper's
-network) unless the learner's ``coupling`` setting is "inertia".
-"""
+Trained in torch (float64); the fast loops evaluate a compiled, exported copy
+(ExportedNetwork), so torch never runs inside them. The output layers start at zero with
+biases vec(B0 / F) and softplus^-1(D0): the first estimate is the nominal RHS."""
 from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -21,28 +18,22 @@ from dacph_drake.dynamics import ReducedModel
 from dacph_drake.scenario import LEARNER_COUPLINGS, Learner
 
 if TYPE_CHECKING:
-    from dacph_drake.learning import PortEstimate
+    from dacph_drake.learning.protocol import PortEstimate
 
 
 def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarray:
-    """The coupling scale F (n x n) of B_hat = F o mat(W_B h_B + b_B).
+    """The coupling scale F (n x n) of B_hat = F o mat(W_B h_B + b_B):
 
         "uniform": F_ij = 1 (the paper's network)
         "inertia": F_ij = min(1, m_i / m_j),  m = ``joint_inertias`` (diag M(q0))
 
-    With "inertia", the network's output for the coupling from a heavy joint j into
-    a light joint i is scaled down by m_i / m_j, and so are its learning steps.
     Why: an error delta in B_ij adds delta u_j to joint i's torque; where u_j is a
-    shoulder's N m and joint i a wrist of 1e-3 kg m^2, no in-band data bound delta
-    tightly enough (docs/results/spatial.md). Couplings into heavier joints and
-    the diagonal keep F = 1.
+    shoulder's and joint i a light wrist, no in-band data bound delta tightly enough, so
+    that coupling and its learning steps are scaled down by m_i / m_j.
 
     Args:
         coupling: "uniform" or "inertia" (the learner's ``coupling`` setting).
         joint_inertias: diag M(q0), m above.
-
-    Returns:
-        F.
 
     Raises:
         ValueError: An unknown ``coupling``."""
@@ -56,27 +47,20 @@ def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarr
 
 def port_torque(B: torch.Tensor, D: torch.Tensor, u: torch.Tensor,
                 qdot: torch.Tensor) -> torch.Tensor:
-    """The RHS's port torque tau = B u - D qdot for samples (torch).
-
-    The leading axes broadcast: one (n, n) B for all samples, or a trial's per
-    sample.
+    """The RHS's port torque tau = B u - D qdot (..., n) for samples (torch); the leading
+    axes broadcast (one B for all samples, or one per sample).
 
     Args:
         B: Shape (..., n, n).
         D: The diagonal of D, shape (..., n).
         u: Shape (..., n).
-        qdot: Shape (..., n).
-
-    Returns:
-        tau, shape (..., n)."""
+        qdot: Shape (..., n)."""
     return torch.einsum("...ij,...j->...i", B, u) - D * qdot
 
 
 class RhsNetwork(torch.nn.Module):
-    """The physics-informed RHS network of one trial (module docstring).
-
-    Two tanh MLPs on X = (q, p / p_scale) and the output layers of B_hat and D_hat,
-    starting at the constant prior (B0, D0).
+    """The physics-informed RHS network of one trial (module docstring), starting at the
+    constant prior (B0, D0).
 
     Args:
         n: The number of joints.
@@ -84,10 +68,8 @@ class RhsNetwork(torch.nn.Module):
         B0: The prior B (n x n).
         D0: The prior diag D (n); entries below 1e-6 count as 1e-6.
         momentum_scale: p_scale.
-        seed: The seed of the initial weights (torch's global generator is left
-            as it was).
-        coupling: F (coupling_factors; None: all ones).
-    """
+        seed: The seed of the initial weights (torch's global generator is left as is).
+        coupling: F (coupling_factors; None: all ones)."""
     def __init__(self, n: int, hidden: List[int], B0: np.ndarray, D0: Sequence[float],
                  momentum_scale: float, seed: int, coupling: Optional[np.ndarray] = None):
         super().__init__()
@@ -105,10 +87,8 @@ class RhsNetwork(torch.nn.Module):
         torch.random.set_rng_state(generator_state)
 
     def set_constant(self, B: np.ndarray, D: Sequence[float]) -> None:
-        """Sets the output layers to a constant B_hat and D_hat.
-
-        Zero weights and the biases that make B_hat = B and D_hat = diag(D) at every
-        state.
+        """Sets the output layers to B_hat = B, D_hat = diag(D) at every state (zero
+        weights).
 
         Args:
             B: The constant B_hat (n x n).
@@ -119,9 +99,8 @@ class RhsNetwork(torch.nn.Module):
             self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(np.asarray(D, float)))))
 
     def set_constant_B(self, B: np.ndarray) -> None:
-        """Sets B's output layer to a constant B_hat; D_hat unchanged.
-
-        Zero weights and the bias that makes B_hat = B at every state.
+        """Sets B's output layer to B_hat = B at every state (zero weights); D_hat
+        unchanged.
 
         Args:
             B: The constant B_hat (n x n)."""
@@ -131,27 +110,20 @@ class RhsNetwork(torch.nn.Module):
                 (np.asarray(B, float) / self.coupling.numpy()).reshape(-1)))
 
     def features(self, q: torch.Tensor, p: torch.Tensor) -> torch.Tensor:
-        """The MLPs' input X = (q, p / p_scale).
+        """The MLPs' input X = (q, p / p_scale), shape (m, 2n).
 
         Args:
             q: The joint angles, shape (m, n) [rad].
-            p: The momenta, shape (m, n) [kg m^2/s].
-
-        Returns:
-            X, shape (m, 2n)."""
+            p: The momenta, shape (m, n) [kg m^2/s]."""
         return torch.cat([q, p / self.momentum_scale], dim=-1)
 
     def forward(self, q: torch.Tensor, p: torch.Tensor
                 ) -> Tuple[torch.Tensor, torch.Tensor]:
-        """The estimates B_hat and D_hat for a batch of states.
+        """The estimates (B_hat (m, n, n), D_hat's diagonal (m, n)) for a batch of states.
 
         Args:
             q: The joint angles, shape (m, n) [rad].
-            p: The momenta, shape (m, n) [kg m^2/s].
-
-        Returns:
-            The pair of B_hat, shape (m, n, n), and D_hat's diagonal, shape
-                (m, n)."""
+            p: The momenta, shape (m, n) [kg m^2/s]."""
         X = self.features(q, p)
         B = self.head_B(self.body_B(X)).reshape(-1, self.n, self.n) * self.coupling
         D = torch.nn.functional.softplus(self.head_D(self.body_D(X)))
@@ -159,22 +131,17 @@ class RhsNetwork(torch.nn.Module):
 
 
     def export(self) -> np.ndarray:
-        """All parameters as one float64 vector (the order ExportedNetwork.Evaluate reads)."""
+        """All parameters as one float64 vector (ExportedNetwork.Evaluate's order)."""
         return torch.cat([t.detach().reshape(-1) for t in self.parameters()]).numpy()
 
 
 class StackedRhsNetworks(torch.nn.Module):
-    """The RhsNetworks of a batch's trials as one module with one parameter
-    ``flat`` (trials x P): row i is trial i's exported parameter vector
-    (RhsNetwork.export's order; each trial initialized as its own RhsNetwork:
-    ``networks``), the layers views of it, evaluated with batched matrix
-    products: one forward and backward pass trains them all, each trial's
-    gradient its own row.
+    """The RhsNetworks of a batch's trials as one module with one parameter ``flat`` (trials
+    x P), row i trial i's exported vector, the layers views of it: one forward and backward
+    pass of batched products trains them all, each trial's gradient its own row.
 
     Args:
-        networks: Each trial's RhsNetwork, alike but for their weights and
-            coupling scales.
-    """
+        networks: Each trial's RhsNetwork, alike but for weights and coupling scales."""
 
     def __init__(self, networks: List[RhsNetwork]):
         super().__init__()
@@ -196,16 +163,13 @@ class StackedRhsNetworks(torch.nn.Module):
     def forward(self, q: torch.Tensor, p: torch.Tensor,
                 trials: Optional[Union[Sequence[int], torch.Tensor]] = None
                 ) -> Tuple[torch.Tensor, torch.Tensor]:
-        """The estimates of some trials at their samples.
+        """The estimates (B_hat (t, m, n, n), D_hat's diagonal (t, m, n)) of some trials at
+        their samples.
 
         Args:
             q: The joint angles, shape (t, m, n) [rad].
             p: The momenta, shape (t, m, n) [kg m^2/s].
-            trials: The trials' indices (all by default; t of them).
-
-        Returns:
-            The pair of B_hat, shape (t, m, n, n), and D_hat's diagonal, shape
-                (t, m, n)."""
+            trials: The trials' indices (all by default; t of them)."""
         flat = self.flat if trials is None else self.flat[trials]
         params = [flat[:, columns].reshape((-1,) + shape) for columns, shape in self._views]
         coupling = self.coupling if trials is None else self.coupling[trials]
@@ -222,10 +186,7 @@ class StackedRhsNetworks(torch.nn.Module):
         return B, D
 
     def set_constant_B(self, trial: int, B: np.ndarray) -> None:
-        """Sets one trial's B output layer to a constant B_hat.
-
-        Zero weights and the bias that makes B_hat = B at every state
-        (RhsNetwork.set_constant_B).
+        """Sets one trial's B output layer to B_hat = B (as RhsNetwork.set_constant_B).
 
         Args:
             trial: The trial's index.
@@ -237,8 +198,7 @@ class StackedRhsNetworks(torch.nn.Module):
                 (np.asarray(B, float) / self.coupling[trial].numpy()).reshape(-1))
 
     def export(self) -> np.ndarray:
-        """Each trial's parameters as one float64 vector (RhsNetwork.export's
-        order): shape (trials, size)."""
+        """Each trial's parameters in RhsNetwork.export's order (trials, size)."""
         return self.flat.detach().numpy().copy()
 
 
@@ -256,17 +216,15 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 
 
 class ExportedNetwork:
-    """RhsNetwork evaluated from its exported parameter vector by a compiled kernel.
-
-    The kernel is kernels.network.evaluate_networks. The network's learning.PublishedModel
-    for one trial (a point estimate: no credible set); Stack evaluates a batch's.
+    """RhsNetwork evaluated from its exported parameters by
+    kernels.network.evaluate_networks: one trial's learning.PublishedModel (a point
+    estimate: no credible set).
 
     Args:
         n: The number of joints.
         hidden: The MLPs' hidden layer widths.
         momentum_scale: p_scale.
-        coupling: F (coupling_factors; None: all ones).
-    """
+        coupling: F (coupling_factors; None: all ones)."""
 
     def __init__(self, n: int, hidden: List[int], momentum_scale: float,
                  coupling: Optional[np.ndarray] = None):
@@ -290,46 +248,34 @@ class ExportedNetwork:
 
     @staticmethod
     def Stack(models: Sequence["ExportedNetwork"]) -> "NetworkStack":
-        """The evaluator of a batch whose trials' networks are ``models``.
+        """The evaluator (NetworkStack) of a batch whose trials' networks are ``models``.
 
         Args:
-            models: Each trial's ExportedNetwork.
-
-        Returns:
-            Their NetworkStack."""
+            models: Each trial's ExportedNetwork."""
         return NetworkStack(models)
 
     @staticmethod
     def ForLearner(settings: Learner, model: ReducedModel, q0: Sequence[float]
                    ) -> "ExportedNetwork":
-        """The evaluator of the network that a learner trains.
-
-        The learner and every system reading its ``weights`` port build their own
-        from the same settings.
+        """The evaluator of the network a learner trains (the learner and every system
+        reading its ``weights`` port build their own from the same settings).
 
         Args:
             settings: The learner's settings (scenario.Learner).
             model: The controller's model (num_joints, MassMatrix).
-            q0: The initial joint angles [rad]: the coupling scale comes from
-                diag M(q0) (coupling_factors).
-
-        Returns:
-            The evaluator."""
+            q0: The initial joint angles [rad] (F from diag M(q0): coupling_factors)."""
         return ExportedNetwork(model.num_joints, settings.hidden, settings.momentum_scale,
                                coupling_factors(settings.coupling, np.diag(
                                    model.MassMatrix(np.asarray(q0, float)))))
 
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """The estimates at one state.
+        """The estimates (B_hat (n x n), D_hat's diagonal (n,)) at one state.
 
         Args:
             weights: The exported parameters (RhsNetwork.export), shape (size,).
             q: The joint angles (n) [rad].
-            p: The momenta (n) [kg m^2/s].
-
-        Returns:
-            The pair of B_hat (n x n) and D_hat's diagonal (n,)."""
+            p: The momenta (n) [kg m^2/s]."""
         B, D = evaluate_networks(
             self._hidden, self._momentum_scale, np.asarray(weights, float)[None],
             np.asarray(q, float)[None], np.asarray(p, float)[None], self.coupling[None])
@@ -337,13 +283,10 @@ class ExportedNetwork:
 
 
 class NetworkStack:
-    """The exported networks of a batch's trials, evaluated in one compiled call
-    (the batch's learning.PublishedModel).
+    """A batch's exported networks, evaluated in one compiled call (its PublishedModel).
 
     Args:
-        networks: Each trial's ExportedNetwork, alike but for their coupling
-            scales.
-    """
+        networks: Each trial's ExportedNetwork, alike but for their coupling scales."""
     has_uncertainty = False
 
     def __init__(self, networks: Sequence[ExportedNetwork]):
@@ -354,33 +297,27 @@ class NetworkStack:
 
     def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
                  ) -> "PortEstimate":
-        """Every trial's estimate at its state (learning.PublishedModel.Estimate):
-        the point, no credible set, the point as its interval.
+        """Every trial's estimate at its state (PublishedModel.Estimate), a
+        learning.PortEstimate: the point, which is also its interval (no credible set).
 
         Args:
             published: Each trial's exported parameters (trials, size).
             t: The time [s] (unused).
             q: Each trial's joint angles (trials, n) [rad].
-            p: Each trial's momenta (trials, n).
-
-        Returns:
-            The learning.PortEstimate."""
-        from dacph_drake.learning import PortEstimate
+            p: Each trial's momenta (trials, n)."""
+        from dacph_drake.learning.protocol import PortEstimate
         B, D = self.Evaluate(published, q, p)
         return PortEstimate(B=B, D=D, B_set=None, B_interval=np.stack([B, B]),
                             D_interval=np.stack([D, D]))
 
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """The estimates of every trial, trial i at weights[i] and (q[i], p[i]).
+        """The estimates (B_hat (trials, n, n), D_hat's diagonal (trials, n)) of every
+        trial, trial i at weights[i] and (q[i], p[i]).
 
         Args:
             weights: Each trial's exported parameters, shape (trials, size).
             q: Each trial's joint angles, shape (trials, n) [rad].
-            p: Each trial's momenta, shape (trials, n) [kg m^2/s].
-
-        Returns:
-            The pair of B_hat, shape (trials, n, n), and D_hat's diagonal, shape
-                (trials, n)."""
+            p: Each trial's momenta, shape (trials, n) [kg m^2/s]."""
         return evaluate_networks(self._hidden, self._momentum_scale, weights, q, p,
                                  self._coupling)

@@ -1,15 +1,7 @@
 """Scenario files: load_scenario and save_scenario, the texts a saved run's
-fingerprint is taken from (saved_forms), and the layouts before the robot: and
-task: sections (issue 23), read so that older files keep loading (with a logged
-note) and saved runs keep their fingerprints:
-
-- PlanarLayoutV1: a planar arm's scenario with top-level robot:, nominal_robot:,
-  lhs:, potential: and reference: (now robot: {truth, nominal, potential} and
-  task: {gains, reference});
-- SpatialLayoutV1: a described arm's scenario (``dacph spatial``) with robot: a
-  description name, top-level gains:, reference:, potential:,
-  nominal_inertia_scale:, flat periods (rhs_period, ...) and a stored duration
-  (now derived from the phases)."""
+fingerprint is taken from (saved_forms), and the layouts before the robot: and task:
+sections (PlanarLayoutV1, SpatialLayoutV1), read so that older files keep loading
+(with a logged note) and saved runs keep their fingerprints."""
 import logging
 import re
 from dataclasses import dataclass, field, replace
@@ -21,14 +13,18 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass, read_yaml
-from dacph_drake.scenario import (
-    AttitudeGains, AttitudeReference, ClearancePotential, DescribedArm, Disturbance,
-    EndEffectorAngle, EndEffectorAttitude, Excitation, InertiaIdentification, Learner,
-    LocalBayes,
-    LhsGains, Periods, Phases, PlanarArm, Potential, Reference, Rhs, Scenario, Stress,
-    BUILT_IN_SCENARIOS, Uncertainty, described_arm_learner, described_arm_rhs,
-    six_dof_disturbance, six_dof_uncertainty)
+from dacph_drake.scenario import (AttitudeGains, AttitudeReference, ClearancePotential,
+                                  DescribedArm, Disturbance, EndEffectorAngle,
+                                  EndEffectorAttitude, Excitation,
+                                  InertiaIdentification, Learner, LocalBayes, LhsGains,
+                                  Periods, Phases, PlanarArm, Potential, Reference,
+                                  Rhs, Scenario, Stress, Uncertainty)
+from dacph_drake.built_in_scenarios import (BUILT_IN_SCENARIOS, described_arm_learner,
+                                            described_arm_rhs, six_dof_disturbance,
+                                            six_dof_uncertainty)
 from dacph_drake.loop.simulator import FixedStepConfig
+from dacph_drake.arm_defaults import sized_defaults
+from dacph_drake.assembly import validate_scenario
 
 # The YAML lines of settings added after planar runs were first saved, at their
 # defaults, and the sections added since: left out of PlanarLayoutV1's saved forms
@@ -68,10 +64,7 @@ def as_before_added(scenario: Scenario) -> Scenario:
     a file written before them is read with.
 
     Args:
-        scenario: The scenario.
-
-    Returns:
-        The copy."""
+        scenario: The scenario."""
     import copy
     before = copy.deepcopy(scenario)
     for section, key, value in ADDED_TO_CURRENT_LAYOUT:
@@ -103,10 +96,9 @@ ADDED_SECTION_DEFAULTS = (
 
 @dataclass(eq=False)
 class PlanarLayoutV1:
-    """A planar scenario's fields as they stood before the robot: and task: sections.
-
-    In their order (the YAML text, hence a saved run's fingerprint, follows it): a
-    frozen record of that format, never edited.
+    """A planar scenario's fields as they stood before the robot: and task: sections, in
+    their order (the YAML text, hence a saved run's fingerprint, follows it): a frozen
+    record of that format, never edited.
 
     Attributes:
         robot: The ground truth (now robot.truth).
@@ -151,10 +143,7 @@ class PlanarLayoutV1:
         """The same settings in this layout.
 
         Args:
-            scenario: A planar arm's scenario.
-
-        Returns:
-            Its settings in this layout."""
+            scenario: A planar arm's scenario."""
         return PlanarLayoutV1(
             robot=scenario.robot.truth, nominal_robot=scenario.robot.nominal,
             q0=scenario.q0, phases=scenario.phases, lhs=scenario.task.gains,
@@ -165,10 +154,7 @@ class PlanarLayoutV1:
         """The Scenario this file layout describes.
 
         Args:
-            path: The file read (not needed by this layout).
-
-        Returns:
-            The Scenario."""
+            path: The file read (not needed by this layout)."""
         return Scenario(
             robot=PlanarArm(truth=self.robot, nominal=self.nominal_robot,
                             potential=self.potential),
@@ -196,9 +182,8 @@ class PlanarLayoutV1:
 
 @dataclass(eq=False)
 class SpatialLayoutV1:
-    """A described arm's scenario (SpatialScenario) as it stood, with its defaults.
-
-    A frozen record of that format, never edited.
+    """A described arm's scenario (SpatialScenario) as it stood, with its defaults: a
+    frozen record of that format, never edited.
 
     Attributes:
         robot: The description's name (now robot.description).
@@ -207,8 +192,7 @@ class SpatialLayoutV1:
         reference: The reference attitude (now task.reference).
         gains: The attitude controller's gains (now task.gains).
         potential: The clearance potential (now robot.potential).
-        nominal_inertia_scale: The controller's model error (now
-            robot.nominal_inertia_scale).
+        nominal_inertia_scale: The controller's model error (robot.nominal_inertia_scale).
         inertia: The inertial identification (scenario.InertiaIdentification).
         phases: The phases (scenario.Phases).
         uncertainty: The ground truth's RHS (scenario.Uncertainty).
@@ -253,16 +237,11 @@ class SpatialLayoutV1:
             "learner_sample_period", "learner_period", "log_period")
 
     def ToScenario(self, path: Union[str, Path]) -> Scenario:
-        """The scenario of these settings.
-
-        The run lasts as long as the phases, so a duration other than their end
-        stretches (or shortens) the last phase.
+        """The scenario of these settings: the run lasts as long as the phases, so a
+        duration other than their end stretches (or shortens) the last phase.
 
         Args:
             path: The file read, for the message.
-
-        Returns:
-            The Scenario.
 
         Raises:
             ConfigError: The duration ends before phase 3 starts."""
@@ -286,6 +265,11 @@ class SpatialLayoutV1:
                             log=self.log_period), **_shared(self, periods=False))
 
 
+# The older file layouts that can express a scenario of each robot section (a saved
+# run's fingerprint may come from them); runs of described arms began in the current.
+OLDER_LAYOUTS = {PlanarArm: (PlanarLayoutV1,)}
+
+
 def _shared(settings, periods: bool = True):
     """The sections both layouts share with Scenario, by name."""
     names = ["rhs", "uncertainty", "disturbance", "learner", "excitation", "stress",
@@ -294,13 +278,11 @@ def _shared(settings, periods: bool = True):
 
 
 def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
-    """Reads a scenario file of an older layout, with a logged note naming it.
+    """Reads a scenario file of an older layout, with a logged note naming it; None for a
+    file of the current layout.
 
     Args:
         path: The scenario file.
-
-    Returns:
-        Its scenario, or None for a file of the current layout.
 
     Raises:
         ConfigError: The file cannot be read or does not fit its layout."""
@@ -331,45 +313,37 @@ def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
 
 
 def load_scenario(path: Union[str, Path]) -> Scenario:
-    """Loads and validates a scenario.
-
-    A file without a robot: section gets the paper's arm and a logged warning
-    saying so. Files of the layouts before the robot: and task: sections
-    (PlanarLayoutV1, SpatialLayoutV1) load with a logged note.
+    """Loads and validates a scenario. A file without a robot: section gets the paper's
+    arm and a logged warning saying so; files of the older layouts (PlanarLayoutV1,
+    SpatialLayoutV1) load with a logged note.
 
     Args:
-        path: A YAML file, or a built-in name (BUILT_IN_SCENARIOS: paper, short,
-            satellite_6dof, satellite_3dof) where no file of that name exists.
-
-    Returns:
-        The validated Scenario.
+        path: A YAML file, or a built-in name (BUILT_IN_SCENARIOS) if no file has that name.
 
     Raises:
-        ConfigError: No such file or name, malformed YAML, an unknown key, a wrong
-            type or a setting out of range (one line naming the file and the
-            setting)."""
+        ConfigError: No such file or name, bad YAML, or a bad key, type or value (named)."""
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
     scenario = load_older_layout(path) or _load_current_layout(path)
-    scenario.robot.ResolvePaths(Path(path).resolve().parent)   # paths in the file
-    scenario.Validate()
+    resolve_paths(scenario.robot, Path(path).resolve().parent)   # paths in the file
+    validate_scenario(scenario)
     return scenario
 
 
 def _load_current_layout(path) -> Scenario:
     """A file of the current layout, read over its robot's defaults: Scenario's own
     for a planar arm; for an arm from its description, the settings sized to it
-    (scenario.DescribedArm.SizedDefaults), so that a file naming only the robot
+    (arm_defaults.sized_defaults), so that a file naming only the robot
     and q0 runs."""
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
                                    migrate=_migrate_file)
-    scenario.robot.ResolvePaths(Path(path).resolve().parent)   # before it is parsed
+    resolve_paths(scenario.robot, Path(path).resolve().parent)   # before it is parsed
     raw = read_yaml(path)
     given = raw if isinstance(raw, dict) else {}
-    defaults = scenario.robot.SizedDefaults(
+    defaults = sized_defaults(scenario.robot,
         scenario.q0 if "q0" in given else None,
         scenario.task if "task" in given else None)
     if defaults is None:
@@ -407,21 +381,15 @@ def _migrate_file(raw, path):
 
 
 def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
-    """A q0 given as a mapping joint name -> angle, as the list in q's order.
-
-    Only for an arm from its description (robot.description): its joints are
-    named there.
+    """A q0 given as a mapping joint name -> angle, as the list [rad] in q's order; only
+    for an arm from its description (robot.description): its joints are named there.
 
     Args:
         raw: The parsed scenario file (its q0 a mapping).
         path: The file (relative description paths are relative to its folder).
 
-    Returns:
-        q0 [rad], one entry per joint in q's order.
-
     Raises:
-        ConfigError: Naming a joint the arm does not have (with the closest name),
-            the joints left out, or a robot without a description."""
+        ConfigError: An unknown joint (and the closest), joints left out, no description."""
     import difflib
     import json
 
@@ -437,7 +405,7 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
                           "else a list with one angle per joint")
     arm = yaml_load_typed(schema=DescribedArm, data=yaml_dump(json.loads(json.dumps(
         robot))))                       # the loader's tagged mapping, as plain data
-    arm.ResolvePaths(Path(path).resolve().parent)
+    resolve_paths(arm, Path(path).resolve().parent)
     names = [joint.name() for joint in arm_joints(FloatingBaseModel(MakeRobotPlant(arm)))]
     for name in mapping:
         if name not in names:
@@ -455,7 +423,8 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
 
 
 def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dict]:
-    """Moves a top-level integration_scheme: into the simulator: section.
+    """Moves a top-level integration_scheme: into the simulator: section; returns the
+    parsed file with the key moved, or None when it has no such key.
 
     Files saved before the scenario embedded Drake's SimulatorConfig have a
     top-level ``integration_scheme: X``: it is read as ``simulator:
@@ -465,9 +434,6 @@ def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dic
     Args:
         raw: The parsed scenario file.
         path: The file, for the messages.
-
-    Returns:
-        The parsed file with the key moved, or None when it has no such key.
 
     Raises:
         ConfigError: The file sets both integration_scheme: and simulator:."""
@@ -488,24 +454,42 @@ def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dic
     return migrated
 
 
-def saved_forms(scenario: Scenario) -> List[str]:
-    """The YAML texts a saved run of a scenario may have been fingerprinted from.
-
-    Its current form, without the settings added to the current layout since it
-    was introduced where they are at their defaults (ADDED_TO_CURRENT_LAYOUT: a
-    setting added at its default leaves a fingerprint as it was), and the forms
-    of the same settings in the layouts before (the robot section's
-    OLDER_LAYOUTS: a planar arm's scenario before the robot: and task: sections,
-    and before that the top-level integration_scheme:).
+def resolve_paths(robot: Union[PlanarArm, DescribedArm], folder: Path) -> None:
+    """Makes a described arm's relative paths (description, package_paths, packages)
+    relative to its scenario file's folder; shipped names, package:// URIs and a
+    path that exists only relative to the working directory stay. A planar arm
+    names no file.
 
     Args:
-        scenario: The scenario.
+        robot: The robot section.
+        folder: The folder of the scenario file."""
+    if not isinstance(robot, DescribedArm):
+        return
+    def resolved(path: str) -> str:
+        beside = folder / path
+        if Path(path).is_absolute() or (Path(path).exists() and not beside.exists()):
+            return path
+        return str(beside)
+    if (not robot.description.startswith("package://")
+            and Path(robot.description).suffix.lower() in (".urdf", ".sdf", ".xml")):
+        robot.description = resolved(robot.description)
+    robot.package_paths = [resolved(path) for path in robot.package_paths]
+    robot.packages = {name: resolved(path) for name, path in robot.packages.items()}
 
-    Returns:
-        The texts, the current form first."""
+
+def saved_forms(scenario: Scenario) -> List[str]:
+    """The YAML texts a saved run of a scenario may have been fingerprinted from: its
+    current form, without the settings added to the current layout since it was
+    introduced where they are at their defaults (ADDED_TO_CURRENT_LAYOUT: a setting
+    added at its default leaves a fingerprint as it was), then the forms of the same
+    settings in the layouts before (OLDER_LAYOUTS: a planar arm's scenario before the
+    robot: and task: sections, and before that the top-level integration_scheme:).
+
+    Args:
+        scenario: The scenario."""
     return [_without_lines(yaml_dump_typed(scenario), _added_lines())] + [
-        form for layout in scenario.robot.OLDER_LAYOUTS
-        for form in globals()[layout].From(scenario).SavedForms()]
+        form for layout in OLDER_LAYOUTS.get(type(scenario.robot), ())
+        for form in layout.From(scenario).SavedForms()]
 
 
 def save_scenario(scenario: Scenario, path: Union[str, Path]) -> None:

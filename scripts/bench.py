@@ -20,7 +20,7 @@ from dacph_drake.dynamics.plant import AddFreeFloatingArm, MakeArmPlant, SetArmA
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import short_scenario
+from dacph_drake.built_in_scenarios import short_scenario
 from dacph_drake.loop.simulator import MakeSimulator
 
 ROOT = Path(__file__).resolve().parents[1]

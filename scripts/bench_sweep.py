@@ -32,7 +32,8 @@ from dacph_drake.montecarlo.definition import load_sweep, sample_trial
 from dacph_drake.montecarlo.executors import dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import Phases, short_scenario
+from dacph_drake.scenario import Phases
+from dacph_drake.built_in_scenarios import short_scenario
 from dacph_drake.scenario_files import save_scenario
 
 SWEEP = """\

@@ -21,7 +21,8 @@ from dacph_drake.analysis.verify import verify_logs
 from dacph_drake.log_layout import RhsLog
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import ActuatorFault, short_scenario
+from dacph_drake.scenario import ActuatorFault
+from dacph_drake.built_in_scenarios import short_scenario
 
 START = [[0.3, 1.0], [0.45, 0.85]]          # q0 of seed 0, 1
 KEPT_METRICS = ("tracking_error", "phase", "fault", "control_effort")   # in runs.jsonl

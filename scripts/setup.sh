@@ -2,8 +2,8 @@
 # Installs everything dacph-drake needs into ./.venv: system tools (graphviz's dot,
 # and Debian's chromium for the headless test of the HTML animation),
 # the CPU build of torch (pinned here; the project itself only asks for a range),
-# and the package with its test, Dask, Parquet, robots (example-robot-data) and docs
-# (MkDocs) extras.
+# and the package with its test, Dask, Parquet, pandas, robots (example-robot-data)
+# and docs (MkDocs) extras.
 # Safe to run again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +18,6 @@ fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/pip install -q --upgrade pip
 .venv/bin/pip install -q torch==2.13.0
-.venv/bin/pip install -q -e ".[test,dask,parquet,robots,docs]"
+.venv/bin/pip install -q -e ".[test,dask,parquet,pandas,robots,docs]"
 # Compile the numba kernels of the closed loop once, into their on-disk cache.
 .venv/bin/python -m dacph_drake.kernels

@@ -6,29 +6,24 @@ inertia instead (K_d = damping_rate M, the spatial loop's AttitudeGains).
 
     .venv/bin/python scripts/spatial_gain_rule.py
 """
-import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from conftest import three_link_robot  # noqa: E402
-
-from dacph_drake.robots.description import SPATIAL_ROBOTS, MakeRobotPlant  # noqa: E402
-from dacph_drake.dynamics.floating_model import FloatingBaseModel  # noqa: E402
-from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,  # noqa: E402
+from dacph_drake.robots.description import SPATIAL_ROBOTS, MakeRobotPlant
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,
                                    inertia_scaled_c_lower_bound)
-from dacph_drake.dynamics.inertia_bound import search_inertia_bound  # noqa: E402
-from dacph_drake.dynamics.plant import MakeArmPlant  # noqa: E402
-from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds  # noqa: E402
-from dacph_drake.arm_parameters import RobotParams  # noqa: E402
-from dacph_drake.scenario import AttitudeGains, Scenario  # noqa: E402
+from dacph_drake.dynamics.inertia_bound import search_inertia_bound
+from dacph_drake.dynamics.plant import MakeArmPlant
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.arm_parameters import RobotParams, unequal_three_link_arm
+from dacph_drake.scenario import AttitudeGains, Scenario
 
 
 def main() -> None:
     scenario = Scenario()
     Td, Kd, rhs = scenario.rhs.Td, scenario.task.gains.Kd, scenario.rhs
     robots = [("planar 2-link (paper)", MakeArmPlant(RobotParams()), True),
-              ("planar 3-link (tests)", MakeArmPlant(three_link_robot()), True)]
+              ("planar 3-link (tests)", MakeArmPlant(unequal_three_link_arm()), True)]
     robots += [(name, MakeRobotPlant(name), False) for name in SPATIAL_ROBOTS]
     print(f"gain rule at Td = {Td:g}, Kd = {Kd:g}, beta_max = {rhs.beta_max:g}, "
           f"c_margin = {rhs.c_margin:g}; search: 24 starts, 5 % safety margin")

@@ -1,15 +1,12 @@
 import numpy as np
 import pytest
 
-from dacph_drake.arm_parameters import LinkParams, RobotParams
+from dacph_drake.arm_parameters import RobotParams, unequal_three_link_arm
 
 
 def three_link_robot() -> RobotParams:
     """A 3-link arm with unequal, off-centre links (nothing tied to two links)."""
-    return RobotParams(links=[
-        LinkParams(mass=1.2, length=0.30, inertia=0.008, com=0.12),
-        LinkParams(mass=0.8, length=0.25, inertia=0.004, com=0.14),
-        LinkParams(mass=0.5, length=0.20, inertia=0.002, com=0.09)])
+    return unequal_three_link_arm()
 
 
 @pytest.fixture(params=["paper_2link", "3link"])

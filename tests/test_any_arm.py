@@ -20,7 +20,9 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.loop.threads import single_threaded
-from dacph_drake.robots.described import DescribedRobot, link_base_clearance
+from dacph_drake.assembly import robot_of
+from dacph_drake.montecarlo.definition import apply_model_error_sample
+from dacph_drake.robots.described import link_base_clearance
 from dacph_drake.robots.description import MakeRobotPlant, ParsedDescription
 from dacph_drake.robots.serial_arm import SerialLink, serial_arm_urdf
 from dacph_drake.robots.start_pose import (CLEARANCE_BOUND, SINGULAR_BOUND,
@@ -86,7 +88,7 @@ def test_duplicate_materials_load_with_one_line_per_kind(tmp_path, caplog):
     path = _arm_file(tmp_path, "quirky", text, "q0: [0.3, -0.8, 1.2, 0.2, 0.6, -0.3]\n")
     with caplog.at_level(logging.WARNING):
         scenario = load_scenario(path)
-        DescribedRobot(scenario)
+        robot_of(scenario)
     lines = [r.getMessage() for r in caplog.records]
     materials = [line for line in lines if "material 'carbon'" in line]
     tags = [line for line in lines if "safety_controller" in line]
@@ -131,10 +133,10 @@ def test_a_start_at_a_task_singularity_is_refused_by_name(tmp_path):
                                           r"effector's attitude is singular there .*"
                                           r"joints ('joint1', 'joint3'|'joint3', "
                                           r"'joint1') turn it"):
-        DescribedRobot(scenario).RequireRunnableStart()
+        robot_of(scenario).RequireRunnableStart()
     path.write_text(path.read_text().replace("q0: [0.4, 0.0, -0.2]",
                                              "q0: [0.4, 0.7, -0.2]"))
-    DescribedRobot(load_scenario(path)).RequireRunnableStart()
+    robot_of(load_scenario(path)).RequireRunnableStart()
 
 
 @pytest.mark.parametrize("name, links, tool", [
@@ -159,7 +161,7 @@ def test_the_automatic_start_is_within_limits_clear_of_the_base_and_regular(
     assert within_limits(model, rehearsal.q)
     assert np.min(rehearsal.singular_value) >= SINGULAR_BOUND
     assert np.linalg.svd(task_jacobian(model, q0), compute_uv=False)[-1] >= SINGULAR_BOUND
-    DescribedRobot(scenario).RequireRunnableStart()
+    robot_of(scenario).RequireRunnableStart()
 
 
 def test_errors_name_the_joints_frames_and_bodies(tmp_path):
@@ -168,7 +170,7 @@ def test_errors_name_the_joints_frames_and_bodies(tmp_path):
     with pytest.raises(ConfigError, match=r"q0 has 2 entries; allowed: 3 \(one per "
                                           r"joint\); the joints in q0's order: joint1, "
                                           r"joint2, joint3$"):
-        DescribedRobot(load_scenario(path))
+        robot_of(load_scenario(path))
     arm = DescribedArm(description=str(tmp_path / "named.urdf"), base=ArmBase(mass=1.0),
                        end_effector=EndEffectorFrame(frame="tol"))
     with pytest.raises(ConfigError, match=r"frame = 'tol' is not a frame of .*named"
@@ -182,7 +184,7 @@ def test_errors_name_the_joints_frames_and_bodies(tmp_path):
     with pytest.raises(ConfigError, match=r"nominal_inertia_scale has 1 entries; "
                                           r"allowed: 5, one per body with mass in this "
                                           r"order: root, link1, link2, link3, base"):
-        DescribedRobot(scenario)
+        robot_of(scenario)
 
 
 def test_a_run_limits_blas_and_openmp_to_one_thread():
@@ -272,7 +274,7 @@ def test_a_damping_too_stiff_to_integrate_is_refused_by_name(tmp_path):
     with pytest.raises(ConfigError, match=r"^simulator.max_step_size = .* s, the step "
                                           r"the description's joint damping asks for "
                                           r"\(joint 'joint3': 18.4 N m s/rad on"):
-        DescribedRobot(scenario).RequireRunnableStart()
+        robot_of(scenario).RequireRunnableStart()
 
 
 def test_a_sweeps_model_error_lands_on_the_bodies_it_names(tmp_path):
@@ -282,15 +284,15 @@ def test_a_sweeps_model_error_lands_on_the_bodies_it_names(tmp_path):
     root; the controller's model then has those bodies' masses, the truth its own."""
     path = _arm_file(tmp_path, "swept", serial_arm_urdf("swept", SIX[:3]))
     scenario = load_scenario(path)
-    scenario.robot.ApplyModelErrorSample([2.0, 3.0, 4.0], 5.0, 3)
+    apply_model_error_sample(scenario.robot, [2.0, 3.0, 4.0], 5.0)
     assert scenario.robot.nominal_inertia_scale == [1.0, 2.0, 3.0, 4.0, 5.0]
-    robot = DescribedRobot(scenario)
+    robot = robot_of(scenario)
     mass = {body.name(): body.default_mass() for body in robot.model.parameters.bodies}
     nominal = robot.model.inertial_parameters.reshape(-1, 10)[:, 0]
     np.testing.assert_allclose(nominal, [mass["root"], 2 * mass["link1"],
                                          3 * mass["link2"], 4 * mass["link3"],
                                          5 * mass["base"]], rtol=1e-12)
-    scenario.robot.ApplyModelErrorSample(None, 0.5, 3)
+    apply_model_error_sample(scenario.robot, None, 0.5)
     assert scenario.robot.nominal_inertia_scale == [1.0, 1.0, 1.0, 1.0, 0.5]
 
 

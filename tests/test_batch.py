@@ -9,7 +9,7 @@ import pytest
 from dacph_drake.errors import ConfigError
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate, simulate_batch
-from dacph_drake.scenario import short_scenario
+from dacph_drake.built_in_scenarios import short_scenario
 
 
 def _trials(count: int, diverging: int = None):

@@ -23,7 +23,7 @@ def test_every_command_offers_exactly_the_registered_controllers(capsys):
 
 def test_every_registered_controller_builds_a_closed_loop():
     from dacph_drake.loop.closed_loop import ClosedLoop
-    from dacph_drake.scenario import short_scenario
+    from dacph_drake.built_in_scenarios import short_scenario
     for name in controllers.REGISTRY:
         loop = controllers.build_closed_loop(name, short_scenario())
         assert isinstance(loop, ClosedLoop) and loop.diagram is not None
@@ -52,7 +52,7 @@ def build_hold_still_diagram(scenario):
 
 def test_a_new_controller_is_one_function_and_one_registry_line(monkeypatch):
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario import short_scenario
+    from dacph_drake.built_in_scenarios import short_scenario
     monkeypatch.setitem(controllers.REGISTRY, "hold-still", controllers.Controller(
         "test_controllers:build_hold_still_diagram", "a joint damper"))
     result = simulate(short_scenario(), "hold-still", duration=0.2)

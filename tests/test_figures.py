@@ -11,10 +11,11 @@ import pytest
 from conftest import three_link_robot
 from dacph_drake.app.figures import COLUMNS, DAC_PANELS, envelope, make_panels
 from dacph_drake.log_layout import LhsLog, RhsLog
-from dacph_drake.robots.planar import PlanarRobot
-from dacph_drake.scenario import PlanarArm, Scenario, Uncertainty, paper_scenario
+from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
+from dacph_drake.scenario import PlanarArm, Scenario, Uncertainty
+from dacph_drake.built_in_scenarios import paper_scenario
 
-PANELS = DAC_PANELS + PlanarRobot.task_panels
+PANELS = DAC_PANELS + END_EFFECTOR_ANGLE.panels
 
 
 def _synthetic_run(scenario: Scenario, tracking_error: float, seed: int):

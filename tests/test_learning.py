@@ -16,7 +16,8 @@ from dacph_drake.learning.local_bayes import (LocalBayesChannels, LocalModel,
                                               LocalModelLayout, free_response,
                                               prior_range, student_quantile)
 from dacph_drake.log_layout import RhsLog
-from dacph_drake.scenario import LocalBayes, Phases, short_scenario
+from dacph_drake.scenario import LocalBayes, Phases
+from dacph_drake.built_in_scenarios import short_scenario
 
 
 def test_spd_inverse_is_numpys_and_refuses_an_indefinite_matrix(rng):

@@ -17,7 +17,7 @@ import pytest
 from dacph_drake.app.cli import main
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario import short_scenario
+from dacph_drake.built_in_scenarios import short_scenario
 from test_scenario import BAD_SCENARIO_FILES
 
 

@@ -9,7 +9,7 @@ import pytest
 from dacph_drake.app.figures import DAC_PANELS
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.app.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
-from dacph_drake.robots.planar import PlanarRobot
+from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.loop.run_store import load_logs
 from dacph_drake.scenario_files import load_scenario
 from headless_chromium import run_chromium
@@ -18,7 +18,7 @@ from headless_chromium import run_chromium
 def test_reproduce_writes_panels_table_scenario_and_animation(quick_reproduction):
     status, out = quick_reproduction
     assert status == 0
-    for panel in DAC_PANELS + PlanarRobot.task_panels:
+    for panel in DAC_PANELS + END_EFFECTOR_ANGLE.panels:
         for suffix in ("png", "pdf"):
             path = out / "figures" / f"{panel}.{suffix}"
             assert path.stat().st_size > 10_000, path

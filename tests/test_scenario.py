@@ -7,8 +7,10 @@ from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.errors import ConfigError
 from pydrake.common.yaml import yaml_dump_typed
 
-from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario
+from dacph_drake.scenario import Scenario
+from dacph_drake.built_in_scenarios import BUILT_IN_SCENARIOS
 from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
+from dacph_drake.assembly import validate_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -287,18 +289,18 @@ def test_plain_learner_needs_no_band():
     scenario = Scenario()
     scenario.learner.mode = "plain"
     scenario.excitation.frequencies = [0.5, 0.7]
-    scenario.Validate()
+    validate_scenario(scenario)
 
 
 def test_a_string_set_from_python_names_the_field():
     scenario = Scenario()
     scenario.q0 = [0.3, "1.0"]
     with pytest.raises(ConfigError, match=r"q0\[1\] = '1.0' is not a number"):
-        scenario.Validate()
+        validate_scenario(scenario)
     scenario = Scenario()
     scenario.seed = 1.5
     with pytest.raises(ConfigError, match=r"seed = 1.5 is not an integer"):
-        scenario.Validate()
+        validate_scenario(scenario)
 
 
 def test_built_in_names_load_and_unknown_ones_are_named(tmp_path):

@@ -147,12 +147,12 @@ def test_spatial_panels_show_dac_against_the_baseline(tmp_path, capsys):
     import matplotlib.image
     from dacph_drake.app.cli import main
     from dacph_drake.app.figures import DAC_PANELS
-    from dacph_drake.robots.described import DescribedRobot
+    from dacph_drake.tasks.end_effector_attitude import END_EFFECTOR_ATTITUDE
     scenario = _short_3dof()
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
     save_scenario(scenario, tmp_path / "s.yaml")
     assert main(["reproduce", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "run")]) == 0
-    for name in DAC_PANELS + DescribedRobot.task_panels:
+    for name in DAC_PANELS + END_EFFECTOR_ATTITUDE.panels:
         image = matplotlib.image.imread(tmp_path / "run" / "figures" / f"{name}.png")
         assert image.shape[0] > 500 and (tmp_path / "run" / "figures" / f"{name}.pdf").is_file()
     assert main(["spatial", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "mb"),

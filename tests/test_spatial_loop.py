@@ -8,8 +8,8 @@ from dacph_drake.controllers.model_based import build_model_based_diagram
 from dacph_drake.errors import ConfigError
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.loop.simulate import collect_logs
-from dacph_drake.scenario import (AttitudeGains, ClearancePotential, Phases,
-                                  satellite_6dof_scenario)
+from dacph_drake.scenario import AttitudeGains, ClearancePotential, Phases
+from dacph_drake.built_in_scenarios import satellite_6dof_scenario
 
 
 def _nominal_6dof(duration: float):
@@ -161,7 +161,7 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
     from dacph_drake.app.cli import main
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.run_store import load_run
-    from dacph_drake.scenario import BUILT_IN_SCENARIOS
+    from dacph_drake.built_in_scenarios import BUILT_IN_SCENARIOS
     out = tmp_path / "run"
     assert main(["spatial", "satellite_3dof", "--out", str(out), "--duration", "2",
                  "--animate"]) == 0
@@ -183,7 +183,7 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
 def test_shipped_spatial_scenario_files_are_the_built_ins(name):
     from pathlib import Path
     from pydrake.common.yaml import yaml_dump_typed
-    from dacph_drake.scenario import BUILT_IN_SCENARIOS
+    from dacph_drake.built_in_scenarios import BUILT_IN_SCENARIOS
     from dacph_drake.scenario_files import load_scenario
     path = Path(__file__).resolve().parents[1] / "scenarios" / f"{name}.yaml"
     assert yaml_dump_typed(load_scenario(path)) == yaml_dump_typed(

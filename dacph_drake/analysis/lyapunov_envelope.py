@@ -1,40 +1,28 @@
-"""The LHS Lyapunov check (paper section "LHS Model-Based Control" and "Stability
+"""The LHS Lyapunov check (paper sections "LHS Model-Based Control" and "Stability
 Analysis"): V = s^T M(q) s / 2 along a run against the exponential envelope.
 
-The paper's bounds, with r_slow = 2 lambda_min(K_d) / sup lambda_max(M) and
-r_fast = 2 lambda_max(K_d) / inf lambda_min(M), hold for the discontinuous term
--chi s / ||s|| whenever ||e_tau|| <= chi. The controller uses the smooth
--chi tanh(s / epsilon); per component s_i (1 - tanh(|s_i| / epsilon)) <= kappa epsilon
-with kappa = max_x x (1 - tanh x) = 0.2785, so over each logged interval where
-||e_tau|| <= chi at both ends:
+With r_slow = 2 lambda_min(K_d) / sup lambda_max(M), r_fast = 2 lambda_max(K_d) /
+inf lambda_min(M) and the smooth robust term -chi tanh(s / epsilon) (per component
+s_i (1 - tanh(|s_i| / epsilon)) <= kappa epsilon, kappa = max_x x (1 - tanh x) = 0.2785),
+over each logged interval where ||e_tau|| <= chi at both ends:
 
     upper:  Vdot <= -r_slow V + delta,          delta = n kappa chi epsilon
     lower:  Vdot >= -r_low V - e^2 / (2 lambda_max(K_d)),
             r_low = (3 lambda_max(K_d) + 2 chi / epsilon) / inf lambda_min(M)
 
-(the lower rate adds the tanh slope chi / epsilon and Young's inequality on
-s^T e_tau to r_fast). Integrated over the interval [t_k, t_k+1] these give
-V_k e^(-r dt) +- (delta / r)(1 - e^(-r dt)), the envelope checked here.
-
-A DAC loop with the learner's excitation (scenario.excitation) adds the known input
-tau_pe, ||tau_pe|| <= a, to the s dynamics. Young's inequality
-s^T tau_pe <= lambda_min(K_d) ||s||^2 / 2 + a^2 / (2 lambda_min(K_d)) then gives
+(the tanh slope and Young's inequality on s^T e_tau added to r_fast), integrated over
+[t_k, t_k+1] to V_k e^(-r dt) +- (delta / r)(1 - e^(-r dt)). The learner's excitation
+tau_pe, ||tau_pe|| <= a, adds by Young's inequality
 
     upper:  Vdot <= -(r_slow / 2) V + delta + a^2 / (2 lambda_min(K_d))
 
-and in the lower bound ||e_tau|| becomes ||e_tau|| + a.
-
-The spatial arms' LHS (systems.attitude_controller) has K_d = r M(q) and the
-robust term chi tanh(w_i s_i), w_i = M_ii / phi, phi = epsilon + chi / b (the
-boundary rate b). The same steps give, with lambda = inf_q lambda_min(M) and
-m = sup_q max_i M_ii (M_ii >= lambda):
+and ||e_tau|| + a in the lower bound. The spatial LHS (systems.attitude_controller:
+K_d = r M(q), chi tanh(w_i s_i), w_i = M_ii / phi, phi = epsilon + chi / b), with
+lambda = inf_q lambda_min(M) and m = sup_q max_i M_ii (M_ii >= lambda):
 
     upper:  Vdot <= -2 r V + n kappa chi phi / lambda  (excitation: -r V and
             a^2 / (2 r lambda) by Young with k = r lambda)
-    lower:  Vdot >= -(3 r + 2 (chi / phi) m / lambda) V - e^2 / (2 r lambda)
-
-EnvelopeConstants holds either form; envelope_bounds uses it.
-"""
+    lower:  Vdot >= -(3 r + 2 (chi / phi) m / lambda) V - e^2 / (2 r lambda)"""
 from dataclasses import asdict, dataclass
 from typing import Tuple, Union
 
@@ -45,11 +33,7 @@ KAPPA = 0.2785          # max_x x (1 - tanh x)
 
 @dataclass
 class EnvelopeConstants:
-    """The envelope's constants (module docstring).
-
-    The boundary layer's effective thickness for the slack is Layer(chi) =
-    layer_base + layer_per_chi chi, and the lower bound's tanh rate is
-    TanhRate(chi) = 2 slope_scale chi / Layer(chi).
+    """The envelope's constants, planar or spatial (module docstring).
 
     Attributes:
         rate_slow: The paper's upper-bound rate r_slow [1/s].
@@ -58,10 +42,9 @@ class EnvelopeConstants:
         young_e: Young's weight for e_tau.
         young_a: Young's weight for the excitation.
         n: The number of joints.
-        layer_base: The boundary layer's effective thickness at chi = 0.
+        layer_base: The slack's boundary layer Layer(chi) at chi = 0.
         layer_per_chi: d Layer / d chi.
-        slope_scale: The lower-bound tanh rate is 2 slope_scale chi / Layer(chi).
-    """
+        slope_scale: The lower-bound tanh rate is 2 slope_scale chi / Layer(chi)."""
     rate_slow: float
     rate_fast: float
     damping_low: float
@@ -76,10 +59,8 @@ class EnvelopeConstants:
     def ForConstantDamping(Kd_min: float, Kd_max: float, lambda_min_M: float,
                            lambda_max_M: float, epsilon: float, n: int,
                            layer_per_chi: float = 0.0) -> "EnvelopeConstants":
-        """The planar LHS's constants.
-
-        K_d between Kd_min and Kd_max, tanh(s / phi) with phi = epsilon +
-        layer_per_chi chi (lhs.boundary_rate; 0: the paper's tanh(s / epsilon)).
+        """The planar LHS's constants: K_d between Kd_min and Kd_max, tanh(s / phi),
+        phi = epsilon + layer_per_chi chi (lhs.boundary_rate).
 
         Args:
             Kd_min: lambda_min(K_d).
@@ -88,10 +69,7 @@ class EnvelopeConstants:
             lambda_max_M: sup_q lambda_max(M).
             epsilon: The boundary layer's thickness at chi = 0.
             n: The number of joints.
-            layer_per_chi: d phi / d chi (0: the paper's tanh(s / epsilon)).
-
-        Returns:
-            The envelope's constants."""
+            layer_per_chi: d phi / d chi (0: the paper's tanh(s / epsilon))."""
         return EnvelopeConstants(
             rate_slow=2 * Kd_min / lambda_max_M, rate_fast=2 * Kd_max / lambda_min_M,
             damping_low=3 * Kd_max / lambda_min_M, young_e=Kd_max, young_a=Kd_min,
@@ -102,10 +80,8 @@ class EnvelopeConstants:
     def ForInertiaScaled(damping_rate: float, lambda_min_M: float,
                          max_diagonal_M: float, epsilon: float, boundary_rate: float,
                          n: int) -> "EnvelopeConstants":
-        """The spatial LHS's constants.
-
-        K_d = damping_rate M, tanh(M_ii s_i / phi), phi = epsilon + chi /
-        boundary_rate (the slack's layer is phi / lambda).
+        """The spatial LHS's constants: K_d = damping_rate M, tanh(M_ii s_i / phi),
+        phi = epsilon + chi / boundary_rate (the slack's layer is phi / lambda).
 
         Args:
             damping_rate: The LHS's damping rate r [1/s].
@@ -113,10 +89,7 @@ class EnvelopeConstants:
             max_diagonal_M: sup_q max_i M_ii (m).
             epsilon: The boundary layer's thickness at chi = 0.
             boundary_rate: The boundary rate b [1/s].
-            n: The number of joints.
-
-        Returns:
-            The envelope's constants."""
+            n: The number of joints."""
         r, lam = damping_rate, lambda_min_M
         return EnvelopeConstants(
             rate_slow=2 * r, rate_fast=2 * r, damping_low=3 * r, young_e=r * lam,
@@ -125,25 +98,18 @@ class EnvelopeConstants:
             slope_scale=max_diagonal_M / lam**2)
 
     def Layer(self, chi: Union[float, np.ndarray]) -> Union[float, np.ndarray]:
-        """The boundary layer phi = layer_base + layer_per_chi chi.
+        """The boundary layer phi = layer_base + layer_per_chi chi (chi's shape).
 
         Args:
-            chi: The RHS bound chi (a scalar or an array).
-
-        Returns:
-            phi, chi's shape."""
+            chi: The RHS bound chi (a scalar or an array)."""
         return self.layer_base + self.layer_per_chi * chi
 
     def TanhRate(self, chi: Union[float, np.ndarray]) -> Union[float, np.ndarray]:
-        """The lower bound's tanh rate [1/s].
-
-        2 chi / epsilon / lambda (planar), 2 (chi / phi) m / lambda (spatial).
+        """The lower bound's tanh rate [1/s] (chi's shape): 2 chi / epsilon / lambda
+        (planar), 2 (chi / phi) m / lambda (spatial).
 
         Args:
-            chi: The RHS bound chi (a scalar or an array).
-
-        Returns:
-            The rate, chi's shape."""
+            chi: The RHS bound chi (a scalar or an array)."""
         return 2 * self.slope_scale * chi / self.Layer(chi)
 
 
@@ -160,8 +126,7 @@ class EnvelopeCheck:
         worst_violation: max (V - bound) / bound over the intervals.
         worst_time: When the worst violation was [s].
         ok: Whether fraction_inside reaches the required fraction.
-        reason: Why not ok ("" when ok).
-    """
+        reason: Why not ok ("" when ok)."""
     rate_slow: float                # the paper's upper-bound rate [1/s]
     rate_fast: float                # the paper's lower-bound rate [1/s]
     rate_low: float                 # lower-bound rate with the tanh and e_tau terms
@@ -180,7 +145,7 @@ class EnvelopeCheck:
 def envelope_bounds(V: np.ndarray, dt: np.ndarray, e_norm: np.ndarray, chi: np.ndarray,
                     constants: EnvelopeConstants, excitation_norm: float = 0.0
                     ) -> Tuple[np.ndarray, np.ndarray]:
-    """The envelope's (lower, upper) bound for V[1:] from V[:-1] (module docstring).
+    """(lower, upper) envelope bounds (each T - 1) on V[1:] from V[:-1] (module docstring).
 
     Args:
         V: V = s^T M s / 2 at the logged samples (T).
@@ -188,10 +153,7 @@ def envelope_bounds(V: np.ndarray, dt: np.ndarray, e_norm: np.ndarray, chi: np.n
         e_norm: ||e_tau|| at the samples (T).
         chi: The RHS bound chi at the samples (T).
         constants: The envelope's constants.
-        excitation_norm: a, the bound on ||tau_pe|| (0 without excitation).
-
-    Returns:
-        (lower, upper), each T - 1."""
+        excitation_norm: a, the bound on ||tau_pe|| (0 without excitation)."""
     a, c = excitation_norm, constants
     r_slow = c.rate_slow / (2 if a > 0 else 1)
     r_low = c.damping_low + c.TanhRate(chi[:-1])
@@ -222,11 +184,7 @@ def check_lyapunov_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray,
         epsilon: The boundary layer's thickness.
         n: The number of joints.
         required_fraction: The fraction of the intervals that must be inside.
-        excitation_norm: The bound a on the excitation's ||tau_pe|| (0 without
-            excitation).
-
-    Returns:
-        The check's outcome."""
+        excitation_norm: The bound a on the excitation's ||tau_pe|| (0: none)."""
     return check_envelope(t, V, e_norm, chi, EnvelopeConstants.ForConstantDamping(
         Kd_min, Kd_max, lambda_min_M, lambda_max_M, epsilon, n), required_fraction,
         excitation_norm)
@@ -236,11 +194,8 @@ def check_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray, chi: np.nda
                    constants: EnvelopeConstants,
                    required_fraction: float = 0.99,
                    excitation_norm: float = 0.0) -> EnvelopeCheck:
-    """Checks V against the envelope.
-
-    Fraction of the logged intervals (where ||e_tau|| <= chi) on which V stays
-    inside the envelope, and the worst relative violation; ``ok`` when the fraction
-    reaches ``required_fraction``.
+    """Checks V against the envelope: the fraction of the logged intervals with
+    ||e_tau|| <= chi on which V stays inside, and the worst relative violation.
 
     Args:
         t: The logged times [s] (T).
@@ -248,12 +203,8 @@ def check_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray, chi: np.nda
         e_norm: ||e_tau|| at them (T).
         chi: The RHS bound chi at them (T).
         constants: The envelope's constants.
-        required_fraction: The fraction of the intervals that must be inside.
-        excitation_norm: The bound a on the excitation's ||tau_pe|| (0 without
-            excitation).
-
-    Returns:
-        The check's outcome."""
+        required_fraction: The fraction of the intervals that must be inside for ``ok``.
+        excitation_norm: The bound a on the excitation's ||tau_pe|| (0: none)."""
     t, V, e_norm, chi = map(np.asarray, (t, V, e_norm, chi))
     lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants,
                                    excitation_norm)

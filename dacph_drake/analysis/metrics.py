@@ -1,61 +1,18 @@
 """The metrics of a run (the paper's reported quantities and this project's,
 docs/results/paper.md), computed from its logs."""
+from dataclasses import dataclass
 from typing import Dict, Tuple
 
 import numpy as np
 
+from dacph_drake.analysis.phases import (PHASES, phase_windows,  # noqa: F401
+                                         relative_error_rms, rms)
 from dacph_drake.log_layout import LearnerLog, RhsLog
-from dacph_drake.robots import robot_of
+from dacph_drake.assembly import robot_of
 from dacph_drake.scenario import Scenario
 
 
-def rms(x: np.ndarray) -> float:
-    """Root mean square over time of a scalar signal, or of the norm of a vector one.
-
-    Args:
-        x: The signal: one value per sample (T), or one vector per row (T x k).
-
-    Returns:
-        The RMS (nan for an empty signal)."""
-    x = np.asarray(x, float)
-    if x.ndim > 1:
-        x = np.linalg.norm(x, axis=1)
-    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
-
-
-def relative_error_rms(estimate: np.ndarray, truth: np.ndarray) -> float:
-    """time-RMS of ||estimate(t) - truth(t)|| / ||truth(t)|| (Frobenius on rows).
-
-    Args:
-        estimate: The estimate, one row per sample (T x k).
-        truth: The truth, laid out as ``estimate``.
-
-    Returns:
-        The RMS of the relative error."""
-    ratio = (np.linalg.norm(estimate - truth, axis=1)
-             / np.maximum(np.linalg.norm(truth, axis=1), 1e-300))
-    return rms(ratio)
-
-
-PHASES = ("phase1", "phase2", "phase3")
 FAULT_WINDOW = 2.0      # [s] before and after an actuator fault (run_metrics)
-
-
-def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
-    """Masks of the three uncertainty phases (docs/equations.md, SPEC settings).
-
-    The phases are linear, plus nonlinear, plus disturbance (the last from
-    phases.disturbance_start to the end).
-
-    Args:
-        scenario: The scenario (its phases).
-        t: The logged times [s] (T).
-
-    Returns:
-        Phase name (PHASES) -> boolean mask over t."""
-    p = scenario.phases
-    edges = [p.linear_start, p.nonlinear_start, p.disturbance_start, np.inf]
-    return {name: (t >= lo) & (t < hi) for name, lo, hi in zip(PHASES, edges, edges[1:])}
 
 
 def nominal_estimates(scenario: Scenario) -> np.ndarray:
@@ -330,8 +287,8 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
     active = t >= phases.linear_start
     phase3 = t >= scenario.disturbance_start
     R = RhsLog(n)
-    alpha_error, sliding, clearance, base_turn = robot.TaskSignals(logs)
-    total_mass = robot.TotalMass()
+    alpha_error, sliding, clearance, base_turn = robot.task.Signals(robot, logs)
+    total_mass = robot.MeasuredMasses()[0]
     e_tau = (logs["rhs_log"][:, R.e_tau] if "rhs_log" in logs
              else logs["tau_request"] - logs["tau"])
     out = {
@@ -381,7 +338,7 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
         out["identified_mass_error"] = float(identified[-1, 0] / total_mass - 1.0)
         out["momentum_misfit"] = float(identified[-1, 1])
         out["kinematic_mismatch"] = float(identified[-1, 2])
-    out.update(robot.TaskMetrics(logs))
+    out.update(robot.task.Metrics(robot, logs))
     return out
 
 
@@ -405,3 +362,67 @@ def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str
         "control_effort_increase": dac["control_effort_rms"]
         / model_based["control_effort_rms"] - 1,
     }
+
+
+# The scenario's phase (scenario.Phases' field) of each "phaseK." metric.
+PHASE_NAMES = {"phase1": "linear", "phase2": "nonlinear", "phase3": "disturbance"}
+# The metrics' units; every other metric is a ratio, a share or a count. The tracking
+# error's unit is the task's (rad for the shipped tasks' angle and attitude errors).
+UNITS = {"tracking_error_rms": "rad", "tracking_error_max": "rad",
+         "tracking_error_rms_phase3": "rad", "tracking_error_rms_phases_2_3": "rad",
+         "tracking_error_rms_before": "rad", "tracking_error_rms_after": "rad",
+         "position_error_rms": "m", "attitude_error_final": "rad",
+         "attitude_error_rms_settled": "rad", "attitude_error_max_settled": "rad",
+         "control_effort_rms": "N m", "e_tau_rms": "N m", "chi_rms": "N m",
+         "chi_final": "N m", "sliding_rms": "rad/s", "min_clearance": "m",
+         "base_attitude_max_excursion": "rad", "max_momentum": "kg m^2/s",
+         "momentum_misfit": "kg m^2/s"}
+
+
+@dataclass
+class RunMetrics:
+    """A run's metrics as a typed record: over the run, per phase under the
+    scenario's phase names, with units (run_metrics' flat names: ``flat``).
+
+    Attributes:
+        run: Metric -> value over phases 1-3 (and the fault windows).
+        phases: Phase (linear, nonlinear, disturbance) -> metric -> value.
+        units: Metric -> unit ("" for ratios, shares and counts).
+    """
+    run: Dict[str, float]
+    phases: Dict[str, Dict[str, float]]
+    units: Dict[str, str]
+
+    @classmethod
+    def Of(cls, logs: Dict[str, np.ndarray], scenario: Scenario) -> "RunMetrics":
+        """The record of run_metrics(logs, scenario).
+
+        Args:
+            logs: The run's logs.
+            scenario: The scenario it ran."""
+        return cls.FromFlat(run_metrics(logs, scenario))
+
+    @classmethod
+    def FromFlat(cls, flat: Dict[str, float]) -> "RunMetrics":
+        """The record of run_metrics' flat names ("phaseK.NAME" into phases).
+
+        Args:
+            flat: run_metrics' dictionary."""
+        run, phases = {}, {name: {} for name in PHASE_NAMES.values()}
+        for key, value in flat.items():
+            head, _, name = key.partition(".")
+            if head in PHASE_NAMES:
+                phases[PHASE_NAMES[head]][name] = value
+            else:
+                run[key] = value
+        names = {key.rpartition(".")[2] for key in flat}
+        return cls(run=run, phases=phases,
+                   units={name: UNITS.get(name, "") for name in sorted(names)})
+
+    @property
+    def flat(self) -> Dict[str, float]:
+        """run_metrics' flat dictionary."""
+        phase_keys = {name: key for key, name in PHASE_NAMES.items()}
+        return {**self.run, **{f"{phase_keys[phase]}.{name}": value
+                               for phase, values in self.phases.items()
+                               for name, value in values.items()}}

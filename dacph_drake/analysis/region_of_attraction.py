@@ -1,36 +1,25 @@
-"""A region-of-attraction certificate for the LHS sliding dynamics, by sums of
-squares (Drake's ``RegionOfAttraction`` with the open-source Clarabel solver).
+"""Region-of-attraction certificates for the LHS sliding dynamics, by sums of squares
+(Drake's ``RegionOfAttraction`` with the open-source Clarabel solver).
 
-Polynomial model (its assumptions are part of the certificate):
-- frozen configuration q (M and the Christoffel symbols Gamma evaluated at q),
-- nu = 0 (the joint rates are s), exact RHS (e_tau = 0),
-- tanh(x) replaced by its cubic Taylor polynomial x - x^3 / 3,
+Planar model (its assumptions are part of the certificate): frozen configuration q,
+nu = 0 (the joint rates are s), exact RHS (e_tau = 0), tanh(x) replaced by x - x^3 / 3,
 
     M(q) sdot = -C'(q, s) s - K_d s - chi (s / epsilon - (s / epsilon)^3 / 3),
     C'(q, s) = sum_k s_k Gamma_k(q).
 
-With the candidate V = s^T M(q) s / 2, the certified region is {V(s) <= rho}; it
-contains the ball ||s|| <= sqrt(2 rho / lambda_max(M(q))).
+With V = s^T M(q) s / 2 the region {V(s) <= rho} contains the ball
+||s|| <= sqrt(2 rho / lambda_max(M(q))).
 
-A spatial arm's LHS (attitude_region_of_attraction) has K_d = damping_rate M(q)
-and the robust term chi tanh(w_i s_i) with w_i = M_ii / phi up to 2000 s/rad (a
-cubic Taylor polynomial would hold only for |s_i| < 1e-3 rad/s). Its certificate
-drops the robust term instead: s_i tanh(w_i s_i) >= 0, so it only lowers
-dV/dt = s^T M sdot, and a region certified without it holds with it:
-
-    M(q) sdot = -C'(q, s) s - damping_rate M s.
-
-Its dV/dt is homogeneous: with s = M^-1/2 w r, ||w|| = 1 (so V = r^2 / 2),
+A spatial arm's LHS (attitude_region_of_attraction: K_d = damping_rate M(q), robust term
+chi tanh(w_i s_i), w_i = M_ii / phi, too steep for a cubic Taylor polynomial) drops the
+robust term, which only lowers dV/dt (s_i tanh(w_i s_i) >= 0):
+M(q) sdot = -C'(q, s) s - damping_rate M s. With s = M^-1/2 w r, ||w|| = 1 (V = r^2 / 2),
 
     dV/dt = -damping_rate r^2 - c(w) r^3,   c(w) = s^T C'(q, s) s at r = 1,
 
-a cubic form, negative for every r < damping_rate / c(w). So the region {V < rho}
-with rho = (damping_rate / gamma)^2 / 2 is certified by any gamma >= max_{|w|=1}
-c(w), the largest level the full program could certify when gamma is that maximum.
-gamma comes from a sums-of-squares program on the sphere (gamma - c(w) = sigma(w) +
-lambda(w) (|w|^2 - 1), sigma SOS of degree 4, lambda free of degree 2; a few
-milliseconds for 7 joints), where the full program in s takes 2 min for 6 joints
-and more than 15 min for 7."""
+so {V < rho}, rho = (damping_rate / gamma)^2 / 2, is certified by any
+gamma >= max_{|w|=1} c(w), bounded by a small SOS program on the sphere
+(cubic_maximum_on_sphere) instead of the full program in s, which grows steeply with n."""
 import multiprocessing
 from dataclasses import asdict, dataclass
 
@@ -55,8 +44,7 @@ class RegionCertificate:
         rho: The certified level of V = s^T M s / 2 [J].
         radius: A ball ||s|| <= radius inside the region [rad/s].
         assumptions: The polynomial model's assumptions (part of the certificate).
-        skipped: Why no certificate was computed (the budget), or "".
-    """
+        skipped: Why no certificate was computed (the budget), or ""."""
     q: list
     rho: float                      # level of V = s^T M s / 2 [J]
     radius: float                   # a ball ||s|| <= radius inside the region [rad/s]
@@ -68,13 +56,10 @@ class RegionCertificate:
         return asdict(self)
 
     def Contains(self, s0_norm: float) -> bool:
-        """Whether the ball this certificate gives holds s(0).
+        """Whether the ball this certificate gives holds s(0): s0_norm <= radius.
 
         Args:
-            s0_norm: ||s(0)|| [rad/s].
-
-        Returns:
-            s0_norm <= radius."""
+            s0_norm: ||s(0)|| [rad/s]."""
         return s0_norm <= self.radius
 
 
@@ -82,19 +67,15 @@ class RegionCertificate:
 class MovingConfigurationCertificate:
     """The spatial LHS's region of attraction with nothing frozen: every s.
 
-    C' is the Christoffel form of dM, so Mdot - 2 C' is skew-symmetric and along
-    the sliding dynamics (eq. E26, the configuration moving with any nu)
+    C' is the Christoffel form of dM, so Mdot - 2 C' is skew-symmetric and along the
+    sliding dynamics (eq. E26, any nu; docs/equations.md E26-E28), for every s and q,
 
         M sdot = -C'(q, qdot) s - damping_rate M s - b s - chi tanh(w s) + e_tau,
         dV/dt = -2 damping_rate V - s^T b s - chi sum_i s_i tanh(w_i s_i)
-                <= -2 damping_rate V        (e_tau = 0),
+                <= -2 damping_rate V        (e_tau = 0).
 
-    for every s and q (the paper's proof, docs/equations.md E26-E28). The region
-    is the whole space; what it rests on, dM = dM/dq, is checked: C'(q, e_k) +
-    C'(q, e_k)^T against central differences of M (step FD_STEP) at the run's q0
-    and sampled configurations. The frozen-configuration certificate
-    (attitude_region_of_attraction: C'(q, s) s kept, the Mdot it comes with
-    dropped, so it is stricter than the closed loop) is reported beside it.
+    What it rests on, C'(q, e_k) + C'(q, e_k)^T = dM/dq_k, is checked against central
+    differences (FD_STEP) at q0 and sampled configurations.
 
     Attributes:
         configurations: How many configurations were checked.
@@ -102,8 +83,7 @@ class MovingConfigurationCertificate:
         tolerance: The residual allowed [-].
         frozen_radius: The frozen-configuration certificate's ball at q0 [rad/s].
         assumptions: The model's assumptions (part of the certificate).
-        skipped: Always "" (nothing is budgeted).
-    """
+        skipped: Always "" (nothing is budgeted)."""
     configurations: int
     residual: float
     tolerance: float
@@ -116,13 +96,11 @@ class MovingConfigurationCertificate:
         return {"region": "every s", **asdict(self)}
 
     def Contains(self, s0_norm: float) -> bool:
-        """Whether s(0) is in the region: every s is, when dM is M's derivative.
+        """Whether s(0) is in the region (residual <= tolerance): every s is, when dM is M's
+        derivative.
 
         Args:
-            s0_norm: ||s(0)|| [rad/s] (any).
-
-        Returns:
-            residual <= tolerance."""
+            s0_norm: ||s(0)|| [rad/s] (any)."""
         return self.residual <= self.tolerance
 
 
@@ -131,15 +109,15 @@ ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; tanh replaced by its 
 
 
 # The wall time the planar arm's sums-of-squares program in s may take [s] (dacph
-# verify --region-budget): it grows steeply with the number of joints (about 1 s for
-# 3, 2 min for 6, more than 15 min for 7).
+# verify --region-budget): it grows steeply with the number of joints.
 REGION_BUDGET = 300.0
 
 
 def sliding_region_of_attraction(model: ReducedOrderModel, q: np.ndarray, Kd: float,
                                  chi: float, epsilon: float,
                                  budget: float = REGION_BUDGET) -> RegionCertificate:
-    """The planar LHS's certificate: K_d = Kd I, tanh(s / epsilon).
+    """The planar LHS's certificate: K_d = Kd I, tanh(s / epsilon); past ``budget`` rho and
+    radius are nan and ``skipped`` says why.
 
     Args:
         model: The controller's reduced model.
@@ -147,11 +125,7 @@ def sliding_region_of_attraction(model: ReducedOrderModel, q: np.ndarray, Kd: fl
         Kd: The LHS damping K_d = Kd I.
         chi: The robust term's gain chi.
         epsilon: The boundary layer's thickness.
-        budget: The wall time the sums-of-squares program may take [s].
-
-    Returns:
-        The certificate (with no region, rho and radius nan, and the reason in
-            ``skipped`` when the program did not finish within ``budget``)."""
+        budget: The wall time the sums-of-squares program may take [s]."""
     n = model.num_joints
     M = model.Evaluate(q, np.zeros(n)).M
     Gamma = [model.Evaluate(q, np.eye(n)[k]).C for k in range(n)]
@@ -166,18 +140,13 @@ SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust te
 
 def attitude_region_of_attraction(model: FloatingBaseModel, q: np.ndarray,
                                   damping_rate: float) -> RegionCertificate:
-    """A spatial arm's LHS's certificate, for every chi.
-
-    The LHS has K_d = damping_rate M(q); the certificate is the homogeneous one
-    (module docstring).
+    """A spatial arm's LHS's certificate (K_d = damping_rate M(q)) for every chi: the
+    homogeneous one of the module docstring.
 
     Args:
         model: The arm's model (floating_model.FloatingBaseModel).
         q: The frozen configuration [rad] (n).
-        damping_rate: The LHS's damping rate [1/s].
-
-    Returns:
-        The certificate."""
+        damping_rate: The LHS's damping rate [1/s]."""
     n = model.num_joints
     M = model.MassMatrix(q)
     Gamma = np.array([model.Coriolis(q, np.eye(n)[k]) for k in range(n)])
@@ -207,10 +176,7 @@ def moving_region_of_attraction(model: FloatingBaseModel, q0: np.ndarray,
     Args:
         model: The arm's model (floating_model.FloatingBaseModel).
         q0: The run's start [rad] (n).
-        damping_rate: The LHS's damping rate [1/s] (for the frozen certificate).
-
-    Returns:
-        The certificate."""
+        damping_rate: The LHS's damping rate [1/s] (for the frozen certificate)."""
     n = model.num_joints
     samples = np.random.default_rng(0).uniform(-np.pi, np.pi,
                                                (SKEW_CONFIGURATIONS - 1, n))
@@ -229,17 +195,12 @@ def moving_region_of_attraction(model: FloatingBaseModel, q0: np.ndarray,
 
 
 def cubic_maximum_on_sphere(T: np.ndarray) -> float:
-    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c.
-
-    By sums of squares: the least gamma with gamma - c(w) = sigma(w) + lambda(w)
-    (|w|^2 - 1), sigma SOS (degree 4), lambda any polynomial of degree 2
-    (Clarabel), raised by the solver's tolerance (1e-7 relative).
+    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c: the least gamma
+    with gamma - c(w) = sigma(w) + lambda(w) (|w|^2 - 1), sigma SOS (degree 4), lambda of
+    degree 2 (Clarabel), raised by the solver's tolerance (1e-7 relative).
 
     Args:
         T: The cubic form's coefficients (n x n x n).
-
-    Returns:
-        gamma.
 
     Raises:
         RuntimeError: The sums-of-squares program failed."""
@@ -261,9 +222,7 @@ def cubic_maximum_on_sphere(T: np.ndarray) -> float:
 
 
 def _BudgetedRegion(budget: float, q, *arguments) -> RegionCertificate:
-    """_Region(q, *arguments) in a process of its own, stopped after ``budget``
-    seconds of wall time: then a certificate with no region (rho, radius nan) that
-    says why it was skipped."""
+    """_Region in its own process, stopped after ``budget`` s: then no region, and why."""
     context = multiprocessing.get_context("spawn")
     with context.Pool(1) as pool:      # leaving the block terminates the worker
         pending = pool.apply_async(_Region, (q, *arguments))

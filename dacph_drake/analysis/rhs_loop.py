@@ -1,19 +1,14 @@
-"""The discrete RHS loop as a Drake LinearSystem, and its stability certificate
-(paper eqs. 45-48, docs/equations.md E37-E38, E45-E48).
-
-Perturbation model of the loop the DAC diagram closes every RHS period h: the
-integrator u_I(k+1) = u_I(k) + h K e(k) acts on e(k) = tau_c^r - tau_obs(k), and the
-port observer returns the port one sample late, tau_obs(k+1) = B u_I(k). With the
-state x = (u_I, tau_obs):
+"""The discrete RHS loop as a Drake LinearSystem, and its stability certificate (paper
+eqs. 45-48, docs/equations.md E37-E38, E45-E48). The integrator u_I(k+1) = u_I(k) +
+h K e(k) acts on e(k) = tau_c^r - tau_obs(k); the port observer returns the port one
+sample late, tau_obs(k+1) = B u_I(k). With the state x = (u_I, tau_obs):
 
     x(k+1) = [[I, -h K], [B, 0]] x(k) + [[h K], [0]] tau_c^r
     e(k)   = [0, -I] x(k) + tau_c^r
 
-per decoupled mode p the characteristic polynomial is z^2 - z + h k_p lambda_p.
-(Drake's ``Linearize`` needs AutoDiff scalar support, which the Python LeafSystems
-of this package do not have, so the LinearSystem is written in closed form; a test
-checks it against the RhsIntegrator LeafSystem's own response.)
-"""
+and per decoupled mode p the characteristic polynomial is z^2 - z + h k_p lambda_p. It is
+written in closed form: Drake's ``Linearize`` needs AutoDiff, which this package's Python
+LeafSystems lack (a test checks it against the RhsIntegrator's response)."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -25,15 +20,13 @@ from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:
-    """The closed discrete RHS loop: input tau_c^r, output e_tau, time_period h.
+    """The closed discrete RHS loop as a discrete LinearSystem: input tau_c^r, output e_tau,
+    time_period h.
 
     Args:
         B: The port's input matrix (n x n).
         K: The integrator's gains (n).
-        period: The RHS period h [s].
-
-    Returns:
-        The loop as a discrete LinearSystem."""
+        period: The RHS period h [s]."""
     n = B.shape[0]
     A = loop_matrix(B, K, period)
     B_in = np.vstack([period * np.diag(K), np.zeros((n, n))])
@@ -49,15 +42,13 @@ class RhsLoopCheck:
         spectral_radius: The discrete loop's spectral radius.
         margin: 1 - spectral radius.
         decay_rate: -ln(spectral radius) / h [1/s].
-        lyapunov_P_min_eigenvalue: The least eigenvalue of the Lyapunov certificate
-            P (nan when the radius check failed).
+        lyapunov_P_min_eigenvalue: The least eigenvalue of P (nan: the radius check failed).
         lyapunov_residual: ||A^T P A - P + I|| / ||P||.
         dic_ok: det B != 0 and Re(lambda_p) > 0.
         sigma_rhs: min_p k_p Re(lambda_p) [1/s].
         separation: sigma_rhs / lambda_LHS (eq. 45).
         ok: Whether every check passed.
-        reason: Why not ("; "-separated; "" when ok).
-    """
+        reason: Why not ("; "-separated; "" when ok)."""
     spectral_radius: float
     margin: float                  # 1 - spectral radius
     decay_rate: float              # -ln(spectral radius) / h [1/s]
@@ -76,23 +67,18 @@ class RhsLoopCheck:
 
 def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: float,
                    Td: float) -> RhsLoopCheck:
-    """The RHS loop's certificate at one operating point.
-
-    - the linearized discrete loop has spectral radius <= 1 - STABILITY_MARGIN and
-      RealDiscreteLyapunovEquation(A, I) gives P > 0;
-    - DIC: det B != 0 and Re(lambda_p) > 0 for the eigenvalues of B;
-    - time-scale separation: sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS,
-      lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45).
+    """The RHS loop's certificate at one operating point (``ok``: every check passed):
+    spectral radius <= 1 - STABILITY_MARGIN and P > 0 from
+    RealDiscreteLyapunovEquation(A, I); DIC: det B != 0, Re(lambda_p) > 0; separation
+    sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS,
+    lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45).
 
     Args:
         B: The port's input matrix (n x n): the learner's B_hat or the truth's B~.
         K: The integrator's gains (n).
         period: The RHS period h [s].
         lambda_lhs: The LHS rate lambda_LHS [1/s] (eq. 45).
-        Td: The time-scale separation factor T_d.
-
-    Returns:
-        The certificate (``ok``: every check passed)."""
+        Td: The time-scale separation factor T_d."""
     _, paired, dic_ok = integral_gains(B, 1.0)
     A = rhs_loop_system(B, K, period).A()
     radius = float(np.max(np.abs(np.linalg.eigvals(A))))

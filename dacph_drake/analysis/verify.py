@@ -2,28 +2,21 @@
 
 1. LHS: V = s^T M s / 2 inside its exponential envelope wherever ||e_tau|| <= chi
    (lyapunov_envelope).
-2. RHS: at every learner update, the discrete RHS loop with the learner's B_hat,
-   the gains K, the RHS period and the observer's delay (rhs_loop): spectral
-   radius with margin, P > 0 from RealDiscreteLyapunovEquation, DIC, time-scale
-   separation; estimates the integrator rejected (DIC or trust band) are counted,
-   not checked, since the loop kept its previous gains. The same loop with the
-   ground truth's B~ (known in simulation only) is checked at every logged sample:
-   a learner that is wrong but self-consistent (B_hat K = c I) passes the first
-   check and fails this one.
-   With a learner that reports credible intervals (learner.model local_bayes),
-   the loop with the gains in effect is also checked on the whole box of B its
-   interval allows at every logged sample where an estimate was adopted
-   (kernels.certificate.box_certificate: time-scale separation and spectral
-   radius for every B of the box): an estimate adopted outside its certificate
-   (the point rule, rhs.adoption trust_band) fails the run.
-3. A region-of-attraction certificate of the sliding dynamics
-   (region_of_attraction), checked to contain s(0): by sums of squares at the
-   initial configuration for a planar arm, the whole space by the skew symmetry
-   of Mdot - 2 C' (checked) for a spatial arm.
+2. RHS: at every learner update, the discrete RHS loop with the learner's B_hat, the
+   gains K, the RHS period and the observer's delay (rhs_loop): spectral radius with
+   margin, P > 0 from RealDiscreteLyapunovEquation, DIC, time-scale separation;
+   estimates the integrator rejected are counted, not checked. The same loop with the
+   ground truth's B~ is checked at every logged sample (a learner wrong but
+   self-consistent, B_hat K = c I, fails it). With a learner's credible intervals
+   (learner.model local_bayes), every B of the interval's box is checked where an
+   estimate was adopted (kernels.certificate.box_certificate); an estimate adopted
+   outside its certificate (rhs.adoption trust_band) fails the run.
+3. A region-of-attraction certificate of the sliding dynamics (region_of_attraction)
+   contains s(0): by sums of squares at q0 for a planar arm, everywhere by the skew
+   symmetry of Mdot - 2 C' (checked) for a spatial arm.
+
 The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
-Every robot's runs are checked alike; what the checks need of the LHS comes from
-the robot (robots.Robot.VerifyLhs: a described arm's LHS has K_d = damping_rate M
-and the inertia-scaled boundary layer, EnvelopeConstants.ForInertiaScaled).
+What the checks need of the LHS comes from the robot (robots.Robot.VerifyLhs).
 """
 import json
 from dataclasses import dataclass, field
@@ -43,7 +36,7 @@ from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # no
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
 from dacph_drake.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
-from dacph_drake.robots import robot_of  # noqa: E402
+from dacph_drake.assembly import robot_of  # noqa: E402
 from dacph_drake.loop.run_store import load_run  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
@@ -147,42 +140,20 @@ def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
             "first_failure_time": failures[0] if failures else None}
 
 
-@dataclass
-class LhsSide:
-    """What the checks need of a run's LHS.
-
-    Attributes:
-        V: V = s^T M s / 2 at every logged sample (from its log) [J].
-        s0_norm: ||s(0)|| (from its log) [rad/s].
-        constants: The envelope's constants.
-        lambda_lhs: The LHS rate lambda_LHS of eq. (45) [1/s].
-        region: The region-of-attraction certificate at q0 (RegionCertificate).
-        settings: The LHS's settings, for the report.
-    """
-    V: np.ndarray
-    s0_norm: float
-    constants: EnvelopeConstants
-    lambda_lhs: float
-    region: object
-    settings: Dict
-
-
 def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
                 out_dir: Optional[Union[str, Path]] = None,
                 region_budget: float = REGION_BUDGET) -> Dict:
-    """All checks on the logs of a DAC run of ``scenario``.
+    """All checks on the logs of a DAC run of ``scenario``: the report (``ok``: verdict).
 
     Args:
         logs: The run's logs (RunResult.logs).
         scenario: The scenario it ran.
         run_meta: The run's metadata (its "status", "reason", "final_time").
         out_dir: Where verification.{md,json} and the plots go; None: not written.
-        region_budget: Wall-time budget [s] of the region-of-attraction search.
-
-    Returns:
-        The report dictionary (``ok`` is the verdict)."""
+        region_budget: Wall-time budget [s] of the region-of-attraction search."""
     n = len(scenario.q0)
-    lhs = robot_of(scenario).VerifyLhs(logs, region_budget)
+    robot = robot_of(scenario)
+    lhs = robot.task.VerifyLhs(robot, logs, region_budget)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
@@ -228,18 +199,14 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
 def verify_run(run_dir: Union[str, Path], out_dir: Optional[Union[str, Path]] = None,
                controller: str = "dac",
                region_budget: float = REGION_BUDGET) -> Dict:
-    """Verifies a saved run against its Lyapunov claims (verify_logs).
+    """Verifies a saved run against its Lyapunov claims (verify_logs); returns the report
+    (its "ok" entry: every check passed).
 
     Args:
-        run_dir: A run directory written by ``dacph simulate`` or ``dacph
-            reproduce``.
+        run_dir: A run directory written by ``dacph simulate`` or ``dacph reproduce``.
         out_dir: Where the report goes; default: run_dir.
-        controller: The run to verify: one with the RHS integrator (DAC, its
-            ablation, or a registered variant).
+        controller: The run to verify: one with the RHS integrator (DAC, its ablation, ...).
         region_budget: Wall-time budget [s] of the region-of-attraction search.
-
-    Returns:
-        The report as a dict (its "ok" entry: every check passed).
 
     Raises:
         ConfigError: The run has no RHS loop to verify, or a file is missing."""

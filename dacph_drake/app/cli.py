@@ -34,7 +34,7 @@ def _free_flight(args) -> int:
 def _simulate(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.metrics import PHASES, run_metrics
-    from dacph_drake.robots import robot_of
+    from dacph_drake.assembly import robot_of
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
@@ -109,7 +109,7 @@ def _print_table(summary) -> None:
 
 def _animate_run(run_dir, controller: str, out=None):
     from pathlib import Path
-    from dacph_drake.robots import robot_of
+    from dacph_drake.assembly import robot_of
     from dacph_drake.loop.run_store import load_run
     logs, scenario, _ = load_run(run_dir, controller)
     out = (Path(out) if out else
@@ -263,14 +263,11 @@ def _AddSimulateArguments(command) -> None:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """The ``dacph`` command line: parses ``argv`` and runs the command.
+    """The ``dacph`` command line: parses ``argv``, runs the command and returns the exit
+    status (2 for bad input, with one line naming it; 130 when interrupted).
 
     Args:
-        argv: The arguments after the program's name (default: sys.argv[1:]).
-
-    Returns:
-        The exit status (2 for bad input, with one line naming it; 130 when
-            interrupted)."""
+        argv: The arguments after the program's name (default: sys.argv[1:])."""
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     free = commands.add_parser(

@@ -30,10 +30,10 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
-from dacph_drake.log_layout import AttitudeLog, LhsLog, RhsLog  # noqa: E402
+from dacph_drake.log_layout import LhsLog, PoseLog, RhsLog  # noqa: E402
 from dacph_drake.analysis.metrics import nominal_estimates  # noqa: E402
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
-from dacph_drake.robots import robot_type  # noqa: E402
+from dacph_drake.assembly import task_of  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
@@ -304,27 +304,34 @@ def _panel_f(runs: Dict[str, Logs], scenario: Scenario):
     return fig
 
 
-def _panel_attitude(runs: Dict[str, Logs], scenario):
-    """(e) of a described arm: |e| and ||s|| of every run, the smallest link-base
-    distance against the potential's margin, d(t)."""
-    n, layout = len(scenario.q0), AttitudeLog()
+def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
+    """(e) of a described arm: |e| (with the pose task: |e_p| too) and ||s|| of every
+    run, the smallest link-base distance against the potential's margin, d(t)."""
+    n, layout = len(scenario.q0), PoseLog()
+    pose = log_name == "pose_log"
     dac = runs[REFERENCE]
-    fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
+    fig, axes, xlim = _figure(5 if pose else 4, scenario)
+    error_axes, (ax2, ax3, ax4) = axes[:-3], axes[-3:]
     for name, logs in _compared(runs):
-        t, log = logs["time"], logs["attitude_log"]
-        _trace(ax1, t, log[:, layout.e_norm], xlim, log=True, **_style(name))
+        t, log = logs["time"], logs[log_name]
+        _trace(error_axes[0], t, log[:, layout.e_norm], xlim, log=True, **_style(name))
+        if pose:
+            _trace(error_axes[1], t, log[:, layout.e_position_norm], xlim, log=True,
+                   **_style(name))
         _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **_style(name))
         _trace(ax3, t, log[:, layout.clearance], xlim, **_style(name))
     ax3.axhline(scenario.robot.potential.margin, color="k", ls=":", lw=1.0,
                 label="potential's margin")
-    ax1.set_ylabel(r"attitude error $|e|$ [rad]")
+    error_axes[0].set_ylabel(r"attitude error $|e|$ [rad]")
+    if pose:
+        error_axes[1].set_ylabel(r"position error $|e_p|$ [m]")
     ax2.set_ylabel(r"$\|s\|$ [rad/s]")
     ax3.set_ylabel("link-base\ndistance [m]")
     for k in range(n):
         _trace(ax4, dac["time"], dac["disturbance"][:, k], xlim, color=f"C{k % 10}",
                label=f"$d_{k + 1}$")
     ax4.set_ylabel("d(t) [N m]")
-    for ax in (ax1, ax2, ax3, ax4):
+    for ax in axes:
         _legend_outside(ax)
     return fig
 
@@ -344,9 +351,12 @@ def zoom_window(scenario: Scenario) -> Tuple[float, float]:
     return (start - length / 48, start + length / 12)
 
 
-# The task panels by name (robots.Robot.task_panels).
+# The task panels by name (tasks.task.Task.panels).
 TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f,
-               "e_attitude_dac_vs_model_based": _panel_attitude}
+               "e_attitude_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
+                   runs, scenario, "attitude_log"),
+               "e_pose_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
+                   runs, scenario, "pose_log")}
 
 
 def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
@@ -365,7 +375,7 @@ def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
     figures = {name: figure for name, figure in zip(DAC_PANELS, (
         _panel_a(dac, scenario), _entries(dac, scenario),
         _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)))}
-    for name in robot_type(scenario).task_panels:
+    for name in task_of(scenario).panels:
         figures[name] = TASK_PANELS[name](runs, scenario)
     for fig in figures.values():
         _fit_log_axes(fig)

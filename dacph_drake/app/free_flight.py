@@ -51,8 +51,7 @@ class FreeFlightResult:
         max_momentum: max over samples of |(h_A_z, h_L_x, h_L_y)|_inf.
         kinetic_energy: The kinetic energy at the end [J].
         work: The work done by the torques [J].
-        min_clearance: The smallest signed distance between non-adjacent bodies
-            [m].
+        min_clearance: The smallest signed distance between non-adjacent bodies [m].
     """
     max_momentum: float     # max over samples of |(h_A_z, h_L_x, h_L_y)|_inf
     kinetic_energy: float   # [J] at the end
@@ -74,11 +73,7 @@ def run_free_flight(robot: RobotParams, duration: float, amplitudes: Sequence[fl
         q0: The initial joint angles [rad] (n).
         integration_scheme: The fixed-step integrator (FixedStepConfig).
         step: Its step [s].
-        time_step: > 0: the plant is Drake's discrete one with this step [s] (then
-            W is not tracked).
-
-    Returns:
-        The momentum, energy, work and clearance."""
+        time_step: > 0: Drake's discrete plant with this step [s] (W then not tracked)."""
     n = robot.num_links
     builder = DiagramBuilder()
     plant, scene_graph = AddFreeFloatingArm(builder, robot, time_step)

@@ -14,19 +14,12 @@ _ID = re.compile(r"(digraph _|clusters|cluster|\bs)(\d+)")
 
 
 def diagram_graphviz(diagram: "Diagram", max_depth: int = 2) -> str:
-    """Drake's Graphviz source of ``diagram``, the same text for equal diagrams.
-
-    Its process-specific system ids are renumbered in order of appearance and its
-    edges sorted (Drake lists them in no fixed order), so equal diagrams give
-    equal text.
+    """Drake's Graphviz source of ``diagram``, the same text for equal diagrams: its
+    process-specific system ids renumbered in order of appearance, its edges sorted.
 
     Args:
         diagram: The diagram.
-        max_depth: How many levels deep (2: the controller sub-diagram shows its
-            systems).
-
-    Returns:
-        The Graphviz source."""
+        max_depth: How many levels deep (2: the controller sub-diagram's systems shown)."""
     ids = {}
 
     def renumber(match):
@@ -56,14 +49,11 @@ def _dot() -> str:
 
 
 def render_diagram(diagram: "Diagram", stem: Union[str, Path]) -> List[Path]:
-    """Writes stem.dot, stem.svg and stem.png.
+    """Writes stem.dot, stem.svg and stem.png; returns their paths.
 
     Args:
         diagram: The diagram.
         stem: The files' path without suffix (its folder is created if missing).
-
-    Returns:
-        The files' paths.
 
     Raises:
         RuntimeError: Graphviz's ``dot`` program is not installed."""
@@ -81,16 +71,11 @@ def render_diagram(diagram: "Diagram", stem: Union[str, Path]) -> List[Path]:
 
 
 def diagram_svg(diagram: "Diagram", max_depth: int = 2) -> str:
-    """The diagram's graph as SVG text.
-
-    For a notebook: IPython.display.SVG(diagram_svg(loop.diagram)).
+    """The diagram's graph as SVG text (a notebook: IPython.display.SVG(diagram_svg(d))).
 
     Args:
         diagram: The diagram.
         max_depth: How many levels deep (diagram_graphviz).
-
-    Returns:
-        The SVG text.
 
     Raises:
         RuntimeError: Graphviz's ``dot`` program is not installed."""

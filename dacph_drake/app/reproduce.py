@@ -34,7 +34,7 @@ class TableRow:
         label: The row's label.
         unit: The value's unit ("%", "-", "samples" or a physical unit).
         paper: The paper's value, where it reports one.
-        target: "<= x" / ">= x": the issue's acceptance bound ("": none).
+        target: "<= x" / ">= x": the acceptance bound ("": none).
     """
     key: str            # a key of the metrics dictionaries
     label: str
@@ -76,12 +76,10 @@ class AblationRow:
     """One row of the ablation table.
 
     Attributes:
-        key: "CONTROLLER.NAME", looked up as "CONTROLLER.phaseK.NAME" for each
-            phase.
+        key: "CONTROLLER.NAME", looked up as "CONTROLLER.phaseK.NAME" for each phase.
         label: The row's label.
         unit: The value's unit.
-        over: Another key: the row is the ratio of ``key`` to it in the same phase
-            (None: no ratio).
+        over: Another key: the row is ``key``'s ratio to it in the same phase (None: none).
     """
     key: str
     label: str
@@ -90,17 +88,12 @@ class AblationRow:
 
 
 def ablation_rows(metrics: Dict[str, Dict[str, float]]) -> List[AblationRow]:
-    """The ablation table's rows for the controllers that ran.
-
-    Every controller's tracking error; for every controller with an RHS loop (a
-    chi) its e_tau, DAC's over it, and its chi; then the learner's rows of DAC.
+    """The ablation table's rows for the controllers that ran, in the registry's order:
+    every controller's tracking error; for every controller with an RHS loop (a chi)
+    its e_tau, DAC's over it, and its chi; then the learner's rows of DAC.
 
     Args:
-        metrics: Controller -> its run's metrics (run_metrics), for the controllers
-            that ran.
-
-    Returns:
-        The rows, in the registry's order of the controllers."""
+        metrics: Controller -> its run's metrics (run_metrics), for those that ran."""
     ran = [c for c in CONTROLLERS if c in metrics]
     rhs_loop = [c for c in ran if f"{PHASES[0]}.chi_rms" in metrics[c]]
     label = {c: "DAC" if c == REFERENCE else c for c in ran}
@@ -128,15 +121,11 @@ LEARNER_ROWS = (
 
 
 def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
-    """{"dac": {...}, "model-based": {...}} -> comparison keys plus "dac.x" keys.
+    """{"dac": {...}, "model-based": {...}} -> the comparison's metrics, DAC's estimation
+    errors, and every controller's metrics as "CONTROLLER.NAME".
 
     Args:
-        metrics: Controller -> its run's metrics (run_metrics); "dac" and
-            "model-based" required.
-
-    Returns:
-        The comparison's metrics, DAC's estimation errors, and every controller's
-            metrics as "CONTROLLER.NAME"."""
+        metrics: Controller ("dac", "model-based" required) -> its run's metrics."""
     out = dict(comparison(metrics["dac"], metrics["model-based"]))
     out["estimation_error_B"] = metrics["dac"]["estimation_error_B"]
     out["estimation_error_D"] = metrics["dac"]["estimation_error_D"]
@@ -146,28 +135,21 @@ def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
 
 
 def metrics_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """One row per TableRow with this project's value beside the paper's.
+    """One row (metric, key, unit, paper, this_project, target) per TableRow.
 
     Args:
-        metrics: Controller -> its run's metrics (run_metrics).
-
-    Returns:
-        The rows (metric, key, unit, paper, this_project, target)."""
+        metrics: Controller -> its run's metrics (run_metrics)."""
     flat = flat_metrics(metrics)
     return [{"metric": r.label, "key": r.key, "unit": r.unit, "paper": r.paper,
              "this_project": flat[r.key], "target": r.target} for r in PAPER_ROWS]
 
 
 def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """The ablation_rows whose controllers ran, one value per phase.
-
-    The errors are time-RMS relative errors (metrics.learning_metrics).
+    """The ablation_rows whose controllers ran (metric, key, over, unit, phases: one value
+    per phase); the errors are time-RMS relative errors (metrics.learning_metrics).
 
     Args:
-        metrics: Controller -> its run's metrics (run_metrics).
-
-    Returns:
-        The rows (metric, key, over, unit, phases: one value per phase)."""
+        metrics: Controller -> its run's metrics (run_metrics)."""
     flat = {f"{c}.{k}": v for c, values in metrics.items() for k, v in values.items()}
     rows = []
     for r in ablation_rows(metrics):
@@ -191,10 +173,7 @@ def ablation_markdown(rows: List[Dict], title: str) -> str:
 
     Args:
         rows: The rows (ablation_table): metric, phase 1, phase 2, phase 3.
-        title: The table's heading.
-
-    Returns:
-        The Markdown text."""
+        title: The table's heading."""
     lines = [f"## {title}", "", "| metric | phase 1 (linear) | phase 2 (+ nonlinear) | "
              "phase 3 (+ disturbance) |", "|---|---|---|---|"]
     for row in rows:
@@ -208,15 +187,12 @@ NOT_REACHED = "n/a (phase not reached)"
 
 
 def format_value(value: Optional[float], unit: str, missing: str = "n/a") -> str:
-    """``value`` with its unit (4 significant digits).
+    """``value`` with its unit, as text (4 significant digits).
 
     Args:
         value: The value; None: "not reported".
         unit: Its unit ("%": shown in percent; "samples": a count; "-": none).
-        missing: The text for NaN (no samples to compute it from).
-
-    Returns:
-        The text."""
+        missing: The text for NaN (no samples to compute it from)."""
     if value is None:
         return "not reported"
     if value != value:
@@ -232,12 +208,8 @@ def table_markdown(rows: List[Dict], title: str) -> str:
     """A Markdown table of the metrics table's rows.
 
     Args:
-        rows: The rows (metrics_table): metric, the paper's value, this project's,
-            the target.
-        title: The table's heading.
-
-    Returns:
-        The Markdown text."""
+        rows: The rows (metrics_table): metric, the paper's value, this project's, target.
+        title: The table's heading."""
     lines = [f"## {title}", "", "| metric | paper | this project | target |",
              "|---|---|---|---|"]
     for row in rows:
@@ -249,10 +221,8 @@ def table_markdown(rows: List[Dict], title: str) -> str:
 
 def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                                runs: Dict[str, Dict]) -> None:
-    """Requires that the runs of a directory belong together.
-
-    Runs saved before run.json recorded the scenario's fingerprint and the
-    duration are not checked.
+    """Requires that the runs of a directory belong together (runs saved before run.json
+    recorded the scenario's fingerprint and the duration are not checked).
 
     Args:
         run_dir: The run directory (for the messages).
@@ -260,8 +230,7 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
         runs: Controller -> its run's metadata (its run_CONTROLLER.json).
 
     Raises:
-        ConfigError: A run was made from another scenario, or the runs have
-            different durations."""
+        ConfigError: A run was made from another scenario, or the runs' durations differ."""
     fingerprints = scenario_fingerprints(scenario)
     for controller, run in runs.items():
         if run.get("scenario_fingerprint", fingerprints[0]) not in fingerprints:
@@ -277,21 +246,15 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
 
 
 def report(run_dir: Union[str, Path]) -> Dict:
-    """Panels and tables for a directory holding the runs.
-
-    Writes figures/, metrics.md, ablation.md and metrics.json.
+    """Writes the panels and tables of a directory holding the runs (figures/, metrics.md,
+    ablation.md, metrics.json); returns the summary written to metrics.json (scenario,
+    duration, runs, table, ablation, metrics, figures, versions).
 
     Args:
-        run_dir: The directory, as ``reproduce`` or ``dacph simulate`` calls leave
-            it: dac and model-based, and dac-nominal for the ablation.
-
-    Returns:
-        The summary written to metrics.json (scenario, duration, runs, table,
-            ablation, metrics, figures, versions).
+        run_dir: The runs' directory (dac, model-based; dac-nominal for the ablation).
 
     Raises:
-        ConfigError: A required file is missing, or the runs do not belong
-            together (check_runs_belong_together)."""
+        ConfigError: A required file is missing, or the runs do not belong together."""
     run_dir = require_run_files(run_dir, REQUIRED)
     scenario = load_scenario(run_dir / "scenario.yaml")
     controllers = [c for c in CONTROLLERS
@@ -328,18 +291,14 @@ def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
 
 def reproduce(scenario: Scenario, out_dir: Union[str, Path], progress: bool = True,
               jobs: int = 1) -> Dict:
-    """Runs the CONTROLLERS on ``scenario``, then writes the panels and the tables.
+    """Runs the CONTROLLERS on ``scenario``, then writes the panels and the tables;
+    returns the report's summary (report).
 
     Args:
         scenario: The scenario.
-        out_dir: Where the runs go (logs, scenario.yaml, run_*.json with versions
-            and seed) and the report (report).
+        out_dir: Where the runs (logs, scenario.yaml, run_*.json) and the report go.
         progress: Show progress bars (with jobs 1).
-        jobs: Run the controllers in this many processes (above 1: no progress
-            bars).
-
-    Returns:
-        The report's summary (report).
+        jobs: Run the controllers in this many processes (above 1: no progress bars).
 
     Raises:
         ValueError: jobs is not between 1 and the number of controllers."""

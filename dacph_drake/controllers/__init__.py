@@ -3,16 +3,13 @@
 A controller is one module of this package with a function ``build(*scenarios) ->
 closed_loop.ClosedLoop`` (one scenario: a single run; several: a batch of trials)
 that calls ``closed_loop.assemble_closed_loop(scenarios[0], name, add,
-scenarios[1:])``, where ``add(loop, controller)`` adds the controller's systems to
-``controller.builder`` (the robot's LHS controller through
-``closed_loop.AddLhsSide``) and returns them by name (model_based.py is the
-shortest). REGISTRY maps its name to that function, as "module:function" so that
-the command line can list the names without loading Drake, with how tables and
-figures show it. `dacph simulate --controller`, `dacph diagram`, `dacph animate`,
-`dacph reproduce` (which runs every registered controller into its tables and
-panels), the sweep's ``controllers:`` and its summary, and ``loop.simulate.simulate`` all
-take their names from here. To add a controller, write its module and add one
-entry below."""
+scenarios[1:])``; ``add(loop, controller)`` adds the controller's systems to
+``controller.builder`` (the robot's LHS controller through ``closed_loop.AddLhsSide``)
+and returns them by name (model_based.py is the shortest). REGISTRY maps its name to
+that function as "module:function" (the command line lists the names without loading
+Drake), with how tables and figures show it; the commands, the sweep and
+``loop.simulate.simulate`` take their names from here. To add a controller, write its
+module and add one entry below."""
 import importlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -29,8 +26,7 @@ class Controller:
     """A registered controller.
 
     Args:
-        builder: "module:function" of a function that takes the scenarios and
-            returns a closed_loop.ClosedLoop.
+        builder: "module:function" of a function: scenarios -> closed_loop.ClosedLoop.
         description: One line, for --help.
         label: Its name in legends (empty: the registered name).
         color: Its matplotlib colour in figures.
@@ -62,13 +58,10 @@ REFERENCE, BASELINE = "dac", "model-based"
 
 
 def require_controller(name: str) -> Controller:
-    """Looks up a registered controller.
+    """The registered Controller ``name``.
 
     Args:
         name: A name of REGISTRY.
-
-    Returns:
-        Its Controller.
 
     Raises:
         ConfigError: Listing the registered names."""
@@ -77,14 +70,10 @@ def require_controller(name: str) -> Controller:
 
 
 def build_closed_loop(name: str, *scenarios: "Scenario") -> "ClosedLoop":
-    """Builds the closed loop of a registered controller.
+    """Builds the closed loop (closed_loop.ClosedLoop) of a registered controller.
 
     Args:
         name: A name of REGISTRY.
-        *scenarios: One scenario (a single run) or several (a batch of trials in one
-            diagram).
-
-    Returns:
-        The closed_loop.ClosedLoop: its diagram, plant, loggers and named systems."""
+        *scenarios: One scenario (a single run) or several (a batch in one diagram)."""
     module, function = require_controller(name).builder.split(":")
     return getattr(importlib.import_module(module), function)(*scenarios)

@@ -18,21 +18,14 @@ from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
 
 
 def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
-    """Builds the DAC-pH closed loop.
-
-    Plant, true RHS and disturbance, closed by the robot's LHS controller (chi from
-    the RHS loop, plus scenario.excitation; an inertial identifier with
-    inertia.identify), the port observer, the RHS integrator and the learner (in
-    regularized mode behind a RegressionFilter).
+    """Builds the DAC-pH closed loop "dac": plant, true RHS and disturbance, closed by the
+    robot's LHS controller (chi from the RHS loop, plus scenario.excitation; an inertial
+    identifier with inertia.identify), the port observer, the RHS integrator and the
+    learner (in regularized mode behind a RegressionFilter).
 
     Args:
         *scenarios: One scenario, or a batch of trials for one diagram.
-        learning: False keeps the learner's initial weights, so the integrator runs
-            on the nominal RHS (B0, D0): the dac-nominal ablation, otherwise the
-            same diagram.
-
-    Returns:
-        The ClosedLoop, named "dac" (or "dac_nominal")."""
+        learning: False keeps the learner's initial weights (B0, D0): "dac_nominal"."""
     def add(loop: ClosedLoop, controller: ControllerBuilder):
         lhs, systems = AddLhsSide(loop, controller, loop.scenario.excitation,
                                   identify=loop.scenario.inertia.identify)
@@ -43,48 +36,38 @@ def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop
 
 
 def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
-    """Builds the learning ablation: build_dac_diagram with the learner off.
-
+    """Builds the learning ablation "dac_nominal": build_dac_diagram with the learner off.
     The integrator runs on the nominal RHS (B0, D0); the excitation stays, so that
     learning is the only difference.
 
     Args:
-        *scenarios: One scenario, or a batch of trials for one diagram.
-
-    Returns:
-        The ClosedLoop, named "dac_nominal"."""
+        *scenarios: One scenario, or a batch of trials for one diagram."""
     return build_dac_diagram(*scenarios, learning=False)
 
 
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
                 learning: bool, identifier: Optional[InertialIdentifier] = None
                 ) -> Dict[str, object]:
-    """Adds the DAC controller's RHS side to a controller's diagram.
-
-    The port observer, the regression filter (regularized mode), the learner and the
-    RHS integrator, wired to the LHS controller and to the controller's inputs q,
-    qdot; exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``,
-    ``estimates``, ``estimate_bounds``. The gain rule (eq. 48) uses each trial's robot's LHS rates
-    (robots.Robot.GainRuleRates); the RHS period is checked for the largest c they
-    allow (gain_rule.check_rhs_period). Each system serves every trial of the loop.
+    """Adds the DAC controller's RHS side to a controller's diagram; returns the added
+    systems by name: the port observer, the regression filter (regularized mode), the
+    learner and the RHS integrator, wired to the LHS controller and to the controller's
+    inputs q, qdot; exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``,
+    ``estimates``, ``estimate_bounds``. The gain rule (eq. 48) uses each trial's robot's
+    LHS rates (robots.Robot.GainRuleRates); the RHS period is checked for the largest c
+    they allow (gain_rule.check_rhs_period). Each system serves every trial.
 
     Args:
         loop: The loop being built.
         controller: The controller's ControllerBuilder.
-        lhs: The LHS controller (its outputs ``reduced_model`` and ``tau_request``,
-            its input ``chi``).
+        lhs: The LHS controller (outputs ``reduced_model``, ``tau_request``; input ``chi``).
         learning: False keeps the learner's initial weights (dac-nominal).
-        identifier: The LHS's InertialIdentifier, if any: the learner then watches
-            the model the observer uses (Learner.model_change).
-
-    Returns:
-        The added systems by name.
+        identifier: The LHS's InertialIdentifier, if any (Learner.model_change watches it).
 
     Raises:
         ConfigError: The RHS period cannot realize the gain rule's largest rate."""
     scenario, model = loop.scenario, loop.model
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
-    rates = [robot.GainRuleRates() for robot in loop.robots]
+    rates = [robot.task.GainRuleRates(robot) for robot in loop.robots]
     for Kd_max, lambda_min_M in rates:
         check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
                              rhs_settings.Td, Kd_max, lambda_min_M, 1.0),

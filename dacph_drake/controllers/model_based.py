@@ -10,16 +10,12 @@ from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 
 
 def build_model_based_diagram(*scenarios: Scenario) -> ClosedLoop:
-    """Builds the model-based baseline loop of the scenarios' robot.
-
-    The LHS's request is inverted through the nominal RHS (B0, D0); on a nominal
-    ground truth the inversion is exact and the plant receives the request.
+    """Builds the model-based baseline loop "model_based" of the scenarios' robot: the
+    LHS's request is inverted through the nominal RHS (B0, D0); on a nominal ground
+    truth the inversion is exact and the plant receives the request.
 
     Args:
-        *scenarios: One scenario, or a batch of trials for one diagram.
-
-    Returns:
-        The ClosedLoop, named "model_based"."""
+        *scenarios: One scenario, or a batch of trials for one diagram."""
     def add(loop: ClosedLoop, controller: ControllerBuilder):
         lhs, systems = AddLhsSide(loop, controller, Excitation(amplitude=0.0),
                                   identify=False)

@@ -7,44 +7,34 @@ import numpy as np
 
 
 class ReducedModel(Protocol):
-    """The controller's reduced model of a free-floating arm at zero momentum.
-
-    reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel
-    for described ones: M(q) qdot = p is the port's momentum.
+    """The controller's reduced model of a free-floating arm at zero momentum:
+    reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel for
+    described ones; M(q) qdot = p is the port's momentum.
 
     Attributes:
         num_joints: The number of the arm's joints n.
         joint_damping: The description's joint damping b (n) [N m s/rad], part of
-            the LHS model (zero for the planar arms).
-    """
+            the LHS model (zero for the planar arms)."""
     num_joints: int
     joint_damping: np.ndarray
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """The port's momentum p = M(q) qdot.
+        """The port's momentum p = M(q) qdot (n).
 
         Args:
             q: The joint angles (n) [rad].
-            qdot: The joint rates (n) [rad/s].
-
-        Returns:
-            p (n)."""
+            qdot: The joint rates (n) [rad/s]."""
 
     def MassMatrix(self, q: np.ndarray) -> np.ndarray:
-        """The reduced mass matrix M(q).
+        """The reduced mass matrix M(q) (n x n).
 
         Args:
-            q: The joint angles (n) [rad].
-
-        Returns:
-            M(q) (n x n)."""
+            q: The joint angles (n) [rad]."""
 
     def MassMatrixAndDerivatives(self, q: np.ndarray
                                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """M(q) and its derivatives by the joint angles.
+        """(M, dM), dM[k] = dM/dq_k (n x n x n): M(q) and its derivatives by the joint
+        angles.
 
         Args:
-            q: The joint angles (n) [rad].
-
-        Returns:
-            (M, dM) with dM[k] = dM/dq_k (n x n x n)."""
+            q: The joint angles (n) [rad]."""

@@ -1,18 +1,12 @@
 """inf_q lambda_min(M(q)), the inertia bound of the RHS gain rule (eq. 48), and
-sup_q lambda_max(M(q)) (the Lyapunov envelope's), for arms with many joints: a grid
-over [-pi, pi)^n costs 73^n mass matrices (a 32 s build already for a spatial arm of
-n = 3, 398 s for a planar one of n = 4, and 73^6 angles for n = 6 do not fit in
-memory), so the bounds are searched instead.
+sup_q lambda_max(M(q)) (the Lyapunov envelope's), searched for arms with many joints,
+where a grid over [-pi, pi)^n (73^n mass matrices) costs too much.
 
-Multi-start descent on lambda_min(M(q)): where the smallest eigenvalue is simple, its
-gradient is d lambda_min / d q_k = v^T (dM/dq_k) v (v its unit eigenvector; dM/dq
-from the model: FloatingBaseModel's AutoDiff, ReducedOrderModel's closed form); each
-start descends with an Armijo line search on the torus of joint angles. A local
-search can miss the global minimum, so the bound returned is the smallest minimum
-found times (1 - safety_margin), and the result says how many starts came within
-0.1 % of it (the more, the likelier it is the global one; the landscape is flat near
-it, so descents stop at slightly different values). lambda_max likewise, by descent
-on -lambda_max, its bound the largest maximum found times (1 + safety_margin)."""
+Multi-start descent on lambda_min(M(q)), with an Armijo line search on the torus of joint
+angles; where lambda_min is simple, d lambda_min / d q_k = v^T (dM/dq_k) v (v its unit
+eigenvector). A local search can miss the global minimum, so the bound is the smallest
+minimum found times (1 - safety_margin), and the result counts the starts within 0.1 %
+of it. lambda_max likewise, by descent on -lambda_max, times (1 + safety_margin)."""
 import hashlib
 import time
 from dataclasses import dataclass
@@ -34,8 +28,7 @@ class InertiaBound:
         starts: The number of starts.
         starts_at_minimum: The starts whose local minimum is within 0.1 % of it.
         safety_margin: The relative margin taken off smallest_found.
-        seconds: The wall time of the search [s].
-    """
+        seconds: The wall time of the search [s]."""
     lambda_min: float
     smallest_found: float
     argmin: np.ndarray
@@ -51,21 +44,15 @@ _CACHE = {}
 def search_inertia_bound(model: ReducedModel, starts: int = 24,
                          safety_margin: float = 0.05, seed: int = 0,
                          iterations: int = 200) -> InertiaBound:
-    """The gain rule's inf_q lambda_min(M) of a model's arm (see the module docstring).
-
-    Cached per robot (its mass matrix at fixed probe configurations identifies it)
-    and settings within a process.
+    """The gain rule's inf_q lambda_min(M) of a model's arm, searched (cached per robot):
+    the bound and how it was found.
 
     Args:
         model: The arm's reduced model.
         starts: The number of descents, from random joint angles.
-        safety_margin: The bound is the smallest minimum found times
-            (1 - safety_margin).
+        safety_margin: The bound is the smallest minimum found times (1 - safety_margin).
         seed: The seed of the starts.
-        iterations: The most steps of each descent.
-
-    Returns:
-        The bound and how it was found."""
+        iterations: The most steps of each descent."""
     key = _Key(model, starts, safety_margin, seed, iterations)
     if key not in _CACHE:
         _CACHE[key] = _Search(model, starts, safety_margin, seed, iterations)
@@ -75,21 +62,15 @@ def search_inertia_bound(model: ReducedModel, starts: int = 24,
 def search_mass_matrix_bounds(model: ReducedModel, starts: int = 24,
                               safety_margin: float = 0.05, seed: int = 0,
                               iterations: int = 200) -> Tuple[float, float]:
-    """The bounds (inf_q lambda_min(M), sup_q lambda_max(M)) of a model's arm, searched.
-
-    lambda_min is search_inertia_bound's; lambda_max the largest local maximum of
-    ``starts`` ascents times (1 + safety_margin) (module docstring). Cached like
-    search_inertia_bound.
+    """(inf_q lambda_min(M), sup_q lambda_max(M)) [kg m^2] of a model's arm, searched and
+    cached.
 
     Args:
         model: The arm's reduced model.
         starts: The number of descents per bound, from random joint angles.
         safety_margin: The relative margin by which each bound is widened.
         seed: The seed of the starts.
-        iterations: The most steps of each descent.
-
-    Returns:
-        (lambda_min bound, lambda_max bound) [kg m^2]."""
+        iterations: The most steps of each descent."""
     smallest = search_inertia_bound(model, starts, safety_margin, seed, iterations)
     key = ("largest", *_Key(model, starts, safety_margin, seed, iterations))
     if key not in _CACHE:
@@ -99,16 +80,14 @@ def search_mass_matrix_bounds(model: ReducedModel, starts: int = 24,
 
 
 def _Key(model: ReducedModel, *settings) -> tuple:
-    """The cache key of a robot and the search's settings: its mass matrix at fixed
-    probe configurations identifies the robot."""
+    """The cache key: the robot (its M at fixed probe configurations) and the settings."""
     probe = np.random.default_rng(12345).uniform(-np.pi, np.pi, (3, model.num_joints))
     return (hashlib.sha256(np.concatenate([model.MassMatrix(q).ravel() for q in probe]
                                           ).tobytes()).hexdigest(), *settings)
 
 
 def _ExtremeEigen(model: ReducedModel, q, sign: float):
-    """sign * lambda(M(q)) and its gradient by q, lambda the smallest eigenvalue for
-    sign = 1, the largest for sign = -1 (what _Descend minimizes)."""
+    """sign * lambda(M(q)) and its gradient (sign = 1: lambda_min; -1: lambda_max)."""
     M, dM = model.MassMatrixAndDerivatives(q)
     values, vectors = np.linalg.eigh(M)
     extreme = 0 if sign > 0 else -1
@@ -141,8 +120,7 @@ def _Descend(model: ReducedModel, q, iterations: int, sign: float = 1.0):
 
 def _Extremes(model: ReducedModel, sign: float, starts: int, seed: int,
               iterations: int):
-    """The smallest of the starts' local minima of sign * lambda (_ExtremeEigen),
-    where it is, and how many starts came within 0.1 % of it."""
+    """The least local minimum of sign * lambda, where, and how many starts within 0.1 %."""
     rng = np.random.default_rng(seed)
     minima = [_Descend(model, rng.uniform(-np.pi, np.pi, model.num_joints), iterations,
                        sign) for _ in range(starts)]

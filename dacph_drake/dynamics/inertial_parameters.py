@@ -1,29 +1,18 @@
-"""The inertial parameters of a free-floating robot's bodies, and the two things the
-controller needs that are linear in them: the mass matrix and the momentum.
+"""The inertial parameters of a free-floating robot's bodies, and what is linear in them:
+the mass matrix and the momentum. Body k has ten, in its frame B about its origin Bo,
 
-Body k has ten parameters, in its own frame B about its origin Bo,
+    pi_k = [m, h_x, h_y, h_z, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz],      h = m p_BoBcm.
 
-    pi_k = [m, h_x, h_y, h_z, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz],
-
-the mass m, the first moment h = m p_BoBcm and the rotational inertia I about Bo.
-In the world frame (R = R_WB, o = p_WoBo) the body's spatial inertia about Bo is
-
-    M_k = [[R I R^T, S(R h)], [S(R h)^T, m 1]]        (Drake's [omega; v] order)
-
-so that H(q) = sum_k J_k^T M_k J_k (J_k the body origin's spatial velocity Jacobian)
-and the system's momentum about the world origin, with (omega_k, v_k) the body's
-angular velocity and its origin's velocity,
+In the world (R = R_WB, o = p_WoBo) its spatial inertia about Bo is
+M_k = [[R I R^T, S(R h)], [S(R h)^T, m 1]] (Drake's [omega; v] order), so that
+H(q) = sum_k J_k^T M_k J_k, and the momentum about the world origin
 
     P = sum_k m v_k + omega_k x (R h)
     L = sum_k R I R^T omega_k + (R h) x v_k + o x P_k
 
-are both linear in pi = [pi_1, ..., pi_N] for given positions and velocities:
-P, L = Y(x) pi (MomentumRegressor). In free flight from rest, P = L = 0, so
-Y(x) pi~ = 0 along any motion: the measured base and joint rates determine the
-true parameters up to one common factor (Yoshida and Abiko, "Inertia parameter
-identification for a free-flying space robot", AIAA GNC 2002) with no actuator
-model at all (systems/inertial_identifier.py).
-"""
+is [L; P] = Y(x) pi (MomentumRegressor). In free flight from rest Y(x) pi~ = 0: the
+measured rates determine the true parameters up to one common factor, with no actuator
+model (Yoshida and Abiko, AIAA GNC 2002; systems/inertial_identifier.py)."""
 from typing import List, Optional
 
 import numpy as np
@@ -56,16 +45,11 @@ def _inertia_regressor(w: np.ndarray) -> np.ndarray:
 
 
 class InertialParameters:
-    """The parameter layout of a finalized plant's bodies and the maps above.
-
-    The layout holds every body with mass but the world, in body index order (a
-    massless frame body, such as a URDF's tool link, carries none); the maps are
-    evaluated on a context of that plant (its kinematics only: the maps do not read
-    the context's own inertias).
+    """The parameter layout of a finalized plant's bodies with mass (not the world), in body
+    index order, and the maps above on the plant's contexts (their kinematics only).
 
     Args:
-        plant: The finalized plant.
-    """
+        plant: The finalized plant."""
 
     def __init__(self, plant: MultibodyPlant):
         self.plant = plant
@@ -75,23 +59,17 @@ class InertialParameters:
         self.size = PER_BODY * len(self.bodies)
 
     def body_slice(self, k: int) -> slice:
-        """The columns of a body's ten parameters in pi.
+        """The slice of a body's ten parameters' columns in pi.
 
         Args:
-            k: The body's position in the layout (0-based).
-
-        Returns:
-            The slice of its columns."""
+            k: The body's position in the layout (0-based)."""
         return slice(PER_BODY * k, PER_BODY * (k + 1))
 
     def FromContext(self, context: Context) -> np.ndarray:
-        """pi of the inertias the plant holds in a context.
+        """pi (size) of the inertias the plant holds in a context.
 
         Args:
-            context: A context of the plant.
-
-        Returns:
-            pi (size)."""
+            context: A context of the plant."""
         pi = np.zeros(self.size)
         for k, body in enumerate(self.bodies):
             M = body.CalcSpatialInertiaInBodyFrame(context)
@@ -104,20 +82,12 @@ class InertialParameters:
         return pi
 
     def SpatialInertias(self, pi: np.ndarray) -> List[SpatialInertia]:
-        """One Drake SpatialInertia per body, unchecked.
-
-        An identified pi is exact only in the directions the motion informs (a
-        planar arm's out-of-plane inertias stay at the prior while its in-plane one
-        moves, which may break the triangle inequality of a body that does not
-        exist), so the identifier checks the mass matrix the controller will use
-        instead.
+        """One Drake SpatialInertia per body, about its origin in its frame, unchecked: an
+        identified pi may break the triangle inequality in directions the motion does not
+        inform (M is checked instead).
 
         Args:
-            pi: The bodies' parameters (size).
-
-        Returns:
-            The bodies' spatial inertias about their origins, in their frames, in
-                layout order."""
+            pi: The bodies' parameters (size)."""
         out = []
         for k in range(len(self.bodies)):
             block = pi[self.body_slice(k)]
@@ -130,16 +100,11 @@ class InertialParameters:
 
 
     def Nodes(self, tree: KinematicTree) -> np.ndarray:
-        """The node of each body of this layout in a kinematic tree.
-
-        Where the compiled kernels (kernels.identification) put each body's
-        parameters.
+        """Each body's node in a kinematic tree (where kernels.identification puts it), in
+        layout order.
 
         Args:
-            tree: The plant's kinematic_tree.KinematicTree.
-
-        Returns:
-            The nodes, in layout order."""
+            tree: The plant's kinematic_tree.KinematicTree."""
         node_of = {int(body.index()): node for node, body in enumerate(tree.bodies)}
         return np.array([node_of[int(body.index())] for body in self.bodies])
 
@@ -148,8 +113,7 @@ class InertialParameters:
 
         Args:
             context: A context of the plant.
-            pi: The bodies' parameters (size).
-        """
+            pi: The bodies' parameters (size)."""
         for body, M in zip(self.bodies, self.SpatialInertias(pi)):
             body.SetSpatialInertiaInBodyFrame(context, M)
 
@@ -159,14 +123,10 @@ class InertialParameters:
         return X.rotation().matrix(), X.translation(), V.rotational(), V.translational()
 
     def MomentumRegressor(self, context: Context) -> np.ndarray:
-        """The momentum regressor Y: [L about the world origin; P] = Y pi.
+        """The momentum regressor Y (6 x size): [L about the world origin; P] = Y pi.
 
         Args:
-            context: A context of the plant, whose positions and velocities are
-                used.
-
-        Returns:
-            Y (6 x size)."""
+            context: A context of the plant (its positions and velocities)."""
         Y = np.zeros((6, self.size))
         for k, body in enumerate(self.bodies):
             R, o, omega, v = self._Kinematics(context, body)
@@ -180,17 +140,12 @@ class InertialParameters:
         return Y
 
     def MassMatrixBasis(self, context: Context) -> np.ndarray:
-        """The mass matrix's basis H_j: H(q) = sum_j pi_j H_j.
-
-        With the body's Jacobian rotated into its frame, a = R^T J_w,
-        b = R^T J_v (rows a_x, a_y, a_z, ...): H_m = b^T b, H_h_i = a^T S(e_i) b + its
-        transpose, H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on.
+        """The mass matrix's basis H_j (size x nv x nv), H(q) = sum_j pi_j H_j: with
+        a = R^T J_w, b = R^T J_v, H_m = b^T b, H_h_i = a^T S(e_i) b + its transpose,
+        H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on.
 
         Args:
-            context: A context of the plant, whose positions are used.
-
-        Returns:
-            H_j (size x nv x nv)."""
+            context: A context of the plant (its positions)."""
         nv = self.plant.num_velocities()
         world = self.plant.world_frame()
         out = np.zeros((self.size, nv, nv))
@@ -212,19 +167,13 @@ class InertialParameters:
 
 
 def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
-    """A size for every parameter of the prior pi0, by body.
-
-    The body's mass m, m r for the first moments and m r^2 for the inertia
-    entries, r = sqrt(I_max / m) its radius of gyration about its origin. They
-    weigh the prior term of identify_parameters so that a relative error counts
-    alike in every entry.
+    """A scale for each parameter of the prior pi0 (parameters.size), per body: m, m r for
+    the first moments, m r^2 for the inertias (r = sqrt(I_max / m)), so a relative error
+    counts alike in each.
 
     Args:
         parameters: The parameter layout.
-        pi0: The prior (parameters.size).
-
-    Returns:
-        The scales (parameters.size)."""
+        pi0: The prior (parameters.size)."""
     scales = np.empty(parameters.size)
     for k in range(len(parameters.bodies)):
         block = pi0[parameters.body_slice(k)]
@@ -238,38 +187,24 @@ def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
 def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                         prior_weight: float, anchor: Optional[np.ndarray] = None,
                         anchor_value: Optional[np.ndarray] = None) -> np.ndarray:
-    """The inertial parameters the momentum samples identify, regularized by the prior.
+    """The inertial parameters pi (size, or a stack; pi0 where r is not > 0: no information)
+    the momentum samples identify, regularized by the prior:
 
-    argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to
-    pi0^T S^-2 pi = pi0^T S^-2 pi0,  A = sum_k Y_k^T Y_k the ``information`` of the
-    momentum samples (Y_k pi~ = 0 for the truth), S the prior's scales and
-    r = prior_weight trace(S A S) / size: the data determine every direction they
-    inform more than prior_weight times the average, the rest stays at the prior,
-    and the common scale of all parameters, which momentum data cannot fix, is the
-    prior's: pi's component along pi0 in the prior's metric S^-2 is pi0's (on the
-    truth's ray, k = |pi0|^2_S / (pi0^T S^-2 pi~)). Without that constraint the
-    ridge alone held the scale, and a controller's model whose link lengths were a
-    few percent off the robot's (Y_k pi~ no longer exactly 0 for any pi) shrank to
-    a quarter of the robot's mass.
+        argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to  c^T pi = v
 
-    With ``anchor`` the common scale is fixed by what a user measures instead: the
-    constraint is anchor^T pi = anchor_value (MassAnchor: the bodies' total mass,
-    or the base's, equal to a measured mass).
-
-    Stacked arguments (information (trials, size, size), pi0, scales and anchor
-    (trials, size), anchor_value (trials,)) solve one problem per trial.
+    with A = sum_k Y_k^T Y_k, S the prior's scales, r = prior_weight trace(S A S) / size:
+    the data set every direction they inform more than prior_weight times the average, the
+    rest stays at the prior, and the constraint fixes the common scale that momentum data
+    cannot (the prior's, c = S^-2 pi0, v = c^T pi0; or a measured mass, MassAnchor).
+    Stacked arguments solve one problem per trial.
 
     Args:
-        information: A = sum_k Y_k^T Y_k (size x size), or a stack.
+        information: A = sum_k Y_k^T Y_k (size x size), or a stack (trials, size, size).
         pi0: The prior (size), or a stack.
         scales: S, the prior's scales (prior_scales), or a stack.
         prior_weight: The prior's weight relative to the average information.
-        anchor: The constraint's vector c (size), or a stack; None: the prior's
-            component along pi0, c = S^-2 pi0.
-        anchor_value: c^T pi (a scalar, or one per trial); with ``anchor`` only.
-
-    Returns:
-        pi (size), or a stack; pi0 where r is not > 0 (no information)."""
+        anchor: The constraint's c (size), or a stack; None: c = S^-2 pi0.
+        anchor_value: v = c^T pi (a scalar, or one per trial); with ``anchor`` only."""
     information, pi0 = np.asarray(information, float), np.asarray(pi0, float)
     S2 = np.asarray(scales, float)**2
     size = pi0.shape[-1]
@@ -299,14 +234,12 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
 
 def mass_anchor(parameters: InertialParameters, bodies: Optional[List[int]] = None
                 ) -> np.ndarray:
-    """The vector c with c^T pi the mass of some bodies (identify_parameters' anchor).
+    """The vector c (parameters.size) with c^T pi the mass of some bodies
+    (identify_parameters' anchor).
 
     Args:
         parameters: The parameter layout.
-        bodies: The bodies' positions in the layout (None: all, the total mass).
-
-    Returns:
-        c (parameters.size)."""
+        bodies: The bodies' positions in the layout (None: all, the total mass)."""
     c = np.zeros(parameters.size)
     for k in (range(len(parameters.bodies)) if bodies is None else bodies):
         c[PER_BODY * k + MASS] = 1.0
@@ -315,20 +248,15 @@ def mass_anchor(parameters: InertialParameters, bodies: Optional[List[int]] = No
 
 def momentum_misfit(information: np.ndarray, pi: np.ndarray, size_of_body: int = PER_BODY
                     ) -> np.ndarray:
-    """The momentum the parameters leave unexplained, relative to the bodies' own.
-
-    sqrt(pi^T A pi / sum_b pi_b^T A_bb pi_b): with the controller's kinematics right
-    the motion's momentum is Y(x) pi~ = 0 and this is round-off; with a link a few
-    percent longer than the model says, no pi explains the samples and it is of
-    that order (InertialIdentifier's kinematic-mismatch test).
+    """The momentum the parameters leave unexplained (a scalar, or one per trial), relative
+    to the bodies' own, sqrt(pi^T A pi / sum_b pi_b^T A_bb pi_b): round-off when the
+    controller's kinematics are right; of the order of a link-length error when no pi
+    explains the samples.
 
     Args:
         information: A = sum_k Y_k^T Y_k (size x size), or a stack.
         pi: The parameters (size), or a stack.
-        size_of_body: The parameters per body.
-
-    Returns:
-        The misfit (a scalar, or one per trial)."""
+        size_of_body: The parameters per body."""
     A, pi = np.asarray(information, float), np.asarray(pi, float)
     total = np.einsum("...i,...ij,...j->...", pi, A, pi)
     bodies = pi.shape[-1] // size_of_body

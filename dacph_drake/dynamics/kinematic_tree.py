@@ -1,19 +1,11 @@
-"""A free-floating plant's kinematic tree as plain arrays, for the compiled spatial
-kernels (kernels/spatial.py): the bodies in an order where each parent comes before
-its children (node 0 the base, on a free joint or, for the planar arms, a planar
-one, whose velocities' motion subspace at the identity pose is ``base_subspace``:
-the identity for a free base's (omega_W, v_W), the columns v_x, v_y, omega_z for a
-planar joint's (vx, vy, omega)), each body's inboard joint as a fixed transform
-X_PF from its parent's frame to the joint's frame F, a rotation about ``axis`` (in
-F) by the joint's angle for a revolute joint (none for a weld), and a fixed
-transform X_MC from the joint's moving frame M to the body's frame C:
+"""A free-floating plant's kinematic tree as plain arrays, for the compiled spatial kernels
+(kernels/spatial.py): parents before children, node 0 the base (on a free joint or, for
+the planar arms, a planar one), each body on its inboard joint, revolute or a weld:
 
     X_WC = X_WP X_PF Rot(axis, q_j) X_MC.
 
-Joints are numbered in the plant's actuator order (dynamics.plant.ArmCoordinates),
-the order of the reduced model's q. The bodies' inertias are not part of the tree
-(they change with the controller's inertial parameters): Inertias(plant, context)
-reads them."""
+Joints are numbered in actuator order (ArmCoordinates), the reduced model's q. The
+inertias change with the controller's parameters, so they are not part of the tree."""
 from dataclasses import dataclass
 from typing import Tuple
 
@@ -31,7 +23,7 @@ def _Matrix(X) -> np.ndarray:
 
 @dataclass
 class KinematicTree:
-    """A free-floating plant's kinematic tree as arrays (see the module docstring).
+    """A free-floating plant's kinematic tree as arrays.
 
     Attributes:
         bodies: The plant's bodies, in node order.
@@ -43,8 +35,7 @@ class KinematicTree:
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4).
         below: True where joint k moves the node (n, nodes).
         joint_below: True where joint k moves joint j's axis (j != k) (n, n).
-        joint_node: The node each joint moves (n,).
-    """
+        joint_node: The node each joint moves (n,)."""
     bodies: list
     base_subspace: np.ndarray
     parent: np.ndarray
@@ -61,16 +52,10 @@ class KinematicTree:
         """The tree of a finalized free-floating plant.
 
         Args:
-            plant: A finalized plant whose moving joints are its free base and
-                revolute joints (description.PopulateFromDescription).
-
-        Returns:
-            Its tree.
+            plant: A finalized plant with a free base and revolute joints (and welds).
 
         Raises:
-            ValueError: The base joint is neither free nor planar, a body other than
-                the base is on the world, or a joint is neither revolute nor a weld.
-        """
+            ValueError: Not such a plant (free or planar base, revolute joints, welds)."""
         coordinates = ArmCoordinates.FromPlant(plant)
         joint_of_velocity = {int(v): j for j, v in enumerate(coordinates.joint_v)}
         inboard = {}
@@ -142,20 +127,16 @@ class KinematicTree:
             joint_below=joint_below, joint_node=joint_node)
 
     def KernelArrays(self) -> tuple:
-        """The tree's arrays in kernels.spatial's argument order (the inertias
-        follow them there)."""
+        """The tree's arrays in kernels.spatial's argument order (the inertias follow)."""
         return (self.base_subspace, self.parent, self.joint, self.X_PF, self.axis,
                 self.X_MC, self.below, self.joint_below)
 
     def Inertias(self, context: Context) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The bodies' inertias, as the plant holds them in a context.
+        """The bodies' inertias, as the plant holds them in a context, in each body's frame:
+        (mass (nodes,), m c (nodes, 3), inertia about the origin (nodes, 3, 3)).
 
         Args:
-            context: A context of the plant.
-
-        Returns:
-            (mass (nodes,), first moment m c (nodes, 3), rotational inertia about
-                the body's origin (nodes, 3, 3)), in each body's frame."""
+            context: A context of the plant."""
         nodes = len(self.bodies)
         mass, moment, inertia = np.zeros(nodes), np.zeros((nodes, 3)), np.zeros((nodes, 3, 3))
         for node, body in enumerate(self.bodies):
@@ -166,13 +147,11 @@ class KinematicTree:
         return mass, moment, inertia
 
     def Node(self, frame: Frame) -> Tuple[int, np.ndarray]:
-        """Where a plant frame sits in the tree.
+        """Where a plant frame sits in the tree: (node, X_CF (4 x 4)), its body's node and
+        its pose in that body.
 
         Args:
-            frame: A frame of the plant.
-
-        Returns:
-            (node, X_CF (4 x 4)), its body's node and its pose in that body."""
+            frame: A frame of the plant."""
         body = frame.body()
         node = next(k for k, b in enumerate(self.bodies) if b.index() == body.index())
         return node, _Matrix(frame.GetFixedPoseInBodyFrame())

@@ -1,16 +1,9 @@
 """The ground-truth free-floating arm as a Drake MultibodyPlant (docs/equations.md E6-E11).
 
-Bodies: ``base`` on a PlanarJoint ``base_joint`` (x, y, theta0) w.r.t. the world;
-``link1`` ... ``linkn`` on RevoluteJoints ``q1`` ... ``qn`` about +z, each driven by an
-actuator ``tau1`` ... ``taun`` (the base is not actuated); gravity is zero. The frame
-``end_effector`` sits at the far end of the last link.
-
-Continuous time by default (time_step = 0): measured in scripts/bench.py over 20 s of
-free flight, the continuous plant under fixed-step Runge-Kutta 3 at 0.25 ms keeps the
-total momentum at ~1e-13, while Drake's discrete plant (semi-implicit) at the same step
-drifts to ~1e-5. The discrete controllers already stop the integrator at every RHS
-sample, so the continuous plant costs no more steps than a discrete one would.
-"""
+``base`` on the PlanarJoint ``base_joint`` (x, y, theta0); ``link1``..``linkn`` on
+RevoluteJoints ``q1``..``qn`` about +z, driven by ``tau1``..``taun``; frame ``end_effector``
+at the last link's tip; zero gravity. Continuous time by default: it conserves momentum
+far better than Drake's semi-implicit discrete plant, at no extra steps."""
 from dataclasses import dataclass
 from typing import List, Optional, Sequence, Tuple
 
@@ -33,24 +26,18 @@ GEOMETRY_DEPTH = 0.05  # extent of the boxes along z [m]; does not enter the dyn
 
 
 def joint_name(k: int) -> str:
-    """Name of the k-th arm joint (the paper's q_{k+1}).
+    """Name of the k-th arm joint (the paper's q_{k+1}): q1, q2, ...
 
     Args:
-        k: The joint's index, k = 0 .. n-1.
-
-    Returns:
-        Its name, q1, q2, ..."""
+        k: The joint's index, k = 0 .. n-1."""
     return f"q{k + 1}"
 
 
 def link_name(k: int) -> str:
-    """The name of a planar arm's link.
+    """The name of a planar arm's link: link1, link2, ...
 
     Args:
-        k: The link's index (0-based).
-
-    Returns:
-        Its name, link1, link2, ..."""
+        k: The link's index (0-based)."""
     return f"link{k + 1}"
 
 
@@ -59,16 +46,12 @@ class ArmCoordinates:
     """Where the base and the joints sit in a plant's q and v vectors.
 
     Attributes:
-        base_q: The indices of the base joint's positions in q.
-        base_v: The indices of the base joint's velocities in v, in the world frame
-            (a PlanarJoint's vx, vy, omega0; a free base's omega_W, v_W).
-        joint_q: The indices of the arm's joint angles q in q.
-        joint_v: The indices of the arm's joint rates qdot in v.
-        base_origin: The base joint's coordinates at the origin (zeros; a free
-            base's identity quaternion).
-        plant_positions: The number of the whole plant's positions (a batch's:
-            every trial's).
-    """
+        base_q: The base joint's position indices in q.
+        base_v: Its velocity indices in v, world frame (vx, vy, omega0; free: omega_W, v_W).
+        joint_q: The joint angles' indices in q.
+        joint_v: The joint rates' indices in v.
+        base_origin: The base joint's coordinates at the origin (free: identity quaternion).
+        plant_positions: The whole plant's number of positions (a batch: every trial's)."""
     base_q: np.ndarray
     base_v: np.ndarray
     joint_q: np.ndarray
@@ -79,25 +62,15 @@ class ArmCoordinates:
     @staticmethod
     def FromPlant(plant: MultibodyPlant, instance: Optional[ModelInstanceIndex] = None
                   ) -> "ArmCoordinates":
-        """The layout of a finalized free-floating plant.
-
-        The base joint is the one joint on the world (the planar arms' PlanarJoint:
-        x, y, theta0; a robot from a file's quaternion floating joint: qw, qx, qy,
-        qz, x, y, z and omega_W, v_W), the arm's joints are the actuated ones, in
-        actuator order. Indices are into the whole plant's q and v.
+        """The layout of a finalized free-floating plant, indices into the whole plant's q
+        and v: the base is its one joint on the world, the arm its actuated joints.
 
         Args:
             plant: The finalized free-floating plant.
-            instance: The model instance whose layout to give (one trial's arm in a
-                batch's plant; default: the whole plant).
-
-        Returns:
-            The layout.
+            instance: The model instance to describe (default: the whole plant).
 
         Raises:
-            ValueError: The plant (or instance) has not exactly one joint on the
-                world.
-        """
+            ValueError: The plant (or instance) has not exactly one joint on the world."""
         among = () if instance is None else (instance,)
         on_world = [plant.get_joint(i) for i in plant.GetJointIndices(*among)
                     if plant.get_joint(i).parent_body().index()
@@ -120,16 +93,10 @@ class ArmCoordinates:
 
     @staticmethod
     def ForPlanarArm(num_joints: int) -> "ArmCoordinates":
-        """The layout AddFreeFloatingArm and MakeArmPlant give a planar arm.
-
-        The base's x, y, theta0 come first; for reading logged plant states without
-        a plant.
+        """A planar arm's layout (AddFreeFloatingArm, MakeArmPlant): x, y, theta0 first.
 
         Args:
-            num_joints: The arm's number of links (and joints).
-
-        Returns:
-            The layout."""
+            num_joints: The arm's number of links (and joints)."""
         joints = np.arange(3, 3 + num_joints)
         return ArmCoordinates(base_q=np.arange(3), base_v=np.arange(3), joint_q=joints,
                               joint_v=joints, base_origin=np.zeros(3),
@@ -149,46 +116,35 @@ class ArmCoordinates:
 
         Args:
             q: The joint angles (n) [rad].
-            base_pose: The base joint's coordinates (default: base_origin).
-
-        Returns:
-            The plant's positions, the joints at q and the base at base_pose."""
+            base_pose: The base joint's coordinates (default: base_origin)."""
         positions = np.zeros(self.num_positions)
         positions[self.base_q] = self.base_origin if base_pose is None else base_pose
         positions[self.joint_q] = q
         return positions
 
     def StateIndices(self) -> np.ndarray:
-        """Indices into the plant state x = [positions, velocities] of
-        [theta0, base velocity (3), q (n), qdot (n)], for compiled kernels that read
-        the state whole (kernels.loop.true_torque)."""
+        """Indices into x = [positions, velocities] of [theta0, base velocity (3), q, qdot],
+        for compiled kernels that read the state whole (kernels.loop.true_torque)."""
         nq = self.plant_positions
         return np.concatenate([self.base_q[2:3], nq + self.base_v, self.joint_q,
                                nq + self.joint_v]).astype(np.int64)
 
     def Split(self, x: np.ndarray
               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The parts of plant state(s).
+        """The parts (base_pose, q, base_velocity, qdot) of plant state(s).
 
         Args:
-            x: Plant state(s) [positions, velocities] (the last axis).
-
-        Returns:
-            (base_pose, q, base_velocity, qdot)."""
+            x: Plant state(s) [positions, velocities] (the last axis)."""
         v = x[..., self.plant_positions:]
         return (x[..., self.base_q], x[..., self.joint_q], v[..., self.base_v],
                 v[..., self.joint_v])
 
 
 def trial_coordinates(plant: MultibodyPlant) -> List[ArmCoordinates]:
-    """Each trial's ArmCoordinates in a batch's plant.
+    """Each trial's ArmCoordinates in a batch's plant, in trial order.
 
     Args:
-        plant: The batch's plant (AddFreeFloatingArms: one model instance per trial,
-            in trial order); a plant of one arm is one trial.
-
-    Returns:
-        The trials' layouts, in trial order."""
+        plant: The batch's plant (AddFreeFloatingArms); a plant of one arm is one trial."""
     instances = [plant.GetModelInstanceByName(TRIAL_INSTANCE.format(i))
                  for i in range(plant.num_model_instances())
                  if plant.HasModelInstanceNamed(TRIAL_INSTANCE.format(i))]
@@ -204,23 +160,18 @@ def SetArmAtRest(plant: MultibodyPlant, plant_context: Context, q0: np.ndarray
     Args:
         plant: The plant of one arm.
         plant_context: Its context, set in place.
-        q0: The joint angles [rad].
-    """
+        q0: The joint angles [rad]."""
     SetArmsAtRest(plant, plant_context, [q0])
 
 
 def SetArmsAtRest(plant: MultibodyPlant, plant_context: Context,
                   q0s: Sequence[np.ndarray]) -> None:
-    """Sets the initial state of every run.
-
-    Every trial's base at the origin, its joints at its q0, everything at rest
-    (zero momentum).
+    """Sets every trial's base at the origin and its joints at its q0, all at rest.
 
     Args:
         plant: The batch's plant.
         plant_context: Its context, set in place.
-        q0s: Each trial's joint angles q0 [rad], in trial order.
-    """
+        q0s: Each trial's joint angles q0 [rad], in trial order."""
     positions = np.zeros(plant.num_positions())
     for coordinates, q0 in zip(trial_coordinates(plant), q0s, strict=True):
         positions[coordinates.base_q] = coordinates.base_origin
@@ -233,16 +184,13 @@ STATE_SIGNALS = ("base_pose", "q", "base_velocity", "qdot")    # AddStateSplitte
 
 
 def FixStateInputs(system: System, context: Context, x: np.ndarray) -> None:
-    """Fixes the state inputs that a system has to the plant state x of a planar arm.
-
-    ``state`` to x itself, STATE_SIGNALS to its parts (a system tested alone,
-    without a plant and a splitter).
+    """Fixes a planar arm's state inputs of a system tested alone (no plant, no splitter):
+    ``state`` to x, STATE_SIGNALS to its parts.
 
     Args:
         system: The system.
         context: Its context.
-        x: The plant state [positions, velocities].
-    """
+        x: The plant state [positions, velocities]."""
     if system.HasInputPort("state"):
         system.GetInputPort("state").FixValue(context, x)
     num_joints = (len(x) - 6) // 2
@@ -252,22 +200,13 @@ def FixStateInputs(system: System, context: Context, x: np.ndarray) -> None:
 
 
 def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector:
-    """The plant state as named signals, for every system that reads it.
-
-    A Selector (Drake C++, no Python call per evaluation) named "state_splitter",
-    fed by the plant's state, with outputs ``base_pose`` (the base joint's
-    coordinates: x, y, theta0 for the planar arms; qw, qx, qy, qz, x, y, z for a
-    free base from a description file), ``q`` (joint angles), ``base_velocity``
-    (vx, vy, omega0, or omega_W, v_W, in the world frame) and ``qdot`` (joint
-    rates), each the trials' signals stacked in trial order (trial_coordinates),
-    built from ArmCoordinates: the one place that knows the state's layout.
+    """Adds and returns the Selector "state_splitter" (C++, no Python call per evaluation)
+    giving the plant state as ``base_pose``, ``q``, ``base_velocity`` (world frame) and
+    ``qdot``, each the trials' stacked in trial order; only ArmCoordinates knows the layout.
 
     Args:
         builder: The builder it is added to.
-        plant: The (batch's) plant, in ``builder``.
-
-    Returns:
-        The splitter."""
+        plant: The (batch's) plant, in ``builder``."""
     trials = trial_coordinates(plant)
     nq = plant.num_positions()
 
@@ -291,42 +230,27 @@ def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector
 
 def AddFreeFloatingArm(builder: DiagramBuilder, robot: RobotParams,
                        time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """AddFreeFloatingArms of one arm.
+    """AddFreeFloatingArms of one arm: (plant, scene_graph).
 
     Args:
         builder: The builder the plant is added to.
         robot: The arm.
-        time_step: The plant's time step [s] (0: continuous).
-
-    Returns:
-        (plant, scene_graph)."""
+        time_step: The plant's time step [s] (0: continuous)."""
     return AddFreeFloatingArms(builder, [robot], time_step)
 
 
 def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
                         time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized plant of a batch of trials, one arm per trial.
-
-    Each arm is the model instance TRIAL_INSTANCE.format(i), side by side at the
-    origin: without contact they do not interact; one arm: the default model
-    instance, as a plant of one arm has it. Visual geometry is registered with a
-    SceneGraph (for Meshcat). Each arm's state evolves exactly as in a plant of its
-    own (bit for bit, tests/test_batch.py), at a fraction of the cost per arm
-    (scripts/bench_sweep.py).
-
-    No collision geometry: the arm in free flight never touches its base in a
-    runnable scenario (the potential field keeps it off), and contact queries cost
-    30 % of the plant's derivative evaluation. A run is stopped with a named reason
-    when the links' kinematic clearance from the base reaches zero
-    (run._Simulate), and the start is checked (diagrams._RequireRunnableStart).
+    """Adds the finalized plant of a batch, one arm per trial (model instance
+    TRIAL_INSTANCE.format(i); one arm: the default instance), side by side: without contact
+    each evolves exactly as in a plant of its own; returns (plant, scene_graph). Visual
+    geometry only: the potential field keeps the arm off its base, and a run stops at zero
+    clearance (run._Simulate).
 
     Args:
         builder: The builder the plant is added to.
         robots: Each trial's arm, in trial order.
-        time_step: The plant's time step [s]; continuous unless > 0.
-
-    Returns:
-        (plant, scene_graph)."""
+        time_step: The plant's time step [s]; continuous unless > 0."""
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=time_step)
     for i, robot in enumerate(robots):
         robot.Validate()
@@ -339,26 +263,16 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
 
 def AddClonedArms(builder: DiagramBuilder, sources: Sequence[MultibodyPlant]
                   ) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized continuous plant of a batch of trials with cloned arms.
-
-    Each source is copied into the model instance TRIAL_INSTANCE.format(i): its
-    bodies with their default inertias, its revolute joints (axis, damping) and
-    welds in the same order, its actuators (effort limit, rotor inertia, gear
-    ratio), the free base on the quaternion floating joint Finalize gives it; no
-    geometry (no contact, as in AddFreeFloatingArms) and zero gravity. Each copy's
-    dynamics are its source's.
+    """Adds the finalized continuous plant of a batch, one copy of a source arm per trial
+    (TRIAL_INSTANCE.format(i): its inertias, joints, actuators, free base; no geometry);
+    returns (plant, scene_graph).
 
     Args:
         builder: The builder the plant is added to.
-        sources: The trials' arms as finalized plants (one per trial: an arm from
-            a description file, robots.description.ParsedDescription).
-
-    Returns:
-        (plant, scene_graph).
+        sources: The trials' finalized arm plants (robots.description.ParsedDescription).
 
     Raises:
-        ValueError: A source has a joint that is neither revolute nor a weld.
-    """
+        ValueError: A source has a joint that is neither revolute nor a weld."""
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
     for i, source in enumerate(sources):
         instance = plant.AddModelInstance(TRIAL_INSTANCE.format(i))
@@ -395,8 +309,7 @@ def AddClonedArms(builder: DiagramBuilder, sources: Sequence[MultibodyPlant]
 
 
 def _ClonedFrame(plant: MultibodyPlant, body, frame):
-    """``frame`` of a source plant on the cloned ``body``: its body frame, or a
-    FixedOffsetFrame at the same pose in it."""
+    """A source's ``frame`` on the cloned ``body``: its body frame or a FixedOffsetFrame."""
     X_BF = frame.GetFixedPoseInBodyFrame()
     if np.array_equal(X_BF.GetAsMatrix4(), np.eye(4)):
         return body.body_frame()
@@ -407,10 +320,7 @@ def MakeArmPlant(robot: RobotParams) -> MultibodyPlant:
     """A finalized arm plant without geometry, for a controller's internal model.
 
     Args:
-        robot: The arm.
-
-    Returns:
-        The plant."""
+        robot: The arm."""
     robot.Validate()
     plant = MultibodyPlant(time_step=0.0)
     _PopulateArm(plant, robot, default_model_instance())
@@ -464,33 +374,23 @@ def _RegisterGeometry(plant: MultibodyPlant, robot: RobotParams, bodies: List) -
 
 
 def total_momentum(plant: MultibodyPlant, context: Context) -> np.ndarray:
-    """The planar system's total momentum.
-
-    The system's angular momentum about the world origin and its linear momentum
-    (paper eq. for h_L, h_A); the other three components of a planar system's
-    spatial momentum are identically zero.
+    """The planar system's total momentum [h_A_z, h_L_x, h_L_y] about the world origin
+    (paper: h_A, h_L; the other spatial components are zero in the plane).
 
     Args:
         plant: The plant.
-        context: Its context.
-
-    Returns:
-        [h_A_z, h_L_x, h_L_y]."""
+        context: Its context."""
     h = plant.CalcSpatialMomentumInWorldAboutPoint(context, np.zeros(3))
     return np.array([h.rotational()[2], h.translational()[0], h.translational()[1]])
 
 
 def joint_damping(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
-    """The joints' damping.
-
-    The description's, which Drake applies in the plant's dynamics.
+    """The joints' damping [N m s/rad], the description's (Drake applies it in the plant's
+    dynamics).
 
     Args:
         plant: The plant.
-        joint_v: The joints' velocity indices (ArmCoordinates.joint_v).
-
-    Returns:
-        The damping of each joint [N m s/rad]."""
+        joint_v: The joints' velocity indices (ArmCoordinates.joint_v)."""
     by_velocity = {plant.get_joint(j).velocity_start(): plant.get_joint(j)
                    for j in plant.GetJointIndices()
                    if plant.get_joint(j).num_velocities() == 1}
@@ -498,15 +398,11 @@ def joint_damping(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
 
 
 def effort_limits(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
-    """The effort limits of the joints' actuators.
+    """The effort limits [N m] of the joints' actuators (inf where one has none).
 
     Args:
         plant: The plant.
-        joint_v: The joints' velocity indices (ArmCoordinates.joint_v).
-
-    Returns:
-        The effort limit [N m] of the actuator of each joint (inf where it has
-            none)."""
+        joint_v: The joints' velocity indices (ArmCoordinates.joint_v)."""
     by_velocity = {plant.get_joint_actuator(a).joint().velocity_start():
                    plant.get_joint_actuator(a).effort_limit()
                    for a in plant.GetJointActuatorIndices()}

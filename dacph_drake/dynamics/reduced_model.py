@@ -1,29 +1,14 @@
-"""Reduced-order port-Hamiltonian model of a free-floating arm (the paper's section
-"Modeling", docs/equations.md E7-E20).
-
-With the base unactuated and the system at zero momentum, the momentum rows of the
-full dynamics give the base velocity from the joint rates,
+"""Reduced-order port-Hamiltonian model of a planar free-floating arm (the paper's section
+"Modeling", docs/equations.md E7-E20). At zero momentum, with the base unactuated,
 
     qdot0 = -H_bb^-1 H_bm qdot                         (paper: qdot0 = -H_q0^-1 H_q qdot)
-
-and the arm's kinetic energy is (1/2) qdot^T M(q) qdot with the Schur complement
-
     M(q) = H_mm - H_bm^T H_bb^-1 H_bm                  (paper: M(q), reduced mass matrix)
 
-where H is the full mass matrix of the (controller's own) MultibodyPlant with
-velocities ordered (base: vx, vy, omega0; joints: qdot). M does not depend on the
-base pose.
-
-Derivatives are exact. For a planar chain of revolute joints every entry of H (base
-pose at zero) is a linear combination of 1, cos(s_r) and sin(s_r), where s_r = q_a + ...
-+ q_b runs over the n (n + 1) / 2 consecutive ranges r = [a, b] of joint angles (each
-entry is a sum of m l_a l_b cos of angle differences between bodies). The constructor
-finds these coefficients from the MultibodyPlant's own CalcMassMatrix by least squares
-on random configurations and refuses the plant unless the representation reproduces
-CalcMassMatrix to round-off on fresh configurations and its derivative matches Drake's
-AutoDiffXd: H(q) and dH/dq are then closed-form trigonometric sums, one matrix
-product each, with no finite differences.
-"""
+with H the full mass matrix of the controller's own MultibodyPlant, velocities ordered
+(vx, vy, omega0, qdot); M does not depend on the base pose. Derivatives are exact: each
+entry of H is a sum of 1, cos(s_r), sin(s_r) over the consecutive joint-angle sums
+s_r = q_a + ... + q_b, fitted once to CalcMassMatrix and checked to round-off (and against
+AutoDiffXd), so H and dH/dq are closed-form, with no finite differences."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,14 +29,11 @@ class ReducedDynamics:
         Mdot: dM/dt = sum_k dM/dq_k qdot_k.
         dM: dM[k] = dM/dq_k, shape (n, n, n).
         C: C'(q, p) in Christoffel form, C_ij = sum_k Gamma_ijk qdot_k with
-            Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2, so that
-            Mdot - 2 C' is skew-symmetric.
+            Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2: Mdot - 2 C' is skew.
         dH_dq: dH/dq at fixed p = -(Mdot - C') qdot = -(1/2) qdot^T (dM/dq_i) qdot.
         D: The task Jacobian D(q), 1 x n as a vector: alpha_dot = D qdot.
         dD: dD[k] = dD/dq_k, shape (n, n).
-        base_velocity_map: -H_bb^-1 H_bm, 3 x n: (vx, vy, omega0) = map @ qdot, at
-            theta0 = 0.
-    """
+        base_velocity_map: -H_bb^-1 H_bm (3 x n), qdot -> (vx, vy, omega0) at theta0 = 0."""
     M: np.ndarray
     Mdot: np.ndarray
     dM: np.ndarray
@@ -63,18 +45,13 @@ class ReducedDynamics:
 
 
 class ReducedOrderModel:
-    """Evaluates the reduced model of a planar arm's plant.
-
-    One scratch context is made here and reused by every evaluation.
+    """Evaluates the reduced model of a planar arm's plant (one scratch context, reused).
 
     Args:
         plant: An arm built by dynamics/plant.py.
 
     Raises:
-        ValueError: The plant's velocities are not in dynamics/plant.py's layout,
-            or its mass matrix is not a trigonometric sum over consecutive joint
-            angle ranges (not a planar chain of revolute joints).
-    """
+        ValueError: Not a planar revolute chain in dynamics/plant.py's velocity layout."""
 
     def __init__(self, plant: MultibodyPlant):
         self._plant = plant
@@ -108,23 +85,16 @@ class ReducedOrderModel:
 
     @property
     def trigonometric_representation(self):
-        """(coefficients, ranges) of H(q) = coefficients psi(q) for the compiled
-        kernels (kernels.arm)."""
+        """(coefficients, ranges) of H(q) = coefficients psi(q), for kernels.arm."""
         return self._coefficients, self._ranges
 
     def CoefficientBasis(self, parameters: InertialParameters) -> np.ndarray:
-        """The trigonometric coefficients, linear in the bodies' inertial parameters.
-
-        coefficients(pi) = tensordot(pi, basis, 1). H(q) is linear in pi and the
-        fit is a linear operator on its samples, so this is exact: at the plant's
-        own parameters it gives trigonometric_representation's coefficients.
+        """The trigonometric coefficients as linear in the inertial parameters pi:
+        coefficients(pi) = tensordot(pi, basis, 1), exact (H and the fit are linear in pi),
+        basis of shape (parameters.size, N*N, 1 + 2R).
 
         Args:
-            parameters: The inertial_parameters.InertialParameters of this model's
-                plant.
-
-        Returns:
-            The basis, of shape (parameters.size, N*N, 1 + 2R)."""
+            parameters: The InertialParameters of this model's plant."""
         context = self._plant.CreateDefaultContext()
         samples = []
         for q in self._fit_samples:
@@ -135,18 +105,11 @@ class ReducedOrderModel:
 
     def WithInertialParameters(self, parameters: InertialParameters, pi: np.ndarray
                                ) -> "ReducedOrderModel":
-        """A copy of this model whose bodies have the inertial parameters pi.
-
-        Its M, C', D are those the LHS controller evaluated with them. Its plant and
-        GJMs stay this model's.
+        """A copy whose M, C', D use the inertial parameters pi (same plant and GJMs).
 
         Args:
             parameters: The InertialParameters layout of this model's plant.
-            pi: The bodies' inertial parameters, e.g. an InertialIdentifier's
-                estimate.
-
-        Returns:
-            The copy."""
+            pi: The bodies' inertial parameters, e.g. an InertialIdentifier's estimate."""
         copy = object.__new__(ReducedOrderModel)
         copy.__dict__.update(self.__dict__)
         copy._coefficients = np.tensordot(pi, self.CoefficientBasis(parameters), 1)
@@ -157,9 +120,7 @@ class ReducedOrderModel:
         return self._plant.CalcMassMatrix(self._context)
 
     def _Basis(self, q: np.ndarray) -> np.ndarray:
-        """Columns [psi(q), dpsi/dq_1, ..., dpsi/dq_n] of the trigonometric basis
-        psi = (1, cos s_r, sin s_r), shape (1 + 2 R, 1 + n). One sine call gives
-        (cos s, sin s, -sin s, cos s) through phase offsets."""
+        """[psi, dpsi/dq_1..n] of psi = (1, cos s_r, sin s_r), (1 + 2R, 1 + n)."""
         trig = np.sin(self._phase_ranges @ q + self._phase_offsets)
         basis = self._basis_buffer
         half = len(trig) // 2
@@ -168,8 +129,7 @@ class ReducedOrderModel:
         return basis
 
     def _MassMatrixAndDerivatives(self, q: np.ndarray):
-        """H(q) and dH/dq_k (closed form) with the base pose at zero:
-        returns an array of shape (1 + n, N, N): [H, dH/dq_1, ..., dH/dq_n]."""
+        """[H, dH/dq_1, ..., dH/dq_n] (1 + n, N, N) in closed form, base pose at zero."""
         N = self._num_joints + 3
         return (self._coefficients @ self._Basis(q)).T.reshape(-1, N, N)
 
@@ -216,37 +176,30 @@ class ReducedOrderModel:
         return float(np.max(np.abs(self._MassMatrixAndDerivatives(q)[1:] - dH_ad)))
 
     def MassMatrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm.
+        """M(q) = H_mm - H_bm^T H_bb^-1 H_bm (n x n).
 
         Args:
-            q: The joint angles (n) [rad].
-
-        Returns:
-            M(q) (n x n)."""
+            q: The joint angles (n) [rad]."""
         H = self._MassMatrixAndDerivatives(q)[0]
         return H[3:, 3:] - H[:3, 3:].T @ np.linalg.solve(H[:3, :3], H[:3, 3:])
 
     def MassMatrixAndDerivatives(self, q: np.ndarray
                                  ) -> "tuple[np.ndarray, np.ndarray]":
-        """M(q) and its derivatives by the joint angles (Evaluate's, at rest).
+        """(M, dM) with dM[k] = dM/dq_k (n x n x n): M(q) and its derivatives by the joint
+        angles (Evaluate's, at rest).
 
         Args:
-            q: The joint angles (n) [rad].
-
-        Returns:
-            (M, dM) with dM[k] = dM/dq_k (n x n x n)."""
+            q: The joint angles (n) [rad]."""
         dynamics = self.Evaluate(q, np.zeros(self._num_joints))
         return dynamics.M, dynamics.dM
 
     def Evaluate(self, q: np.ndarray, qdot: np.ndarray) -> ReducedDynamics:
-        """M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base velocity map at (q, qdot).
+        """The reduced model at (q, qdot): M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base
+        velocity map.
 
         Args:
             q: The joint angles (n) [rad].
-            qdot: The joint rates (n) [rad/s].
-
-        Returns:
-            The reduced model at (q, qdot)."""
+            qdot: The joint rates (n) [rad/s]."""
         n = self._num_joints
         H_and_dH = self._MassMatrixAndDerivatives(q)
         H = H_and_dH[0]
@@ -269,32 +222,24 @@ class ReducedOrderModel:
                                base_velocity_map=-A)
 
     def BaseVelocity(self, q_full: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """The base velocity implied by zero momentum.
-
-        qdot0 = -H_bb^-1 H_bm qdot at the full configuration (base pose included).
+        """The base velocity qdot0 = -H_bb^-1 H_bm qdot implied by zero momentum,
+        (vx, vy, omega0) in the world frame.
 
         Args:
             q_full: The plant's positions (base pose included).
-            qdot: The joint rates (n) [rad/s].
-
-        Returns:
-            (vx, vy, omega0) in the world frame."""
+            qdot: The joint rates (n) [rad/s]."""
         H = self._FullMassMatrix(q_full)
         return -np.linalg.solve(H[:3, :3], H[:3, 3:] @ qdot)
 
     def GeneralizedJacobian(self, q_full: np.ndarray, frame: Frame,
                             p_FoP_F: np.ndarray = np.zeros(3)) -> np.ndarray:
-        """Generalized Jacobian J_bar = J_k - H_k H_q0^-1 H_q of a point P.
-
+        """Generalized Jacobian J_bar (6 x n) = J_k - H_k H_q0^-1 H_q of a point P:
         [omega; v] of P in the world (Drake's order) = J_bar qdot.
 
         Args:
             q_full: The plant's positions (base pose included).
             frame: The frame P is fixed in.
-            p_FoP_F: P's position in ``frame`` [m].
-
-        Returns:
-            J_bar (6 x n)."""
+            p_FoP_F: P's position in ``frame`` [m]."""
         H = self._FullMassMatrix(q_full)
         J = self._plant.CalcJacobianSpatialVelocity(
             self._context, JacobianWrtVariable.kV, frame, p_FoP_F,
@@ -302,87 +247,64 @@ class ReducedOrderModel:
         return J[:, 3:] - J[:, :3] @ np.linalg.solve(H[:3, :3], H[:3, 3:])
 
     def EndEffectorJacobian(self, q_full: np.ndarray) -> np.ndarray:
-        """GJM of the end effector; its omega_z row is D(q).
+        """GJM J_bar (6 x n) of the end effector; its omega_z row is D(q).
 
         Args:
-            q_full: The plant's positions (base pose included).
-
-        Returns:
-            J_bar (6 x n)."""
+            q_full: The plant's positions (base pose included)."""
         return self.GeneralizedJacobian(q_full, self._ee_frame)
 
     def LinkJacobians(self, q_full: np.ndarray) -> list:
-        """GJM of each link's centre of mass.
+        """GJM of each link's centre of mass, [J_bar_1, ..., J_bar_n], each 6 x n.
 
         Args:
-            q_full: The plant's positions (base pose included).
-
-        Returns:
-            [J_bar_1, ..., J_bar_n], each 6 x n."""
+            q_full: The plant's positions (base pose included)."""
         return [self.GeneralizedJacobian(q_full, body.body_frame(),
                                          body.default_com())
                 for body in self._link_bodies]
 
     def EndEffectorAngle(self, q_full: np.ndarray) -> float:
-        """alpha = theta0 + q1 + ... + qn, the end effector's angle in the plane.
+        """alpha = theta0 + q1 + ... + qn, the end effector's unwrapped absolute angle in
+        the plane [rad].
 
         Args:
-            q_full: The plant's positions.
-
-        Returns:
-            alpha, the unwrapped absolute angle in the plane [rad]."""
+            q_full: The plant's positions."""
         theta0 = q_full[self._coordinates.base_q[2]]
         return float(theta0 + np.sum(q_full[self._coordinates.joint_q]))
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """p = M(q) qdot.
+        """p = M(q) qdot (n).
 
         Args:
             q: The joint angles (n) [rad].
-            qdot: The joint rates (n) [rad/s].
-
-        Returns:
-            p (n)."""
+            qdot: The joint rates (n) [rad/s]."""
         return self.MassMatrix(q) @ qdot
 
     def Hamiltonian(self, q: np.ndarray, p: np.ndarray) -> float:
-        """H(q, p) = p^T M^-1(q) p / 2.
+        """The kinetic energy H(q, p) = p^T M^-1(q) p / 2 [J].
 
         Args:
             q: The joint angles (n) [rad].
-            p: The momentum (n).
-
-        Returns:
-            The kinetic energy H [J]."""
+            p: The momentum (n)."""
         return 0.5 * float(p @ np.linalg.solve(self.MassMatrix(q), p))
 
 
 _MASS_MATRIX_BOUNDS = {}      # (trigonometric coefficients, grid) -> bounds
 
 
-# The largest arm whose bounds come from the grid (73^2 mass matrices, about 0.1 s;
-# 73^3 would take 5 s, the search 0.3 s): larger arms' bounds are searched
-# (inertia_bound.search_mass_matrix_bounds).
+# The largest arm whose bounds come from the grid (its cost grows as 73^n): larger
+# arms' bounds are searched (inertia_bound.search_mass_matrix_bounds).
 GRID_JOINTS = 2
 
 
 def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                        ) -> "tuple[float, float]":
-    """The paper's lambda_min_min(M) and lambda_max_max(M).
-
-    For up to GRID_JOINTS joints, over a uniform grid of joint angles in [-pi, pi)^n
-    (the paper's arm: 73^2 mass matrices, about 0.1 s); the grid's cost grows as 73^n,
-    so for more joints they are searched (inertia_bound.search_mass_matrix_bounds:
-    0.3 s for 3 or 4 links, 0.5 s for 6). Every diagram build and verification asks
-    for them, so they are computed once per distinct robot in a process: the
-    model's fitted coefficients determine M(q) entirely and serve as the key.
+    """The paper's (lambda_min_min(M), lambda_max_max(M)) =
+    (inf_q lambda_min(M), sup_q lambda_max(M)): over a grid up to GRID_JOINTS joints, else
+    searched; cached per robot (its fitted coefficients determine M(q)).
 
     Args:
         model: The arm's reduced model.
-        samples_per_joint: The grid's points per joint.
-
-    Returns:
-        (inf_q lambda_min(M), sup_q lambda_max(M))."""
+        samples_per_joint: The grid's points per joint."""
     key = (model._coefficients.tobytes(), model._coefficients.shape, samples_per_joint)
     if key not in _MASS_MATRIX_BOUNDS:
         if model.num_joints <= GRID_JOINTS:
@@ -395,18 +317,12 @@ def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
 
 def grid_mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                             ) -> "tuple[float, float]":
-    """The extreme eigenvalues of M(q) over a uniform grid of joint angles.
-
-    The grid holds samples_per_joint^n configurations in [-pi, pi)^n, so its
-    bounds only sample the true inf and sup (mass_matrix_bounds uses it for small
-    arms).
+    """The extreme eigenvalues (min lambda_min(M), max lambda_max(M)) of M(q) over
+    samples_per_joint^n joint angles in [-pi, pi)^n (a sample of the true inf and sup).
 
     Args:
         model: The arm's reduced model.
-        samples_per_joint: The grid's points per joint.
-
-    Returns:
-        (min lambda_min(M), max lambda_max(M)) over the grid."""
+        samples_per_joint: The grid's points per joint."""
     n = model.num_joints
     axes = [np.linspace(-np.pi, np.pi, samples_per_joint, endpoint=False)] * n
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)

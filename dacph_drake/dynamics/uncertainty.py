@@ -7,14 +7,12 @@ from dacph_drake.scenario import Phases, Uncertainty
 
 
 def actuator_arguments(uncertainty: Uncertainty, n: int) -> np.ndarray:
-    """The actuators' gains as the kernels read them (kernels.loop.actuator_gains).
+    """The actuators' gains as the kernels read them (kernels.loop.actuator_gains):
+    [B_scale (n), then (time, joint index from 0, gain) per fault].
 
     Args:
         uncertainty: The trial's true RHS (its B_scale and faults).
-        n: The number of joints.
-
-    Returns:
-        [B_scale (n), then (time, joint index from 0, gain) per fault]."""
+        n: The number of joints."""
     scale = uncertainty.B_scale if len(uncertainty.B_scale) else [1.0] * n
     faults = [[f.time, f.joint - 1, f.gain] for f in uncertainty.faults]
     return np.concatenate([np.asarray(scale, float),
@@ -22,17 +20,14 @@ def actuator_arguments(uncertainty: Uncertainty, n: int) -> np.ndarray:
 
 
 class TrueRhsModel:
-    """The ground truth's RHS matrices B~(q, p, t) and D~(p, t).
-
-    B~(q, p, t) = diag(g(t)) (B0 + Delta B) and D~(p, t) = D0 + Delta D, with the
-    linear terms on from phases.linear_start, the nonlinear terms from
-    phases.nonlinear_start and the actuators' gains g(t) (uncertainty.B_scale and
-    the faults whose time has come) from t = 0.
+    """The ground truth's RHS matrices B~(q, p, t) = diag(g(t)) (B0 + Delta B) and
+    D~(p, t) = D0 + Delta D, with the linear terms on from phases.linear_start, the
+    nonlinear terms from phases.nonlinear_start and the actuators' gains g(t)
+    (uncertainty.B_scale and the faults whose time has come) from t = 0.
 
     Args:
         uncertainty: The trial's true RHS.
-        phases: The trial's phases.
-    """
+        phases: The trial's phases."""
 
     def __init__(self, uncertainty: Uncertainty, phases: Phases):
         u = uncertainty
@@ -56,13 +51,11 @@ class TrueRhsModel:
                 float(self._linear_start), float(self._nonlinear_start), self._actuator)
 
     def ActuatorGains(self, t: float) -> np.ndarray:
-        """The actuators' gains g(t).
+        """The actuators' gains g(t) (n), B_scale times the gains of the faults whose time
+        has come.
 
         Args:
-            t: The time [s].
-
-        Returns:
-            g(t) (n), B_scale times the gains of the faults whose time has come."""
+            t: The time [s]."""
         n = len(self._B0)
         gains = self._actuator[:n].copy()
         for time, joint, gain in self._actuator[n:].reshape(-1, 3):
@@ -72,15 +65,12 @@ class TrueRhsModel:
 
     def Matrices(self, t: float, q: np.ndarray, p: np.ndarray
                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """B~ and D~ at a time and state.
+        """(B~ (n x n), diagonal of D~ (n)) at a time and state.
 
         Args:
             t: The time [s].
             q: The joint angles (n) [rad].
-            p: The momentum (n).
-
-        Returns:
-            (B~ (n x n), diagonal of D~ (n))."""
+            p: The momentum (n)."""
         B, D = self._NominalScaleMatrices(t, q, p)
         return self.ActuatorGains(t)[:, None] * B, D
 

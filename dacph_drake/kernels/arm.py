@@ -1,7 +1,6 @@
-"""The reduced model of a planar free-floating arm from its trigonometric mass
-matrix representation (reduced_model.ReducedOrderModel, which fits and checks it):
-H(q) = coefficients @ psi(q), psi = (1, cos s_r, sin s_r), s_r = sum of the joint
-angles in range r."""
+"""The reduced model of a planar free-floating arm from its trigonometric mass matrix
+(reduced_model.ReducedOrderModel fits and checks it): H(q) = coefficients @ psi(q),
+psi = (1, cos s_r, sin s_r), s_r = the sum of the joint angles in range r."""
 from typing import Tuple
 
 import numpy as np
@@ -9,17 +8,14 @@ from numba import njit
 
 
 # Small dense products as loops: numba's @ calls BLAS through SciPy, which the
-# project does not need, and for n <= 7 the loops are faster than a BLAS call.
+# project does not need.
 @njit(cache=True)
 def matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A B (loops: no BLAS).
+    """A B (m x l), a new array (loops: no BLAS).
 
     Args:
         A: A matrix (m x k).
-        B: A matrix (k x l).
-
-    Returns:
-        A B (m x l), a new array."""
+        B: A matrix (k x l)."""
     out = np.zeros((A.shape[0], B.shape[1]))
     for i in range(A.shape[0]):
         for k in range(A.shape[1]):
@@ -31,14 +27,11 @@ def matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 @njit(cache=True)
 def matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """A x (loops: no BLAS).
+    """A x (m), a new array (loops: no BLAS).
 
     Args:
         A: A matrix (m x k).
-        x: A vector (k).
-
-    Returns:
-        A x (m), a new array."""
+        x: A vector (k)."""
     out = np.zeros(A.shape[0])
     for i in range(A.shape[0]):
         for k in range(A.shape[1]):
@@ -48,14 +41,11 @@ def matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 @njit(cache=True)
 def dot(a: np.ndarray, b: np.ndarray) -> float:
-    """a . b (a loop).
+    """The scalar product a . b (a loop).
 
     Args:
         a: A vector (m).
-        b: A vector (m).
-
-    Returns:
-        The scalar product."""
+        b: A vector (m)."""
     out = 0.0
     for i in range(a.shape[0]):
         out += a[i] * b[i]
@@ -65,21 +55,14 @@ def dot(a: np.ndarray, b: np.ndarray) -> float:
 @njit(cache=True)
 def mass_matrix_and_derivatives(q: np.ndarray, coefficients: np.ndarray,
                                 ranges: np.ndarray) -> np.ndarray:
-    """The full mass matrix H and its derivatives, with the base pose at zero.
-
-    H = C psi(q), dH/dq_k = C dpsi/dq_k.
+    """[H, dH/dq_1, ..., dH/dq_n] (1 + n, N, N): the full mass matrix H = C psi(q) and
+    dH/dq_k = C dpsi/dq_k, the base pose at zero.
 
     Args:
         q: The joint angles (n) [rad].
-        coefficients: C (N * N, 1 + 2 R), N = n + 3: row i N + j gives H_ij (the
-            velocities ordered vx, vy, omega0, qdot; units of H: kg, kg m,
-            kg m^2) as its coefficients of psi = (1, cos s_r (R), sin s_r (R));
-            ReducedOrderModel.trigonometric_representation's first element.
-        ranges: (R, n): 1.0 where joint k is in range r (s_r = ranges[r] . q),
-            R = n (n + 1) / 2; trigonometric_representation's second element.
-
-    Returns:
-        [H, dH/dq_1, ..., dH/dq_n], shape (1 + n, N, N)."""
+        coefficients: C (N^2, 1 + 2 R), N = n + 3: row i N + j holds H_ij's coefficients of
+            psi (velocities vx, vy, omega0, qdot; H in kg, kg m, kg m^2).
+        ranges: (R, n), 1 where joint k is in range r, s_r = ranges[r] . q, R = n(n+1)/2."""
     n = q.shape[0]
     R = ranges.shape[0]
     N = n + 3
@@ -102,13 +85,10 @@ def mass_matrix_and_derivatives(q: np.ndarray, coefficients: np.ndarray,
 
 @njit(cache=True)
 def inverse3(A: np.ndarray) -> np.ndarray:
-    """The inverse of a 3 x 3 matrix (adjugate over determinant).
+    """The inverse A^-1 (3 x 3) of a 3 x 3 matrix (adjugate over determinant).
 
     Args:
-        A: An invertible 3 x 3 matrix.
-
-    Returns:
-        A^-1 (3 x 3)."""
+        A: An invertible 3 x 3 matrix."""
     out = np.empty((3, 3))
     out[0, 0] = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
     out[0, 1] = A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]
@@ -127,21 +107,17 @@ def inverse3(A: np.ndarray) -> np.ndarray:
 def reduced_dynamics(q: np.ndarray, qdot: np.ndarray, coefficients: np.ndarray,
                      ranges: np.ndarray
                      ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(M, C', D, dD) at (q, qdot), as ReducedOrderModel.Evaluate.
+    """(M (n, n), C' (n, n), D (n), dD (n, n)) at (q, qdot), as ReducedOrderModel.Evaluate:
 
-    M = W^T H W and dM/dq_k = W^T dH/dq_k W with W = [-A; I], A = H_bb^-1 H_bm;
-    C'_ij = (Mdot_ij + G_ji - G_ij) / 2 with G_ij = sum_k dM_jk/dq_i qdot_k;
-    D = 1 - A[2] (alpha_dot = D qdot); dD[k] = -d(A[2])/dq_k.
+        M = W^T H W, dM/dq_k = W^T dH/dq_k W, W = [-A; I], A = H_bb^-1 H_bm,
+        C'_ij = (Mdot_ij + G_ji - G_ij) / 2, G_ij = sum_k dM_jk/dq_i qdot_k,
+        D = 1 - A[2] (alpha_dot = D qdot), dD[k] = -d(A[2])/dq_k.
 
     Args:
         q: The joint angles (n) [rad].
         qdot: The joint rates (n) [rad/s].
-        coefficients: H's trigonometric coefficients (N * N, 1 + 2 R), N = n + 3
-            (mass_matrix_and_derivatives).
-        ranges: The joint-angle ranges (R, n) (mass_matrix_and_derivatives).
-
-    Returns:
-        (M (n, n), C' (n, n), D (n), dD (n, n))."""
+        coefficients: H's trigonometric coefficients (N^2, 1 + 2 R), N = n + 3.
+        ranges: The joint-angle ranges (R, n) (mass_matrix_and_derivatives)."""
     n = q.shape[0]
     N = n + 3
     H = mass_matrix_and_derivatives(q, coefficients, ranges)
@@ -197,23 +173,16 @@ def reduced_dynamics(q: np.ndarray, qdot: np.ndarray, coefficients: np.ndarray,
 def joint_momentum(theta0: float, base_velocity: np.ndarray, q: np.ndarray,
                    qdot: np.ndarray, coefficients: np.ndarray, ranges: np.ndarray
                    ) -> np.ndarray:
-    """p = the joint rows of H(q_full) v of a planar arm.
-
-    With the base's velocity turned into its own frame, p = H(q)[3:] T v, which at
-    zero momentum is M(q) qdot.
+    """p (n), the joint rows of H(q_full) v of a planar arm: p = H(q)[3:] T v, T turning the
+    base's velocity into its own frame (at zero momentum, M(q) qdot).
 
     Args:
         theta0: The base angle [rad].
-        base_velocity: The base velocity (vx, vy [m/s], omega0 [rad/s]) in the
-            world frame (3).
+        base_velocity: The base velocity (vx, vy [m/s], omega0 [rad/s]) in the world (3).
         q: The joint angles (n) [rad].
         qdot: The joint rates (n) [rad/s].
-        coefficients: H's trigonometric coefficients (N * N, 1 + 2 R), N = n + 3
-            (mass_matrix_and_derivatives).
-        ranges: The joint-angle ranges (R, n) (mass_matrix_and_derivatives).
-
-    Returns:
-        p (n)."""
+        coefficients: H's trigonometric coefficients (N^2, 1 + 2 R), N = n + 3.
+        ranges: The joint-angle ranges (R, n) (mass_matrix_and_derivatives)."""
     n, R = q.shape[0], ranges.shape[0]
     p = np.empty(n)
     _joint_momentum_into(theta0, base_velocity[0], base_velocity[1], base_velocity[2],
@@ -224,9 +193,7 @@ def joint_momentum(theta0: float, base_velocity: np.ndarray, q: np.ndarray,
 @njit(cache=True)
 def _joint_momentum_into(theta0, vx, vy, omega0, q, qdot, coefficients, ranges, c, si,
                          p):
-    """joint_momentum written into p, with c and si (one entry per range) as work
-    arrays: only H's joint rows are formed, by the same sums as
-    mass_matrix_and_derivatives', without dH."""
+    """joint_momentum into p (c, si: work arrays (R)): H's joint rows only, no dH."""
     n = q.shape[0]
     R = ranges.shape[0]
     N = n + 3

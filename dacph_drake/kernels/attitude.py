@@ -96,10 +96,10 @@ def reference_rates(D: np.ndarray, D_dot: np.ndarray, r: np.ndarray, r_dot: np.n
         dD^+ = D_dot^T G^-1 - D^T G^-1 (D_dot D^T + D D_dot^T) G^-1.
 
     Args:
-        D: The task Jacobian (3 x n).
-        D_dot: Its rate along the motion (3 x n).
-        r: The task rate asked for, omega_d - Lambda e (3) [rad/s].
-        r_dot: Its rate (3) [rad/s^2].
+        D: The task Jacobian (m x n, m = 3: attitude; 6: pose).
+        D_dot: Its rate along the motion (m x n).
+        r: The task rate asked for, e.g. omega_d - Lambda e (m).
+        r_dot: Its rate (m).
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate (n) [rad/s^2].
         damping: The damped pseudo-inverse's mu.
@@ -107,9 +107,10 @@ def reference_rates(D: np.ndarray, D_dot: np.ndarray, r: np.ndarray, r_dot: np.n
     Returns:
         (nu, nu_dot) (n each)."""
     G = matmul(D, D.T)
-    for i in range(3):
+    m = D.shape[0]
+    for i in range(m):
         G[i, i] += damping * damping
-    G_inverse = inverse3(G)
+    G_inverse = inverse3(G) if m == 3 else _cholesky_solve(G, np.eye(m))
     D_plus = matmul(D.T, G_inverse)
     G_dot = matmul(D_dot, D.T)
     G_dot = G_dot + G_dot.T
@@ -142,6 +143,163 @@ def desired_attitude(R_d0: np.ndarray, axis: np.ndarray, amplitude: float, omega
     phi_ddot = -omega * omega * phi
     axis_W = matvec(R_d0, axis)
     return matmul(R_d0, _rotation(axis, phi)), axis_W * phi_dot, axis_W * phi_ddot
+
+
+@njit(cache=True)
+def desired_position(position: tuple, t: float
+                     ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """p_d(t) = p_d0 + axis amplitude sin(omega t) and its rates (world).
+
+    Args:
+        position: (p_CE, p_d0, unit axis (world), amplitude [m], omega [rad/s]).
+        t: The time [s].
+
+    Returns:
+        (p_d [m], v_d [m/s], a_d [m/s^2]) (3 each)."""
+    axis, amplitude, omega = position[2], position[3], position[4]
+    return (position[1] + axis * (amplitude * np.sin(omega * t)),
+            axis * (amplitude * omega * np.cos(omega * t)),
+            axis * (-amplitude * omega * omega * np.sin(omega * t)))
+
+
+@njit(cache=True)
+def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                   joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+                   node: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """G = S_m - S_b A, the twist of a node's body about the base origin per qdot at
+    zero momentum (the base at the identity), its rate along the motion and the
+    joints' own twist of the body.
+
+    G_dot's columns are crm(w_j) S_j - S_b dA qdot, w_j the twist of the joints
+    above j.
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration (M, dM, A, dA, X, S).
+        qdot: The joint rates (n) [rad/s].
+        node: The body's node.
+
+    Returns:
+        (G (6 x n), G_dot (6 x n), sum over the body's joints of S_j qdot_j (6))."""
+    A, dA, S = evaluation[2], evaluation[3], evaluation[5]
+    n, nb = qdot.shape[0], base_subspace.shape[1]
+    G, G_dot = np.zeros((6, n)), np.zeros((6, n))
+    for i in range(6):
+        for c in range(n):
+            value, rate = 0.0, 0.0
+            for m in range(nb):
+                value -= base_subspace[i, m] * A[m, c]
+                for k in range(n):
+                    rate -= base_subspace[i, m] * dA[k, m, c] * qdot[k]
+            G[i, c], G_dot[i, c] = value, rate
+    relative, w = np.zeros(6), np.empty(6)
+    ancestor = node
+    while ancestor > 0:
+        j = joint[ancestor]
+        if j >= 0:
+            w[:] = 0.0
+            for k in range(n):
+                if joint_below[k, j]:
+                    w += qdot[k] * S[k]
+            G[:, j] += S[j]
+            relative += qdot[j] * S[j]
+            G_dot[:3, j] += _cross(w[:3], S[j, :3])
+            G_dot[3:, j] += _cross(w[:3], S[j, 3:]) + _cross(w[3:], S[j, :3])
+        ancestor = parent[ancestor]
+    return G, G_dot, relative
+
+
+@njit(cache=True)
+def position_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                  joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+                  quaternion: np.ndarray, base_position: np.ndarray,
+                  base_velocity: np.ndarray, node: int, p_CE: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
+                                             np.ndarray]:
+    """The end effector's position p_E, its velocity v_E and the linear rows of the
+    GJM with their exact rate along the motion (world frame).
+
+    With G the twist of E's body per qdot (twist_jacobian) and p E's position (the
+    base at the identity): J = G_lin + G_ang x p, J_dot = G_lin_dot + G_ang_dot x p
+    + G_ang x p_dot, p_dot the joints' velocity of E; then D = R_WB J,
+    D_dot = [omega_b]x D + R_WB J_dot and v_E = v_b + omega_b x (R_WB p) + R_WB p_dot.
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration (M, dM, A, dA, X, S).
+        qdot: The joint rates (n) [rad/s].
+        quaternion: The base's attitude (w, x, y, z).
+        base_position: The base's origin in the world [m].
+        base_velocity: The base's (omega_W, v_W) (6).
+        node: The end effector's node.
+        p_CE: E's position in its node's body [m].
+
+    Returns:
+        (p_E [m], v_E [m/s], D (3 x n), D_dot (3 x n))."""
+    X, n = evaluation[4], qdot.shape[0]
+    G, G_dot, relative = twist_jacobian(base_subspace, parent, joint, joint_below,
+                                        evaluation, qdot, node)
+    p = matvec(X[node, :3, :3], p_CE) + X[node, :3, 3]
+    p_dot = relative[3:] + _cross(relative[:3], p)
+    J, J_dot = np.empty((3, n)), np.empty((3, n))
+    for c in range(n):
+        J[:, c] = G[3:, c] + _cross(G[:3, c], p)
+        J_dot[:, c] = (G_dot[3:, c] + _cross(G_dot[:3, c], p)
+                       + _cross(G[:3, c], p_dot))
+    R_WB = quaternion_rotation(quaternion)
+    omega_base = base_velocity[:3]
+    D = matmul(R_WB, J)
+    D_dot = matmul(_skew(omega_base), D) + matmul(R_WB, J_dot)
+    p_W = matvec(R_WB, p)
+    v_E = base_velocity[3:] + _cross(omega_base, p_W) + matvec(R_WB, p_dot)
+    return base_position + p_W, v_E, D, D_dot
+
+
+@njit(cache=True)
+def attitude_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                  joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+                  quaternion: np.ndarray, omega_base: np.ndarray, t: float,
+                  reference: tuple, end_effector: tuple, Lambda: float) -> tuple:
+    """The attitude task's rows (task_rates states them): D, D_dot, the task rate
+    r = omega_d - Lambda e asked for and its rate, e and R_d.
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration.
+        qdot: The joint rates (n) [rad/s].
+        quaternion: The base's attitude (w, x, y, z).
+        omega_base: omega_b (3) [rad/s], world frame.
+        t: The time [s].
+        reference: (R_d0, unit axis, amplitude, 2 pi / period).
+        end_effector: (node, R_CE).
+        Lambda: [1/s].
+
+    Returns:
+        (D (3 x n), D_dot, r (3), r_dot (3), e (3), R_d (3 x 3))."""
+    X = evaluation[4]
+    node, R_CE = end_effector
+    R_WB = quaternion_rotation(quaternion)
+    R_WE = matmul(R_WB, matmul(X[node, :3, :3], R_CE))
+    R_d, omega_d, omega_d_dot = desired_attitude(reference[0], reference[1],
+                                                 reference[2], reference[3], t)
+    R_err = matmul(R_WE, R_d.T)
+    error = rotation_quaternion(R_err)                  # eta >= 0
+    e = 2.0 * error[1:]
+    G, G_dot, relative = twist_jacobian(base_subspace, parent, joint, joint_below,
+                                        evaluation, qdot, node)
+    D = matmul(R_WB, G[:3])
+    D_dot = matmul(_skew(omega_base), D) + matmul(R_WB, G_dot[:3])
+    omega_error = omega_base + matvec(R_WB, relative[:3]) - matvec(R_err, omega_d)
+    e_dot = error[0] * omega_error + _cross(omega_error, error[1:])
+    return D, D_dot, omega_d - Lambda * e, omega_d_dot - Lambda * e_dot, e, R_d
 
 
 @njit(cache=True)
@@ -183,54 +341,61 @@ def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
             rotation in the node's body.
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate (n) [rad/s^2].
-        Lambda: The attitude error's gain Lambda [1/s].
+        Lambda: The task error's gain Lambda [1/s].
         damping: The damped pseudo-inverse's mu (reference_rates).
 
     Returns:
         (nu (n), nu_dot (n), e (3), R_d (3 x 3))."""
-    A, dA, X, S = evaluation[2], evaluation[3], evaluation[4], evaluation[5]
-    n, nb = qdot.shape[0], base_subspace.shape[1]
-    node, R_CE = end_effector
-    R_WB = quaternion_rotation(quaternion)
-    R_WE = matmul(R_WB, matmul(X[node, :3, :3], R_CE))
-    R_d, omega_d, omega_d_dot = desired_attitude(reference[0], reference[1],
-                                                 reference[2], reference[3], t)
-    R_err = matmul(R_WE, R_d.T)
-    error = rotation_quaternion(R_err)                  # eta >= 0
-    e = 2.0 * error[1:]
-    D_B, D_B_dot = np.zeros((3, n)), np.zeros((3, n))
-    for i in range(3):
-        for c in range(n):
-            value, rate = 0.0, 0.0
-            for m in range(nb):
-                value -= base_subspace[i, m] * A[m, c]
-                for k in range(n):
-                    rate -= base_subspace[i, m] * dA[k, m, c] * qdot[k]
-            D_B[i, c], D_B_dot[i, c] = value, rate
-    omega_joints, w_j = np.zeros(3), np.empty(3)
-    ancestor = node
-    while ancestor > 0:
-        j = joint[ancestor]
-        if j >= 0:
-            w_j[:] = 0.0
-            for k in range(n):
-                if joint_below[k, j]:
-                    for i in range(3):
-                        w_j[i] += qdot[k] * S[k, i]
-            for i in range(3):
-                D_B[i, j] += S[j, i]
-                omega_joints[i] += qdot[j] * S[j, i]
-            D_B_dot[0, j] += w_j[1] * S[j, 2] - w_j[2] * S[j, 1]
-            D_B_dot[1, j] += w_j[2] * S[j, 0] - w_j[0] * S[j, 2]
-            D_B_dot[2, j] += w_j[0] * S[j, 1] - w_j[1] * S[j, 0]
-        ancestor = parent[ancestor]
-    D = matmul(R_WB, D_B)
-    D_dot = matmul(_skew(omega_base), D) + matmul(R_WB, D_B_dot)
-    omega_error = omega_base + matvec(R_WB, omega_joints) - matvec(R_err, omega_d)
-    e_dot = error[0] * omega_error + _cross(omega_error, error[1:])
-    nu, nu_dot = reference_rates(D, D_dot, omega_d - Lambda * e,
-                                 omega_d_dot - Lambda * e_dot, xi, xi_dot, damping)
+    D, D_dot, r, r_dot, e, R_d = attitude_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, quaternion,
+        omega_base, t, reference, end_effector, Lambda)
+    nu, nu_dot = reference_rates(D, D_dot, r, r_dot, xi, xi_dot, damping)
     return nu, nu_dot, e, R_d
+
+
+@njit(cache=True)
+def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+               joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+               base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
+               reference: tuple, end_effector: tuple, position: tuple, xi: np.ndarray,
+               xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
+    """The pose task's reference joint rates: the attitude rows (attitude_rows) and
+    the position rows (position_rows) stacked, r = [omega_d - Lambda e;
+    v_d - Lambda e_p], e_p = p_E - p_d(t).
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration.
+        qdot: The joint rates (n) [rad/s].
+        base_pose: The base's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base's (omega_W, v_W) (6).
+        t: The time [s].
+        reference: The attitude reference (desired_attitude).
+        end_effector: (node, R_CE).
+        position: desired_position's arguments (p_CE first).
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate (n).
+        Lambda: [1/s].
+        damping: mu.
+
+    Returns:
+        (nu, nu_dot, e (3), R_d, e_p (3) [m], p_d (3) [m])."""
+    D, D_dot, r, r_dot, e, R_d = attitude_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
+        base_velocity[:3], t, reference, end_effector, Lambda)
+    p_E, v_E, D_p, D_p_dot = position_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
+        base_pose[4:], base_velocity, end_effector[0], position[0])
+    p_d, v_d, a_d = desired_position(position, t)
+    e_p = p_E - p_d
+    nu, nu_dot = reference_rates(
+        np.vstack((D, D_p)), np.vstack((D_dot, D_p_dot)),
+        np.concatenate((r, v_d - Lambda * e_p)),
+        np.concatenate((r_dot, a_d - Lambda * (v_E - v_d))), xi, xi_dot, damping)
+    return nu, nu_dot, e, R_d, e_p, p_d
 
 
 @njit(cache=True)
@@ -263,24 +428,27 @@ def coupling_ratio(M: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np.ndarray,
-                    omega_base: np.ndarray, t: float, reference: tuple,
-                    end_effector: tuple, xi: np.ndarray, xi_dot: np.ndarray,
-                    gains: np.ndarray, chi: float, excitation: np.ndarray) -> tuple:
+def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.ndarray,
+                    base_velocity: np.ndarray, t: float, reference: tuple,
+                    end_effector: tuple, position: tuple, xi: np.ndarray,
+                    xi_dot: np.ndarray, gains: np.ndarray, chi: float,
+                    excitation: np.ndarray) -> tuple:
     """One AttitudeController update (its docstring states the law).
 
     From the compiled model at q (kernels.spatial.reduced_model with derivatives):
-    nu, nu_dot and e there (task_rates).
+    nu, nu_dot and e there (task_rates; pose_rates for the pose task).
 
     Args:
         tree: The model's kernel arguments (FloatingBaseModel.kernel_tree).
         q: The joint angles (n) [rad].
         qdot: The joint rates (n) [rad/s].
-        quaternion: The base's attitude (w, x, y, z).
-        omega_base: The base's angular velocity (3) [rad/s], world frame.
+        base_pose: The base's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base's (omega_W, v_W) (6), world frame.
         t: The time [s].
         reference: (R_d0, unit axis, amplitude, 2 pi / period) (desired_attitude).
         end_effector: (node, R_CE) (task_rates).
+        position: desired_position's arguments for the pose task; an amplitude < 0:
+            the attitude task.
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate along the motion (n) [rad/s^2].
         gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate,
@@ -293,16 +461,26 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
             amplitudes [N m], scenario.Excitation.Amplitudes).
 
     Returns:
-        (tau, M, C', [e, |e|, ||s||, V], the quaternion of R_d)."""
+        (tau, M, C', [e, |e|, ||s||, V], the quaternion of R_d, [e_p, |e_p|, p_d]
+            (zero for the attitude task))."""
     base_subspace, parent, joint, joint_below = tree[0], tree[1], tree[2], tree[7]
     evaluation = reduced_model(tree[0], tree[1], tree[2], tree[3], tree[4], tree[5],
                                tree[6], tree[7], tree[8], tree[9], tree[10], q, True)
     Lambda, damping, damping_rate, epsilon, boundary_rate = (
         gains[0], gains[1], gains[2], gains[3], gains[4])
-    nu, nu_dot, e, R_d = task_rates(base_subspace, parent, joint, joint_below,
-                                    evaluation, qdot, quaternion, omega_base, t,
-                                    reference, end_effector, xi, xi_dot, Lambda,
-                                    damping)
+    position_log = np.zeros(7)
+    if position[3] < 0:
+        nu, nu_dot, e, R_d = task_rates(base_subspace, parent, joint, joint_below,
+                                        evaluation, qdot, base_pose[:4],
+                                        base_velocity[:3], t, reference, end_effector,
+                                        xi, xi_dot, Lambda, damping)
+    else:
+        nu, nu_dot, e, R_d, e_p, p_d = pose_rates(
+            base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose,
+            base_velocity, t, reference, end_effector, position, xi, xi_dot, Lambda,
+            damping)
+        position_log[:3], position_log[3] = e_p, np.sqrt(np.sum(e_p * e_p))
+        position_log[4:] = p_d
     M, dM = evaluation[0], evaluation[1]
     C = christoffel(dM, qdot)
     s = qdot - nu
@@ -315,4 +493,4 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, quaternion: np
             tau[i] += excitation[i] * np.sin(excitation[q.shape[0] + i] * t)
     log = np.array([e[0], e[1], e[2], np.sqrt(np.sum(e * e)), np.sqrt(np.sum(s * s)),
                     0.5 * np.sum(s * Ms)])
-    return tau, M, C, log, rotation_quaternion(R_d)
+    return tau, M, C, log, rotation_quaternion(R_d), position_log

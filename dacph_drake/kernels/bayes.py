@@ -1,30 +1,25 @@
-"""The local Bayesian learner's regression (learning.local_bayes), compiled: one
-joint's row of the port relation on its window of band-passed samples,
+"""The local Bayesian learner's regression (learning.local_bayes), compiled: one joint's
+row of the port relation on its window of band-passed samples,
 
     y_k = a_k^T theta + psi_k^T eta + r_k,     theta ~ N(theta_0, diag(s^2)),
 
-solved in the prior's standardized coordinates (theta = theta_0 + s o phi,
-phi ~ N(0, I)), so that the posterior precision A'^T W A' / sigma^2 + I is well
-conditioned whatever the columns' scales. The weights W are the forgetting's; the
-residual's variance sigma^2 is estimated from the window, inflated by the
-residual's correlation time (Bartlett's estimate over ``lags`` samples: the
-band-passed residual is far from white) and by the degrees of freedom the fit
-spends (the trace of its hat matrix), so that a short window after a restart is
-not mistaken for a well determined one."""
+solved in the prior's standardized coordinates (theta = theta_0 + s o phi), so that the
+precision A'^T W A' / sigma^2 + I is well conditioned whatever the columns' scales. The
+residual variance sigma^2 is inflated by the residual's correlation time (band-passed, it
+is far from white) and by the fit's degrees of freedom, so that a short window after a
+restart is not mistaken for a well determined one."""
 import numpy as np
 from numba import njit
 
 
 @njit(cache=True)
 def spd_inverse(A: np.ndarray, out: np.ndarray) -> bool:
-    """The inverse of a symmetric positive definite matrix, by Cholesky.
+    """Writes the inverse of a symmetric positive definite matrix into ``out``, by Cholesky;
+    False when A is not positive definite (out is then undefined).
 
     Args:
         A: The matrix (m x m); only its lower triangle is read.
-        out: Where the inverse goes (m x m).
-
-    Returns:
-        False when A is not positive definite (out is then undefined)."""
+        out: Where the inverse goes (m x m)."""
     m = A.shape[0]
     L = np.zeros((m, m))
     for j in range(m):
@@ -81,8 +76,7 @@ def _newest_relative(r: np.ndarray, y: np.ndarray, old: int) -> float:
 
 @njit(cache=True)
 def _correlation_time(r: np.ndarray, lags: int) -> float:
-    """1 + 2 sum_l (1 - l / (L + 1)) max(rho_l, 0), rho_l the residual's
-    autocorrelation at lag l (Bartlett), at least 1."""
+    """Bartlett's correlation time 1 + 2 sum_l (1 - l / (L + 1)) max(rho_l, 0), >= 1."""
     count = r.shape[0]
     lags = min(lags, count // 4)
     mean = 0.0
@@ -108,7 +102,9 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
             prior_sd: np.ndarray, lags: int, min_tau: float, floor: float, newest: int,
             nuisance: float, min_dof: float, mean: np.ndarray, variance: np.ndarray,
             statistics: np.ndarray) -> bool:
-    """One row's posterior on its window.
+    """One row's posterior on its window (module docstring); whether the window determines
+    the fit: (sum w - nuisance - tr hat) / tau >= min_dof (if not, mean and variance are the
+    prior's).
 
     Args:
         A: The regressors (K samples x P columns), the nuisance projected out.
@@ -117,33 +113,16 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         prior_mean: theta_0 (P).
         prior_sd: s (P), each > 0.
         lags: The longest lag of the correlation-time estimate [samples].
-        min_tau: The least correlation time [samples]: a band of width f Hz
-            sampled every h s carries 1 / (2 f h) samples per independent one,
-            which a short window's estimate misses.
-        floor: The systematic-error floor: each coefficient's variance gains
-            (floor RMS_w(r) / RMS_w(A_c))^2, the change of coefficient c that alone
-            would explain the residual (the port relation holds to the observer's
-            accuracy, a relative error the residual shows but no variance
-            formula for independent samples bounds).
-        newest: How many of the last samples are the newest (since the last fit):
-            the change test predicts them from the fit to the others.
-        nuisance: The weighted degrees of freedom the projected nuisance spent
-            (project_out).
-        min_dof: The residual degrees of freedom (in independent samples) a
-            determined fit needs.
+        min_tau: The least correlation time: 1 / (2 f h) for a band f [Hz] sampled at h [s].
+        floor: The observer's relative accuracy, which no independent-sample variance has:
+            each coefficient's variance gains (floor RMS_w(r) / RMS_w(A_c))^2.
+        newest: How many of the last samples are new since the last fit (the change test's).
+        nuisance: The weighted dof the projected nuisance spent (project_out).
+        min_dof: The residual dof (in independent samples) a determined fit needs.
         mean: The posterior mean (P), written.
         variance: The posterior variances (P), written.
-        statistics: [sigma^2, residual degrees of freedom (in independent
-            samples), effective parameters (weighted), the newest samples' RMS
-            prediction error from the fit to the others over its predictive
-            sd (the change test's statistic), RMS of the newest residual over that
-            of their y, residual's correlation time], written.
-
-    Returns:
-        Whether the window determines the fit (at least min_dof residual degrees
-        of freedom in independent samples: (sum w - nuisance - trace of the hat
-        matrix) / correlation time); the mean and variances are the prior's if
-        not, and of the statistics only the newest relative residual is set."""
+        statistics: Written: [sigma^2, residual dof, effective parameters, change statistic
+            (new samples' RMS prediction error / its sd), newest relative residual, tau]."""
     K, P = A.shape
     scaled = A * prior_sd.reshape(1, P)
     offset = y - _matvec(A, prior_mean)
@@ -260,25 +239,17 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
 
 @njit(cache=True)
 def project_out(basis: np.ndarray, w: np.ndarray, A: np.ndarray, y: np.ndarray) -> float:
-    """Projects the span of ``basis`` out of A's columns and y, W-orthogonally.
-
-    The band-pass filter's free response from its state at the window's start
-    (LocalBayesLearner: whatever the port did before the window) lies in that
-    span; with a flat prior on its coefficients the regression on the projected
-    data is exact (modified Gram-Schmidt; a direction whose norm falls below
-    1e-9 of its column's is dependent and skipped).
+    """Projects the span of ``basis`` out of A's columns and y, W-orthogonally (modified
+    Gram-Schmidt; a direction below 1e-9 of its column's norm is skipped); returns the
+    weighted dof spent, sum_s sum_k w_k^2 q_sk^2 (q_s W-orthonormal). The band-pass's free
+    response from its state at the window's start lies in that span: with a flat prior on
+    it, the regression on the projected data is exact.
 
     Args:
         basis: The nuisance columns (K x S).
         w: The weights (K).
         A: The regressors (K x P), projected in place.
-        y: The target (K), projected in place.
-
-    Returns:
-        The weighted degrees of freedom the projection spends,
-        sum_s sum_k w_k^2 q_sk^2 over its W-orthonormal directions q_s (a
-        direction concentrated where the forgetting has left little weight costs
-        little)."""
+        y: The target (K), projected in place."""
     K, S = basis.shape
     Q = basis.copy()
     kept = 0
@@ -305,25 +276,17 @@ def project_out(basis: np.ndarray, w: np.ndarray, A: np.ndarray, y: np.ndarray) 
 @njit(cache=True)
 def row_design(rows: np.ndarray, i: int, n: int, t_now: float, p_now: float
                ) -> np.ndarray:
-    """Row i's regressors of the local model from buffered samples.
-
-    With the channels of a sample laid out as learning.local_bayes.LocalBayesChannels
-    (each the band-passed product of a port signal and a feature), the local model
-    theta_ij(x) = theta_ij + drift_ij (t - t_now) + slope_ij (p_i - p_now) / p_scale
-    for B_ij (j < n) and D_i gives the columns, per entry [const, drift, slope]:
-    B_ij: [U0_j, Ut_j - t_now U0_j, Up_ij - p_now U0_j];
-    D_i: -[V0_i, Vt_i - t_now V0_i, Vp_i - p_now V0_i].
+    """Row i's regressors A (K x 3 (n + 1)) of the local model theta_ij(x) = theta_ij +
+    drift_ij (t - t_now) + slope_ij (p_i - p_now) / p_scale, per entry [const, drift,
+    slope] (channels as in LocalBayesChannels): B_ij (j < n): [U0_j, Ut_j - t_now U0_j,
+    Up_ij - p_now U0_j]; D_i: -[V0_i, Vt_i - t_now V0_i, Vp_i - p_now V0_i].
 
     Args:
-        rows: The window's samples (K x (2n + channels)): [q, p / p_scale,
-            channels] (no time column).
+        rows: The window's samples (K x (2n + channels)): [q, p / p_scale, channels].
         i: The row (joint).
         n: The number of joints.
         t_now: The model's reference time [s].
-        p_now: The model's reference momentum of joint i, over p_scale.
-
-    Returns:
-        A (K x 3 (n + 1))."""
+        p_now: The model's reference momentum of joint i, over p_scale."""
     K = rows.shape[0]
     c0 = 2 * n                              # the channels' first column
     A = np.empty((K, 3 * (n + 1)))
@@ -356,8 +319,7 @@ def fit_rows(times: np.ndarray, rows: np.ndarray, starts: np.ndarray, n: int,
         n: The number of joints.
         prior_mean: Each row's theta_0 (n x 3 (n + 1)).
         prior_sd: Each row's s (n x 3 (n + 1)).
-        free_response: The band-pass cascade's output from each unit state (at
-            least K x S), sample 0 at the window's start.
+        free_response: The filter's response to each unit state from the start (>= K x S).
         forgetting: The forgetting time [s].
         lags: fit_row's lags.
         min_tau: fit_row's min_tau.

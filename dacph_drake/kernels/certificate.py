@@ -1,19 +1,14 @@
-"""The certificate of the discrete RHS loop on a credible set of B (gain_rule.CertifiedGains),
-compiled.
+"""The discrete RHS loop's certificate on a credible set of B (gain_rule.CertifiedGains).
 
-Per decoupled mode the loop's characteristic polynomial is z^2 - z + mu with mu an
-eigenvalue of h K B (gain_rule.loop_matrix); with K = c diag(1 / Re lambda_hat_p)
-and B anywhere in the entrywise box [lower, upper], Gershgorin places the
-eigenvalues of h K B in the union over p of the "stadiums"
+Per decoupled mode the characteristic polynomial is z^2 - z + mu, mu an eigenvalue of h K B;
+with K = c diag(1 / Re lambda_hat_p) and B in the box [lower, upper], Gershgorin puts mu in
 
     S_p = {mu : dist(mu, h c [lower_pp, upper_pp] / lambda_p) <= h c R_p / lambda_p},
     R_p = sum_{j != p} max(|lower_pj|, |upper_pj|).
 
-The loop is certified at c when every S_p lies in Re(mu) > 0 with
-Re(mu) / h >= Td lambda_LHS (the time-scale separation, eq. 45) and every root of
-z^2 - z + mu, mu in S_p, lies within the spectral radius bound (the largest root
-modulus is subharmonic in mu: its maximum over S_p is on S_p's boundary, sampled
-here at BOUNDARY_POINTS points)."""
+Certified at c: every S_p has Re(mu) / h >= Td lambda_LHS (eq. 45) and every root within the
+spectral radius bound (the largest root modulus is subharmonic in mu, so its maximum over
+S_p is on the boundary, sampled at BOUNDARY_POINTS points)."""
 import numpy as np
 from numba import njit
 
@@ -22,21 +17,17 @@ BOUNDARY_POINTS = 48
 
 @njit(cache=True)
 def root_radius(mu: complex) -> float:
-    """The largest root modulus of z^2 - z + mu.
+    """The largest root modulus max |z| of z^2 - z + mu.
 
     Args:
-        mu: The loop gain (an eigenvalue of h K B).
-
-    Returns:
-        max |z| over the two roots."""
+        mu: The loop gain (an eigenvalue of h K B)."""
     disc = np.sqrt(1.0 - 4.0 * mu + 0j)
     return max(abs(0.5 * (1.0 + disc)), abs(0.5 * (1.0 - disc)))
 
 
 @njit(cache=True)
 def _largest_radius(low, high, radius, scale) -> float:
-    """The largest root radius over the stadiums at loop scale h c (``scale``):
-    ``low``, ``high``, ``radius`` per mode, in units of h c."""
+    """The largest root radius over the stadiums (in units of h c) at h c = ``scale``."""
     worst = 0.0
     quarter = BOUNDARY_POINTS // 4
     for p in range(low.shape[0]):
@@ -57,8 +48,7 @@ def _largest_radius(low, high, radius, scale) -> float:
 
 @njit(cache=True)
 def _bisect(low, high, radius, period, good, bad, radius_bound) -> float:
-    """The certified end of [good, bad] (30 halvings): the rate nearest ``bad``
-    whose stadiums keep every root within ``radius_bound``."""
+    """The certified end of [good, bad] nearest ``bad`` (30 halvings)."""
     for _ in range(30):
         middle = 0.5 * (good + bad)
         if _largest_radius(low, high, radius, period * middle) > radius_bound:
@@ -70,14 +60,8 @@ def _bisect(low, high, radius, period, good, bad, radius_bound) -> float:
 
 @njit(cache=True)
 def _certified_rate(low, high, radius, period, c, c_low, c_cap, radius_bound) -> float:
-    """The certified rate nearest ``c`` in [c_low, c_cap], or -1 for none.
-
-    The largest root radius over the stadiums falls with c while the slow roots
-    (near 1 - mu) dominate and rises once the fast ones turn complex (modulus
-    sqrt(mu)): the certified rates are an interval [c_a, c_b]. ``c`` itself where it
-    certifies; otherwise c_b below it (c too fast) or c_a above it (c too slow: a
-    small step with a wide set, whose slowest mode's root is within 1 - radius_bound
-    of 1), c_a found on a geometric scan up to c_cap."""
+    """The certified rate nearest ``c`` in [c_low, c_cap], or -1: the certified rates are an
+    interval (the radius falls with c, then rises once the fast roots turn complex)."""
     if _largest_radius(low, high, radius, period * c) <= radius_bound:
         return c
     if _largest_radius(low, high, radius, period * c_low) <= radius_bound:
@@ -99,38 +83,25 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
                     floor: np.ndarray, c_target: np.ndarray, c_floor: np.ndarray,
                     rate: np.ndarray, period: float, c_cap: float, radius_bound: float,
                     out: np.ndarray, gains: np.ndarray) -> None:
-    """Every trial's certified decay rate c and gains on its credible set (module
-    docstring).
-
-    c is c_target moved into the certified range within [max(c_floor, c_sep),
-    c_cap] (_certified_rate): c_sep = rate / min_p (lower_pp - R_p) / lambda_p is
-    where the slowest mode meets the separation, and the rates whose stadiums keep
-    every root within ``radius_bound`` are an interval. The gains are
-    k_p = c / lambda_p, each raised to ``floor`` (the gains of the loop without
-    learning) where the set certifies the raised gains too (box_certificate):
-    learning never runs a mode slower than the loop without it would, where that
-    loop is safe for every B of the set (an actuator stronger than its prior gives
-    the prior's loop more gain, and the prior's wide range a larger c; the learned
-    gains alone would give that up).
+    """Every trial's certified decay rate c and gains k_p = c / lambda_p on its credible
+    set: c is c_target moved into the certified interval within [max(c_floor, rate /
+    slowest), c_cap]; k_p is raised to ``floor`` where the set certifies that too
+    (box_certificate), so learning never runs a mode slower than the safe loop without it.
 
     Args:
         lower: Each trial's set's lower bounds (trials, n, n).
         upper: Each trial's set's upper bounds (trials, n, n).
-        eigenvalues: The real parts of each trial's estimate's paired eigenvalues
-            lambda_p, each > 0 (trials, n).
-        floor: The gains each mode is raised to where certified [1/s per unit of
-            B] (trials, n; 0: none).
+        eigenvalues: Re lambda_p of each trial's estimate's paired eigenvalues (trials, n).
+        floor: The gains without learning [1/s per unit of B] (trials, n; 0: none).
         c_target: The rate the gain rule asks of each trial [1/s] (trials).
         c_floor: The least rate each trial may run [1/s] (trials).
         rate: Td lambda_LHS of each trial [1/s] (trials).
         period: The RHS period h [s].
         c_cap: The largest rate any trial may run [1/s].
         radius_bound: The largest spectral radius allowed.
-        out: Written per trial: [c, certified (1/0), the set's slowest mode
-            min_p (lower_pp - R_p) / lambda_p, its fastest (upper_pp + R_p) /
-            lambda_p] (trials, 4).
-        gains: Written per certified trial: its gains k_p [1/s per unit of B]
-            (trials, n)."""
+        out: Written: [c, certified (1/0), slowest min_p (lower_pp - R_p) / lambda_p,
+            fastest max_p (upper_pp + R_p) / lambda_p] (trials, 4).
+        gains: Written per certified trial: k_p [1/s per unit of B] (trials, n)."""
     trials, n = lower.shape[0], lower.shape[1]
     low, high, radius = np.empty(n), np.empty(n), np.empty(n)
     for i in range(trials):
@@ -172,21 +143,15 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
 @njit(cache=True)
 def box_certificate(lower: np.ndarray, upper: np.ndarray, gains: np.ndarray,
                     period: float) -> np.ndarray:
-    """The certificate of the discrete loop with given gains on an entrywise box of B.
-
-    Gershgorin on h K B, K = diag(gains) (module docstring), row p's disc centred in
-    h k_p [lower_pp, upper_pp] with radius h k_p R_p: the slowest decay rate
-    min_p k_p (lower_pp - R_p) [1/s] and the largest root modulus over the discs
-    (at most radius_bound where certified).
+    """[slowest decay rate min_p k_p (lower_pp - R_p) [1/s], largest root modulus]: the
+    loop's certificate with given gains on a box of B, by Gershgorin on h K B, K =
+    diag(gains), disc p centred in h k_p [lower_pp, upper_pp] with radius h k_p R_p.
 
     Args:
         lower: The box's lower bounds (n, n).
         upper: The box's upper bounds (n, n).
         gains: The integrator's gains k_p (n).
-        period: The RHS period h [s].
-
-    Returns:
-        [slowest decay rate [1/s], largest root modulus]."""
+        period: The RHS period h [s]."""
     n = lower.shape[0]
     low, high, radius = np.empty(n), np.empty(n), np.empty(n)
     slowest = np.inf

@@ -1,22 +1,12 @@
-"""The inertial identifier's compiled body (systems/inertial_identifier.py), for
-every trial of a batch in one call: the information Y^T Y of the momentum
-regressor (dynamics.inertial_parameters.MomentumRegressor: [L about the world
-origin; P] = Y(x) pi) at the measured state, and the reduced mass matrix M(q) of
-given inertial parameters pi.
+"""The inertial identifier's compiled body (systems/inertial_identifier.py) for every trial
+of a batch: the information Y^T Y of the momentum regressor ([L about O; P] = Y(x) pi,
+inertial_parameters.MomentumRegressor) and the reduced mass matrix M(q) of given pi.
 
-The trials' kinematic trees (dynamics.kinematic_tree.KinematicTree) share one
-topology (parent, joint, below, joint_below, base_subspace) and may differ in
-their fixed transforms X_PF, X_MC and axes, stacked along a first axis of length
-trials (TreeStack in the identifier). ``nodes`` lists the node of each body that
-carries parameters (inertial_parameters.InertialParameters.bodies, in order);
-the other nodes keep their fixed inertias.
-
-Kinematics of body C at the measured state: with the base B at the identity
-(spatial.forward_kinematics: X_BC, the joints' motion subspaces S_j about B's
-origin in B's axes) and the base's twist (omega_B; v_B) in B's axes, C's spatial
-velocity about B's origin is V = (omega_B; v_B) + sum_j S_j qdot_j over the joints
-that move C, its origin's velocity v_C = V_lin + V_ang x p_BC, and in the world
-R_WC = R_WB R_BC, p_WC = p_WB + R_WB p_BC, omega = R_WB V_ang, v = R_WB v_C."""
+The trials' trees share one topology (parent, joint, below, joint_below, base_subspace)
+and stack their fixed transforms and axes along a first axis. Body C's twist about
+the base's origin is V = (omega_B; v_B) + sum_j S_j qdot_j (spatial.body_twist_into),
+its origin's velocity v_C = V_lin + V_ang x p_BC; in the world omega = R_WB V_ang,
+v = R_WB v_C."""
 import numpy as np
 from numba import njit
 
@@ -32,32 +22,22 @@ def momentum_regressor(base_subspace: np.ndarray, parent: np.ndarray, joint: np.
                        below: np.ndarray, nodes: np.ndarray, base_pose: np.ndarray,
                        base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
                        ) -> np.ndarray:
-    """The momentum regressor Y at the state: [L about the world origin; P] = Y pi.
-
-    inertial_parameters.InertialParameters.MomentumRegressor, compiled.
+    """The momentum regressor Y (6 x 10 bodies) at the state: [L about the world origin; P]
+    = Y pi (InertialParameters.MomentumRegressor, compiled).
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
-            [m].
+        X_PF: Each joint's frame F in its parent body's frame (nodes, 4, 4) [m].
         axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
-        nodes: The node of each body that carries parameters (bodies,), in
-            InertialParameters.bodies order (InertialParameters.Nodes).
-        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
-            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
-        base_velocity: The base joint's velocities in the world: a planar
-            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
+        nodes: Each parameter-carrying body's node (bodies,), in InertialParameters order.
+        base_pose: Planar (x, y, theta) [m, rad] or floating (qw, qx, qy, qz, x, y, z) [m].
+        base_velocity: Planar (vx, vy, omega) or floating (omega, v), world [rad/s, m/s].
         q: The joint angles (n) [rad].
-        qdot: The joint rates (n) [rad/s].
-
-    Returns:
-        Y (6 x 10 bodies)."""
+        qdot: The joint rates (n) [rad/s]."""
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     R_WB, p_WB, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)
     Y = np.zeros((6, PER_BODY * nodes.shape[0]))
@@ -87,8 +67,8 @@ def momentum_regressor(base_subspace: np.ndarray, parent: np.ndarray, joint: np.
 
 @njit(cache=True)
 def _body_block(Y, c, R, o, omega, v):
-    """Body columns c..c+9 of Y: dP/dm = v, dP/dh = [omega]x R,
-    dL/dm = o x v, dL/dh = -[v]x R + [o]x [omega]x R, dL/dI = R W(R^T omega)."""
+    """Body columns c..c+9 of Y: dP/dm = v, dP/dh = [omega]x R, dL/dm = o x v,
+    dL/dh = -[v]x R + [o]x [omega]x R, dL/dI = R W(R^T omega)."""
     wR = np.empty((3, 3))
     for k in range(3):                       # [omega]x R, column k = omega x R_k
         wR[0, k] = omega[1] * R[2, k] - omega[2] * R[1, k]
@@ -132,35 +112,22 @@ def add_momentum_information(base_subspace: np.ndarray, parent: np.ndarray,
                              base_poses: np.ndarray, base_velocities: np.ndarray,
                              q: np.ndarray, qdot: np.ndarray,
                              information: np.ndarray) -> None:
-    """information[i] += vec(Y_i^T Y_i) for every trial i, in place.
-
-    Y_i is momentum_regressor at its row of base_poses, base_velocities, q, qdot,
-    on its tree.
+    """information[i] += vec(Y_i^T Y_i) for every trial i (momentum_regressor at its rows).
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PFs: Each trial's X_PF, each inboard joint's frame F in its parent body's
-            frame (trials, nodes, 4, 4) [m].
-        axes: Each trial's axis, each joint's unit axis in its frame F
-            (trials, nodes, 3) (zero for a weld).
-        X_MCs: Each trial's X_MC, each body's frame C in its joint's moving frame M
-            (trials, nodes, 4, 4) [m].
+        X_PFs: Each trial's joint frames F in their parent bodies (trials, nodes, 4, 4) [m].
+        axes: Each trial's joint axes in F (trials, nodes, 3) (zero for a weld).
+        X_MCs: Each trial's body frames C in the joints' frames M (trials, nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
-        nodes: The node of each body that carries parameters (bodies,), in
-            InertialParameters.bodies order (InertialParameters.Nodes).
-        base_poses: Each trial's base joint positions (trials, base positions)
-            (momentum_regressor's base_pose).
-        base_velocities: Each trial's base joint velocities in the world
-            (trials, nb) (momentum_regressor's base_velocity).
+        nodes: Each parameter-carrying body's node (bodies,), in InertialParameters order.
+        base_poses: Each trial's base joint positions (trials, base positions).
+        base_velocities: Each trial's base joint velocities in the world (trials, nb).
         q: Each trial's joint angles (trials, n) [rad].
         qdot: Each trial's joint rates (trials, n) [rad/s].
-        information: Each trial's information, vec(sum Y^T Y) row-major
-            (trials, size * size), size = 10 bodies; added to in place.
-    """
+        information: Each trial's vec(sum Y^T Y) (trials, (10 bodies)^2), added to."""
     size = PER_BODY * nodes.shape[0]
     for i in range(q.shape[0]):
         Y = momentum_regressor(base_subspace, parent, joint, X_PFs[i], axes[i], X_MCs[i],
@@ -181,39 +148,25 @@ def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
                           masses: np.ndarray, moments: np.ndarray, inertias: np.ndarray,
                           nodes: np.ndarray, pis: np.ndarray, q: np.ndarray
                           ) -> np.ndarray:
-    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm of every trial i.
-
-    Trial i's parameter-carrying bodies are at pis[i] and the other nodes at
-    masses[i], moments[i], inertias[i] (spatial.reduced_model).
+    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm (trials, n, n) of every trial i, its
+    parameter-carrying bodies at pis[i] (spatial.reduced_model); non-finite where H_bb is
+    not positive definite.
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PFs: Each trial's X_PF, each inboard joint's frame F in its parent body's
-            frame (trials, nodes, 4, 4) [m].
-        axes: Each trial's axis, each joint's unit axis in its frame F
-            (trials, nodes, 3) (zero for a weld).
-        X_MCs: Each trial's X_MC, each body's frame C in its joint's moving frame M
-            (trials, nodes, 4, 4) [m].
+        X_PFs: Each trial's joint frames F in their parent bodies (trials, nodes, 4, 4) [m].
+        axes: Each trial's joint axes in F (trials, nodes, 3) (zero for a weld).
+        X_MCs: Each trial's body frames C in the joints' frames M (trials, nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
         joint_below: True where joint k moves joint j's axis, j != k (n, n).
-        masses: Each trial's bodies' masses (trials, nodes) [kg] (KinematicTree.Inertias;
-            those of the nodes in ``nodes`` are replaced).
-        moments: Each trial's bodies' first moments m c about their origins, in
-            their frames (trials, nodes, 3) [kg m].
-        inertias: Each trial's bodies' rotational inertias about their origins,
-            in their frames (trials, nodes, 3, 3) [kg m^2].
-        nodes: The node of each body that carries parameters (bodies,), in
-            InertialParameters.bodies order (InertialParameters.Nodes).
-        pis: Each trial's inertial parameters (trials, 10 bodies), the
-            InertialParameters layout.
-        q: Each trial's joint angles (trials, n) [rad].
-
-    Returns:
-        M (trials, n, n), non-finite where H_bb is not positive definite."""
+        masses: Each trial's body masses (trials, nodes) [kg]; those in ``nodes`` replaced.
+        moments: Each trial's first moments m c in body frames (trials, nodes, 3) [kg m].
+        inertias: Each trial's rotational inertias about body origins (..., 3, 3) [kg m^2].
+        nodes: Each parameter-carrying body's node (bodies,), in InertialParameters order.
+        pis: Each trial's inertial parameters (trials, 10 bodies; InertialParameters).
+        q: Each trial's joint angles (trials, n) [rad]."""
     trials, n = q.shape[0], q.shape[1]
     out = np.empty((trials, n, n))
     for i in range(trials):

@@ -1,7 +1,5 @@
-"""Kernels of the closed loop's systems: the LHS control law (LhsController), the
-true RHS with d(t) (TrueRhs, DisturbanceSource), the port observer's sample
-(PortObserver) and the RHS integrator's sample (RhsIntegrator). Each system's
-docstring states the equations; the kernels are their compiled bodies."""
+"""Compiled bodies of the closed loop's systems: LhsController, TrueRhs (with d(t)),
+PortObserver and RhsIntegrator; each system's docstring states the equations."""
 from typing import Sequence, Tuple, Union
 
 import numpy as np
@@ -15,16 +13,13 @@ from dacph_drake.kernels.spatial import joint_momentum
 
 @njit(cache=True)
 def disturbance(t: float, model: np.ndarray) -> np.ndarray:
-    """d(t) from its parameter vector (DisturbanceSource).
+    """d(t) [N m] (n) = scale (offset + amplitude sin(omega t + quadrature) +
+    hf sin(hf_omega t)), zero before start (DisturbanceSource).
 
     Args:
         t: The time [s].
-        model: [start [s], scale, hf_omega [rad/s], offset (n) [N m], amplitude (n)
-            [N m], omega (n) [rad/s], quadrature (n) [rad], hf (n) [N m]]
-            (3 + 5 n; d(t) = 0 before start).
-
-    Returns:
-        d(t) [N m] (n)."""
+        model: [start [s], scale, hf_omega [rad/s], offset [N m], amplitude [N m],
+            omega [rad/s], quadrature [rad], hf [N m]] (the last five n each; 3 + 5 n)."""
     n = (model.shape[0] - 3) // 5
     d = np.zeros(n)
     _add_disturbance(t, model, d)
@@ -46,16 +41,12 @@ def _add_disturbance(t, model, out):
 
 @njit(cache=True)
 def actuator_gains(t: float, actuator: np.ndarray, n: int) -> np.ndarray:
-    """g(t): B_scale times the gain of every fault whose time has come.
+    """g(t) (n): B_scale times the gain of every fault whose time has come.
 
     Args:
         t: The time [s].
-        actuator: [B_scale (n), (time [s], joint index from 0, gain) per fault]
-            (uncertainty.actuator_arguments).
-        n: The number of joints.
-
-    Returns:
-        g(t) (n)."""
+        actuator: [B_scale (n), (time [s], joint index from 0, gain) per fault].
+        n: The number of joints."""
     gains = actuator[:n].copy()
     for k in range((actuator.shape[0] - n) // 3):
         if t >= actuator[n + 3 * k]:
@@ -70,14 +61,9 @@ def true_matrices(t: float, q: np.ndarray, p: np.ndarray, B0: np.ndarray,
                   B_quadratic: np.ndarray, B_q1_squared: np.ndarray,
                   linear_start: float, nonlinear_start: float, actuator: np.ndarray
                   ) -> Tuple[np.ndarray, np.ndarray]:
-    """(B~, diag D~) at time t and (q, p) (uncertainty.TrueRhsModel).
-
-    B~ = diag(g(t)) (B0 + Delta B), g from ``actuator`` (actuator_gains). Before
-    linear_start B~ = diag(g B0), D~ = D0; from it on B~_ii = g_i (B0_i +
-    B_linear[i] . q) and D~ = D0 + D_offset + D_linear p; from nonlinear_start on
-    B~_ii also gains g_i B_quadratic_i p_i^2, B~ gains diag(g) q_1^2 B_q1_squared and
-    D~ gains D_quadratic p^2. The arguments after (t, q, p) are
-    TrueRhsModel.kernel_arguments (the uncertainty's scales applied).
+    """(B~ (n x n), diag D~ [N m s] (n)) at (t, q, p): B~ = diag(g(t)) (B0 + Delta B),
+    D~ = D0 + Delta D (uncertainty.TrueRhsModel; the arguments after (t, q, p) are its
+    kernel_arguments).
 
     Args:
         t: The time [s].
@@ -85,18 +71,15 @@ def true_matrices(t: float, q: np.ndarray, p: np.ndarray, B0: np.ndarray,
         p: The joint momenta p = M qdot [N m s] (n).
         B0: The nominal B0's diagonal (n).
         D0: The nominal D0's diagonal [N m s] (n).
-        D_offset: D~'s offset from the linear phase on [N m s] (n).
+        D_offset: D~'s offset [N m s] (n).
         D_linear: D~'s coefficients of p (n).
         B_linear: B~'s diagonal's coefficients of q (n x n).
         D_quadratic: D~'s coefficients of p^2 (n).
         B_quadratic: B~'s diagonal's coefficients of p^2 (n).
         B_q1_squared: B~'s coefficients of q_1^2 (n x n).
-        linear_start: When the linear terms switch on [s].
-        nonlinear_start: When the nonlinear terms switch on [s].
-        actuator: The actuators' gains' arguments (actuator_gains).
-
-    Returns:
-        (B~ (n x n), diag D~ [N m s] (n))."""
+        linear_start: When the linear terms (D_offset, D_linear, B_linear) switch on [s].
+        nonlinear_start: When the p^2 and q_1^2 terms switch on [s].
+        actuator: The actuators' gains' arguments (actuator_gains)."""
     n = q.shape[0]
     B, D = np.empty((n, n)), np.empty(n)
     _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadratic,
@@ -143,24 +126,15 @@ def _true_matrices_into(t, q, p, B0, D0, D_offset, D_linear, B_linear, D_quadrat
 def pack_true_rhs(coefficients: Union[np.ndarray, Sequence[float]],
                   ranges: Union[np.ndarray, Sequence[float]],
                   uncertainty: Sequence[Union[np.ndarray, float]]) -> np.ndarray:
-    """The robot's and the uncertainty's constant arguments of true_torque as one array.
-
-    One array because numba's dispatch cost grows with the number of array
-    arguments: 16 of them cost 3 us a call, more than the kernel.
+    """true_torque's constant arguments as one array [vec(coefficients), vec(ranges), the
+    uncertainty's arguments, raveled]: numba's dispatch cost grows with the number of array
+    arguments.
 
     Args:
-        coefficients: The mass matrix's trigonometric coefficients
-            (ReducedOrderModel.trigonometric_representation: N^2 x (1 + 2 R),
-            N = n + 3, R = n (n + 1) / 2); empty for a spatial arm, whose kernel
-            computes p from its tree (spatial_true_torques).
+        coefficients: The mass matrix's trigonometric coefficients (N^2 x (1 + 2 R),
+            N = n + 3, R = n (n + 1) / 2); empty for a spatial arm.
         ranges: Their angle combinations (R x n); empty for a spatial arm.
-        uncertainty: The uncertainty's arguments of true_matrices after (t, q, p)
-            (uncertainty.TrueRhsModel.kernel_arguments).
-
-    Returns:
-        [vec(coefficients), vec(ranges), B0, D0, D_offset, D_linear, vec(B_linear),
-            D_quadratic, B_quadratic, vec(B_q1_squared), linear_start, nonlinear_start,
-            actuator (the rest)]."""
+        uncertainty: true_matrices' arguments after (t, q, p) (TrueRhsModel)."""
     return np.concatenate([np.ravel(a) for a in (coefficients, ranges, *uncertainty)]
                           ).astype(float)
 
@@ -168,19 +142,15 @@ def pack_true_rhs(coefficients: Union[np.ndarray, Sequence[float]],
 @njit(cache=True)
 def true_torque(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
                 disturbance_model: np.ndarray, packed: np.ndarray) -> np.ndarray:
-    """tau = B~(x) u - D~(x) qdot + d(t) at time t and plant state x (TrueRhs).
+    """tau [N m] (n) = B~(x) u - D~(x) qdot + d(t) at time t and plant state x (TrueRhs).
 
     Args:
         t: The time [s].
         x: The plant's state [positions, velocities].
-        indices: The indices of [theta0, base velocity (3), q (n), qdot (n)] in x
-            (plant.ArmCoordinates.StateIndices; int64, 4 + 2 n).
+        indices: The indices of [theta0, base velocity (3), q (n), qdot (n)] in x (int64).
         u: The command [N m] (n).
         disturbance_model: d(t)'s parameters (disturbance; 3 + 5 n).
-        packed: The robot's and the uncertainty's arguments (pack_true_rhs).
-
-    Returns:
-        tau [N m] (n)."""
+        packed: The robot's and the uncertainty's arguments (pack_true_rhs)."""
     n = u.shape[0]
     tau = np.empty(n)
     _true_torque_into(t, x, indices, u, disturbance_model, packed, torque_scratch(n),
@@ -190,14 +160,11 @@ def true_torque(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
 
 @njit(cache=True)
 def torque_scratch(n: int) -> Tuple[np.ndarray, ...]:
-    """The work arrays of _true_torque_into for n joints (one set per batch call).
+    """Uninitialized work arrays (q, qdot, p (n), cos, sin (R = n (n + 1) / 2), B (n x n),
+    D (n)) of _true_torque_into for n joints (one set per batch call).
 
     Args:
-        n: The number of joints.
-
-    Returns:
-        (q (n), qdot (n), p (n), cos (R), sin (R), B (n x n), D (n)),
-            R = n (n + 1) / 2, uninitialized."""
+        n: The number of joints."""
     R = n * (n + 1) // 2
     return (np.empty(n), np.empty(n), np.empty(n), np.empty(R), np.empty(R),
             np.empty((n, n)), np.empty(n))
@@ -205,8 +172,7 @@ def torque_scratch(n: int) -> Tuple[np.ndarray, ...]:
 
 @njit(cache=True)
 def _true_torque_into(t, x, indices, u, disturbance_model, packed, scratch, tau):
-    """true_torque written into ``tau`` with the work arrays ``scratch``
-    (torque_scratch), allocating nothing."""
+    """true_torque written into ``tau`` with the work arrays ``scratch``."""
     q, qdot, p, _, _, B, D = scratch
     o = _trial_state_into(x, indices, packed, scratch)
     _torque_into(t, q, p, qdot, u, disturbance_model, packed[o:], B, D, tau)
@@ -214,9 +180,7 @@ def _true_torque_into(t, x, indices, u, disturbance_model, packed, scratch, tau)
 
 @njit(cache=True)
 def _trial_state_into(x, indices, packed, scratch):
-    """q, qdot and p = the joint rows of H v (joint_momentum) of the trial whose
-    state is x[indices], written into scratch's first three arrays; returns where
-    the uncertainty's arguments start in ``packed`` (pack_true_rhs)."""
+    """q, qdot, p of trial x[indices] into scratch; returns the uncertainty's offset."""
     q, qdot, p, c, si, _, _ = scratch
     n = q.shape[0]
     for j in range(n):
@@ -236,7 +200,8 @@ def _trial_state_into(x, indices, packed, scratch):
 def true_matrices_of_trials(t: float, x: np.ndarray, indices: np.ndarray,
                             packs: np.ndarray, offsets: np.ndarray, n: int
                             ) -> np.ndarray:
-    """[vec(B~), diag(D~)] of every trial of a batch at its state, stacked.
+    """[vec(B~) (row-major), diag(D~)] of every trial of a batch at its state, stacked
+    (trials (n n + n)).
 
     Args:
         t: The time [s].
@@ -244,10 +209,7 @@ def true_matrices_of_trials(t: float, x: np.ndarray, indices: np.ndarray,
         indices: Each trial's StateIndices in x (int64, trials x (4 + 2 n)).
         packs: The trials' packed arguments, stacked (stack_packs).
         offsets: Where each trial's part of ``packs`` starts (int64, trials + 1).
-        n: The number of joints.
-
-    Returns:
-        [vec(B~) (row-major), diag(D~)] per trial (trials (n n + n))."""
+        n: The number of joints."""
     trials = indices.shape[0]
     out = np.empty(trials * (n * n + n))
     scratch = torque_scratch(n)
@@ -265,15 +227,11 @@ def true_matrices_of_trials(t: float, x: np.ndarray, indices: np.ndarray,
 
 
 def stack_packs(packs: Sequence[np.ndarray]) -> "tuple[np.ndarray, np.ndarray]":
-    """A batch's per-trial packed arguments as one array, and each one's offset.
+    """(A batch's per-trial packed arguments concatenated, each one's offset in it (int64,
+    trials + 1)).
 
     Args:
-        packs: Each trial's packed arguments (pack_true_rhs, pack_lhs: their lengths
-            may differ, e.g. with the actuator faults a trial samples).
-
-    Returns:
-        (the packs concatenated, the offsets of each trial's part in it (int64,
-            N + 1))."""
+        packs: Each trial's packed arguments (pack_true_rhs, pack_lhs; any lengths)."""
     offsets = np.concatenate([[0], np.cumsum([len(p) for p in packs])]).astype(np.int64)
     return np.concatenate(packs).astype(float), offsets
 
@@ -284,9 +242,7 @@ RUNNING, STOPPED, NON_FINITE, RUNAWAY = 0, 1, 2, 3
 
 @njit(cache=True)
 def _verdict(running, state, rates, more_rates, tau, bound):
-    """A trial's verdict from its running flag, its state, its rates (two views) and
-    its torque: STOPPED, NON_FINITE (state or torque), RUNAWAY (a rate beyond
-    ``bound``) or RUNNING."""
+    """STOPPED, NON_FINITE (state, torque), RUNAWAY (a rate over ``bound``) or RUNNING."""
     if running <= 0:
         return STOPPED
     for value in state:
@@ -308,33 +264,20 @@ def _verdict(running, state, rates, more_rates, tau, bound):
 def true_torques(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
                  disturbance_models: np.ndarray, packs: np.ndarray, offsets: np.ndarray,
                  running: np.ndarray, bound: float, verdicts: np.ndarray) -> np.ndarray:
-    """true_torque of every trial of a batch in one call.
-
-    Trial i's state indices are indices[i] (its plant.ArmCoordinates.StateIndices
-    in the batch's plant state x), its command u[i n:(i + 1) n], its disturbance
-    model disturbance_models's i-th part and its packed arguments
-    packs[offsets[i]:offsets[i + 1]] (stack_packs). A trial's torque is zero
-    unless its verdict (_verdict, with its running flag, state, base and joint
-    rates and the rate ``bound``), written to verdicts[i], is RUNNING;
-    verdicts[trials] gets the largest verdict.
+    """The trials' tau [N m] (trials n): true_torque of every trial of a batch; zero unless
+    the trial's verdict is RUNNING.
 
     Args:
         t: The time [s].
         x: The batch's plant state [positions, velocities].
         indices: Each trial's StateIndices in x (int64, trials x (4 + 2 n)).
         u: The trials' commands [N m] (trials n).
-        disturbance_models: The trials' d(t) parameters (disturbance;
-            trials (3 + 5 n)).
+        disturbance_models: The trials' d(t) parameters (disturbance; trials (3 + 5 n)).
         packs: The trials' packed arguments, stacked (stack_packs of pack_true_rhs).
         offsets: Where each trial's part of ``packs`` starts (int64, trials + 1).
         running: Each trial's running flag (1: runs, 0: stopped; trials).
-        bound: The largest rate a running trial may have [rad/s, m/s]
-            (true_rhs.RUNAWAY_RATE).
-        verdicts: Written: each trial's verdict (RUNNING, STOPPED, NON_FINITE,
-            RUNAWAY), then the largest (int64, trials + 1).
-
-    Returns:
-        The trials' tau [N m] (trials n)."""
+        bound: The largest rate a running trial may have [rad/s, m/s] (RUNAWAY_RATE).
+        verdicts: Written: each trial's verdict, then the largest (int64, trials + 1)."""
     trials = indices.shape[0]
     n = u.shape[0] // trials
     m = disturbance_models.shape[0] // trials
@@ -355,8 +298,7 @@ def true_torques(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
 
 @njit(cache=True)
 def _settle(out, verdicts, i, verdict, tau):
-    """Trial i's verdict recorded (verdicts[i]; the largest so far in the last
-    entry) and, while it runs, its torque in its part of ``out``."""
+    """Records trial i's verdict (the largest: last entry) and, if RUNNING, its tau."""
     n = tau.shape[0]
     if verdict == RUNNING:
         out[i * n:(i + 1) * n] = tau
@@ -366,8 +308,7 @@ def _settle(out, verdicts, i, verdict, tau):
 
 @njit(cache=True)
 def _planar_verdict(x, indices, n, tau, bound):
-    """_verdict of a running planar trial whose state is x[indices] = [theta0, base
-    velocity (3), q (n), qdot (n)], read in place."""
+    """_verdict of a running planar trial whose state is x[indices], read in place."""
     for k in indices:
         if not np.isfinite(x[k]):
             return NON_FINITE
@@ -385,8 +326,7 @@ def _planar_verdict(x, indices, n, tau, bound):
 
 @njit(cache=True)
 def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
-    """tau = B~ u - D~ qdot + d(t) written into ``tau`` (B and D: work arrays), with
-    the uncertainty's arguments packed as pack_true_rhs packs them after the robot's."""
+    """tau = B~ u - D~ qdot + d(t) into ``tau``; B, D: work arrays (_matrices_into)."""
     n = u.shape[0]
     _matrices_into(t, q, p, packed, B, D)
     for i in range(n):
@@ -399,8 +339,7 @@ def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
 
 @njit(cache=True)
 def _matrices_into(t, q, p, packed, B, D):
-    """true_matrices written into B and D, with the uncertainty's arguments packed
-    as pack_true_rhs packs them after the robot's."""
+    """true_matrices into B and D from the uncertainty's part of a pack_true_rhs."""
     n = q.shape[0]
     B0, D0, D_offset, D_linear = (packed[0:n], packed[n:2 * n], packed[2 * n:3 * n],
                                   packed[3 * n:4 * n])
@@ -425,49 +364,32 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
                          limits: np.ndarray, disturbance_models: np.ndarray,
                          packs: np.ndarray, offsets: np.ndarray, running: np.ndarray,
                          bound: float, verdicts: np.ndarray) -> np.ndarray:
-    """tau = B~(x) u_c - D~(x) qdot + d(t) of every trial of a batch of spatial arms.
-
-    As true_torques does for planar ones (SpatialTrueRhs): trial i's state is
-    x[indices[i]] = [base pose (7), base velocity (6), q (n), qdot (n)], its tree
-    and inertias the i-th of the stacked ones (spatial.joint_momentum: p the joint
-    rows of H v), u_c its command clipped to +-limits[i], ``packs`` its
-    pack_true_rhs((), (), uncertainty). A trial's torque is zero unless its
-    verdict (_verdict: its state, its velocities, its torque), written to
-    verdicts[i], is RUNNING; verdicts[trials] gets the largest. The tree's
-    topology (base_subspace, parent, joint, below) is every trial's; its frames
-    and inertias are each trial's (kinematic_tree.KinematicTree, nodes bodies).
+    """The trials' tau [N m] (trials n) = B~ u_c - D~ qdot + d(t) of a batch of spatial arms
+    (SpatialTrueRhs), as true_torques: u_c = u clipped to +-limits, p from each trial's tree
+    (joint_momentum).
 
     Args:
         t: The time [s].
         x: The batch's plant state [positions, velocities].
-        indices: Each trial's indices of [base pose (7), base velocity (6), q (n),
-            qdot (n)] in x (trials x (13 + 2 n)).
+        indices: Each trial's indices of [base pose (7), base twist (6), q, qdot] in x.
         base_subspace: The base joint's motion subspace (6 x base velocities).
         parent: Each node's parent node, -1 for the base (nodes).
         joint: The joint moving each node (0 .. n - 1), -1 for a weld (nodes).
         X_PFs: Each trial's joint frames F in their parents (trials x nodes x 4 x 4).
         axes: Each trial's joint axes in F (trials x nodes x 3).
-        X_MCs: Each trial's child body poses in the joints' frames M
-            (trials x nodes x 4 x 4).
+        X_MCs: Each trial's body poses in the joints' frames M (trials x nodes x 4 x 4).
         below: True where joint k moves the node (n x nodes).
         masses: Each trial's body masses [kg] (trials x nodes).
         moments: Each trial's first moments m c [kg m] (trials x nodes x 3).
-        inertias: Each trial's rotational inertias about the bodies' origins
-            [kg m^2] (trials x nodes x 3 x 3).
+        inertias: Each trial's rotational inertias about the body origins [kg m^2].
         u: The trials' commands [N m] (trials n).
         limits: The actuators' effort limits [N m] (trials x n).
-        disturbance_models: The trials' d(t) parameters (disturbance;
-            trials (3 + 5 n)).
+        disturbance_models: The trials' d(t) parameters (disturbance; trials (3 + 5 n)).
         packs: The trials' packed uncertainties, stacked (stack_packs).
         offsets: Where each trial's part of ``packs`` starts (int64, trials + 1).
         running: Each trial's running flag (1: runs, 0: stopped; trials).
-        bound: The largest velocity a running trial may have [rad/s, m/s]
-            (true_rhs.RUNAWAY_RATE).
-        verdicts: Written: each trial's verdict (RUNNING, STOPPED, NON_FINITE,
-            RUNAWAY), then the largest (int64, trials + 1).
-
-    Returns:
-        The trials' tau [N m] (trials n)."""
+        bound: The largest velocity a running trial may have [rad/s, m/s] (RUNAWAY_RATE).
+        verdicts: Written: each trial's verdict, then the largest (int64, trials + 1)."""
     trials = indices.shape[0]
     n = u.shape[0] // trials
     m = disturbance_models.shape[0] // trials
@@ -496,26 +418,19 @@ def pack_lhs(ranges: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
              fraction: np.ndarray, radius: np.ndarray, potential_gains: np.ndarray,
              reference: np.ndarray, gains: np.ndarray, excitation: np.ndarray
              ) -> np.ndarray:
-    """The constant arguments of lhs_sample as one array (see pack_true_rhs).
+    """The constant arguments of lhs_sample as one array [points, reference terms, then the
+    arguments raveled in order] (see pack_true_rhs).
 
     Args:
-        ranges: The mass matrix's angle combinations (R x n,
-            ReducedOrderModel.trigonometric_representation).
-        geometry: [half base size, shoulder x, shoulder y, link lengths (n)], in m
-            (kernels.potential.potential).
+        ranges: The mass matrix's angle combinations (R x n).
+        geometry: (half base size, shoulder x, shoulder y, link lengths (n)) [m].
         link_of: The link of each potential point (points).
         fraction: How far along its link each point lies (points).
         radius: Each point's half width [m] (points).
         potential_gains: [base_gain, base_margin, fold_gain, fold_margin] (4).
-        reference: [alpha0 [rad], amplitudes (m) [rad], omegas (m) [rad/s]]
-            (lhs_control).
+        reference: [alpha0 [rad], amplitudes (m) [rad], omegas (m) [rad/s]] (lhs_control).
         gains: [Kd, Lambda, epsilon, eta, layer_per_chi] (lhs_control).
-        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] (lhs_control).
-
-    Returns:
-        [number of potential points, number of reference terms, vec(ranges),
-            geometry, link_of, fraction, radius, potential gains (4), reference,
-            gains (5), excitation]."""
+        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] (lhs_control)."""
     return np.concatenate([[len(link_of), (len(reference) - 1) // 2],
                            *(np.ravel(a) for a in (
                                ranges, geometry, link_of, fraction, radius,
@@ -526,7 +441,8 @@ def pack_lhs(ranges: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
 @njit(cache=True)
 def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: float,
                coefficients: np.ndarray, packed: np.ndarray) -> np.ndarray:
-    """lhs_control with its constant arguments unpacked from ``packed``.
+    """lhs_control with its constant arguments unpacked from ``packed``: [tau_c^r (n),
+    log (n + 4), vec(M), vec(C')] (2 n + 4 + 2 n^2).
 
     Args:
         t: The time [s].
@@ -534,12 +450,8 @@ def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: fl
         q: The joint angles [rad] (n).
         qdot: The joint rates [rad/s] (n).
         chi: The RHS loop's bound chi [N m].
-        coefficients: The mass matrix's trigonometric coefficients (the controller's
-            model, which the inertial identification may refresh; N^2 x (1 + 2 R)).
-        packed: The constant arguments (pack_lhs).
-
-    Returns:
-        [tau_c^r (n), log (n + 4), vec(M), vec(C')] (2 n + 4 + 2 n^2)."""
+        coefficients: The mass-matrix coefficients (the identification may refresh them).
+        packed: The constant arguments (pack_lhs)."""
     n = q.shape[0]
     R = n * (n + 1) // 2
     points, terms = int(packed[0]), int(packed[1])
@@ -574,11 +486,8 @@ def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: fl
 def lhs_samples(t: float, theta0s: np.ndarray, q: np.ndarray, qdot: np.ndarray,
                 chi: np.ndarray, coefficients: np.ndarray, packs: np.ndarray,
                 offsets: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """lhs_sample of every trial of a batch in one call.
-
-    Trial i's base angle is theta0s[i], its joints q[i n:(i + 1) n], qdot likewise,
-    chi[i], its mass-matrix coefficients coefficients[i] and its packed arguments
-    packs[offsets[i]:offsets[i + 1]] (stack_packs).
+    """lhs_sample of every trial of a batch in one call: (tau_c^r [N m], logs (n + 4 each),
+    [vec(M), vec(C')]), each stacked by trial.
 
     Args:
         t: The time [s].
@@ -586,14 +495,9 @@ def lhs_samples(t: float, theta0s: np.ndarray, q: np.ndarray, qdot: np.ndarray,
         q: The trials' joint angles [rad] (trials n).
         qdot: The trials' joint rates [rad/s] (trials n).
         chi: The trials' RHS bounds chi [N m] (trials).
-        coefficients: The trials' mass-matrix coefficients
-            (trials x N^2 x (1 + 2 R)).
+        coefficients: The trials' mass-matrix coefficients (trials x N^2 x (1 + 2 R)).
         packs: The trials' constant arguments, stacked (stack_packs of pack_lhs).
-        offsets: Where each trial's part of ``packs`` starts (int64, trials + 1).
-
-    Returns:
-        (the trials' tau_c^r [N m], their logs (n + 4 each), their [vec(M),
-            vec(C')]), each stacked."""
+        offsets: Where each trial's part of ``packs`` starts (int64, trials + 1)."""
     trials = theta0s.shape[0]
     n = q.shape[0] // trials
     tau, logs = np.empty(trials * n), np.empty(trials * (n + 4))
@@ -615,10 +519,9 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
                 potential_gains: np.ndarray, reference: np.ndarray, gains: np.ndarray,
                 excitation: np.ndarray
                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The LHS control law at time t, base angle theta0 and joint state (q, qdot).
-
-    The law is LhsController's; the robust term's boundary layer is
-    phi = epsilon + layer_per_chi chi.
+    """(tau_c^r [N m] (n), log [s, alpha~, alpha_d, V, U] (n + 4), M (n x n), C' (n x n)):
+    the LHS control law (LhsController) at time t, base angle theta0, joints (q, qdot); the
+    robust term's boundary layer is phi = epsilon + layer_per_chi chi.
 
     Args:
         t: The time [s].
@@ -626,23 +529,17 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
         q: The joint angles [rad] (n).
         qdot: The joint rates [rad/s] (n).
         chi: The RHS loop's bound chi [N m].
-        coefficients: The mass matrix's trigonometric coefficients
-            (N^2 x (1 + 2 R), kernels.arm.reduced_dynamics).
+        coefficients: The mass matrix's trigonometric coefficients (N^2 x (1 + 2 R)).
         ranges: Their angle combinations (R x n).
         geometry: The potential's geometry (kernels.potential.potential).
         link_of: The link of each potential point (points).
         fraction: How far along its link each point lies (points).
         radius: Each point's half width [m] (points).
         potential_gains: [base_gain, base_margin, fold_gain, fold_margin] (4).
-        reference: [alpha0 [rad], amplitudes (m) [rad], omegas (m) [rad/s]] of
+        reference: [alpha0 [rad], a (m) [rad], omega (m) [rad/s]] of
             alpha_d(t) = alpha0 + sum_j a_j sin(omega_j t).
         gains: [Kd, Lambda, epsilon, eta, layer_per_chi] (5).
-        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] of tau_pe(t)
-            (amplitude 0: off).
-
-    Returns:
-        (tau_c^r [N m] (n), [s, alpha~, alpha_d, V, U] (n + 4), M (n x n),
-            C' (n x n))."""
+        excitation: [amplitudes (n) [N m], omegas (n) [rad/s]] of tau_pe(t) (0: off)."""
     n = q.shape[0]
     M, C, D, dD = reduced_dynamics(q, qdot, coefficients, ranges)
     m = (reference.shape[0] - 1) // 2
@@ -703,12 +600,10 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
 def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
                     model: np.ndarray, u: np.ndarray, noise: np.ndarray,
                     constants: np.ndarray) -> np.ndarray:
-    """One port-observer sample (PortObserver) at joint state (q, qdot).
-
-    qddot = (qdot(k) - qdot(k-1)) / h, qdot_mid = (qdot(k) + qdot(k-1)) / 2,
-    tau_obs = M qddot + C' qdot_mid + b qdot_mid + noise (b the LHS model's joint
-    damping); port_sample = [q, p = M qdot_mid, r], r <- r + a ([qdot_mid, u,
-    tau_obs] - r).
+    """A port-observer sample [tau_obs (n), qdot(k) (n), port_sample (5 n)] (PortObserver):
+    tau_obs = M qddot + C' qdot_mid + b qdot_mid + noise, qddot = (qdot(k) - qdot(k-1)) / h,
+    qdot_mid = (qdot(k) + qdot(k-1)) / 2; port_sample = [q, p = M qdot_mid, r],
+    r <- r + a ([qdot_mid, u, tau_obs] - r).
 
     Args:
         q: The joint angles [rad] (n).
@@ -717,10 +612,7 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
         model: [vec(M), vec(C')] (2 n^2, row-major).
         u: The command held over the interval [N m] (n).
         noise: The measurement noise on tau_obs [N m] (n).
-        constants: [h [s], anti-alias factor a, b (n) [N m s/rad]].
-
-    Returns:
-        [tau_obs (n), qdot(k) (n), port_sample (5 n)]."""
+        constants: [h [s], anti-alias factor a, LHS model damping b [N m s/rad] (n)]."""
     n = u.shape[0]
     h, a = constants[0], constants[1]
     M = model[:n * n].reshape(n, n)
@@ -745,7 +637,8 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
 def observer_samples(trials: int, q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
                      model: np.ndarray, u: np.ndarray, noise: np.ndarray,
                      constants: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """observer_sample of each of ``trials`` trials in one call.
+    """observer_sample of each of ``trials`` trials in one call: (tau_obs [N m], memories
+    [qdot(k), port_sample]), each stacked by trial.
 
     Args:
         trials: The number of trials.
@@ -755,12 +648,7 @@ def observer_samples(trials: int, q: np.ndarray, qdot: np.ndarray, memory: np.nd
         model: The trials' [vec(M), vec(C')] (trials 2 n^2).
         u: The trials' commands [N m] (trials n).
         noise: The trials' measurement noise [N m] (trials n).
-        constants: [h [s], anti-alias factor a, b (n) [N m s/rad]], every
-            trial's.
-
-    Returns:
-        (the trials' tau_obs [N m], their memories [qdot(k), port_sample]), each
-            stacked."""
+        constants: observer_sample's constants, every trial's."""
     n = u.shape[0] // trials
     tau, memory_out = np.empty(n * trials), np.empty(6 * n * trials)
     for i in range(trials):
@@ -779,7 +667,8 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
                        tau_request: np.ndarray, tau_observed: np.ndarray,
                        qdot: np.ndarray, constants: np.ndarray
                        ) -> Tuple[np.ndarray, np.ndarray]:
-    """integrator_sample of each of ``trials`` trials in one call.
+    """integrator_sample of each of ``trials`` trials in one call: (fast groups, u [N m]),
+    each stacked by trial.
 
     Args:
         trials: The number of trials.
@@ -788,10 +677,7 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
         tau_request: The trials' tau_c^r [N m] (trials n).
         tau_observed: The trials' tau_obs(k) [N m] (trials n).
         qdot: The trials' joint rates [rad/s] (trials n).
-        constants: [h [s], chi_decay, chi_floor [N m]], every trial's.
-
-    Returns:
-        (the trials' fast groups, their u [N m]), each stacked."""
+        constants: [h [s], chi_decay, chi_floor [N m]], every trial's."""
     n = qdot.shape[0] // trials
     fast_size, gains_size = fast.shape[0] // trials, gains.shape[0] // trials
     fast_out, u = np.empty(trials * fast_size), np.empty(trials * n)
@@ -810,24 +696,20 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
 def integrator_sample(fast: np.ndarray, gains: np.ndarray, tau_request: np.ndarray,
                       tau_observed: np.ndarray, qdot: np.ndarray, constants: np.ndarray
                       ) -> np.ndarray:
-    """One RHS integrator sample (RhsIntegrator) at joint rates qdot.
+    """One RHS integrator sample (RhsIntegrator) at joint rates qdot, returning
+    [fast after it (3 n + 2), u (n)]:
 
         e_tau = tau_c^r(k-1) - tau_obs(k),   u_I <- u_I + h K e_tau,
         u = B_hat^-1 (tau_c^r + D_hat qdot) + u_I,
         chi = max(||e_tau||, chi e^(-h / chi_window), chi_floor).
 
     Args:
-        fast: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)]
-            (log_layout.RhsState's fast group, 3 n + 2).
-        gains: [vec(B_hat^-1) (n^2), D_hat (n), K (n), ...] (log_layout.RhsState's
-            model group).
+        fast: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)] (RhsState's fast part).
+        gains: [vec(B_hat^-1) (n^2), D_hat (n), K (n), ...] (RhsState's model group).
         tau_request: tau_c^r(k) [N m] (n).
         tau_observed: tau_obs(k) [N m] (n).
         qdot: The joint rates [rad/s] (n).
-        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m]].
-
-    Returns:
-        [fast after the sample (3 n + 2), u (n)]."""
+        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m]]."""
     n = tau_request.shape[0]
     h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
     out = np.empty(4 * n + 2)

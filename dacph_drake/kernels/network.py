@@ -1,10 +1,6 @@
-"""The RHS network's evaluation (network.ExportedNetwork), compiled, for every
-trial of a batch in one call: each trial's exported parameter vector in torch's
-parameters() order (body_B's layers, body_D's, head_B, head_D; each layer its
-weight (rows x columns, row-major) then its bias), evaluated as
-
-    h_B = tanh-MLP_B(X), h_D = tanh-MLP_D(X),  X = (q, p / p_scale)
-    B_hat = F o mat(W_B h_B + b_B),  D_hat = softplus(W_D h_D + b_D)."""
+"""The RHS network (network module, E34-E35) evaluated for every trial of a batch in one
+compiled call, from each trial's exported parameters in torch's parameters() order:
+body_B, body_D, head_B, head_D, each layer's weight (row-major) then its bias."""
 from typing import Tuple
 
 import numpy as np
@@ -13,8 +9,7 @@ from numba import njit
 
 @njit(cache=True)
 def _dense(weights, offset, rows, columns, x, out, activate):
-    """out = tanh(W x + b) (W x + b if not ``activate``) with W (rows x columns) and
-    b read from ``weights`` at ``offset``; returns the offset after them."""
+    """out = tanh(W x + b) (W x + b unless ``activate``); returns the offset after W, b."""
     for r in range(rows):
         value = 0.0
         for c in range(columns):
@@ -26,8 +21,7 @@ def _dense(weights, offset, rows, columns, x, out, activate):
 
 @njit(cache=True)
 def _body(weights, offset, hidden, x, work):
-    """The tanh MLP's last hidden layer (in ``work`` row len(hidden) - 1, sized
-    max(hidden)); returns the offset after its parameters."""
+    """The tanh MLP's last hidden layer into work[-1]; returns the offset after it."""
     width, source = x.shape[0], x
     for layer in range(hidden.shape[0]):
         offset = _dense(weights, offset, hidden[layer], width, source, work[layer],
@@ -40,23 +34,16 @@ def _body(weights, offset, hidden, x, work):
 def evaluate_networks(hidden: np.ndarray, momentum_scale: float, weights: np.ndarray,
                       q: np.ndarray, p: np.ndarray, coupling: np.ndarray
                       ) -> Tuple[np.ndarray, np.ndarray]:
-    """Every trial's B_hat and D_hat from its network.
-
-    Trial i's network at weights[i], its state (q[i], p[i]) and coupling scale
-    F = coupling[i].
+    """Every trial's (B_hat (trials, n, n), D_hat (trials, n)): trial i's network at
+    weights[i], state (q[i], p[i]).
 
     Args:
-        hidden: The widths of the MLPs' hidden layers (layers,), int64 (both MLPs
-            alike).
+        hidden: The MLPs' hidden layer widths (layers,), int64 (both MLPs alike).
         momentum_scale: p_scale, the momentum's scale in the networks' input.
-        weights: Each trial's exported parameter vector (trials, size), in the
-            module docstring's order.
+        weights: Each trial's exported parameter vector (trials, size).
         q: Each trial's joint angles (trials, n) [rad].
         p: Each trial's momentum (trials, n).
-        coupling: Each trial's coupling scale F (trials, n, n).
-
-    Returns:
-        (B_hat (trials, n, n), D_hat (trials, n))."""
+        coupling: Each trial's coupling scale F (trials, n, n)."""
     trials, n = q.shape[0], q.shape[1]
     layers, widest = hidden.shape[0], 0
     for h in hidden:

@@ -20,9 +20,7 @@ def _firas(rho, k, rho0):
 
 @njit(cache=True)
 def _chain(q, qdot, geometry):
-    """(e, edot, O, Odot): each link's unit direction and its rate, each joint's
-    position and velocity (n x 2, base frame, fixed-base kinematics);
-    ``geometry`` as in potential."""
+    """(e, edot, O, Odot): link directions, joint positions and their rates (n x 2)."""
     n = q.shape[0]
     lengths = geometry[3:]
     # Scalar loops rather than array expressions (each of those compiles into a
@@ -47,10 +45,8 @@ def _chain(q, qdot, geometry):
 
 @njit(cache=True)
 def _box_distance(P0, P1, half, g):
-    """(distance, h00, h01, h11) of the point (P0, P1) from the base square of
-    half size ``half`` (negative inside: minus the depth below the nearest side),
-    its gradient written to g (inside: the nearest side's normal) and, in a
-    corner region, the distance's curvature (zero elsewhere)."""
+    """(distance, h00, h01, h11) of (P0, P1) from the base square (inside: minus the depth),
+    its gradient written to g and its curvature in a corner region (zero elsewhere)."""
     ex0, ex1 = abs(P0) - half, abs(P1) - half
     out0, out1 = max(ex0, 0.0), max(ex1, 0.0)
     dist = np.sqrt(out0 * out0 + out1 * out1)
@@ -72,19 +68,15 @@ def _box_distance(P0, P1, half, g):
 @njit(cache=True)
 def min_clearance(q: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
                   fraction: np.ndarray, radius: np.ndarray) -> float:
-    """The smallest clearance of the sample points from the base.
-
-    rho_j = distance - radius[j].
+    """The sample points' smallest clearance min_j rho_j [m], rho_j = distance_j - radius[j]
+    from the base (negative: a point inside the base).
 
     Args:
         q: The joint angles (n) [rad].
         geometry: (half base size, shoulder x, shoulder y, link lengths (n)) [m].
         link_of: The link each sample point j lies on (points,).
         fraction: How far along its link point j lies (points,), in link lengths.
-        radius: The half width of point j's link (points,) [m].
-
-    Returns:
-        min_j rho_j [m] (negative: a point inside the base)."""
+        radius: The half width of point j's link (points,) [m]."""
     e, _, O, _ = _chain(q, np.zeros_like(q), geometry)
     lengths, g, smallest = geometry[3:], np.empty(2), np.inf
     for j in range(link_of.shape[0]):
@@ -100,10 +92,7 @@ def min_clearance(q: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
 def potential(q: np.ndarray, qdot: np.ndarray, geometry: np.ndarray,
               link_of: np.ndarray, fraction: np.ndarray, radius: np.ndarray,
               gains: np.ndarray) -> Tuple[float, np.ndarray, np.ndarray]:
-    """The potential U, its gradient and its gradient's rate Hess U qdot.
-
-    Point j lies ``fraction[j]`` along link ``link_of[j]`` with half width
-    ``radius[j]`` (BaseRepulsionPotential.kernel_arguments).
+    """The potential (U [J], grad U (n), Hess U qdot (n)) at (q, qdot).
 
     Args:
         q: The joint angles (n) [rad].
@@ -112,11 +101,8 @@ def potential(q: np.ndarray, qdot: np.ndarray, geometry: np.ndarray,
         link_of: The link each sample point j lies on (points,).
         fraction: How far along its link point j lies (points,), in link lengths.
         radius: The half width of point j's link (points,) [m].
-        gains: (base_gain [J m^2], base_margin [m], fold_gain [J rad^2],
-            fold_margin [rad]) (scenario.Potential).
-
-    Returns:
-        (U [J], grad U (n), Hess U qdot (n))."""
+        gains: (base_gain [J m^2], base_margin [m], fold_gain [J rad^2], fold_margin
+            [rad])."""
     n = q.shape[0]
     lengths = geometry[3:]
     base_gain, base_margin, fold_gain, fold_margin = gains[0], gains[1], gains[2], gains[3]

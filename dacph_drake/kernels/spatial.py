@@ -1,26 +1,18 @@
-"""The reduced model of a spatial free-floating arm (dynamics.floating_model's, which
-computes it with Drake's AutoDiff), compiled: for a kinematic tree of revolute joints
-and welds on a free base (dynamics.kinematic_tree.KinematicTree), at the base's
-identity pose (M and C' do not depend on it; Jacobians are turned to the base's
-attitude by the caller).
+"""The reduced model of a spatial free-floating arm, compiled (dynamics.floating_model
+computes it with Drake's AutoDiff): a tree of revolute joints and welds on a free base
+(KinematicTree) at the base's identity pose (M and C' do not depend on it).
 
-Spatial vectors are (angular; linear) about the world origin O, in world axes
-(Featherstone's Plucker coordinates). Joint j's motion subspace is
-S_j = (a_j; p_j x a_j) (axis a_j through the point p_j); the base's velocities have
-the subspace S_b (KinematicTree.base_subspace: the identity for a free base's
-(omega, v_O)). With I_i body i's spatial inertia about O and Ic_j the composite
-inertia of the bodies joint j moves,
+Spatial vectors are (angular; linear) about the world origin O in world axes. With
+S_j = (a_j; p_j x a_j) joint j's motion subspace, S_b the base's, I_i body i's spatial
+inertia about O and Ic_j the composite inertia of the bodies joint j moves,
 
     H_bb = S_b^T (sum_i I_i) S_b,  H_bj = S_b^T Ic_j S_j,
-    H_jl = S_j^T Ic_l S_l (j at or above l, 0 on separate branches),
+    H_jl = S_j^T Ic_l S_l (l at or below j; 0 on separate branches),
+    dS_j/dq_k = S_k x S_j (j below k),  dIc'/dq_k = crf(S_k) Ic' - Ic' crm(S_k),
+    M = H_mm - H_bm^T A,  A = H_bb^-1 H_bm,
+    dM_k = dH_mm - dH_bm^T A - A^T dH_bm + A^T dH_bb A    (docs/equations.md E5-E9),
 
-and a change of q_k turns everything joint k moves about S_k:
-dS_j/dq_k = S_k x S_j for a joint j below k, and dIc/dq_k = crf(S_k) Ic' - Ic' crm(S_k)
-for the part Ic' of a composite that joint k moves (so d(Ic_j S_j)/dq_k =
-S_k x* (Ic_j S_j) when joint k moves joint j). The reduced model is then
-M = H_mm - H_bm^T A, A = H_bb^-1 H_bm, with
-dM_k = dH_mm - dH_bm^T A - A^T dH_bm + A^T dH_bb A (docs/equations.md E5-E9), and
-C' the Christoffel form of dM (floating_model.FloatingBaseModel.Coriolis)."""
+Ic' the part of a composite that joint k moves, and C' the Christoffel form of dM."""
 from typing import Tuple
 
 import numpy as np
@@ -52,23 +44,16 @@ def _skew(v):
 def forward_kinematics(parent: np.ndarray, joint: np.ndarray, X_PF: np.ndarray,
                        axis: np.ndarray, X_MC: np.ndarray, q: np.ndarray
                        ) -> Tuple[np.ndarray, np.ndarray]:
-    """Every body's pose and every joint's motion subspace, the base at the identity.
-
-    The products are matmul's sums, written into work arrays (no allocation per
-    node).
+    """(X_WC (nodes, 4, 4), S (n, 6)): every body's pose and every joint's motion subspace
+    S_j = (a_j; p_j x a_j) about O in world axes, the base at the identity.
 
     Args:
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
-            [m].
+        X_PF: Each joint's frame F in its parent body's frame (nodes, 4, 4) [m].
         axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
-        q: The joint angles (n) [rad].
-
-    Returns:
-        (X_WC (nodes, 4, 4), S (n, 6)), S_j = (a_j; p_j x a_j) about the origin, in
-            world axes."""
+        q: The joint angles (n) [rad]."""
     nodes, n = parent.shape[0], q.shape[0]
     X = np.empty((nodes, 4, 4))
     S = np.zeros((n, 6))
@@ -123,10 +108,8 @@ def _rotation_into(axis, angle, R):
 
 @njit(cache=True)
 def _spatial_inertias(X, mass, moment, inertia):
-    """Each body's spatial inertia about O in world axes (zero for a massless body),
-    from its mass, first moment m c and rotational inertia about its origin (body
-    frame): [[R I_c R^T - m [c]x^2, m [c]x], [-m [c]x, m 1]], c = p + R c_B, I_c the
-    inertia about the centre of mass."""
+    """Each body's spatial inertia about O in world axes (zero if massless):
+    [[R I_c R^T - m [c]x^2, m [c]x], [-m [c]x, m 1]], c = p + R c_B."""
     nodes = X.shape[0]
     out = np.zeros((nodes, 6, 6))
     I_c, RI = np.empty((3, 3)), np.empty((3, 3))
@@ -192,32 +175,23 @@ def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
                                 derivatives: bool
                                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
                                            np.ndarray]:
-    """The plant's mass matrix at the base's identity pose, and its derivatives.
+    """(H (nb + n)^2 in (base; joints) order, dH[k] = dH/dq_k, X, S (forward_kinematics)):
+    the plant's mass matrix at the base's identity pose, and its derivatives.
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
-            [m].
+        X_PF: Each joint's frame F in its parent body's frame (nodes, 4, 4) [m].
         axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
         joint_below: True where joint k moves joint j's axis, j != k (n, n).
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
-        moment: Each body's first moment m c about its origin, in its frame
-            (nodes, 3) [kg m].
-        inertia: Each body's rotational inertia about its origin, in its frame
-            (nodes, 3, 3) [kg m^2].
+        moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
         q: The joint angles (n) [rad].
-        derivatives: Whether to compute dH (zero otherwise).
-
-    Returns:
-        (H (nb + n)^2, dH (n, nb + n, nb + n), X (nodes, 4, 4), S (n, 6)), the
-            plant's mass matrix in (base; joints) order, its derivatives by q
-            (dH[k] = dH/dq_k), the bodies' poses and the joints' motion subspaces."""
+        derivatives: Whether to compute dH (zero otherwise)."""
     n, nodes, nb = q.shape[0], parent.shape[0], base_subspace.shape[1]
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     I = _spatial_inertias(X, mass, moment, inertia)
@@ -332,33 +306,24 @@ def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
                   below: np.ndarray, joint_below: np.ndarray, mass: np.ndarray,
                   moment: np.ndarray, inertia: np.ndarray, q: np.ndarray,
                   derivatives: bool = True) -> tuple:
-    """The reduced model and what the Jacobians and their rates need.
-
+    """(M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S): the reduced
+    model and what the Jacobians and their rates need;
     dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A).
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
-            [m].
+        X_PF: Each joint's frame F in its parent body's frame (nodes, 4, 4) [m].
         axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
         joint_below: True where joint k moves joint j's axis, j != k (n, n).
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
-        moment: Each body's first moment m c about its origin, in its frame
-            (nodes, 3) [kg m].
-        inertia: Each body's rotational inertia about its origin, in its frame
-            (nodes, 3, 3) [kg m^2].
+        moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
         q: The joint angles (n) [rad].
-        derivatives: Whether to compute dM and dA (zero otherwise).
-
-    Returns:
-        (M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n),
-            X (nodes, 4, 4), S (n, 6)), X and S as forward_kinematics gives them."""
+        derivatives: Whether to compute dM and dA (zero otherwise)."""
     n, nb = q.shape[0], base_subspace.shape[1]
     H, dH, X, S = mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis,
                                               X_MC, below, joint_below, mass, moment,
@@ -392,14 +357,11 @@ def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
 
 @njit(cache=True)
 def christoffel(dM: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-    """C'(q, qdot)_ij = sum_k (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qdot_k / 2.
+    """C' (n, n): C'(q, qdot)_ij = sum_k (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qdot_k / 2.
 
     Args:
         dM: dM[k] = dM/dq_k (n, n, n).
-        qdot: The joint rates (n) [rad/s].
-
-    Returns:
-        C' (n, n)."""
+        qdot: The joint rates (n) [rad/s]."""
     n = qdot.shape[0]
     C = np.zeros((n, n))
     for i in range(n):
@@ -415,24 +377,18 @@ def christoffel(dM: np.ndarray, qdot: np.ndarray) -> np.ndarray:
 def point_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                    X: np.ndarray, S: np.ndarray, A: np.ndarray, node: int,
                    p_W: np.ndarray) -> np.ndarray:
-    """The generalized Jacobian J_bar of a point fixed in a body.
-
-    (omega; v) of the point = J_bar qdot at zero momentum.
+    """The generalized Jacobian J_bar (6, n) of a body's point: (omega; v) = J_bar qdot at
+    zero momentum.
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
         X: The bodies' poses (nodes, 4, 4) (forward_kinematics; unused here).
         S: The joints' motion subspaces (n, 6) (forward_kinematics).
         A: H_bb^-1 H_bm (nb, n) (reduced_model).
         node: The body's node.
-        p_W: The point (3) [m], in the world, the base at the identity.
-
-    Returns:
-        J_bar (6, n)."""
+        p_W: The point (3) [m], in the world, the base at the identity."""
     n, nb = S.shape[0], base_subspace.shape[1]
     J = np.zeros((6, nb + n))
     J[:, :nb] = base_subspace
@@ -453,22 +409,14 @@ def point_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
 def base_pose_and_twist(base_subspace: np.ndarray, base_pose: np.ndarray,
                         base_velocity: np.ndarray
                         ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The base's pose and its twist in its own axes, from its joint's coordinates.
-
-    A planar joint's (x, y, theta) and (vx, vy, omega) in the world, or a
-    quaternion floating joint's (qw, qx, qy, qz, x, y, z) and (omega, v) in the
-    world (the quaternion normalized, as Drake's RotationMatrix does).
+    """The base's pose and twist in its own axes, (R_WB (3, 3), p_WB (3) [m],
+    omega_B (3) [rad/s], v_B (3) [m/s]), from its joint's coordinates (the quaternion
+    normalized, as Drake's RotationMatrix does).
 
     Args:
-        base_subspace: S_b (6, nb): its number of columns tells a planar base (3)
-            from a free one (6).
-        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
-            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
-        base_velocity: The base joint's velocities in the world: a planar
-            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
-
-    Returns:
-        (R_WB (3, 3), p_WB (3) [m], omega_B (3) [rad/s], v_B (3) [m/s])."""
+        base_subspace: S_b (6, nb): nb = 3 for a planar base, 6 for a free one.
+        base_pose: Planar (x, y, theta) [m, rad] or floating (qw, qx, qy, qz, x, y, z) [m].
+        base_velocity: Planar (vx, vy, omega) or floating (omega, v), world [rad/s, m/s]."""
     R, p = np.zeros((3, 3)), np.zeros(3)
     omega_W, v_W = np.zeros(3), np.zeros(3)
     if base_subspace.shape[1] == 3:
@@ -502,10 +450,8 @@ def base_pose_and_twist(base_subspace: np.ndarray, base_pose: np.ndarray,
 def body_twist_into(V: np.ndarray, omega_B: np.ndarray, v_B: np.ndarray,
                     S: np.ndarray, qdot: np.ndarray, below: np.ndarray,
                     node: int) -> None:
-    """V = (omega; v_O) of a body, written into V.
-
-    The base's twist (omega_B; v_B) plus S_k qdot_k of every joint k that moves it
-    (about the base's origin, in its axes).
+    """V = (omega; v_O) of a body: the base's (omega_B; v_B) plus S_k qdot_k of every joint
+    k moving it, about the base's origin in its axes.
 
     Args:
         V: The output (6), overwritten.
@@ -514,8 +460,7 @@ def body_twist_into(V: np.ndarray, omega_B: np.ndarray, v_B: np.ndarray,
         S: The joints' motion subspaces (n, 6) (forward_kinematics).
         qdot: The joint rates (n) [rad/s].
         below: True where joint k moves the node (n, nodes).
-        node: The body's node.
-    """
+        node: The body's node."""
     for r in range(3):
         V[r], V[3 + r] = omega_B[r], v_B[r]
     for k in range(qdot.shape[0]):
@@ -531,42 +476,30 @@ def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                    inertia: np.ndarray, base_pose: np.ndarray,
                    base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
                    ) -> np.ndarray:
-    """p (n), the joint rows of H(q) v.
+    """p (n), the joint rows of H(q) v, about the base's origin in its axes (so independent
+    of the base's pose):
 
         p_j = S_j . sum_{bodies C joint j moves} h_C,   h_C = (L_C; P_C),
         V_C = (omega; v_O) = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
         P_C = m (v_O + omega x c),  L_C = R I_c R^T omega + c x P_C,
 
-    (c the body's centre of mass, I_c its inertia about it in its own axes, R its
-    orientation), everything about the base's origin in its axes (the base at
-    the identity: p does not depend on the base's pose, only on its twist in its
-    own axes). Scalar loops: no allocation per body.
+    c the body's centre of mass, I_c its inertia about it in body axes, R its orientation.
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace: nb = 6 for a free base, 3 for a planar
-            one).
+        base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
         parent: Each node's parent node (nodes,), -1 for the base (node 0).
         joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
-        X_PF: Each inboard joint's frame F in its parent body's frame (nodes, 4, 4)
-            [m].
+        X_PF: Each joint's frame F in its parent body's frame (nodes, 4, 4) [m].
         axis: Each joint's unit axis in its frame F (nodes, 3) (zero for a weld).
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4) [m].
         below: True where joint k moves the node (n, nodes).
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
-        moment: Each body's first moment m c about its origin, in its frame
-            (nodes, 3) [kg m].
-        inertia: Each body's rotational inertia about its origin, in its frame
-            (nodes, 3, 3) [kg m^2].
-        base_pose: The base joint's positions: a planar joint's (x, y, theta) [m,
-            rad] or a quaternion floating joint's (qw, qx, qy, qz, x, y, z).
-        base_velocity: The base joint's velocities in the world: a planar
-            joint's (vx, vy, omega) or a floating joint's (omega, v) [rad/s, m/s].
+        moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
+        inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
+        base_pose: Planar (x, y, theta) [m, rad] or floating (qw, qx, qy, qz, x, y, z) [m].
+        base_velocity: Planar (vx, vy, omega) or floating (omega, v), world [rad/s, m/s].
         q: The joint angles (n) [rad].
-        qdot: The joint rates (n) [rad/s].
-
-    Returns:
-        p (n)."""
+        qdot: The joint rates (n) [rad/s]."""
     n, nodes = q.shape[0], parent.shape[0]
     X, S = forward_kinematics(parent, joint, X_PF, axis, X_MC, q)
     _, _, omega_B, v_B = base_pose_and_twist(base_subspace, base_pose, base_velocity)

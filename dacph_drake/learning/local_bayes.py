@@ -1,5 +1,5 @@
-"""The local Bayesian learner (``learner.model: local_bayes``): per joint i, the
-port relation's row
+"""The local Bayesian learner (``learner.model: local_bayes``): per joint i, the port
+relation's row
 
     tau_i = sum_j B_ij(x) u_j - D_i(x) qdot_i + d_i(t)
 
@@ -7,35 +7,20 @@ with every entry a local linear model around the newest sample (t_now, p_now),
 
     X(x) = X + X_t (t - t_now) + X_p (p_i - p_now,i),      X in {B_i1..B_in, D_i},
 
-its drift along the trajectory and its slope in the joint's momentum, fitted
-by Bayesian linear regression to the band-passed products of the port signals with
-those features (LocalBayesChannels: the band-pass of B(x) u is not B(x) times the
-band-pass of u when B moves, the band-pass of each product is exact), on the
-samples since the row's last restart, with exponential forgetting. The band-pass
-filter's memory of whatever the port did before the window (the start from rest, a
-change of B, the disturbance's onset) is the cascade's free response from its state
-at the window's start, a known span projected out of the regression
-(kernels.bayes.project_out): a window is consistent from its first sample on, and a
-change costs a restart, not a wait for the filter to forget.
+fitted by Bayesian linear regression, with exponential forgetting, to the band-passed
+products of the port signals with those features (LocalBayesChannels: exact when B
+moves) on the samples since the row's last restart. The filter's memory of what came
+before the window is a known span projected out (kernels.bayes.project_out): a window is
+consistent from its first sample, and a change costs a restart, not a wait. The
+residual's variance is calibrated in kernels.bayes.fit_row.
 
-Calibration (kernels.bayes.fit_row): the residual's variance is inflated by its
-correlation time and by the degrees of freedom spent; a floor adds the coefficient
-change that alone explains the residual (the port observer's systematic error); the
-local linear model's own error is bounded by the curvature setting over the
-window's spread in time. A row whose newest residual jumps (learner.change_ratio
-over the rest of the window, above learner.change_floor relative to its signal)
-restarts at the newest samples, and so does one whose fit moves from its previous
-fit's prediction by more than the credible set's quantile of their combined sd (a
-fit through an undetected switch can explain the mixed window with wrong
-coefficients and a small residual; a row's first fit after a restart is published
-only once the next update confirms it), or whose actuator gain or damping is credibly
-below zero; all rows restart when the LHS model changes (learner.model_change).
-
-What is published (LocalModel): an entry is the learned one where the data move it
-from the prior by more than ``margin`` times its credible half-width, so that with
-the interval right the learned entry is no worse than the prior; every other entry
-is the prior's, with the learned interval (or, while the row is not determined, the
-prior's range) around it."""
+A row restarts when its newest residual jumps (learner.change_ratio, change_floor), when
+its fit leaves the previous fit's prediction by more than the credible set's quantile (a
+fit through an undetected switch can look good), or when its gain or damping is credibly
+below zero; all rows restart when the LHS model changes. An entry is published as learned
+where the data move it from the prior by more than ``margin`` credible half-widths, so it
+is no worse than the prior; else at the prior, with the learned interval (or, while the
+row is not determined, the prior's range) around it."""
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Sequence, Tuple
@@ -44,7 +29,7 @@ import numpy as np
 
 from dacph_drake.identification import BandPassCascade
 from dacph_drake.kernels.bayes import fit_rows, row_design
-from dacph_drake.learning import (Channels, LearnerTrial, PortEstimate,
+from dacph_drake.learning.protocol import (Channels, LearnerTrial, PortEstimate,
                                    PortLearner)
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.scenario import Learner, LocalBayes
@@ -58,17 +43,14 @@ HISTORY, MIN_HISTORY = 10, 3
 
 
 class LocalBayesChannels(Channels):
-    """The band-passed channels of the local model, per trial (n^2 + 6 n):
+    """The band-passed channels of the local model, per trial (n^2 + 6 n), of the port
+    sample's u, qdot, tau (anti-aliased by the observer) and p, at its time t [s]:
 
         [u_j (n), u_j t (n), u_j p_i (n^2, index i n + j), qdot_i (n), qdot_i t (n),
          qdot_i p_i (n), tau_i (n)]
 
-    of the port sample's u, qdot, tau (anti-aliased by the observer) and its p, at
-    the sample's time t [s].
-
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         self.n = n
@@ -79,14 +61,11 @@ class LocalBayesChannels(Channels):
             np.arange(5 * n + n * n, 6 * n + n * n)])
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
-        """Each trial's channels (the layout above) from its port sample.
+        """Each trial's channels (trials, size; the layout above) from its port sample.
 
         Args:
             t: The sample's time [s].
-            samples: Each trial's identification.PortSample (trials, 5 n).
-
-        Returns:
-            The channels (trials, size)."""
+            samples: Each trial's identification.PortSample (trials, 5 n)."""
         n = self.n
         p, qdot, u, tau = (samples[:, k * n:(k + 1) * n] for k in range(1, 5))
         return np.concatenate([u, t * u, (p[:, :, None] * u[:, None, :]).reshape(
@@ -94,20 +73,18 @@ class LocalBayesChannels(Channels):
 
 
 class LocalModelLayout:
-    """The published vector of the local model (LocalModel), per trial, with
-    k = n^2 + n quantities [vec(B), diag(D)]:
+    """The published vector of the local model per trial, for the k = n^2 + n quantities
+    [vec(B), diag(D)]:
 
         [t_ref, p_ref (n), value (k), drift (k) [1/s], slope (k) [per unit p_i],
          interval below, above (k each), set below, above (k each), learned (k)]
 
-    value + drift (t - t_ref) + slope (p_i - p_ref,i) is the estimate at (t, p)
-    (row i's momentum for B_ij and D_i); the interval (learner.bayes.credible_level)
-    and the credible set (certificate_level) are [estimate - below, estimate +
-    above]; learned is 1 where the entry is the learner's, 0 where the prior's.
+    The estimate at (t, p) is value + drift (t - t_ref) + slope (p_i - p_ref,i); the
+    interval (credible_level) and set (certificate_level) are [estimate - below,
+    estimate + above]; learned is 1 where the entry is the learner's, 0 the prior's.
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         k = n * n + n
@@ -125,8 +102,7 @@ class LocalModel:
     """Evaluates a batch's published local models (LocalModelLayout).
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
     has_uncertainty = True
 
     def __init__(self, n: int):
@@ -137,28 +113,22 @@ class LocalModel:
         self._row = np.concatenate([np.repeat(np.arange(n), n), np.arange(n)])
 
     def Stack(self, models: Sequence["LocalModel"]) -> "LocalModel":
-        """The batch's evaluator (learning.PublishedModel.Stack).
+        """The batch's evaluator (learning.PublishedModel.Stack): this one, which serves any
+        batch of its n.
 
         Args:
-            models: The batch's trials' models.
-
-        Returns:
-            This one: it serves any batch of its n."""
+            models: The batch's trials' models."""
         return self
 
     def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
                  ) -> PortEstimate:
-        """Every trial's estimate at its state (PublishedModel.Estimate).
+        """Every trial's estimate, a PortEstimate, at its state (PublishedModel.Estimate).
 
         Args:
             published: Each trial's published vector (trials, size).
             t: The time [s].
-            q: Each trial's joint angles (trials, n) [rad] (unused: the model's
-                dependence on the state is through its drift and momentum).
-            p: Each trial's momenta (trials, n).
-
-        Returns:
-            The PortEstimate."""
+            q: Each trial's joint angles (trials, n) [rad] (unused).
+            p: Each trial's momenta (trials, n)."""
         L, n = self.layout, self.n
         trials = published.shape[0]
         point = (published[:, L.value] + published[:, L.drift]
@@ -177,15 +147,12 @@ class LocalModel:
 
 
 def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
-    """The cascade's output from each unit state with zero input.
+    """The cascade's output (length, sections) from each unit state with zero input:
+    column s from state e_s, row 0 the first output after it.
 
     Args:
         cascade: The band-pass cascade.
-        length: The number of samples.
-
-    Returns:
-        (length, sections): column s is the output from state e_s, sample 0 the
-            first output after the state (as BandPassCascade.Step gives it)."""
+        length: The number of samples."""
     sections = cascade.num_sections
     state = np.eye(sections)               # one column per unit state
     out = np.empty((length, sections))
@@ -196,18 +163,14 @@ def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
 
 def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
                 ) -> np.ndarray:
-    """The prior's range of every quantity [vec(B), diag(D)].
-
-    B_ii in gain_range times B0_i, B_ij (i != j) within entry_coupling
-    sqrt(B0_i B0_j), D_i in damping_range times D0_i (learner.bayes).
+    """The prior's range [lower, upper] (2, n^2 + n) of every quantity [vec(B), diag(D)]:
+    B_ii in gain_range B0_i, |B_ij| <= entry_coupling sqrt(B0_i B0_j), D_i in damping_range
+    D0_i (learner.bayes).
 
     Args:
         bayes: The local Bayesian learner's settings.
         B0: The prior's B0 (its diagonal, n).
-        D0: The prior's D0 (its diagonal, n).
-
-    Returns:
-        [lower, upper] (2, n^2 + n)."""
+        D0: The prior's D0 (its diagonal, n)."""
     B0, D0 = np.asarray(B0, float), np.asarray(D0, float)
     n = len(B0)
     coupling = entry_coupling(bayes, n) * np.sqrt(B0[:, None] * B0[None, :])
@@ -220,40 +183,28 @@ def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
 
 
 def entry_coupling(bayes: LocalBayes, n: int) -> float:
-    """The prior's bound (and sd) of one cross-coupling |B_ij| / sqrt(B0_i B0_j):
-    bayes.coupling, a bound on a row's total, shared by its n - 1 entries, so that
-    the set's Gershgorin radius (kernels.certificate) does not grow with the number
-    of joints.
+    """The prior's per-entry bound (and sd) of one |B_ij| / sqrt(B0_i B0_j): bayes.coupling
+    bounds a row's total, shared by its n - 1 entries, so the Gershgorin radius does not
+    grow.
 
     Args:
         bayes: The local Bayesian learner's settings.
-        n: The number of joints.
-
-    Returns:
-        The per-entry bound."""
+        n: The number of joints."""
     return bayes.coupling / max(n - 1, 1)
 
 
 def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                     bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
                     ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What the published estimates say about the physical B~ and D~.
+    """What the published estimates say about the physical B~ and D~: (estimate, lower,
+    upper), each (T, n^2 + n).
 
-    The port the learner observes is tau_obs = p_dot + dH/dq of the LHS model, so
-    with the model's mass matrix M_hat = (I + E) M~ (to first order) it learns
-    (I + E) B~ and (I + E) D~: port data cannot tell an actuator's gain from the
-    arm's inertia, and momentum data do not reveal E when a link's length is off
-    (the identifier absorbs the length into the parent's inertial parameters). With
-    E's entries independent of standard deviation eps = bayes.model_error,
-    B~_ij = B_ij - sum_k E_ik B_kj; row i's damping sees every joint's through
-    E_ik D_k qdot_k, which leaks into D_i up to sum_k E_ik D_k when the joints move
-    together (a light joint beside heavily damped ones: the leak can exceed D~_i
-    itself). So each half-width grows in quadrature by z eps ||B_:j|| (B_ij) or
-    z eps ||D|| (D_i), D's norm over the larger of each estimate and its prior (a
-    damping collapsed to zero does not shrink its own error), z
-    the normal quantile of bayes.credible_level; an entry that then differs from
-    the prior by no more than bayes.margin half-widths is claimed at the prior,
-    its interval stretched to hold it.
+    The port is tau_obs = p_dot + dH/dq of the LHS model: with M_hat = (I + E) M~ the
+    learner sees (I + E) B~ and (I + E) D~ (port data cannot tell gain from inertia).
+    With E's entries of sd eps = bayes.model_error, each half-width grows in quadrature
+    by z eps ||B_:j|| (B_ij) or z eps ||D|| (D_i: damping leaks across joints through E),
+    z the normal quantile of credible_level; an entry within bayes.margin half-widths of
+    the prior is claimed at the prior.
 
     Args:
         point: The published estimates [vec(B), diag(D)] (T, n^2 + n).
@@ -261,10 +212,7 @@ def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
         upper: Their intervals' upper ends (T, n^2 + n).
         bayes: The learner's settings.
         B0: The prior's B0 (its diagonal, n).
-        D0: The prior's D0 (its diagonal, n).
-
-    Returns:
-        (estimate, lower, upper) about B~ and D~ (each T, n^2 + n)."""
+        D0: The prior's D0 (its diagonal, n)."""
     n = len(B0)
     z = NormalDist().inv_cdf(0.5 + 0.5 * bayes.credible_level)
     prior = np.concatenate([np.diag(np.asarray(B0, float)).reshape(-1),
@@ -285,26 +233,20 @@ def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
 
 
 def student_quantile(z: float, dof: float) -> float:
-    """Student's t quantile with ``dof`` degrees of freedom at the normal quantile
-    z (the Cornish-Fisher expansion to third order in 1 / dof; within 2 % of the
-    exact quantile from 2 degrees of freedom on at the 0.95 and 0.995 levels).
+    """Student's t quantile with ``dof`` degrees of freedom at the normal quantile z
+    (the Cornish-Fisher expansion to third order in 1 / dof).
 
     Args:
         z: The standard normal quantile.
-        dof: The degrees of freedom, >= 2.
-
-    Returns:
-        The quantile."""
+        dof: The degrees of freedom, >= 2."""
     z3, z5, z7 = z ** 3, z ** 5, z ** 7
     return (z + (z3 + z) / (4 * dof) + (5 * z5 + 16 * z3 + 3 * z) / (96 * dof ** 2)
             + (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * dof ** 3))
 
 
 class _RowState:
-    """The layout of one row's learner state: [window start [s], residuals seen,
-    the last HISTORY relative residuals, the previous fit's time [s] (-inf: none)
-    and momentum p_i, its coefficients [const, drift, slope] per entry (3 (n + 1))
-    and their sd (3 (n + 1))]."""
+    """One row's state: [window start [s], residuals seen, last HISTORY relative residuals,
+    previous fit's time [s] (-inf: none), its p_i, [const, drift, slope] per entry, sd]."""
 
     def __init__(self, n: int):
         self.fit_time, self.fit_momentum = 2 + HISTORY, 3 + HISTORY
@@ -315,9 +257,8 @@ class _RowState:
 
 @dataclass
 class _Prior:
-    """One trial's prior of every row: mean and sd of [const, drift, slope] per
-    entry (n, 3 (n + 1)), the entries' scales (n, n + 1) and the prior's range of
-    every quantity (2, n^2 + n)."""
+    """One trial's prior per row: mean and sd of [const, drift, slope] per entry, the
+    entries' scales (n, n + 1) and every quantity's range (2, n^2 + n)."""
     mean: np.ndarray
     sd: np.ndarray
     scale: np.ndarray
@@ -325,18 +266,14 @@ class _Prior:
 
 
 class LocalBayesLearner(PortLearner):
-    """The local Bayesian learner of a batch (module docstring; learning.PortLearner).
-
-    Its state per trial is, per row, _RowState: its window start [s] (its last
-    restart), its change test's recent relative residuals and its previous fit.
+    """The local Bayesian learner of a batch; its state per trial is, per row, _RowState
+    (window start, change-test history, previous fit).
 
     Args:
-        settings: The learner's settings (its ``bayes`` section, the band, the
-            forgetting, the window, the change detection).
+        settings: The learner's settings (``bayes``, band, forgetting, window, changes).
         trials: Each trial's LearnerTrial.
         period: The training period [s].
-        sample_period: The sampling period [s].
-    """
+        sample_period: The sampling period [s]."""
 
     def __init__(self, settings: Learner, trials: Sequence[LearnerTrial], period: float,
                  sample_period: float):
@@ -385,8 +322,7 @@ class LocalBayesLearner(PortLearner):
                       range=prior_range(bayes, B0, D0))
 
     def _PriorVector(self, prior: _Prior) -> np.ndarray:
-        """The published vector of the prior: (B0, D0), no drift or slope, the
-        prior's range as interval and set."""
+        """The prior's published vector: (B0, D0), no drift or slope, its range around."""
         L, n = self._layout, self.n
         out = np.zeros(self.model.size)
         value = np.concatenate([prior.mean.reshape(n, n + 1, 3)[:, :n, 0].reshape(-1),
@@ -397,8 +333,7 @@ class LocalBayesLearner(PortLearner):
         return out
 
     def InitialState(self) -> np.ndarray:
-        """Every row's window starts with the run, its change test has seen
-        nothing (PortLearner.InitialState)."""
+        """Every row's window starts with the run; its change test has seen nothing."""
         state = np.zeros((self._trials, self.n, self._row_state.size))
         state[:, :, 0] = state[:, :, self._row_state.fit_time] = -np.inf
         return state.reshape(self._trials, -1)
@@ -410,18 +345,15 @@ class LocalBayesLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Fits every trial's rows, oldest sample first, and publishes.
+        """Fits every trial's rows, oldest sample first, and publishes: (published, log
+        rows, state), as PortLearner.Update.
 
         Args:
             t: The time [s].
             rows: Each trial's buffered samples, oldest first [t, q, p, channels].
             state: Each trial's state (trials, state_size).
-            model_changed: Whether each trial's LHS model changed since the last
-                update.
-            learning: False publishes the prior (the dac-nominal ablation).
-
-        Returns:
-            (published, log rows, state), as PortLearner.Update."""
+            model_changed: Whether each trial's LHS model changed since the last update.
+            learning: False publishes the prior (the dac-nominal ablation)."""
         published = self._prior_vectors.copy()
         logs = np.zeros((self._trials, LearnerLog().size))
         state = state.reshape(self._trials, self.n, -1).copy()
@@ -440,10 +372,7 @@ class LocalBayesLearner(PortLearner):
 
     def _Fit(self, trial: int, t: float, rows: np.ndarray, state: np.ndarray
              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """One trial's fit: its published vector, its rows' fitted coefficients
-        (the prior's where not determined), which rows are determined and how
-        many restarted (their newest samples broke their window's relation;
-        ``state``, (n, _RowState.size), updated in place)."""
+        """One trial's fit: (published, fitted coefficients, determined rows, restarts)."""
         n, bayes = self.n, self._bayes
         prior = self._priors[trial]
         P = 3 * (n + 1)
@@ -486,14 +415,8 @@ class LocalBayesLearner(PortLearner):
 
     def _Changed(self, row: np.ndarray, surprise: float, relative: float,
                  remember: bool) -> bool:
-        """The change test of one row (``row`` = its state, updated in place). The
-        newest samples' relative residual above bayes.inconsistency is a change
-        (the window's relation does not hold, whatever came before); so is one
-        above bayes.change_floor when the newest samples, predicted by the fit to
-        the rest of the window, miss by more than learner.change_ratio predictive
-        sd (RMS, ``surprise``) or their relative residual exceeds
-        learner.change_ratio times the median of the row's recent ones;
-        otherwise the relative residual joins the history (with ``remember``)."""
+        """One row's change test (``row`` in place): a residual above bayes.inconsistency,
+        or above change_floor and change_ratio predictive sd or times the recent median."""
         if not np.isfinite(relative):
             return False
         if relative > self._bayes.inconsistency:
@@ -510,9 +433,9 @@ class LocalBayesLearner(PortLearner):
         return False
 
     def _EntrySd(self, trial, t, times, starts, variance) -> np.ndarray:
-        """Each row's entries' sd (n, n + 1): the posterior's, and the local linear
-        model's own error over the row's window, half the curvature bound times the
-        weighted mean of (t_k - t_now)^2, per unit of the entry's scale."""
+        """Each row's entries' sd (n, n + 1): the posterior's and the local model's error,
+        curvature / 2 x the weighted mean of (t_k - t_now)^2, per unit of the entry's
+        scale."""
         n, bayes = self.n, self._bayes
         scale = self._priors[trial].scale
         sd = np.empty((n, n + 1))
@@ -525,13 +448,8 @@ class LocalBayesLearner(PortLearner):
         return sd
 
     def _Jumped(self, state, t, newest, mean, variance, sd) -> np.ndarray:
-        """Which rows' fits moved from their previous fit's prediction at (t, p)
-        by more than the credible set's quantile of the prediction's sd (the
-        previous fit's entry sd, its drift's and slope's over the time and momentum
-        moved since) and the new fit's, in some entry: the window now holds a
-        change the residual tests did not resolve (a least-squares fit through a
-        switch can explain the mixed window with wrong coefficients and a small
-        residual)."""
+        """Which rows' fits left their previous fit's prediction at (t, p) by more than the
+        credible set's quantile of the combined sd, in some entry."""
         S, n = self._row_state, self.n
         p = newest[1 + n:1 + 2 * n]
         previous = state[:, S.fit_time]
@@ -548,9 +466,7 @@ class LocalBayesLearner(PortLearner):
         return jumped
 
     def _Unphysical(self, mean, sd, dof) -> np.ndarray:
-        """Which rows' fits put their own actuator's gain B_ii or their damping D_i
-        below zero beyond the credible interval: no port relation of the robot
-        does that, so the window holds something else (a transient)."""
+        """Rows whose fit puts B_ii or D_i credibly below zero: a transient."""
         n = self.n
         constant = mean.reshape(n, n + 1, 3)[:, :, 0]
         quantile = np.array([student_quantile(self._z_interval, max(d, self._bayes.min_dof))
@@ -560,9 +476,7 @@ class LocalBayesLearner(PortLearner):
         return (upper[rows, rows] < 0.0) | (upper[:, n] < 0.0)
 
     def _RememberFits(self, state, t, newest, mean, variance, sd, determined) -> None:
-        """Keeps each determined row's fit for the next update's jump test (the
-        others have none): its coefficients, their sd (the constants' with the
-        local model's error) and the time and momentum they refer to."""
+        """Keeps each determined row's fit, sd, time and momentum for the next jump test."""
         S, n = self._row_state, self.n
         state[:, S.fit_time] = np.where(determined, t, -np.inf)
         state[:, S.fit_momentum] = newest[1 + n:1 + 2 * n]
@@ -572,8 +486,7 @@ class LocalBayesLearner(PortLearner):
         state[:, S.fit_spread] = spread.reshape(n, -1)
 
     def _Restart(self, state, rows, t) -> None:
-        """Restarts rows (a mask) at the newest samples: their window, change test
-        history and previous fit start anew (``state`` in place)."""
+        """Restarts the masked rows at the newest samples (``state`` in place)."""
         state[rows, 0] = t + 1e-9
         state[rows, 1] = 0.0
         state[rows, self._row_state.fit_time] = -np.inf
@@ -587,11 +500,8 @@ class LocalBayesLearner(PortLearner):
             row[1] = count + 1
 
     def _Publish(self, trial, t, newest, mean, sd, determined, dof):
-        """The published vector from the rows' posteriors and entry sd (_EntrySd;
-        module docstring); the intervals are Student's t at each row's residual
-        degrees of freedom (the residual's variance is itself estimated from the
-        window). A damping fitted below zero is published at the prior with the
-        prior's range."""
+        """The published vector from the rows' posteriors and entry sd (Student's t at each
+        row's residual dof); a damping fitted below zero keeps the prior and its range."""
         L, n, bayes = self._layout, self.n, self._bayes
         prior = self._priors[trial]
         out = self._prior_vectors[trial].copy()
@@ -629,11 +539,8 @@ class LocalBayesLearner(PortLearner):
         return out
 
     def _Log(self, trial, t, rows, published, fitted, determined, log):
-        """The log row: the fitted model's and the prior's weighted squared residual
-        on the buffer (recency-weighted as the regression, the whole buffer: a
-        change shows), beta_hat = 1 + RMS residual / RMS tau, holding (no row
-        determined), whether some published quantity is learned, the share of
-        quantities published at the prior."""
+        """The log row: fitted and prior weighted squared residuals on the buffer, beta_hat,
+        holding, whether any quantity is learned, the share at the prior."""
         n, layout = self.n, LearnerLog()
         times = rows[:, 0]
         w = np.exp((times - t) / self._bayes.forgetting)

@@ -1,28 +1,21 @@
-"""The paper's physics-informed network as a learning.PortLearner
-(``learner.model: network``): identification.RhsIdentifier fits network.RhsNetwork
-(docs/equations.md E33-E35) to the window of band-passed port samples
-[q, p, qdot, u, tau_obs] (regularized mode) or raw ones (plain mode, the paper's).
+"""The paper's physics-informed network as a learning.PortLearner (``learner.model:
+network``): identification.RhsIdentifier fits network.RhsNetwork (docs/equations.md
+E33-E35) to the window of port samples [q, p, qdot, u, tau_obs], band-passed
+(regularized mode) or raw (plain mode, the paper's).
 
-In regularized mode a ChangeDetector watches the relative residual of the newest
-samples and pauses training after an abrupt change (settings.change_*), for
-settings.start_hold seconds from the start and after the LHS model changed
-(settings.model_change); a fit needs settings.min_window seconds of samples in the
-window, and the first fit of the run starts from the window's best constant B
-(settings.warm_start, RhsIdentifier.WarmStart). With settings.prior_fallback the
-published weights are the prior's (B_hat = B0, D_hat = D0) whenever the network does
-not beat them on the samples since the last change or on the last period's
-(_NetworkPublished). It publishes a point estimate: no credible set (the RHS
-integrator adopts it by its trust band, rhs.trust_ratio).
-
-The torch modules and Adam's moments live in this object, not in the Context: a
-diagram with this learner simulates one trajectory at a time (build one diagram per
-run, as the package's builders do)."""
+In regularized mode a ChangeDetector pauses training after an abrupt change, at the start
+(settings.start_hold) and after an LHS model change; a fit needs settings.min_window
+seconds of samples, and the run's first fit starts from the window's best constant B
+(settings.warm_start). With settings.prior_fallback the prior (B0, D0) is published
+whenever the network does not beat it. The estimate is a point estimate, no credible set.
+The torch modules and Adam's moments live in this object, not in the Context: one
+diagram per run."""
 from typing import Sequence, Tuple
 
 import numpy as np
 
 from dacph_drake.identification import ChangeDetector, NewestRows, RhsIdentifier
-from dacph_drake.learning import Channels, LearnerTrial, PortLearner
+from dacph_drake.learning.protocol import Channels, LearnerTrial, PortLearner
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.network import ExportedNetwork, NetworkStack
 from dacph_drake.scenario import Learner
@@ -33,8 +26,7 @@ class PortSampleChannels(Channels):
     (identification.PortSample), so that the filtered sample keeps its layout.
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         self.n = n
@@ -43,31 +35,24 @@ class PortSampleChannels(Channels):
         self.port_columns = np.arange(2 * n, 5 * n)
 
     def Of(self, t: float, samples: np.ndarray) -> np.ndarray:
-        """Each trial's [qdot, u, tau_obs].
+        """Each trial's [qdot, u, tau_obs] (trials, size).
 
         Args:
             t: The sample's time [s].
-            samples: Each trial's identification.PortSample (trials, 5 n).
-
-        Returns:
-            The channels (trials, size)."""
+            samples: Each trial's identification.PortSample (trials, 5 n)."""
         return samples[:, 2 * self.n:]
 
 
 class NetworkLearner(PortLearner):
-    """The network learner of a batch (module docstring; learning.PortLearner).
-
-    Its state per trial is its ChangeDetector's and the window start of its warm
-    start (-inf before it). For a batch every trial has a network, Adam moments,
-    window and change detector of its own; one torch forward and backward pass fits
-    every trial that fits this update (RhsIdentifier.FitTrials).
+    """The network learner of a batch: per trial a network, Adam moments, window and
+    ChangeDetector; one torch pass fits every trial that fits this update. Its state per
+    trial is its detector's and its warm start's window start (-inf before it).
 
     Args:
         settings: The learner's settings.
         trials: Each trial's LearnerTrial.
         period: The training period [s].
-        sample_period: The sampling period [s].
-    """
+        sample_period: The sampling period [s]."""
 
     def __init__(self, settings: Learner, trials: Sequence[LearnerTrial], period: float,
                  sample_period: float):
@@ -92,8 +77,7 @@ class NetworkLearner(PortLearner):
         self.state_size = self._detector_size + 1
 
     def InitialState(self) -> np.ndarray:
-        """The detector holding for start_hold seconds (regularized mode), no warm
-        start yet (PortLearner.InitialState)."""
+        """The detectors holding for start_hold s (regularized mode), no warm start yet."""
         hold = (self._settings.start_hold if self._regularized
                 and self._settings.start_hold > 0 else -np.inf)
         return np.tile(np.concatenate([ChangeDetector.InitialState(hold), [-np.inf]]),
@@ -106,19 +90,15 @@ class NetworkLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Detects changes, fits and publishes (with ``learning`` False it keeps
-        the initial weights: B0 and D0).
+        """Detects changes, fits and publishes: (published, log rows, state), as
+        PortLearner.Update.
 
         Args:
             t: The time [s].
             rows: Each trial's buffered samples, oldest first [t, q, p, channels].
             state: Each trial's state (trials, state_size).
-            model_changed: Whether each trial's LHS model changed since the last
-                update.
-            learning: False publishes the prior (the dac-nominal ablation).
-
-        Returns:
-            (published, log rows, state), as PortLearner.Update."""
+            model_changed: Whether each trial's LHS model changed since the last update.
+            learning: False publishes the prior, B0 and D0 (the dac-nominal ablation)."""
         count, settings = self._trials, self._settings
         learning = learning and settings.steps_per_update > 0
         detectors = state[:, :self._detector_size].copy()
@@ -155,15 +135,9 @@ class NetworkLearner(PortLearner):
         return weights, logs, np.concatenate([detectors, warm_started[:, None]], axis=1)
 
     def _NetworkPublished(self, rows, t, window_starts, fitted, learning) -> np.ndarray:
-        """Whether each trial's network weights, not the prior's, are published this
-        update. Always (while learning), unless settings.prior_fallback: then only
-        when this update fitted (not holding after a change, min_window seconds of
-        samples since it) and the network explains the samples since the change,
-        and those of the last period, at least as well as (B0, D0) do
-        (FitStatistics.loss <= nominal_loss on each); the prior otherwise. After a
-        change the frozen network describes the old relation, and a refit on the
-        first window after it can be further off than the prior; a change not yet
-        detected shows first in the newest samples."""
+        """Whether each trial publishes its network, not the prior: always while learning,
+        unless settings.prior_fallback; then only if this update fitted and the network
+        fits the samples since the change and of the last period no worse than (B0, D0)."""
         count = self._trials
         if not learning:
             return np.zeros(count, bool)

@@ -19,7 +19,8 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
 from dacph_drake.dynamics.plant import AddStateSplitter, SetArmsAtRest
-from dacph_drake.robots import Robot, robots_of
+from dacph_drake.assembly import robots_of
+from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.loop.simulator import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
@@ -39,8 +40,7 @@ class ClosedLoop:
         plant: The ground-truth MultibodyPlant.
         scene_graph: Its SceneGraph.
         loggers: Signal name -> its VectorLogSink.
-        systems: System name -> the system (the ground truth's and the
-            controller's).
+        systems: System name -> the system (the ground truth's and the controller's).
     """
     diagram: Diagram
     scenarios: List[Scenario]
@@ -67,14 +67,13 @@ class ClosedLoop:
 
     @property
     def model(self):
-        """The controller's (nominal) reduced model (robots.ReducedModel) of the
-        first trial."""
+        """The first trial's controller (nominal) reduced model (robots.ReducedModel)."""
         return self.robot.model
 
     @property
     def c_min_nominal(self) -> float:
         """eq. (48) with beta_hat = 1: the RHS decay rate the LHS asks for."""
-        Kd_max, lambda_min_M = self.robot.GainRuleRates()
+        Kd_max, lambda_min_M = self.robot.task.GainRuleRates(self.robot)
         return c_lower_bound(self.scenario.rhs.Td, Kd_max, lambda_min_M, 1.0)
 
     def CreateSimulator(self) -> Simulator:
@@ -96,10 +95,8 @@ class ControllerBuilder:
         self._inputs = set()
 
     def Input(self, port: InputPort, signal: str) -> None:
-        """Feeds an internal input port from one of the controller's inputs.
-
-        The controller's input is exported on first use; several internal ports may
-        read one signal.
+        """Feeds an internal input port from one of the controller's inputs (exported on
+        first use).
 
         Args:
             port: An input port of a system in ``builder``.
@@ -114,28 +111,20 @@ class ControllerBuilder:
 def assemble_closed_loop(scenario: Scenario, name: str,
                          add_controller: Callable[[ClosedLoop, ControllerBuilder], Dict],
                          more_trials: Sequence[Scenario] = ()) -> ClosedLoop:
-    """Builds the ground truth and closes it with a controller.
-
-    The ground truth is the plant, the state splitter, the true RHS and the
-    disturbance; every signal of it and every output of the controller is logged at
-    periods.log. The trials share the settings that shape the diagram
+    """Builds the ground truth (plant, state splitter, true RHS, disturbance) and closes
+    it with a controller; every signal of it and every output of the controller is
+    logged at periods.log. The trials share the settings that shape the diagram
     (RequireOneDiagram).
 
     Args:
         scenario: The (first) trial's scenario.
         name: The controller's name: the diagram is ``{name}_closed_loop``.
-        add_controller: ``add_controller(loop, controller_builder)`` adds the
-            controller's systems to controller_builder.builder (a
-            ControllerBuilder; loop.scenarios and loop.robots hold every trial's)
-            and returns them by name.
+        add_controller: ``add_controller(loop, controller_builder)`` adds the controller's
+            systems to controller_builder.builder and returns them by name.
         more_trials: The batch's other trials (one diagram for all).
 
-    Returns:
-        The ClosedLoop.
-
     Raises:
-        ConfigError: The trials differ in a setting that shapes the diagram, or a
-            run cannot start at a trial's q0."""
+        ConfigError: Trials differ in a diagram-shaping setting, or a q0 cannot start."""
     scenarios = [scenario, *more_trials]
     RequireOneDiagram(scenarios)
     robots = robots_of(scenarios)
@@ -187,17 +176,14 @@ PER_TRIAL_SETTINGS = ("robot", "q0", "uncertainty", "disturbance", "seed")
 
 
 def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
-    """Requires the trials of a batch to share every setting that shapes the diagram.
-
-    Settings are compared in their YAML form (Drake's SimulatorConfig has no
-    equality of its own).
+    """Requires the trials of a batch to share every setting that shapes the diagram,
+    compared in their YAML form (Drake's SimulatorConfig has no equality of its own).
 
     Args:
         scenarios: The batch's trials.
 
     Raises:
-        ConfigError: Naming the first setting in which a trial differs from trial 0
-            beyond PER_TRIAL_SETTINGS."""
+        ConfigError: Naming the first setting (beyond PER_TRIAL_SETTINGS) that differs."""
     first = scenarios[0]
     for i, scenario in enumerate(scenarios[1:], start=1):
         for setting in fields(first):
@@ -211,26 +197,21 @@ def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
 
 def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Excitation,
                identify: bool) -> Tuple[object, Dict]:
-    """Adds the robot's LHS controller to a controller's diagram.
-
-    Its request and log are exported as the controller's outputs ``tau_request``
-    and the robot's log name (robots.Robot.AddLhsController).
+    """Adds the robot's LHS controller to a controller's diagram; returns (the LHS
+    controller, its named systems). Its request and log are exported as the controller's
+    outputs ``tau_request`` and the robot's log name (robots.Robot.AddLhsController).
 
     Args:
         loop: The loop being built (its robots: the trials').
         controller: The controller's ControllerBuilder.
         excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
-        identify: Add an InertialIdentifier fed from the controller's state inputs,
-            feeding the LHS; its estimate is the output ``inertial_parameters``, its
-            log ``identification_log``.
-
-    Returns:
-        (the LHS controller, its named systems)."""
-    robot, builder = loop.robot, controller.builder
-    systems = type(robot).AddLhsController(controller, loop.robots, excitation, identify)
-    lhs = systems[robot.lhs_name]
+        identify: Add an InertialIdentifier from the state inputs into the LHS (outputs
+            ``inertial_parameters``, ``identification_log``)."""
+    task, builder = loop.robot.task, controller.builder
+    systems = task.AddLhsController(controller, loop.robots, excitation, identify)
+    lhs = systems[task.lhs_name]
     builder.ExportOutput(lhs.GetOutputPort("tau_request"), "tau_request")
-    builder.ExportOutput(lhs.GetOutputPort(robot.lhs_log), robot.lhs_log)
+    builder.ExportOutput(lhs.GetOutputPort(task.log_name), task.log_name)
     identifier = systems.get("inertial_identifier")
     if identifier is not None:
         for signal in ("base_pose", "base_velocity", "q", "qdot"):

@@ -10,17 +10,14 @@ from dacph_drake.errors import ConfigError
 
 
 def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
-    """Creates a run directory and checks it is writable, before any simulation.
+    """Creates a run directory and checks it is writable, before any simulation; returns
+    it as a Path.
 
     Args:
         out_dir: The directory (created with its parents if missing).
 
-    Returns:
-        It, as a Path.
-
     Raises:
-        ConfigError: It is a file, cannot be created or is not writable (naming
-            the path)."""
+        ConfigError: It is a file, cannot be created or is not writable (naming it)."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out = {str(out)!r} is an existing file; allowed: a "
@@ -38,18 +35,12 @@ def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
 
 @contextmanager
 def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
-    """Replaces a file in one step with what a block writes.
-
-    When the block ends without an exception, the temporary file replaces ``path``
-    (os.replace).
+    """Replaces a file in one step (os.replace) with what a block writes, if it ends
+    without an exception; yields the temporary path to write, beside ``path``, its name
+    + ".<pid>.tmp" (writers in several processes never share one).
 
     Args:
-        path: The file to replace.
-
-    Yields:
-        A temporary path beside ``path`` to write, its name + ".<pid>.tmp" (so that
-            writers in several processes, such as `dacph reproduce --jobs 3` saving the
-            one scenario.yaml of a run directory, never share one)."""
+        path: The file to replace."""
     path = Path(path)
     temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
     yield temporary
@@ -66,12 +57,8 @@ def read_json_record(path: Union[str, Path], keys: Sequence[str], written_by: st
         keys: The keys every such record has.
         written_by: What writes such a file, for the message.
 
-    Returns:
-        The record.
-
     Raises:
-        ConfigError: The file cannot be read, is not JSON, or is not an object with
-            ``keys`` (one line naming the file)."""
+        ConfigError: The file is unreadable, not JSON, or not an object with ``keys``."""
     try:
         record = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError) as e:         # UnicodeDecodeError is a ValueError

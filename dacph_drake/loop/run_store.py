@@ -10,12 +10,13 @@ import platform
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Dict, List, Sequence, Tuple, Union
+from typing import IO, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import read_json_record, replaced_atomically
+from dacph_drake.loop.signals import Signals
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
 
@@ -26,14 +27,14 @@ class RunResult:
 
     Attributes:
         controller: The controller's registered name.
-        status: "ok", "diverged", "interrupted" or, in a checkpoint of a run still
-            going, "incomplete".
+        status: "ok", "diverged", "interrupted" or "incomplete" (a checkpoint's).
         reason: Why the run stopped early ("" when it did not).
         final_time: The simulated time reached [s].
         wall_time: The wall time of the simulation [s] (a batch's share per trial).
         logs: Signal name -> samples (T x k), with "time".
         peak_memory_mib: This process's peak memory so far [MiB] (ru_maxrss).
         duration: The duration asked for [s].
+        scenario: The trial's scenario (None: not known, e.g. a file's logs).
     """
     controller: str
     status: str
@@ -43,31 +44,56 @@ class RunResult:
     logs: Dict[str, np.ndarray] = field(default_factory=dict)
     peak_memory_mib: float = float("nan")
     duration: float = float("nan")
+    scenario: Optional[Scenario] = None
+
+    @property
+    def signals(self) -> Signals:
+        """The logs' signals by name (loop.signals.Signals): ``run.signals["e_tau"]``."""
+        return Signals(self.logs["time"], [self.logs])
+
+    def to_pandas(self, names: Sequence[str] = ()):
+        """The signals as a pandas DataFrame indexed by time (Signals.to_pandas).
+
+        Args:
+            names: The signals (none: all)."""
+        return self.signals.to_pandas(names)
+
+    def plot(self, *names: str, ax: Optional[object] = None, logy: bool = False) -> object:
+        """Plots signals over time (Signals.plot).
+
+        Args:
+            *names: The signals.
+            ax: A matplotlib Axes (None: a new figure's).
+            logy: Absolute values on a log scale."""
+        return self.signals.plot(*names, ax=ax, logy=logy)
+
+    @property
+    def metrics(self) -> "analysis.metrics.RunMetrics":
+        """The run's metrics by phase, with units (analysis.metrics.RunMetrics)."""
+        from dacph_drake.analysis.metrics import RunMetrics
+        if self.scenario is None:
+            raise ValueError("the run's scenario is not known; allowed: a result of "
+                             "simulate(), or analysis.metrics.RunMetrics.Of(logs, "
+                             "scenario)")
+        return RunMetrics.Of(self.logs, self.scenario)
 
 
 def scenario_fingerprint(scenario: Scenario) -> str:
-    """Hashes every setting of a scenario (its YAML form).
-
+    """A hash (16 hexadecimal digits) of every setting of a scenario (its YAML form);
     run.json records it, so that report() can refuse runs of different scenarios in
     one directory.
 
     Args:
-        scenario: The scenario.
-
-    Returns:
-        16 hexadecimal digits."""
+        scenario: The scenario."""
     return scenario_fingerprints(scenario)[0]
 
 
 def scenario_fingerprints(scenario: Scenario) -> List[str]:
-    """Lists a scenario's fingerprints in every layout a saved run may come from.
+    """A scenario's fingerprints in every layout a saved run may come from:
+    scenario_fingerprint's, then the older layouts' (scenario_files.saved_forms).
 
     Args:
-        scenario: The scenario.
-
-    Returns:
-        scenario_fingerprint's, then those of the older layouts
-            (scenario_files.saved_forms)."""
+        scenario: The scenario."""
     return [hashlib.sha256(text.encode()).hexdigest()[:16]
             for text in saved_forms(scenario)]
 
@@ -89,17 +115,13 @@ def versions() -> Dict[str, str]:
 
 
 def LockRun(out: Path, controller: str) -> IO:
-    """Takes the exclusive lock of a controller's run in a directory.
-
-    The lock is flock's on out/.run_CONTROLLER.lock, which the kernel releases when
-    its holder exits, however it exits; ReleaseRun removes the file again.
+    """Takes the exclusive lock of a controller's run in a directory; returns the open
+    lock file. The lock is flock's on out/.run_CONTROLLER.lock, which the kernel
+    releases when its holder exits, however it exits; ReleaseRun removes the file again.
 
     Args:
         out: The run directory.
         controller: The controller's name.
-
-    Returns:
-        The open lock file; ReleaseRun releases it.
 
     Raises:
         ConfigError: Another process holds it."""
@@ -136,18 +158,14 @@ def ReleaseRun(lock: IO) -> None:
 
 
 def require_run_files(run_dir: Union[str, Path], controllers: Sequence[str]) -> Path:
-    """Requires the files save_run writes for some controllers.
+    """Requires the files save_run writes for some controllers; returns run_dir as a Path.
 
     Args:
         run_dir: The run directory.
         controllers: The controllers' names.
 
-    Returns:
-        run_dir, as a Path.
-
     Raises:
-        ConfigError: Naming the first file missing (scenario.yaml, logs_C.npz,
-            run_C.json), or run_dir is not a directory."""
+        ConfigError: Naming the first file missing, or run_dir is not a directory."""
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise ConfigError(f"{str(run_dir)!r} is not a directory; allowed: a run "
@@ -163,18 +181,14 @@ def require_run_files(run_dir: Union[str, Path], controllers: Sequence[str]) -> 
 
 def save_run(result: RunResult, scenario: Scenario, out_dir: Union[str, Path],
              compress: bool = True) -> Path:
-    """Saves a run: logs_C.npz, scenario.yaml and run_C.json.
-
-    Each file is replaced atomically: a reader or a crash never sees half a file.
+    """Saves a run: logs_C.npz, scenario.yaml and run_C.json, each replaced atomically
+    (a reader or a crash never sees half a file); returns out_dir as a Path.
 
     Args:
         result: The run.
         scenario: Its scenario.
         out_dir: The run directory (created if missing).
-        compress: Compress the logs (checkpoints do not, for speed).
-
-    Returns:
-        out_dir, as a Path."""
+        compress: Compress the logs (checkpoints do not, for speed)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with replaced_atomically(out / f"logs_{result.controller}.npz") as path, \
@@ -196,9 +210,8 @@ def save_run(result: RunResult, scenario: Scenario, out_dir: Union[str, Path],
 
 
 def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
-    """Refuses a directory where a new run would sit beside another scenario's.
-
-    report() refuses such a directory, so it is refused before the run.
+    """Refuses, before the run, a directory where a new run would sit beside another
+    scenario's (which report() refuses).
 
     Args:
         out: The run directory.
@@ -206,9 +219,7 @@ def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None
         controller: The new run's controller.
 
     Raises:
-        ConfigError: ``out`` holds another controller's run_C.json whose scenario
-            fingerprint is not ``scenario``'s, or a run of the older layout
-            (run.json, logs.npz)."""
+        ConfigError: ``out`` holds another scenario's run, or one of the older layout."""
     if (out / "run.json").is_file() or (out / "logs.npz").is_file():
         raise ConfigError(f"--out = {str(out)!r} holds a run of the older spatial "
                           "layout (run.json, logs.npz); allowed: a directory without it")
@@ -230,14 +241,11 @@ def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None
 
 def load_run(run_dir: Union[str, Path], controller: str
              ) -> Tuple[Dict[str, np.ndarray], Scenario, Dict]:
-    """Loads a saved run.
+    """Loads a saved run: (logs, scenario, run_C.json's contents).
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
-
-    Returns:
-        (logs, scenario, run_C.json's contents).
 
     Raises:
         ConfigError: Naming a missing or damaged file."""
@@ -247,14 +255,11 @@ def load_run(run_dir: Union[str, Path], controller: str
 
 
 def load_logs(run_dir: Union[str, Path], controller: str) -> Dict[str, np.ndarray]:
-    """Loads a run's logs (logs_CONTROLLER.npz).
+    """Loads a run's logs (logs_CONTROLLER.npz): signal name -> samples.
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
-
-    Returns:
-        Signal name -> samples.
 
     Raises:
         ConfigError: Naming the file when it is damaged."""
@@ -268,14 +273,11 @@ def load_logs(run_dir: Union[str, Path], controller: str) -> Dict[str, np.ndarra
 
 
 def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
-    """Loads a run's record (run_CONTROLLER.json).
+    """Loads a run's record (run_CONTROLLER.json's contents).
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
-
-    Returns:
-        Its contents.
 
     Raises:
         ConfigError: Naming the file when it is damaged."""

@@ -40,7 +40,8 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
              out_dir: Optional[Union[str, Path]] = None, progress: bool = False,
              interruptible: bool = False, checkpoint_seconds: Optional[float] = None,
              meshcat: Optional[Meshcat] = None) -> RunResult:
-    """Builds a controller's closed loop for a scenario and simulates it.
+    """Builds a controller's closed loop for a scenario and simulates it; returns the run's
+    RunResult (status "ok", "diverged" or "interrupted").
 
     A run whose state turns non-finite or whose rates exceed RUNAWAY_RATE (true_rhs)
     stops with a reason and still saves what it has. Every saved file is replaced
@@ -48,31 +49,20 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
 
     Args:
         scenario: The scenario (robot, task, uncertainty, phases, settings).
-        controller: A name of controllers.REGISTRY ("dac", "dac-nominal",
-            "model-based", or one you registered).
+        controller: A name of controllers.REGISTRY ("dac", "dac-nominal", "model-based").
         duration: Simulated time [s]; default: the scenario's phases.
-        out_dir: Where to save logs_C.npz, scenario.yaml and run_C.json (None: not
-            saved). Checked before the simulation starts and locked against a second
-            writer of the same controller; a directory holding another
-            controller's run of another scenario is refused (require_one_scenario).
+        out_dir: Where to save logs_C.npz, scenario.yaml, run_C.json (None: not saved);
+            checked and locked first, refused beside another scenario's runs.
         progress: Show a progress bar.
-        interruptible: SIGINT and SIGTERM stop the run with status "interrupted"
-            and its logs saved (the CLI's single runs; sweeps leave it off so that an
-            interrupted trial is redone on resume).
-        checkpoint_seconds: With ``out_dir``, save the logs so far every this many
-            seconds of wall time with status "incomplete" (a crash or kill -9 loses
-            at most that much).
-        meshcat: A pydrake Meshcat to draw the ground truth in while it simulates
-            (robots.Robot.LiveView; scenario.simulator.target_realtime_rate paces
-            it); the diagram and the results are the same as without.
-
-    Returns:
-        The run's RunResult: status ("ok", "diverged", "interrupted"), reason,
-            final time, wall time and logs.
+        interruptible: SIGINT and SIGTERM stop the run as "interrupted", its logs saved
+            (the CLI's single runs; sweeps leave it off to redo the trial on resume).
+        checkpoint_seconds: With ``out_dir``, save the logs every this many wall seconds
+            with status "incomplete" (a crash or kill -9 loses at most that much).
+        meshcat: A Meshcat drawing the ground truth as it simulates (robots.Robot.LiveView,
+            paced by scenario.simulator.target_realtime_rate); results are unchanged.
 
     Raises:
-        ConfigError: A setting, the controller's name, the duration or out_dir is
-            not allowed (one line naming it)."""
+        ConfigError: Naming the setting, controller, duration or out_dir not allowed."""
     require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
@@ -104,34 +94,27 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
 def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
                    duration: Optional[float] = None,
                    out_dirs: Optional[Sequence] = None) -> List[RunResult]:
-    """Simulates a batch of trials in one diagram.
+    """Simulates a batch of trials in one diagram, controllers.build_closed_loop(controller,
+    *scenarios); returns each trial's RunResult, in trial order: its solo simulate's
+    (logs bit for bit, tests/test_batch.py).
 
-    The diagram is controllers.build_closed_loop(controller, *scenarios); each
-    trial's RunResult is its solo simulate's (logs bit for bit,
-    tests/test_batch.py). A trial that diverges, collides or leaves its limits stops
-    alone with its reason and final time while the others run on: a non-finite or
-    runaway state or torque is caught at the integrator stage it appears at (its
-    torque is zero from then on: TrueRhsSystem), and the trial is brought to rest at
-    the next check (every MONITOR_PERIOD of simulated time). A trial whose state
-    blows up before that check fails the step of the whole batch in Drake's
-    integrator: the batch goes back to the last check, stops that trial there and
-    takes the step again (advance_in_chunks' recover; the others stay bit for bit
-    their solo runs, tests/test_batch.py).
+    A trial that diverges, collides or leaves its limits stops alone with its reason
+    and final time while the others run on: a non-finite or runaway state or torque is
+    caught at the integrator stage it appears at (its torque is zero from then on:
+    TrueRhsSystem), and the trial is brought to rest at the next check (every
+    MONITOR_PERIOD of simulated time). A trial whose state blows up before that check
+    fails the step of the whole batch in Drake's integrator: the batch goes back to the
+    last check, stops that trial there and takes the step again (advance_in_chunks'
+    recover; the others stay bit for bit their solo runs).
 
     Args:
-        scenarios: The trials; they may differ in robot, q0, uncertainty,
-            disturbance and seed only (RequireOneDiagram).
+        scenarios: The trials (differing in robot, q0, uncertainty, disturbance, seed only).
         controller: A name of controllers.REGISTRY.
         duration: Simulated time [s]; default: the first trial's phases.
-        out_dirs: Each trial's run directory, as simulate's out_dir (None, or None
-            entries: not saved).
-
-    Returns:
-        Each trial's RunResult, in trial order.
+        out_dirs: Each trial's simulate out_dir (None, or None entries: not saved).
 
     Raises:
-        ConfigError: The trials differ in a setting that shapes the diagram, or a
-            setting is not allowed (one line naming it)."""
+        ConfigError: Trials differ in a diagram-shaping setting, or a setting is invalid."""
     require_controller(controller)
     scenarios = list(scenarios)
     duration = scenarios[0].duration if duration is None else duration
@@ -237,7 +220,7 @@ def _SimulateLoop(scenarios, controller, duration, progress, interruptible, chec
                 status=status if stop is None else "diverged",
                 reason=reason if stop is None else stop[0], final_time=final,
                 wall_time=wall, logs=trial_logs(loop, logs, coordinates, i, final),
-                peak_memory_mib=memory, duration=duration))
+                peak_memory_mib=memory, duration=duration, scenario=loop.scenarios[i]))
         return out
 
     def result(status: str, reason: str) -> RunResult:
@@ -329,24 +312,19 @@ def advance_in_chunks(simulator: Simulator, duration: float,
                       check: Callable[[float], Optional[str]],
                       after_chunk: Callable[[bool], None],
                       recover: Optional[Callable[[Context], bool]] = None) -> str:
-    """Advances a simulator in steps of MONITOR_PERIOD of simulated time.
+    """Advances a simulator in steps of MONITOR_PERIOD of simulated time; returns why the
+    run stopped early (a RuntimeError of the simulation, such as a failed callback, or a
+    failed Drake assertion, such as a state gone non-finite in the plant's integrator,
+    included), or "" when it reached ``duration``.
 
     Args:
         simulator: The Drake Simulator.
         duration: Where to stop [s].
         check: ``check(t)`` after each step: the reason to stop, or None.
         after_chunk: ``after_chunk(last)`` after each step (last: the final one).
-        recover: For a batch: ``recover(snapshot)`` after a step failed, with a
-            context holding the time, state and parameters of the last step's end;
-            True when it restored them and stopped the trials that made the step
-            fail, so that the step is taken again (None: a failed step ends the
-            run).
-
-    Returns:
-        Why the run stopped early (a RuntimeError of the simulation, such as a failed
-            callback, or a failed Drake assertion, such as a state gone non-finite
-            in the plant's integrator, included), or "" when it reached
-            ``duration``."""
+        recover: For a batch: ``recover(snapshot)`` after a failed step (snapshot: the last
+            step's end); True when it restored it and stopped the trials that made the
+            step fail, so that it is taken again (None: a failed step ends the run)."""
     context = simulator.get_context()
     snapshot = context.Clone() if recover is not None else None
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
@@ -396,18 +374,13 @@ def _CutLogs(loop: ClosedLoop, context: Context, t: float) -> None:
 
 
 def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
-    """Collects every logger's samples of a closed loop.
-
-    They are cut to the samples all loggers hold: a run stopped inside the loggers'
-    publish at one instant (SIGINT, a failed callback) has some loggers one sample
-    ahead of the others.
+    """Every logger's samples of a closed loop, signal name -> samples (T x k), with
+    "time"; cut to the samples all loggers hold: a run stopped inside the loggers'
+    publish at one instant (SIGINT, a failed callback) has some one sample ahead.
 
     Args:
         loop: The closed_loop.ClosedLoop.
-        context: Its simulator's root context.
-
-    Returns:
-        Signal name -> samples (T x k), with "time"."""
+        context: Its simulator's root context."""
     logs, times = {}, None
     for name, logger in loop.loggers.items():
         log = logger.FindLog(context)
@@ -421,20 +394,16 @@ def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
 
 def trial_logs(loop: ClosedLoop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
                trial: int, final_time: float) -> Dict[str, np.ndarray]:
-    """Takes one trial's part of a batch's logs (collect_logs).
+    """One trial's part of a batch's logs (collect_logs): its plant state in the layout
+    of a plant of its own (its Robot's model's plant: [positions, velocities]) and its
+    share of every stacked signal.
 
     Args:
         loop: The batch's closed_loop.ClosedLoop.
         logs: The batch's logs.
-        coordinates: The trial's coordinates in the batch's plant
-            (plant.trial_coordinates).
+        coordinates: The trial's coordinates in the batch's plant (plant.trial_coordinates).
         trial: The trial's index.
-        final_time: The trial's last time [s] (a trial that stopped early is cut).
-
-    Returns:
-        Its logs: its plant state in the layout of a plant of its own (its Robot's
-            model's plant: [positions, velocities]) and its share of every stacked
-            signal."""
+        final_time: The trial's last time [s] (a trial that stopped early is cut)."""
     nq, count = loop.plant.num_positions(), loop.trials
     kept = logs["time"] <= final_time
     solo = ArmCoordinates.FromPlant(loop.robots[trial].model.plant)

@@ -19,7 +19,7 @@ ERROR_CONTROLLED_SCHEMES = ("runge_kutta3", "runge_kutta5")
 
 def FixedStepConfig(integration_scheme: str = "runge_kutta2",
                     step: float = 2.5e-4) -> SimulatorConfig:
-    """Makes Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator.
+    """Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator.
 
     Fixed steps because the closed loop's discrete updates stop the integrator at
     every RHS sample anyway (the step taken is min(step, periods.rhs)); as fast as
@@ -27,10 +27,7 @@ def FixedStepConfig(integration_scheme: str = "runge_kutta2",
 
     Args:
         integration_scheme: Drake's scheme name (runge_kutta2, 3 or 5).
-        step: The largest step [s].
-
-    Returns:
-        The SimulatorConfig."""
+        step: The largest step [s]."""
     return SimulatorConfig(integration_scheme=integration_scheme, max_step_size=step,
                            use_error_control=False, target_realtime_rate=0.0)
 
@@ -68,10 +65,7 @@ def MakeSimulator(diagram: Diagram, config: SimulatorConfig) -> Simulator:
 
     Args:
         diagram: The diagram.
-        config: The simulator configuration (validate_simulator_config).
-
-    Returns:
-        The Simulator."""
+        config: The simulator configuration (validate_simulator_config)."""
     simulator = Simulator(diagram)
     ApplySimulatorConfig(config, simulator)
     return simulator

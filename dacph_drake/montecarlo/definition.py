@@ -2,32 +2,27 @@
 types, ``pydrake.common.schema``), the number of trials, the controllers run on each
 sample; and the sampling of one trial from (sweep seed, trial id) only.
 
-Every sampled setting is optional (absent: the base scenario's value). A setting
-named ``*_scale`` multiplies the base scenario's value; ``q0`` and ``learner_seed``
-replace it. Per-link and per-joint settings take a vector distribution
-(``!UniformVector {min: [..], max: [..]}``, ``!GaussianVector``,
-``!DeterministicVector``, a plain list) with one entry per link, or a scalar
-distribution (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``, ``!Deterministic``)
-drawn independently for each link. The controllers keep the nominal robot
-(``nominal_robot``) unless ``nominal_*`` settings perturb it (the controller's
-model error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per
-joint, and ``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault.
+Every sampled setting is optional (absent: the base scenario's value). ``*_scale``
+multiplies the base scenario's value; ``q0`` and ``learner_seed`` replace it. Per-link
+and per-joint settings take a vector distribution (``!UniformVector {min: [..], max:
+[..]}``, ``!GaussianVector``, ``!DeterministicVector``, a plain list), one entry per
+link, or a scalar one (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``,
+``!Deterministic``) drawn independently for each link. The controllers keep
+``nominal_robot`` unless ``nominal_*`` settings perturb it (the controller's model
+error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per joint;
+``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault. The base
+scenario may be any robot's; ``link_*`` and ``base_*`` (a planar arm's parameters)
+apply where the robot section takes them (``SAMPLED_SETTINGS``).
 
-The base scenario may be any robot's: every setting but the ground-truth robot's
-(``link_*``, ``base_*``: a planar arm's parameters, which a description file does
-not have; the robot section says which it takes: ``SAMPLED_SETTINGS``) applies
-alike.
-
-A sample is not checked against the robot's physical bounds here: a trial whose
-sampled scenario fails ``Scenario.Validate()`` (e.g. ``link_inertia_scale`` beyond
-the rod bound, a negative mass from a Gaussian) is recorded as failed with the
-ConfigError's message, which is also the documented way to make a trial fail.
+A sampled scenario that fails ``Scenario.Validate()`` (e.g. a negative mass from a
+Gaussian) is recorded as a failed trial with the ConfigError's message (the documented
+way to make a trial fail).
 """
 import copy
 import hashlib
 from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
 from pydrake.common import RandomGenerator, schema
@@ -36,7 +31,8 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
 from dacph_drake.arm_parameters import load_yaml_dataclass, read_yaml
-from dacph_drake.scenario import BUILT_IN_SCENARIOS, Scenario
+from dacph_drake.scenario import DescribedArm, PlanarArm, Scenario
+from dacph_drake.built_in_scenarios import BUILT_IN_SCENARIOS
 from dacph_drake.scenario_files import load_scenario, saved_forms
 
 # The ground-truth robot's distributions (planar arms only).
@@ -59,42 +55,25 @@ VectorDistribution = Union[(List[float], *VECTOR_TAGS.values(), float,
 
 @dataclass
 class Distributions:
-    """What each trial samples; None keeps the base scenario's value.
-
-    A per-link (or per-joint) setting takes a vector distribution with one entry per
-    link, a plain list, or a scalar distribution drawn for each link; the others a
-    scalar distribution (Drake's schema types, module docstring).
+    """What each trial samples (module docstring); None keeps the base scenario's value.
 
     Attributes:
-        link_mass_scale: The ground truth's link mass and inertia, one factor per
-            link (planar arms only; the controllers keep nominal_robot).
-        link_length_scale: The ground truth's link length, com and width by f,
-            inertia by f^2, one factor per link (planar arms only).
-        link_inertia_scale: The ground truth's link inertia only, one factor per
-            link (planar arms only).
-        base_mass_scale: The ground truth's base mass and inertia (planar arms
-            only).
-        base_inertia_scale: The ground truth's base inertia only (planar arms
-            only).
+        link_mass_scale: The ground truth's link mass and inertia, per link (planar arms).
+        link_length_scale: Its link length, com and width by f, inertia by f^2 (planar).
+        link_inertia_scale: The ground truth's link inertia only, per link (planar arms).
+        base_mass_scale: The ground truth's base mass and inertia (planar arms only).
+        base_inertia_scale: The ground truth's base inertia only (planar arms only).
         delta_B_scale: The ground truth's B_linear, B_quadratic and B_q1_squared.
         delta_D_scale: The ground truth's D_offset, D_linear and D_quadratic.
         disturbance_scale: d(t)'s amplitude (disturbance.scale).
         disturbance_frequency_scale: All of d's frequencies.
         q0: The initial joint angles [rad], one per joint (replaces q0).
-        learner_seed: The scenario's seed: an integer >= 0, or !Deterministic or
-            !UniformDiscrete of such integers; None: the trial's own seed (see
-            trial_seed).
-        nominal_link_mass_scale: The controller's model error (the ground truth
-            keeps its robot): one factor per link on nominal_robot's link mass and
-            inertia (a described arm: the body each joint moves, in
-            robot.nominal_inertia_scale).
-        nominal_base_mass_scale: The controller's model error: one factor on the
-            nominal base's mass and inertia.
-        actuator_gain_log10: x_j, one per joint: B~'s row j times 10^x_j
-            (uncertainty.B_scale).
-        fault_time: One actuator fault: from fault_time [s] on, joint fault_joint
-            (1-based) delivers fault_gain times its torque (uncertainty.faults; the
-            three go together: all or none).
+        learner_seed: The scenario's seed, integers >= 0 (None: the trial's, trial_seed).
+        nominal_link_mass_scale: The controller's model error, per link: nominal_robot's
+            link mass and inertia (a described arm: robot.nominal_inertia_scale).
+        nominal_base_mass_scale: The controller's model error on the base mass and inertia.
+        actuator_gain_log10: x_j per joint: B~'s row j times 10^x_j (uncertainty.B_scale).
+        fault_time: From it [s], fault_joint gives fault_gain times its torque (all/none).
         fault_joint: The fault's joint (1-based, rounded to an integer).
         fault_gain: The fault's factor on the joint's torque."""
     # Ground-truth robot (the controllers keep nominal_robot), one factor per link:
@@ -132,17 +111,13 @@ class Sweep:
     """A sweep file's settings.
 
     Attributes:
-        scenario: The base scenario, a built-in name (BUILT_IN_SCENARIOS: paper,
-            short, satellite_6dof, satellite_3dof) or a YAML path relative to the
-            sweep file.
+        scenario: A BUILT_IN_SCENARIOS name or a YAML path relative to the sweep file.
         trials: The number of trials, in [1, 10^6].
         seed: The sweep's seed, an integer in [0, 2^32 - 1] (trial_seed).
-        controllers: The controllers run on each sample, one or more of
-            controllers.NAMES, each at most once.
+        controllers: The controllers run on each sample (controllers.NAMES, each once).
         distributions: What each trial samples (Distributions).
         save_logs: Whether each run's logs are also written under OUT/logs/.
-        batch_size: Trials per diagram, in [0, 4096] (runner.batch_size_for; 0:
-            chosen by measurement); no trial's row depends on it."""
+        batch_size: Trials per diagram in [0, 4096] (0: runner.batch_size_for)."""
     scenario: str = "short"     # built-in name (paper, short) or YAML path, relative
     #                             to the sweep file
     trials: int = 10
@@ -169,22 +144,14 @@ class SweepDefinition:
     text: str                   # the sweep file as written
 
     def fingerprint(self) -> str:
-        """The sha256 of the normalized sweep and base scenario.
-
-        Two definitions with the same fingerprint sample and run the same trials.
-
-        Returns:
-            The hex digest."""
+        """The sha256 hex digest of the normalized sweep and base scenario: two
+        definitions with the same fingerprint sample and run the same trials."""
         return self.fingerprints()[0]
 
     def fingerprints(self) -> List[str]:
-        """The fingerprints a saved sweep of these settings may have.
-
-        batch_size is not part of them: it changes no trial's row.
-
-        Returns:
-            The fingerprint() and those of the same settings in the older
-                scenario layouts a saved sweep may come from (scenario.saved_forms)."""
+        """The fingerprints a saved sweep of these settings may have: fingerprint() and
+        those in the older scenario layouts (scenario.saved_forms). batch_size is not
+        part of them: it changes no trial's row."""
         sweep = "".join(line for line in yaml_dump_typed(self.sweep).splitlines(True)
                         if not line.startswith("batch_size:"))
         return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
@@ -199,8 +166,7 @@ class TrialSample:
         trial: The trial id.
         seed: The trial's seed (trial_seed).
         scenario: The base scenario with the sample applied.
-        sampled: Setting -> its sampled value (a float, a list of floats, or an
-            int)."""
+        sampled: Setting -> its sampled value (a float, a list of floats, or an int)."""
     trial: int
     seed: int
     scenario: Scenario               # the base scenario with the sample applied
@@ -208,13 +174,10 @@ class TrialSample:
 
 
 def load_sweep(path: Union[str, Path]) -> SweepDefinition:
-    """Loads and validates a sweep file.
+    """Loads and validates a sweep file and its base scenario.
 
     Args:
         path: The sweep file.
-
-    Returns:
-        The sweep with its base scenario.
 
     Raises:
         ConfigError: Naming the invalid setting and what is allowed."""
@@ -243,7 +206,7 @@ def load_sweep(path: Union[str, Path]) -> SweepDefinition:
     scenario = _base_scenario(sweep.scenario, path.parent)
     for name in ROBOT_DISTRIBUTIONS:
         if (getattr(sweep.distributions, name) is not None
-                and name not in scenario.robot.SAMPLED_SETTINGS):
+                and name not in SAMPLED_SETTINGS.get(type(scenario.robot), ())):
             raise ConfigError(
                 f"distributions.{name} with the scenario {sweep.scenario!r}, whose robot "
                 f"is a {type(scenario.robot).__name__}; allowed: the settings other "
@@ -390,32 +353,23 @@ def _numbers_of(value) -> List[float]:
 
 
 def trial_seed(sweep_seed: int, trial: int) -> int:
-    """The seed of one trial, derived from (sweep seed, trial id) only.
-
-    numpy's SeedSequence; it seeds the sample and, unless learner_seed is sampled,
-    the learner's initialization and the observer's noise.
+    """The seed of one trial, in [0, 2^32 - 1], from (sweep seed, trial id) only (numpy's
+    SeedSequence); it seeds the sample and, unless learner_seed is sampled, the
+    learner's initialization and the observer's noise.
 
     Args:
         sweep_seed: The sweep's seed.
-        trial: The trial id.
-
-    Returns:
-        The seed, in [0, 2^32 - 1]."""
+        trial: The trial id."""
     return int(np.random.SeedSequence([sweep_seed, trial]).generate_state(1)[0])
 
 
 def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
-    """Samples one trial's scenario.
-
-    The base scenario with every distribution sampled, in the order of the
-    Distributions fields, from a generator seeded by trial_seed.
+    """Samples one trial's scenario: the base scenario with every distribution sampled,
+    in the order of the Distributions fields, from a generator seeded by trial_seed.
 
     Args:
         definition: The sweep.
-        trial: The trial id.
-
-    Returns:
-        The trial's sample and scenario."""
+        trial: The trial id."""
     seed = trial_seed(definition.sweep.seed, trial)
     generator = RandomGenerator(seed)
     d = definition.sweep.distributions
@@ -446,21 +400,70 @@ def _sample_vector(value, n: int, generator: RandomGenerator) -> List[float]:
     return [float(distribution.Sample(generator)) for _ in range(n)]
 
 
-def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scenario:
-    """Applies sampled settings to a copy of a scenario.
+# The ground-truth distributions each robot section takes (ROBOT_DISTRIBUTIONS): a
+# description has no link parameters to sample.
+SAMPLED_SETTINGS = {PlanarArm: ("link_mass_scale", "link_length_scale",
+                                "link_inertia_scale", "base_mass_scale",
+                                "base_inertia_scale")}
 
-    See the module's docstring for what each one changes.
+
+def apply_robot_sample(robot: Union[PlanarArm, DescribedArm], sampled: Dict[str, object]) -> None:
+    """Applies a trial's sampled ground truth to a planar robot section: per link mass
+    (and inertia), length (com, width; inertia by its square) and inertia factors,
+    the base's mass (and inertia) and inertia factors.
+
+    Args:
+        robot: The robot section (a described arm's is left as it is).
+        sampled: The trial's sampled settings by name."""
+    if not isinstance(robot, PlanarArm):
+        return
+    links = robot.truth.links
+    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
+        link.mass *= f
+        link.inertia *= f
+    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
+        link.length *= f
+        link.com *= f
+        link.width *= f
+        link.inertia *= f * f
+    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
+        link.inertia *= f
+    f = sampled.get("base_mass_scale", 1.0)
+    robot.truth.base.mass *= f
+    robot.truth.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
+
+
+def apply_model_error_sample(robot: Union[PlanarArm, DescribedArm], links: Optional[Sequence[float]],
+                             base: Optional[float]) -> None:
+    """Applies a trial's controller model error: factors on the nominal links' (a
+    described arm's: the bodies its joints move) and the base's mass and inertia.
+
+    Args:
+        robot: The robot section.
+        links: One factor per link (joint), or None.
+        base: The base's factor, or None."""
+    if isinstance(robot, DescribedArm):
+        if links is not None or base is not None:
+            from dacph_drake.robots.described import model_error_scale
+            robot.nominal_inertia_scale = model_error_scale(robot, links, base)
+        return
+    for link, f in zip(robot.nominal.links, links or []):
+        link.mass *= f
+        link.inertia *= f
+    if base is not None:
+        robot.nominal.base.mass *= base
+        robot.nominal.base.inertia *= base
+
+
+def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scenario:
+    """A copy of a scenario with sampled settings applied (module docstring).
 
     Args:
         base: The base scenario (left as it is).
         sampled: Setting -> its sampled value (TrialSample.sampled).
-        seed: The trial's seed: scenario.seed = learner_seed if sampled, else
-            ``seed``.
-
-    Returns:
-        The copy with the sampled settings applied."""
+        seed: The trial's seed: scenario.seed = learner_seed if sampled, else ``seed``."""
     s = copy.deepcopy(base)
-    s.robot.ApplyRobotSample(sampled)
+    apply_robot_sample(s.robot, sampled)
     u = s.uncertainty
     fB, fD = sampled.get("delta_B_scale", 1.0), sampled.get("delta_D_scale", 1.0)
     u.B_linear = [[fB * v for v in row] for row in u.B_linear]
@@ -484,8 +487,8 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
 def _apply_model_error_sample(s, sampled: Dict[str, object]) -> None:
     """The controller's model error and the actuators' sampled settings."""
     from dacph_drake.scenario import ActuatorFault
-    s.robot.ApplyModelErrorSample(sampled.get("nominal_link_mass_scale"),
-                                  sampled.get("nominal_base_mass_scale"), len(s.q0))
+    apply_model_error_sample(s.robot, sampled.get("nominal_link_mass_scale"),
+                             sampled.get("nominal_base_mass_scale"))
     if "actuator_gain_log10" in sampled:
         s.uncertainty.B_scale = [10.0**x for x in sampled["actuator_gain_log10"]]
     if "fault_time" in sampled:

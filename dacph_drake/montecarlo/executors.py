@@ -19,15 +19,13 @@ class InProcessExecutor(Executor):
     """Runs each submitted call at once, in this process."""
 
     def submit(self, fn: Callable, /, *args: object, **kwargs: object) -> Future:
-        """Runs a call now, in this process.
+        """Runs a call now, in this process; returns its finished Future (its result or
+        its exception).
 
         Args:
             fn: The function.
             *args: Its positional arguments.
-            kwargs: Its keyword arguments.
-
-        Returns:
-            Its finished Future (its result or its exception)."""
+            kwargs: Its keyword arguments."""
         future = Future()
         try:
             future.set_result(fn(*args, **kwargs))
@@ -37,27 +35,18 @@ class InProcessExecutor(Executor):
 
 
 def local_process_pool(workers: int) -> ProcessPoolExecutor:
-    """Makes a process pool for a sweep.
-
-    Its workers are fresh processes ('spawn': no forked copy of this process's
-    torch or Drake threads), each with one thread for OpenMP, MKL and OpenBLAS, and
-    each ending with this process even when it is killed.
+    """Makes a process pool for a sweep: fresh ('spawn') single-threaded workers, no
+    forked copy of torch or Drake threads, each ending with this process.
 
     Args:
-        workers: The number of worker processes.
-
-    Returns:
-        The pool."""
+        workers: The number of worker processes."""
     return ProcessPoolExecutor(max_workers=workers,
                                mp_context=multiprocessing.get_context("spawn"),
                                initializer=_prepare_worker, initargs=(os.getpid(),))
 
 
 def stop_local_pool(pool: ProcessPoolExecutor) -> None:
-    """Shuts a pool down without waiting for the trials it is running.
-
-    Its workers are killed and the queued trials cancelled, so an interrupted sweep
-    returns at once.
+    """Shuts a pool down at once: its workers killed, the queued trials cancelled.
 
     Args:
         pool: The pool (local_process_pool)."""
@@ -70,9 +59,8 @@ def stop_local_pool(pool: ProcessPoolExecutor) -> None:
 
 
 def _prepare_worker(parent: int) -> None:
-    """One thread per library that reads these variables when it loads (torch loads
-    with the first trial); on Linux, ask the kernel to SIGKILL this worker when its
-    parent dies (a parent killed with -9 leaves no worker running)."""
+    """One thread per numeric library; on Linux, SIGKILL this worker when its parent
+    dies (even by kill -9)."""
     for name in THREAD_VARIABLES:
         os.environ[name] = "1"
     if sys.platform.startswith("linux"):
@@ -94,24 +82,17 @@ CONNECT_TIMEOUT = 10.0
 @contextmanager
 def dask_executor(address: str, workers: Optional[int] = None,
                   timeout: float = CONNECT_TIMEOUT) -> Iterator[Tuple[Executor, int]]:
-    """Opens a Dask executor for a sweep.
-
-    Each worker must have one thread: torch's random state and thread settings are
-    per process.
+    """Opens a Dask executor for a sweep, yielding (the executor, the number of worker
+    slots); each worker must have one thread (torch's random state and thread settings
+    are per process).
 
     Args:
-        address: The scheduler's address (``Client(address).get_executor()``), or
-            "local" for a new LocalCluster of single-threaded worker processes.
+        address: The scheduler's address, or "local" for a new single-threaded LocalCluster.
         workers: The LocalCluster's worker processes (default: one per core).
         timeout: How long to wait for the scheduler at ``address`` [s].
 
-    Yields:
-        (the executor, the number of worker slots).
-
     Raises:
-        ConfigError: Dask is not installed, the address is malformed or its
-            scheduler does not answer within ``timeout``, or the cluster has no
-            workers or workers with several threads."""
+        ConfigError: No Dask, a bad or silent address, or no or multi-threaded workers."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as e:

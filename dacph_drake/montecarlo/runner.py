@@ -19,29 +19,22 @@ from dacph_drake.loop.progress import progress_bar
 def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: Optional[Executor] = None,
               slots: Optional[int] = None, progress: bool = False,
               batch_size: Optional[int] = None) -> List[Dict]:
-    """Runs the trials of a sweep missing from its directory.
+    """Runs the trials of a sweep missing from its directory; returns every trial's row,
+    by trial id.
 
-    Each batch is one diagram per controller (trial.run_trials) and one task. If a
-    local pool's worker dies, the trials it may have been running are run again one
-    at a time in a fresh process, and a trial that kills that one too is recorded
-    as failed; a Dask KilledWorker fails its batch's trials the same way. The rows
-    of a batch are saved when it ends, so an interrupted sweep re-runs the trials of
-    its unfinished batches only. A trial's row is the same whichever executor,
+    Each batch is one diagram per controller (trial.run_trials) and one task. If a local
+    pool's worker dies, its trials run again one at a time in a fresh process, and a
+    trial that kills that one too is recorded as failed (likewise a Dask KilledWorker).
+    Rows are saved per finished batch; a trial's row is the same whichever executor,
     worker count, batch or order ran it (except its wall times).
 
     Args:
         definition: The loaded sweep (definition.load_sweep).
-        out_dir: The sweep's directory (rows.jsonl, manifest.json); resumed if it
-            holds this sweep, refused if it holds another.
-        executor: Any concurrent.futures.Executor (e.g. Dask's), or None for a local
-            process pool.
+        out_dir: The sweep's directory; resumed if it holds this sweep, else refused.
+        executor: Any concurrent.futures.Executor, or None for a local process pool.
         slots: Batches kept in flight (the pool's workers); default: one per core.
         progress: Show a progress bar.
-        batch_size: Trials per diagram; default: the sweep's batch_size, else
-            batch_size_for(definition).
-
-    Returns:
-        Every trial's row, by trial id."""
+        batch_size: Trials per diagram; default: batch_size_for(definition)."""
     from dacph_drake.loop.run_store import versions
     slots = slots or default_workers()
     if batch_size is not None:
@@ -73,22 +66,18 @@ def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: 
         store.close()
 
 
-# Trials per batch where the sweep does not say, from scripts/bench_sweep.py: a
-# planar arm's fastest per trial (DAC 0.080 s per simulated s at 64 against 0.093
-# at 16, 0.68 GiB); a described arm's (satellite_6dof DAC) gains little beyond 16.
+# Trials per batch where the sweep does not say (measured by scripts/bench_sweep.py):
+# a planar arm's fastest per trial; a described arm's gains little beyond 16.
 DEFAULT_BATCH_SIZE = 64
 DESCRIBED_BATCH_SIZE = 16
 
 
 def batch_size_for(definition: SweepDefinition) -> int:
-    """Chooses a sweep's trials per diagram.
+    """A sweep's trials per diagram: its batch_size if it gives one (> 0), else
+    DEFAULT_BATCH_SIZE for a planar arm's sweep, DESCRIBED_BATCH_SIZE for a described one.
 
     Args:
-        definition: The sweep.
-
-    Returns:
-        Its batch_size if it gives one (> 0), else DEFAULT_BATCH_SIZE for a planar
-            arm's sweep and DESCRIBED_BATCH_SIZE for a described arm's."""
+        definition: The sweep."""
     from dacph_drake.scenario import PlanarArm
     if definition.sweep.batch_size > 0:
         return definition.sweep.batch_size
@@ -143,9 +132,8 @@ def _run_alone(task: Trial) -> Dict:
 
 def _dispatch(executor: Executor, tasks: Iterator[List[Trial]], slots: int, record,
               recover: bool) -> List[List[Trial]]:
-    """Keeps ``slots`` batches in flight and records each batch's rows as they
-    arrive. Returns [] when the batches are done, or, with ``recover``, the batches
-    in flight when the process pool broke (the rest stay in ``tasks``)."""
+    """Keeps ``slots`` batches in flight, recording rows as they arrive. Returns [] when
+    done, or, with ``recover``, the batches in flight when the process pool broke."""
     in_flight = {}
     while True:
         while len(in_flight) < slots:
@@ -172,8 +160,7 @@ def _dispatch(executor: Executor, tasks: Iterator[List[Trial]], slots: int, reco
 
 
 def _salvage(in_flight: Dict, record) -> List[List[Trial]]:
-    """Records the rows of a broken pool's finished futures; returns the other
-    batches."""
+    """Records a broken pool's finished batches; returns the other batches."""
     suspects = []
     for future, task in in_flight.items():
         if future.done() and future.exception() is None:

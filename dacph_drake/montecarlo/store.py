@@ -1,16 +1,11 @@
 """A sweep's output directory, which is also its resume state:
 
-    rows.jsonl     one JSON row per finished trial, appended, flushed and fsync'ed by
-                   the parent process as each trial finishes (workers never write it)
-    sweep.yaml     the sweep file as written
-    scenario.yaml  its base scenario
-    manifest.json  the definition's fingerprint and, per session, the start time,
-                   the executor and the package versions
+    rows.jsonl     one JSON row per finished trial, appended and fsync'ed by the parent
+    sweep.yaml, scenario.yaml  the sweep file as written and its base scenario
+    manifest.json  the definition's fingerprint and, per session, start, executor, versions
 
-A kill -9 can leave a truncated last line: it is dropped when the directory is
-opened again, so that trial runs again. An exclusive lock on rows.jsonl keeps a
-second sweep from writing to the same directory at the same time.
-"""
+A truncated last line (a kill -9) is dropped on reopening, so that trial runs again; an
+exclusive lock on rows.jsonl keeps a second sweep out."""
 import fcntl
 import json
 import os
@@ -28,15 +23,11 @@ ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 
 
 def read_rows(out_dir: Union[str, Path]) -> Dict[int, Dict]:
-    """Reads a sweep's rows.
-
-    A truncated last line, left by a kill during a write, is ignored.
+    """Trial id -> row of every complete line of a sweep's rows (a truncated last line
+    ignored).
 
     Args:
         out_dir: The sweep's directory (its rows.jsonl).
-
-    Returns:
-        Trial id -> row of every complete line.
 
     Raises:
         ConfigError: A complete line is not a JSON row, or a trial appears twice."""
@@ -69,12 +60,8 @@ def read_manifest(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
         out_dir: The sweep's directory.
         definition: The sweep that must have created it.
 
-    Returns:
-        The manifest.
-
     Raises:
-        ConfigError: The directory holds no sweep, another sweep's, or a damaged
-            manifest."""
+        ConfigError: The directory holds no sweep, another sweep's, or a damaged one."""
     path = Path(out_dir) / MANIFEST
     if not path.exists():
         raise ConfigError(f"{out_dir} holds no sweep ({MANIFEST} is missing); allowed: a "
@@ -98,8 +85,7 @@ class RowStore:
         executor: A label of the executor, for the manifest.
 
     Raises:
-        ConfigError: The directory is in use by another running sweep, holds
-            another sweep, or has rows but no manifest."""
+        ConfigError: The directory is in use, holds another sweep, or lacks a manifest."""
 
     def __init__(self, out_dir: Union[str, Path], definition: SweepDefinition,
                  versions: Dict[str, str], executor: str):
@@ -141,7 +127,7 @@ class RowStore:
         _write_atomically(path, json.dumps(manifest, indent=2))
 
     def append(self, row: Dict) -> None:
-        """Persists one finished trial's row before returning.
+        """Persists (fsyncs) one finished trial's row before returning.
 
         Args:
             row: The trial's row (its "trial" entry the trial id)."""
@@ -162,11 +148,8 @@ def _write_atomically(path: Path, text: str) -> None:
 
 
 def sorted_rows(rows: Dict[int, Dict]) -> List[Dict]:
-    """Orders rows by trial.
+    """The rows in trial order.
 
     Args:
-        rows: Trial id -> row.
-
-    Returns:
-        The rows in trial order."""
+        rows: Trial id -> row."""
     return [rows[t] for t in sorted(rows)]

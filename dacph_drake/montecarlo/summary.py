@@ -1,7 +1,5 @@
-"""What a sweep's rows say: quantiles of each metric per controller, success rates,
-the paired DAC-vs-baseline improvement with a bootstrap confidence interval; the
-rows as one flat table (Parquet); plots of the distributions and of a metric against
-each sampled parameter."""
+"""What a sweep's rows say: per-controller quantiles and success rates, the paired
+DAC-vs-baseline improvement with a bootstrap interval, a flat table (Parquet), plots."""
 import json
 from pathlib import Path
 from typing import Dict, List, Union
@@ -24,16 +22,12 @@ SENSITIVITY_METRIC = "tracking_error_rms"
 
 
 def flat_row(row: Dict) -> Dict:
-    """A row as one level of columns.
+    """A row as one level of columns (column -> value): trial, seed, status, reason,
+    wall_time, sampled.NAME[k], CONTROLLER.status/reason/final_time/wall_time and
+    CONTROLLER.METRIC.
 
     Args:
-        row: A trial's row (rows.jsonl).
-
-    Returns:
-        Column -> value, the columns trial, seed, status, reason, wall_time,
-            sampled.NAME (per-link settings: sampled.NAME[k]), CONTROLLER.status,
-            CONTROLLER.reason, CONTROLLER.final_time, CONTROLLER.wall_time,
-            CONTROLLER.METRIC."""
+        row: A trial's row (rows.jsonl)."""
     out = {k: row[k] for k in ("trial", "seed", "status", "reason", "wall_time")}
     for name, value in row["sampled"].items():
         if isinstance(value, list):
@@ -49,23 +43,15 @@ def flat_row(row: Dict) -> Dict:
 
 
 def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
-    """Summarizes a sweep's rows.
-
-    Success rates (a controller's: the fraction of finished trials in which it ran
-    to the end), quantiles of each metric over its successful runs, and, when DAC and
-    the model-based baseline both run, the paired comparison (metrics.comparison) on
-    the trials where both succeeded: mean, median and a 95 % percentile-bootstrap
-    interval of the mean (resampling seeded with the sweep's seed).
+    """Summarizes a sweep's rows (summary.json, with "learning" and "learning_in_tracking"):
+    success rates, quantiles of each metric over the successful runs, and the paired DAC
+    vs model-based comparison (metrics.comparison) where both succeeded, with a 95 %
+    bootstrap interval of the mean.
 
     Args:
         rows: The trials' rows, in trial order.
         controllers: The controllers the sweep runs.
-        seed: The sweep's seed, for the bootstrap's resampling.
-
-    Returns:
-        The summary (summary.json's content; learning_summary under "learning"
-            with DAC, tracking_summary under "learning_in_tracking" with DAC and
-            dac-nominal)."""
+        seed: The sweep's seed, for the bootstrap's resampling."""
     summary = {"trials": len(rows), "succeeded": sum(r["status"] == "ok" for r in rows),
                "controllers": {}, "paired": {},
                "failures": [{"trial": r["trial"], "reason": r["reason"]}
@@ -93,19 +79,13 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
 
 
 def learning_summary(rows: List[Dict]) -> Dict:
-    """Summarizes how well DAC learned, per phase.
-
-    Per phase, over the trials whose DAC run finished: how often the learned B and
-    D beat the nominal prior (learned / nominal error ratio <= 1), the ratios'
-    median and 95 % quantile, and the share of samples whose B_hat the integrator
-    rejected (the largest one, and how many trials exceed 5 %); with dac-nominal
-    runs, the median over trials of RMS e_tau with learning / without.
+    """Summarizes how well DAC learned: the number of trials and, per phase, how often
+    learned B and D beat the prior (error ratio <= 1), the ratios' median and 95 %
+    quantile, the share of B_hat rejected, and the median RMS e_tau with / without
+    learning (dac-nominal).
 
     Args:
-        rows: The trials' rows.
-
-    Returns:
-        The number of trials and, per phase, those figures."""
+        rows: The trials' rows."""
     ok = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"]
     runs = [r["runs"]["dac"]["metrics"] for r in ok]
     nominal = [(r["runs"]["dac"]["metrics"], r["runs"]["dac-nominal"]["metrics"])
@@ -139,22 +119,14 @@ LARGE_ACTUATOR_ERROR = 2.0
 
 
 def tracking_summary(rows: List[Dict]) -> Dict:
-    """Summarizes how often learning made DAC track better.
-
-    Over the trials where DAC ran to the end: how often it tracked better than
-    dac-nominal, the same loop without learning (RMS tracking error over phases 2
-    and 3, after the start-up transient that dominates phase 1 and is the same for
-    both; a dac-nominal run that diverged counts as worse), in all of them and in
-    those whose sampled actuator gains (actuator_gain_log10) are off by more than
-    LARGE_ACTUATOR_ERROR on some joint, split by the direction of the largest
-    error (weaker or stronger than the prior); and how many DAC runs did not
-    finish.
+    """Summarizes how often learning made DAC track better than dac-nominal (RMS
+    tracking error over phases 2-3, after phase 1's shared start-up transient; a diverged
+    dac-nominal run counts as worse): in all finished trials and in those with an actuator
+    off by more than LARGE_ACTUATOR_ERROR, split into weaker and stronger (counts and
+    shares; None where no trial falls in the group).
 
     Args:
-        rows: The trials' rows.
-
-    Returns:
-        Those counts and shares (None where no trial falls in the group)."""
+        rows: The trials' rows."""
     key = "tracking_error_rms_phases_2_3"
 
     def better(row) -> bool:
@@ -190,8 +162,7 @@ def _quantiles(values) -> Dict:
 
 
 def _mean_interval(values, rng) -> Dict:
-    """Mean, median and the 95 % percentile-bootstrap interval of the mean (None
-    below two values)."""
+    """Mean, median and 95 % percentile-bootstrap interval of the mean (None below 2)."""
     values = np.asarray(values, float)
     interval = None
     if values.size >= 2:
@@ -202,13 +173,10 @@ def _mean_interval(values, rng) -> Dict:
 
 
 def format_summary(summary: Dict) -> str:
-    """Formats a summary as Markdown tables.
+    """Formats a summary as Markdown tables (summary.md's text).
 
     Args:
-        summary: A summary (summarize).
-
-    Returns:
-        The Markdown text (summary.md)."""
+        summary: A summary (summarize)."""
     lines = [f"trials: {summary['trials']}, succeeded: {summary['succeeded']} "
              f"({100 * summary['success_rate']:.1f} %)"]
     lines += [f"{c}: ran to the end in {s['succeeded']} trials "
@@ -267,8 +235,7 @@ def format_summary(summary: Dict) -> str:
 
 
 def _learning_rows(learning: Dict, scaled: str) -> List[str]:
-    """The learning table's rows, of the ratios against the truth (``scaled`` "")
-    or against it at the identified scale ("_scaled")."""
+    """The learning table's rows, against the truth ("") or its identified scale."""
     rows = []
     for phase, e in learning["phases"].items():
         e_tau = e["e_tau_ratio_median"]
@@ -284,18 +251,12 @@ def _learning_rows(learning: Dict, scaled: str) -> List[str]:
 
 
 def write_summary(out_dir: Union[str, Path], definition: SweepDefinition) -> Dict:
-    """Writes a sweep's summary files.
-
-    From OUT/rows.jsonl: summary.json, summary.md, rows.parquet (with pyarrow)
-    and figures/.
+    """Writes summary.json, summary.md, rows.parquet and figures/ from OUT/rows.jsonl;
+    returns the summary with "parquet" (where the table went) and "figures" (paths in OUT).
 
     Args:
         out_dir: The sweep's directory OUT.
         definition: The sweep that created it.
-
-    Returns:
-        The summary, with "parquet" saying where the table went and "figures"
-            the figures' paths relative to OUT.
 
     Raises:
         ConfigError: The directory holds no sweep, or another sweep's."""
@@ -313,14 +274,12 @@ def write_summary(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
 
 
 def write_parquet(flat: List[Dict], path: Path) -> str:
-    """Writes the flat rows to a Parquet file (pyarrow).
+    """Writes the flat rows to a Parquet file (pyarrow); returns its name, or why it was
+    not written.
 
     Args:
         flat: The flat rows (flat_row).
-        path: The file to write.
-
-    Returns:
-        A note of what was written (the file's name) or why not."""
+        path: The file to write."""
     try:
         import pyarrow
         import pyarrow.parquet
@@ -332,19 +291,14 @@ def write_parquet(flat: List[Dict], path: Path) -> str:
 
 
 def plot_sweep(flat: List[Dict], controllers: List[str], folder: Path) -> List[Path]:
-    """Plots a sweep's metrics.
-
-    distributions.png: each plotted metric per controller (successful runs);
-    sensitivity.png: SENSITIVITY_METRIC against each sampled parameter, failed
-    trials marked on the axis.
+    """Plots distributions.png (each metric per controller) and sensitivity.png
+    (SENSITIVITY_METRIC against each sampled parameter, failed trials marked); returns
+    the figures' paths.
 
     Args:
         flat: The flat rows (flat_row).
         controllers: The controllers the sweep runs.
-        folder: The folder to write to (created if missing).
-
-    Returns:
-        The figures written."""
+        folder: The folder to write to (created if missing)."""
     folder.mkdir(parents=True, exist_ok=True)
     metrics = [m for m in PLOTTED_METRICS if any(f"{c}.{m}" in r for r in flat
                                                  for c in controllers)]

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Dict, List, Optional
 
 from dacph_drake.errors import ConfigError
+from dacph_drake.assembly import validate_scenario
 from dacph_drake.scenario import Scenario
 
 
@@ -30,13 +31,10 @@ class Trial:
 
 
 def run_trial(task: Trial) -> Dict:
-    """Runs one trial (run_trials of a batch of one).
+    """Runs one trial (run_trials of a batch of one); returns its row.
 
     Args:
-        task: The trial.
-
-    Returns:
-        Its row."""
+        task: The trial."""
     return run_trials([task])[0]
 
 
@@ -62,7 +60,7 @@ def run_trials(tasks: List[Trial]) -> List[Dict]:
     rows, valid = {}, []
     for task in tasks:
         try:
-            task.scenario.Validate()
+            validate_scenario(task.scenario)
             valid.append(task)
         except ConfigError as e:
             rows[task.trial] = failed_row(task, f"invalid sample: {e}", 0.0)
@@ -117,15 +115,12 @@ def _run_batch(tasks: List[Trial], controller: str, runs: Dict) -> None:
 
 
 def failed_row(task: Trial, reason: str, wall_time: Optional[float] = None) -> Dict:
-    """Makes the row of a trial whose controllers did not run.
+    """The row (status "failed") of a trial whose controllers did not run.
 
     Args:
         task: The trial.
         reason: Why (an invalid sample, or a worker that died running it).
-        wall_time: The time spent on it [s], if known.
-
-    Returns:
-        Its row, status "failed"."""
+        wall_time: The time spent on it [s], if known."""
     return {"trial": task.trial, "seed": task.seed, "sampled": task.sampled,
             "status": "failed", "reason": reason, "wall_time": wall_time, "runs": {}}
 

@@ -3,11 +3,9 @@
 U(q) = sum_points f(rho_j(q); k_b, rho_b) + sum_{k>=2} f(pi - |q_k|; k_f, rho_f),
 f(rho; k, rho0) = k / 2 (1 / rho - 1 / rho0)^2 for rho < rho0, else 0 (FIRAS),
 
-where rho_j is the clearance of the j-th sample point along the links (fixed-base
-kinematics in the base frame, the controller's nominal robot) from the base square,
-less the link's half width. The first term keeps every link off the base, the second
-keeps each elbow from folding onto the previous link. Gradient and Hessian are
-closed form; U does not depend on the base pose.
+rho_j the clearance from the base square of the j-th sample point along the links, less
+the link's half width (fixed-base kinematics, nominal robot): the first term keeps links
+off the base, the second keeps each elbow from folding. U does not depend on the base pose.
 """
 from typing import Tuple
 
@@ -59,8 +57,7 @@ class BaseRepulsionPotential:
                 np.array([s.base_gain, s.base_margin, s.fold_gain, s.fold_margin], float))
 
     def _Points(self, q, qdot):
-        """Sample points P and their velocities Pdot (m x 2), joint positions O and
-        velocities Odot (n x 2), all in the base frame (fixed-base kinematics)."""
+        """Sample points P, Pdot (m x 2), joints O, Odot (n x 2), in the base frame."""
         phi, phidot = np.cumsum(q), np.cumsum(qdot)
         e = np.stack([np.cos(phi), np.sin(phi)], axis=1)
         edot = phidot[:, None] * np.stack([-e[:, 1], e[:, 0]], axis=1)
@@ -73,8 +70,7 @@ class BaseRepulsionPotential:
         return P, Pdot, O, Odot
 
     def _Clearance(self, P):
-        """rho (m), d rho / dP (m x 2), d2 rho / dP2 (m x 2 x 2) to the base square
-        (rho <= 0 inside it; then the gradient points to the nearest side)."""
+        """rho (m), d rho / dP, d2 rho / dP2 to the base square (rho <= 0 inside it)."""
         excess = np.abs(P) - self._half_size
         outside = np.maximum(excess, 0.0)
         dist = np.linalg.norm(outside, axis=1)
@@ -94,14 +90,11 @@ class BaseRepulsionPotential:
 
     def Evaluate(self, q: np.ndarray, qdot: np.ndarray
                  ) -> Tuple[float, np.ndarray, np.ndarray]:
-        """The potential, its gradient and its gradient's rate at (q, qdot).
+        """(U [J], grad U (n), d/dt grad U = Hess U qdot (n)) at (q, qdot).
 
         Args:
             q: The joint angles (n) [rad].
-            qdot: The joint rates (n) [rad/s].
-
-        Returns:
-            (U [J], grad U (n), d/dt grad U = Hess U qdot (n))."""
+            qdot: The joint rates (n) [rad/s]."""
         n, s = self._n, self._s
         grad, grad_dot = np.zeros(n), np.zeros(n)
         P, Pdot, O, Odot = self._Points(q, qdot)
@@ -133,13 +126,9 @@ class BaseRepulsionPotential:
         return U, grad, grad_dot
 
     def MinClearance(self, q: np.ndarray) -> float:
-        """The smallest clearance of the sample points from the base.
-
-        Compiled: kernels.potential.min_clearance.
+        """The smallest clearance [m] of the sample points from the base (negative: a
+        point inside it; compiled kernel).
 
         Args:
-            q: The joint angles (n) [rad].
-
-        Returns:
-            The clearance [m] (negative: a point inside the base)."""
+            q: The joint angles (n) [rad]."""
         return min_clearance(np.asarray(q, float), *self._geometry)

@@ -1,18 +1,14 @@
 """The null-space potential of a spatial arm: keeps every link off the base, from
-SceneGraph's signed distances between the description's collision geometries
-(the planar arms' potential.BaseRepulsionPotential measures link outlines in closed
-form instead).
+SceneGraph's signed distances between the description's collision geometries:
 
     U(q) = gain / 2 sum_k max(0, margin - phi_k(q))^2,
     grad U = -gain sum_k max(0, margin - phi_k) grad phi_k,
     grad phi_k = (J_bar_A(p_A) - J_bar_B(p_B))_v^T nhat_BA,
 
-phi_k the signed distance between link k and the base, p_A, p_B its witness points
-on the link and on the base, nhat_BA the unit normal from the base towards the link,
-J_bar the translational rows of the generalized Jacobians (the base moves too: zero
-momentum). The links joined by a joint to the base, or to a body welded to it (an
-arm's root mounted on it, scenario.ArmBase), are not measured against it: their
-joint sits on its surface (Drake filters the first kind itself)."""
+phi_k the signed distance between link k and the base, p_A, p_B its witness points,
+nhat_BA the normal from base to link, J_bar the generalized Jacobians' translational
+rows (zero momentum). Links jointed to the base (or to a body welded to it) are not
+measured against it: their joint sits on its surface."""
 from dataclasses import dataclass
 from typing import Optional
 
@@ -30,10 +26,9 @@ class Clearance:
     """The potential's value at a configuration (BaseClearancePotential.Evaluate).
 
     Attributes:
-        U: The potential [J-like units of gain * m^2].
+        U: The potential [gain * m^2].
         gradient: dU/dq (n).
-        min_distance: The smallest link-base signed distance [m] (inf beyond the
-            query distance).
+        min_distance: The smallest link-base signed distance [m] (inf beyond the query).
     """
     U: float                # [J-like units of gain * m^2]
     gradient: np.ndarray    # dU/dq
@@ -44,15 +39,11 @@ class BaseClearancePotential:
     """U(q) at a base pose (module docstring).
 
     Args:
-        parsed: The robot (description.ParsedDescription: the plant and SceneGraph
-            the ground truth runs on, queried in contexts of its own with the
-            collision geometry).
-        model: The controller's model of the same description (the same body
-            indices), which gives the Jacobians.
+        parsed: The robot's ParsedDescription, queried in contexts of its own.
+        model: The controller's model of the same description, for the Jacobians.
         gain: The potential's gain.
         margin: The distance below which a link-base pair is repelled [m].
-        query_distance: How far Evaluate looks for the nearest distance by default
-            [m] (at least ``margin``).
+        query_distance: Evaluate's default query distance [m] (at least ``margin``).
     """
 
     def __init__(self, *, parsed: ParsedDescription, model: FloatingBaseModel,
@@ -73,49 +64,34 @@ class BaseClearancePotential:
         self._known_q, self._known_distance, self._known_exact = None, -np.inf, False
 
     def _Beyond(self, q, distance: float) -> bool:
-        """Whether every link-base distance at q is certainly above ``distance``:
-        the distances are functions of q alone (the base pose moves links and base
-        together), each within sum_j reach_j |dq_j| of its value at the last
-        query's q (_JointReach), so above known - reach . |q - q_known|."""
+        """Whether every link-base distance at q is certainly above ``distance``: each
+        is within reach . |q - q_known| of the last query's (_JointReach)."""
         return (self._known_q is not None and self._known_distance
                 - self._reach @ np.abs(q - self._known_q) > distance)
 
     def _NearestAtMost(self, q) -> float:
-        """An upper bound of the nearest link-base distance at q: the last query's
-        nearest plus reach . |q - q_known| (inf when that query found no pair)."""
+        """An upper bound of the nearest link-base distance at q (inf: unknown)."""
         if self._known_q is None or not self._known_exact:
             return np.inf
         return self._known_distance + self._reach @ np.abs(q - self._known_q)
 
     def _BodyFrame(self, geometry):
-        """The model plant's frame of the body owning ``geometry`` and the
-        geometry's pose in that body."""
+        """The model plant's frame of ``geometry``'s body, and its pose in that body."""
         body = self._plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry))
         return (self._model.plant.get_body(body.index()).body_frame(),
                 self._inspector.GetPoseInFrame(geometry))
 
     def Evaluate(self, q: np.ndarray, base_pose: np.ndarray,
                  query_distance: Optional[float] = None) -> Clearance:
-        """U, its gradient and the nearest link-base distance at a configuration.
+        """U, its gradient and the nearest link-base distance at q (a Clearance).
 
-        The model is evaluated at q only when a pair is within the margin (the
-        witness points' Jacobians). Where every link is certainly beyond the query
-        distance (_Beyond), the query is not made: its answer would be U = 0, a zero
-        gradient and inf. The query looks no further than the margin or the nearest
-        distance's upper bound (_NearestAtMost), whichever is larger: beyond it are
-        neither pairs within the margin nor the nearest one. A query made looks
-        CERTIFY further than that, so that the next calls can be answered from it.
+        No query where every link is certainly beyond the query distance (_Beyond); a
+        query looks CERTIFY further, so that later calls can be answered from it.
 
         Args:
             q: The joint angles (n) [rad].
-            base_pose: The base's pose (qw, qx, qy, qz, x, y, z), the base joint's
-                coordinates.
-            query_distance: The distance beyond which the nearest distance is
-                reported as inf [m] (None: the one it was made with; U needs the
-                margin only).
-
-        Returns:
-            The Clearance."""
+            base_pose: The base's pose (qw, qx, qy, qz, x, y, z).
+            query_distance: Beyond it the nearest distance is inf [m] (None: default)."""
         query_distance = (self._query_distance if query_distance is None
                           else max(query_distance, self.margin))
         q = np.asarray(q, float)
@@ -181,8 +157,7 @@ def _HullRadius(hull) -> float:
 
 
 def _BodyRadius(plant, inspector, body) -> float:
-    """The radius about ``body``'s origin of a ball holding its collision
-    geometries (-inf without any; inf for a shape without a bound, a half space)."""
+    """Radius about ``body``'s origin of its collision geometries (-inf: none)."""
     radius = -np.inf
     for geometry in plant.GetCollisionGeometriesForBody(
             plant.get_body(body.index())):
@@ -194,14 +169,8 @@ def _BodyRadius(plant, inspector, body) -> float:
 
 
 def _JointReach(tree, radius) -> np.ndarray:
-    """reach_j: the largest distance of a collision geometry's point moved by joint
-    j from j's axis, bounded by the fixed offsets along the chain, so that
-    |d phi / d q_j| <= reach_j for every link-base distance phi (a revolute
-    joint moves a point at r from its axis at r per rad; kinematic_tree's
-    X_WC = X_WP X_PF Rot X_MC: the chain from joint j's origin to node k is the
-    offsets t(X_MC) of j's node, then t(X_PF) + t(X_MC) of each node after it,
-    each a fixed length, and ``radius``[k] holds node k's geometry about its
-    origin)."""
+    """reach_j >= |d phi / d q_j| for every link-base distance phi, from the chain's fixed
+    offsets and each node's geometry ``radius``."""
     offset_in = np.linalg.norm(tree.X_PF[:, :3, 3], axis=1)
     offset_out = np.linalg.norm(tree.X_MC[:, :3, 3], axis=1)
     reach = np.zeros(len(tree.joint_node))
@@ -217,11 +186,8 @@ def _JointReach(tree, radius) -> np.ndarray:
 
 
 def _FilterLinksOnTheBase(plant, scene_graph, context) -> None:
-    """Excludes, in the SceneGraph ``context``, the collision pairs of the base with
-    each body whose joint's parent is welded to the base (the bodies Drake leaves
-    unfiltered when the arm's root is a body of its own, welded to the base), and
-    every pair of two links: the potential measures links against the base only,
-    and a query then computes those pairs alone."""
+    """Filters the base's pairs with bodies jointed to a body welded to it, and every
+    link-link pair: a query then computes link-base pairs alone."""
     base = plant.get_body(next(iter(plant.GetFloatingBaseBodies())))
     welded = {body.index() for body in plant.GetBodiesWeldedTo(base)}
     on_base = [plant.get_joint(j).child_body() for j in plant.GetJointIndices()

@@ -1,9 +1,7 @@
 """Free-floating manipulators from robot description files (URDF, SDF) with Drake's
-Parser: the root body becomes a free 6-DOF base (Drake's quaternion floating joint,
-so nq = nv + 1), every revolute joint of the arm is actuated, gravity is zero.
-
-The project ships its own descriptions (Drake's bundled models are fetched from the
-internet on first use, which these machines cannot): SPATIAL_ROBOTS names them."""
+Parser: the root body becomes a free 6-DOF base (quaternion floating joint, nq = nv + 1),
+every revolute joint of the arm is actuated, gravity is zero. The project ships its own
+descriptions (SPATIAL_ROBOTS): Drake's bundled models are fetched from the internet."""
 import difflib
 import logging
 import os
@@ -36,9 +34,7 @@ MODELS = Path(__file__).resolve().parents[1] / "models"
 
 class _EachWarningOnce(logging.Filter):
     """Passes each distinct message once per process: a run parses its description
-    for the ground truth, the controller's model and the clearance potential (and a
-    sweep for every trial), so each of Drake's parser warnings would otherwise
-    print three times or more."""
+    several times, which would repeat every parser warning."""
 
     def __init__(self):
         super().__init__()
@@ -63,19 +59,14 @@ SPATIAL_ROBOTS = {"satellite_3dof": MODELS / "satellite_3dof.urdf",
 
 def robot_description(name_or_path: Union[str, Path],
                       package_map: Optional[PackageMap] = None) -> Path:
-    """The description file a scenario's robot.description names.
+    """The path of the description file a scenario's robot.description names.
 
     Args:
-        name_or_path: A shipped robot's name (SPATIAL_ROBOTS), a package:// URI or a
-            path to a .urdf / .sdf file.
+        name_or_path: A shipped robot's name (SPATIAL_ROBOTS), a package:// URI or a path.
         package_map: Resolves a package:// URI (package_map_of).
 
-    Returns:
-        The file's path.
-
     Raises:
-        ConfigError: Naming what is allowed, for an unknown package or a path that
-            is no .urdf or .sdf file."""
+        ConfigError: For an unknown package or a path that is no description file."""
     if str(name_or_path) in SPATIAL_ROBOTS:
         return SPATIAL_ROBOTS[str(name_or_path)]
     text = str(name_or_path)
@@ -101,22 +92,13 @@ def robot_description(name_or_path: Union[str, Path],
 
 
 def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
-    """Adds the packages a described arm's package:// URIs may name to a package map.
-
-    They are robot.packages (name -> folder), the packages under
-    robot.package_paths (their package.xml), those on ROS_PACKAGE_PATH, and the
-    ROS 2 way, the ament index of every prefix on AMENT_PREFIX_PATH and of the
-    prefix pip installs ROS packages into (cmeel's, site-packages/cmeel.prefix:
-    example-robot-data, whose package.xml names itself example_robot_descriptions,
-    is found there as example-robot-data). The first place that names a package
-    wins.
+    """Adds the packages a described arm's package:// URIs may name to ``package_map`` and
+    returns it: robot.packages, robot.package_paths, ROS_PACKAGE_PATH, the ament index on
+    AMENT_PREFIX_PATH and pip's cmeel.prefix; the first place that names a package wins.
 
     Args:
         arm: The scenario's robot section.
-        package_map: The map to add them to (changed in place).
-
-    Returns:
-        ``package_map``."""
+        package_map: The map to add them to (changed in place)."""
     for name, folder in arm.packages.items():
         package_map.Add(name, str(folder))
     for folder in arm.package_paths:
@@ -134,17 +116,10 @@ def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
 
 
 def planar_arm_urdf(robot: RobotParams) -> str:
-    """The URDF of a planar arm.
-
-    The same bodies, inertias, joint and frame names as plant.AddFreeFloatingArm
-    builds directly (a planar joint for the base, continuous z-axis joints, the end
-    effector a massless link).
+    """The URDF text of a planar arm: plant.AddFreeFloatingArm's bodies, joints and frames.
 
     Args:
-        robot: The arm (arm_parameters.RobotParams).
-
-    Returns:
-        The URDF text."""
+        robot: The arm (arm_parameters.RobotParams)."""
     def inertial(mass, com, ixx, iyy, izz):
         return (f'<inertial><origin xyz="{com!r} 0 0"/><mass value="{mass!r}"/>'
                 f'<inertia ixx="{ixx!r}" ixy="0" ixz="0" iyy="{iyy!r}" iyz="0" '
@@ -170,14 +145,10 @@ def planar_arm_urdf(robot: RobotParams) -> str:
 
 
 def described_arm(description: Union[str, Path, DescribedArm]) -> DescribedArm:
-    """A described robot as a scenario's robot section.
+    """A described robot as a scenario's robot section (a section is returned as it is).
 
     Args:
-        description: A scenario's robot section (scenario.DescribedArm), or a bare
-            description name or path (the description is the whole robot).
-
-    Returns:
-        The section as it is, or the section of the bare description."""
+        description: A robot section (scenario.DescribedArm), or a bare name or path."""
     return (description if hasattr(description, "description")
             else DescribedArm(description=str(description)))
 
@@ -185,25 +156,16 @@ def described_arm(description: Union[str, Path, DescribedArm]) -> DescribedArm:
 def PopulateFromDescription(plant: MultibodyPlant,
                             name_or_path: Union[str, Path, DescribedArm, RobotParams]
                             ) -> None:
-    """Parses a description into a plant.
-
-    Each revolute joint the description leaves unactuated is actuated (in its joint
-    order, with the URDF's effort limit when robot.effort_limits is "saturate",
-    else none); a moving joint of another kind is refused by name; gravity is
-    switched off.
+    """Parses a description into a plant: gravity off, each unactuated revolute joint
+    actuated (URDF effort limit if "saturate"), a moving joint of another kind refused.
 
     Args:
         plant: The plant (not finalized; left so).
-        name_or_path: A shipped name, a .urdf/.sdf path, a scenario.DescribedArm
-            (the arm mounted on its base, its end-effector frame added, package://
-            URIs resolved through its package_paths, packages and ROS_PACKAGE_PATH,
-            STL meshes read as OBJ: robots.meshes, its locked joints welded), or a
-            planar RobotParams through planar_arm_urdf.
+        name_or_path: A shipped name, a .urdf/.sdf path, a scenario.DescribedArm (mounted,
+            end effector added, URIs resolved, locked joints welded) or a RobotParams.
 
     Raises:
-        ConfigError: Naming what the description, or the robot section, has that
-            is not allowed (a file that does not parse, a moving joint that is not
-            revolute, no revolute joint, a missing end-effector frame, ...)."""
+        ConfigError: Naming what in the description or robot section is not allowed."""
     efforts = {}
     if isinstance(name_or_path, RobotParams):
         name_or_path.Validate()
@@ -264,15 +226,12 @@ def PopulateFromDescription(plant: MultibodyPlant,
 
 
 def _DrakeMessage(error: RuntimeError, path: Path) -> str:
-    """The first line of a parser error, located in the user's file rather than in
-    Drake's <literal-string>.urdf (the parsed text keeps the file's lines)."""
+    """The first line of a parser error, located in the user's file."""
     return re.sub(r"<literal-string>\.urdf", path.name, str(error).splitlines()[0])
 
 
 def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
-    """A uniform box body "base" of base.mass and base.size (with its collision and
-    visual box where the plant has a SceneGraph), the arm's root body (the one no
-    joint of the description moves) welded to it at base.mount."""
+    """Welds the arm's root body at base.mount to a uniform box "base" of base.mass."""
     roots = [plant.get_body(b) for instance in instances
              for b in plant.GetBodyIndices(instance)]
     _DropWorldAnchors(plant, instances)
@@ -292,9 +251,7 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
 
 
 def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
-    """Removes each weld of the description to the world (a fixed-base arm's file,
-    such as a UR5's world_joint), with a logged note: the arm is mounted on the
-    base instead. ConfigError for a moving joint to the world."""
+    """Removes (and logs) each weld of the description to the world."""
     world = plant.world_body().index()
     for index in [j for instance in instances for j in plant.GetJointIndices(instance)]:
         joint = plant.get_joint(index)
@@ -327,11 +284,7 @@ def _UrdfEffortLimits(path: Path) -> dict:
 
 
 def _LockJoints(plant: MultibodyPlant, locked, path) -> None:
-    """Welds, at its position, each joint named in ``locked`` (name: position,
-    revolute or prismatic) and every other prismatic joint (at 0): a gripper's
-    fingers and any joint that is not the arm's; a logged note names them. The
-    description's joint constraints (a gripper's mimic couplers) go with them.
-    ConfigError for a name that is not a joint of the description."""
+    """Welds each joint in ``locked`` (name: position) and every other prismatic joint."""
     wanted, welded = dict(locked), []
     if any(isinstance(plant.get_joint(j), PrismaticJoint) or plant.get_joint(j).name()
            in wanted for j in plant.GetJointIndices()):
@@ -366,9 +319,7 @@ def _LockJoints(plant: MultibodyPlant, locked, path) -> None:
 
 
 def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path) -> None:
-    """The frame named END_EFFECTOR at end_effector.offset from end_effector.frame
-    (or the description's own END_EFFECTOR frame when end_effector.frame is empty);
-    ConfigError naming the frame otherwise."""
+    """Adds frame END_EFFECTOR at end_effector.offset from end_effector.frame (or not)."""
     if not end_effector.frame:
         if not plant.HasFrameNamed(END_EFFECTOR):
             raise ConfigError(
@@ -393,25 +344,16 @@ def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path)
 
 
 class ParsedDescription:
-    """A description parsed once into a plant and its SceneGraph.
-
-    Its finalized continuous ``plant``, registered with its own ``scene_graph``, is
-    not yet in any diagram. One parse serves
-    a whole closed loop: AddTo puts the pair into the loop's builder as the ground
-    truth, the controller's model evaluates the same plant in contexts of its own
-    (floating_model.FloatingBaseModel; its inertias are context parameters), and the
-    clearance potential queries the collision geometry in its own SceneGraph context
-    (ClearanceContexts). The collision geometry's proximity role is taken off the
-    SceneGraph's model: the ground truth, like the planar one, has no contact (a
-    continuous plant would otherwise compute contact forces from it).
+    """A description parsed once into a finalized continuous ``plant`` and its own
+    ``scene_graph``, for a whole closed loop: AddTo adds them as the ground truth, the
+    controller's model and the clearance potential use contexts of their own. The
+    proximity role is taken off the SceneGraph's model: the truth computes no contact.
 
     Args:
-        name_or_path: A shipped name, a path or a scenario.DescribedArm, as
-            PopulateFromDescription reads it.
+        name_or_path: The description, as PopulateFromDescription reads it.
 
     Raises:
-        ConfigError: As PopulateFromDescription, or the robot has not one free
-            base with mass."""
+        ConfigError: As PopulateFromDescription, or not one free base with mass."""
 
     def __init__(self, name_or_path: Union[str, Path, DescribedArm, RobotParams]):
         self.plant, self.scene_graph = MultibodyPlant(time_step=0.0), SceneGraph()
@@ -430,19 +372,11 @@ class ParsedDescription:
         self._added = False
 
     def AddTo(self, builder: DiagramBuilder) -> "tuple[MultibodyPlant, SceneGraph]":
-        """Adds the plant and its SceneGraph to a diagram.
-
-        They are connected as AddMultibodyPlantSceneGraph connects them, once (a
-        system belongs to one diagram).
+        """Adds the plant and its SceneGraph, connected, to a diagram (once: a second call
+        raises RuntimeError); returns (plant, scene_graph).
 
         Args:
-            builder: The diagram's builder.
-
-        Returns:
-            (plant, scene_graph).
-
-        Raises:
-            RuntimeError: They are already in a diagram."""
+            builder: The diagram's builder."""
         if self._added:
             raise RuntimeError("a ParsedDescription's plant is already in a diagram; "
                                "parse the description again for another one")
@@ -459,16 +393,9 @@ class ParsedDescription:
         return plant, scene_graph
 
     def ClearanceContexts(self) -> Tuple[Context, Context]:
-        """Contexts in which to query the collision geometry.
-
-        The collision geometry's proximity role is given back in the SceneGraph's
-        context, with the filters MultibodyPlant.Finalize declares (none between the
-        bodies a joint connects, none within a group of bodies welded together): set
-        the plant's positions, then UpdatePoses, then query.
-
-        Returns:
-            (plant context, SceneGraph context) of the plant and its SceneGraph
-                alone."""
+        """(plant context, SceneGraph context), of the two alone, in which to query the
+        collision geometry: its proximity role given back, with Finalize's collision
+        filters. Set positions, UpdatePoses, then query."""
         plant, context = self.plant, self.scene_graph.CreateDefaultContext()
         for geometry, properties in self._proximity.items():
             self.scene_graph.AssignRole(context, plant.get_source_id(), geometry,
@@ -503,17 +430,12 @@ class ParsedDescription:
 def AddRobotFromDescription(builder: DiagramBuilder,
                             name_or_path: Union[str, Path, DescribedArm, RobotParams]
                             ) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized continuous plant of a description to a diagram.
-
-    Its visual geometry is registered with a SceneGraph (for Meshcat)
-    (ParsedDescription: no contact).
+    """Adds a description's finalized continuous plant and its SceneGraph to a diagram;
+    returns (plant, scene_graph).
 
     Args:
         builder: The diagram's builder.
         name_or_path: The description, as ParsedDescription takes it.
-
-    Returns:
-        (plant, scene_graph).
 
     Raises:
         ConfigError: As ParsedDescription."""
@@ -522,15 +444,10 @@ def AddRobotFromDescription(builder: DiagramBuilder,
 
 def MakeRobotPlant(name_or_path: Union[str, Path, DescribedArm, RobotParams]
                    ) -> MultibodyPlant:
-    """Makes a finalized plant of a description without geometry.
-
-    For a controller's internal model.
+    """Makes a finalized plant of a description without geometry (a controller's model).
 
     Args:
         name_or_path: The description, as PopulateFromDescription takes it.
-
-    Returns:
-        The plant.
 
     Raises:
         ConfigError: As ParsedDescription."""

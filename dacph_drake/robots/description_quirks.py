@@ -1,17 +1,11 @@
-"""Descriptions as their makers ship them: what Drake's parser refuses or repeats,
-made into one line per kind naming the user's file.
+"""Descriptions as their makers ship them: what Drake's parser refuses or repeats, made
+into one line per kind naming the user's file.
 
-- A URDF that defines one material name more than once (Kinova's j2s6s200 defines
-  'carbon_fiber' in every link's visual): Drake refuses the file. The first
-  definition is kept and every later one is read as a reference to it when it is
-  the same, or renamed NAME__K when its colour or texture differs; each line of
-  the file keeps its number.
-- A xacro macro file (a .xacro name, or a URDF with xacro: elements) is refused
-  with the command that expands it.
-- Drake's parser warnings (unsupported tags such as safety_controller or
-  transmission details, one per occurrence) are collected while a description is
-  parsed and logged once per kind and file, with the first line and the count,
-  naming the user's file instead of Drake's <literal-string>.urdf."""
+- A material name defined more than once (Drake refuses it): the first definition is
+  kept; a later one is read as a reference to it, or renamed NAME__K where it differs.
+- A xacro macro file is refused with the command that expands it.
+- Drake's parser warnings are logged once per kind and file, with the first line and the
+  count."""
 import logging
 import re
 from collections import OrderedDict
@@ -48,15 +42,12 @@ def refuse_xacro(path: Path, text: str) -> None:
 
 
 def without_duplicate_materials(text: str, path: Path) -> Tuple[str, bool]:
-    """A URDF's text with each material name defined once (module docstring).
+    """(text, changed): a URDF's text with each material name defined once (module
+    docstring), every line at its number, and whether it changed.
 
     Args:
         text: The URDF's text.
-        path: Its path (named in the note).
-
-    Returns:
-        (text, changed): the text, every line at its number, and whether a
-            definition was changed."""
+        path: Its path (named in the note)."""
     first = {}
     repeated: "OrderedDict[str, List[int]]" = OrderedDict()
     renamed = {}
@@ -85,14 +76,11 @@ def without_duplicate_materials(text: str, path: Path) -> Tuple[str, bool]:
 
 @contextmanager
 def parser_warnings_once(path: Path) -> Iterator[None]:
-    """Collects Drake's parser warnings while a description is parsed, then logs
-    one line per kind (module docstring).
+    """Logs Drake's parser warnings during a parse once per kind (module docstring), on
+    exit.
 
     Args:
-        path: The description's path (named in each line).
-
-    Yields:
-        Nothing; the warnings are logged on exit."""
+        path: The description's path (named in each line)."""
     drake = logging.getLogger("drake")
     kinds: "OrderedDict[str, list]" = OrderedDict()    # kind -> [first text, lines]
 
@@ -124,8 +112,7 @@ def _Lines(lines: List[int]) -> str:
 
 
 def _Once(message: str) -> None:
-    """Logs a warning once per process (a run parses its description several times:
-    the ground truth, the controller's model, the clearance potential, each trial)."""
+    """Logs a warning once per process (a run parses its description several times)."""
     if message not in _reported:
         _reported.add(message)
         _logger.warning(message)

@@ -1,19 +1,11 @@
-"""Meshes as robot packages ship them, for Drake's SceneGraph: a collision mesh must
-be .obj, .vtk or .gltf (SceneGraph takes its convex hull), while URDFs from ROS
-packages give STL (example-robot-data's Panda, Universal Robots' arms) and Collada
-.dae (Baxter's collision meshes). The rule: every STL mesh a URDF names, and every
-.dae mesh of a <collision>, is converted, triangle for triangle, to an OBJ in a
-cache folder (named by the file's content hash), and the URDF is read with those
-names; the convex hull SceneGraph then takes is the original's. A .dae's triangles
-are its geometries' (triangles, polylist and polygons, fanned) placed by the
-<visual_scene>'s nodes that instance them (matrix, translate, rotate and scale, in
-document order), in metres (<unit meter>); a .dae without a visual scene gives
-its geometries as they are. The file's <up_axis> is not applied: a description's
-meshes are drawn in their link's frame as ROS's tools read them (example-robot-
-data's Borinot base declares Y_UP, an exporter's default, and its flat body lies
-in the link's x-y plane only as written). Visual .dae meshes are left as they are, with their
-materials (Meshcat draws them); other meshes too (their relative paths made
-absolute file:// URIs)."""
+"""Meshes as robot packages ship them, for Drake's SceneGraph, whose collision meshes must
+be .obj, .vtk or .gltf (it takes their convex hull), while ROS packages give STL and
+Collada .dae. Every STL mesh a URDF names, and every .dae mesh of a <collision>, is
+converted triangle for triangle to an OBJ in a cache folder (named by content hash), so
+the hull is the original's. A .dae's triangles are its geometries' placed by the
+<visual_scene>'s nodes (matrix, translate, rotate, scale, in document order), in metres;
+<up_axis> is not applied, as ROS's tools draw meshes in their link's frame. Visual .dae
+and other meshes stay as they are (relative paths made absolute file:// URIs)."""
 import hashlib
 import re
 import tempfile
@@ -32,22 +24,16 @@ _COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
 
 def urdf_with_obj_meshes(path: Path, package_map: PackageMap,
                          text: Optional[str] = None) -> Optional[str]:
-    """A URDF's text with its meshes converted as the module docstring's rule says.
+    """A URDF's text with its meshes converted as the module docstring's rule says, or
+    None when it is the file's own and names no mesh to convert.
 
     Args:
         path: The URDF file.
         package_map: Resolves its package:// mesh URIs.
-        text: The file's text as read so far (default: the file's; a text that
-            differs from the file's is always returned, to be parsed as a string).
-
-    Returns:
-        The text with its STL meshes and its collision .dae meshes replaced by
-            converted OBJs and its relative mesh paths made absolute, or None when it
-            names no mesh to convert and is the file's own.
+        text: The file's text as read so far (default: the file's).
 
     Raises:
-        ConfigError: A mesh names an unknown package, or cannot be read or
-            converted (naming it)."""
+        ConfigError: A mesh names an unknown package, or cannot be read or converted."""
     original = path.read_text(encoding="utf-8")
     text = original if text is None else text
     collision = [match.span() for match in _COLLISION.finditer(text)]
@@ -84,8 +70,7 @@ def _Resolve(name: str, path: Path, package_map) -> Path:
 
 
 def _ObjOf(mesh: Path) -> Path:
-    """The cached OBJ of an STL or .dae file (ConfigError naming a missing or bad
-    file)."""
+    """The cached OBJ of an STL or .dae file (ConfigError naming a missing or bad one)."""
     try:
         data = mesh.read_bytes()
     except OSError as e:
@@ -104,14 +89,11 @@ def _ObjOf(mesh: Path) -> Path:
 
 
 def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
-    """The triangles of an STL file's bytes, binary or ASCII.
+    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII.
 
     Args:
         data: The file's bytes.
         name: The file's name, for the error message.
-
-    Returns:
-        The triangles (k, 3 vertices, xyz).
 
     Raises:
         ConfigError: The bytes are not an STL file."""
@@ -130,14 +112,11 @@ def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
 
 
 def dae_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
-    """The triangles of a Collada file's bytes (module docstring: its rule).
+    """The triangles (k, 3 vertices, xyz) [m] of a Collada file's bytes (module docstring).
 
     Args:
         data: The file's bytes.
         name: The file's name, for the error message.
-
-    Returns:
-        The triangles (k, 3 vertices, xyz) [m].
 
     Raises:
         ConfigError: The bytes are not a Collada file, or hold no triangles."""
@@ -215,8 +194,7 @@ def _GeometryTriangles(geometry) -> np.ndarray:
 
 
 def _NodeTransform(node) -> np.ndarray:
-    """The 4x4 transform of a <node>'s matrix, translate, rotate and scale
-    elements, in document order."""
+    """The 4x4 transform of a <node>'s matrix, translate, rotate, scale (in order)."""
     X = np.eye(4)
     for element in node:
         values = np.array((element.text or "").split(), float)

@@ -28,16 +28,13 @@ class SerialLink:
 
 def serial_arm_urdf(name: str, links: Sequence[SerialLink], tool_mass: float = 0.0,
                     axes: Sequence[str] = AXES) -> str:
-    """The URDF of a serial arm (module docstring).
+    """The URDF text of a serial arm (module docstring).
 
     Args:
         name: The robot's name.
         links: Its links, from the root outwards.
         tool_mass: A mass added to the last link [kg].
-        axes: The joints' axes as URDF "x y z" strings, cycled.
-
-    Returns:
-        The URDF text."""
+        axes: The joints' axes as URDF "x y z" strings, cycled."""
     parts = [f'<robot name="{name}"><link name="root"><inertial><mass value="1.0"/>'
              '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
              '</inertial><collision><geometry><cylinder radius="0.05" length="0.05"/>'

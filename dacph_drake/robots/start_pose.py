@@ -1,18 +1,10 @@
 """Where a described arm starts and what the attitude task asks of it.
 
-A kinematic rehearsal of the task (ReferenceRehearsal): from q0 the joints follow
-the task's law without dynamics,
-
-    qdot = D^+ (omega_d(t) - Lambda e),    D = the generalized Jacobian's angular
-                                           rows (docs/equations.md E5-E9),
-
-the base turning as zero momentum implies, for one warm-up and one reference
-period. Its joint momenta p = M(q) qdot and their rates are the scales the sizing
-rule needs (arm_defaults): the coupled inertia M_jk qdot_k, not M_jj alone,
-decides how far a joint's momentum goes. Its excursion decides whether a start
-keeps every joint within its limits. choose_start picks the start a file does not
-give; task_singularity names the joints of a start at which the task has no
-solution."""
+A kinematic rehearsal (ReferenceRehearsal) follows the task's law from q0 without
+dynamics, qdot = D^+ (omega_d(t) - Lambda e), D the generalized Jacobian's angular rows
+(docs/equations.md E5-E9), the base turning as zero momentum implies. Its momenta
+p = M(q) qdot and their rates size the gains (arm_defaults): the coupled inertia
+M_jk qdot_k, not M_jj alone, decides a joint's momentum; its excursion checks limits."""
 from dataclasses import dataclass
 from typing import Callable, List, Optional, Sequence
 
@@ -24,7 +16,8 @@ from pydrake.multibody.tree import Frame
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import EndEffectorAttitude
-from dacph_drake.tasks.attitude import attitude_error, damped_pseudo_inverse
+from dacph_drake.tasks.attitude import (attitude_error, damped_pseudo_inverse,
+                                        reference_at, reference_start)
 
 # The smallest singular value of D (rad/s of the end effector per rad/s of the
 # joints) a start must have: below it, one end-effector rate asks for joint rates
@@ -58,13 +51,10 @@ class ReferenceRehearsal:
 
 
 def end_effector_frame(model: FloatingBaseModel) -> Frame:
-    """The plant frame the attitude task tracks.
+    """The plant frame the attitude task tracks: the model's END_EFFECTOR frame.
 
     Args:
-        model: The arm's model.
-
-    Returns:
-        Its END_EFFECTOR frame."""
+        model: The arm's model."""
     return model.plant.GetFrameByName(END_EFFECTOR)
 
 
@@ -75,10 +65,7 @@ def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
     Args:
         model: The arm's model.
         q: The joint angles [rad].
-        base_positions: The base joint's coordinates (default: the identity pose).
-
-    Returns:
-        D (3 x n)."""
+        base_positions: The base joint's coordinates (default: the identity pose)."""
     return model.GeneralizedJacobian(np.asarray(q, float), end_effector_frame(model),
                                      base_positions=base_positions)[:3]
 
@@ -91,14 +78,11 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
         model: The arm's model.
         q0: The start [rad].
         task: The task (its reference, Lambda and task_damping).
-        duration: How long [s].
-
-    Returns:
-        The rehearsal."""
+        duration: How long [s]."""
     frame, reference, gains = end_effector_frame(model), task.reference, task.gains
     q = np.asarray(q0, float).copy()
     base = RotationMatrix()
-    R_d0 = reference.Start(RotationMatrix(model.FramePose(frame, model.Evaluate(
+    R_d0 = reference_start(reference, RotationMatrix(model.FramePose(frame, model.Evaluate(
         q, derivatives=False))))
     steps = max(int(np.ceil(duration / REHEARSAL_STEP)), 2)
     qs, ps, sigmas = [], [], []
@@ -106,7 +90,7 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
         positions = np.concatenate([base.ToQuaternion().wxyz(), np.zeros(3)])
         evaluation = model.Evaluate(q, derivatives=False)
         R_WE = RotationMatrix(model.FramePose(frame, evaluation, positions))
-        R_d, omega_d = reference.At(R_d0, k * REHEARSAL_STEP)
+        R_d, omega_d = reference_at(reference, R_d0, k * REHEARSAL_STEP)
         D = model.GeneralizedJacobian(q, frame, base_positions=positions,
                                       evaluation=evaluation)[:3]
         qdot = damped_pseudo_inverse(D, gains.task_damping) @ (
@@ -128,22 +112,17 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
 
 
 def joint_limits(model: FloatingBaseModel) -> tuple:
-    """The position limits of the arm's joints.
+    """The position limits (lower, upper) [rad] of the arm's joints, +-inf where none.
 
     Args:
-        model: The arm's model.
-
-    Returns:
-        (lower, upper) [rad], +-inf where a joint has none."""
+        model: The arm's model."""
     plant, joint_q = model.plant, model.coordinates.joint_q
     return (plant.GetPositionLowerLimits()[joint_q],
             plant.GetPositionUpperLimits()[joint_q])
 
 
 def _allowed_box(model: FloatingBaseModel) -> tuple:
-    """The range a start samples each joint from: its limits less LIMIT_MARGIN of
-    the range at each end, [-pi, pi] for a joint without limits (or with a range
-    over 2 pi)."""
+    """Each joint's sampling range: its limits less LIMIT_MARGIN, else [-pi, pi]."""
     lower, upper = joint_limits(model)
     wide = ~(np.isfinite(lower) & np.isfinite(upper)) | (upper - lower > 2 * np.pi)
     margin = LIMIT_MARGIN * (upper - lower)
@@ -153,15 +132,12 @@ def _allowed_box(model: FloatingBaseModel) -> tuple:
 
 
 def within_limits(model: FloatingBaseModel, q: np.ndarray) -> bool:
-    """Whether joint angles keep LIMIT_MARGIN of each joint's range free of its
-    limits (joints without limits: always).
+    """Whether every sample of ``q`` keeps LIMIT_MARGIN of each joint's range free (no
+    limits: yes).
 
     Args:
         model: The arm's model.
-        q: Joint angles, one sample (n) or many (k x n) [rad].
-
-    Returns:
-        True when every sample does."""
+        q: Joint angles, one sample (n) or many (k x n) [rad]."""
     lower, upper = joint_limits(model)
     finite = np.isfinite(lower) & np.isfinite(upper)
     margin = np.where(finite, LIMIT_MARGIN * (upper - lower), 0.0)
@@ -173,37 +149,25 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
                  clearance: Callable[[np.ndarray], float],
                  null_space_rate: Optional[Callable[[np.ndarray], float]],
                  duration: float) -> np.ndarray:
-    """The start a scenario file does not give.
+    """The start q0 [rad] a scenario file does not give.
 
     Candidates: the middle of the limits and CANDIDATES quasi-random points of the
-    joints' ranges (each joint's limits less LIMIT_MARGIN of its range; [-pi, pi]
-    without limits), in a fixed order. A start qualifies when D's smallest singular
-    value is above SINGULAR_BOUND there and along its rehearsal of the task, the
-    rehearsal keeps every joint within that margin of its limits, and its links are
-    CLEARANCE_BOUND clear of the base (or half the best clearance of the
-    candidates, where a link next to the root never gets that far: a UR5's
-    shoulder sits 3 cm above its mount). The REHEARSED candidates whose clearance
-    potential pushes least at the start (its null-space rate ||xi||, counted as
-    idle below IDLE_NULL_SPACE_RATE), then with the largest singular value, are
-    rehearsed; of those that qualify, the one whose potential pushes least along
-    the rehearsal (a potential pushing at 0.009 rad/s while the task moves cost
-    the UR5 a 300x larger error), then with the largest smallest singular value
-    along it.
+    joints' ranges less LIMIT_MARGIN. A start qualifies when D's smallest singular value
+    stays above SINGULAR_BOUND along its rehearsal, which keeps the joints within the
+    margin, and its links are CLEARANCE_BOUND (or half the best clearance) clear of the
+    base. Of the REHEARSED candidates whose clearance potential pushes least at the start,
+    the qualifying one pushed least along the rehearsal wins (a potential pushing while
+    the task moves costs tracking error), then the best-conditioned one.
 
     Args:
         model: The arm's model.
         task: The task.
         clearance: q -> the link-base clearance [m].
-        null_space_rate: q -> ||xi|| of the clearance potential [rad/s] (None: no
-            potential).
+        null_space_rate: q -> ||xi|| of the clearance potential [rad/s] (None: none).
         duration: How long the rehearsal runs [s].
 
-    Returns:
-        q0 [rad].
-
     Raises:
-        ValueError: No candidate qualifies (the message says which test failed
-            most)."""
+        ValueError: No candidate qualifies (naming the test that failed most)."""
     low, high = _allowed_box(model)
     n = model.num_joints
     points = _halton(CANDIDATES, n)
@@ -244,17 +208,13 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
 
 def task_singularity(model: FloatingBaseModel, q0: Sequence[float]
                      ) -> Optional[str]:
-    """Whether the attitude task is (nearly) singular at q0, and at which joints.
+    """None unless the attitude task is (nearly) singular at q0 (D's smallest singular
+    value < REFUSED_SINGULAR_VALUE), else a sentence naming it and the joints that turn
+    the end effector least.
 
     Args:
         model: The arm's model.
-        q0: The start [rad].
-
-    Returns:
-        None when D's smallest singular value is at least REFUSED_SINGULAR_VALUE;
-            otherwise a sentence naming the value and the joints whose motion
-            turns the end effector least (the right singular vector's largest
-            entries)."""
+        q0: The start [rad]."""
     from dacph_drake.robots.described import arm_joints
     D = task_jacobian(model, q0)
     _, sigma, Vt = np.linalg.svd(D)

@@ -1,13 +1,11 @@
-"""The arm in Meshcat: ArmViewer draws a plant state (live during a simulation,
-loop.simulate.simulate(meshcat=...)), and write_animation replays a run's logs into a
-self-contained HTML file, with an overlay that names what is drawn and shows the
-simulated time and the current phase while it plays.
-"""
+"""The arm in Meshcat: ArmViewer draws a plant state (live, or simulate(meshcat=...)),
+write_animation replays a run's logs into a self-contained HTML file with an overlay
+naming what is drawn, the simulated time and the phase."""
 import html
 import json
 import logging
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Dict, Optional, Union
+from typing import Callable, Dict, Optional, Union
 
 import numpy as np
 from pydrake.geometry import (Box, Meshcat, MeshcatVisualizer,
@@ -25,9 +23,6 @@ from dacph_drake.dynamics.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)
 from dacph_drake.scenario import DescribedArm, Scenario
 
-if TYPE_CHECKING:
-    from dacph_drake.loop.closed_loop import ClosedLoop
-
 DESIRED_PATH = "/desired_orientation"
 MEASURED_PATH = "/measured_orientation"
 BAR_LENGTH = 0.15          # [m] of the bars showing alpha_d and alpha
@@ -40,23 +35,17 @@ OVERLAY_BACKGROUND = "#fffbe6"
 
 
 def playback_speedup(duration: float, max_playback: float) -> float:
-    """The speed-up of a replay.
-
-    Real time unless the run is longer than max_playback.
+    """A replay's simulated seconds per playback second: 1 unless the run is longer than
+    max_playback.
 
     Args:
         duration: The run's simulated duration [s].
-        max_playback: The longest replay [s].
-
-    Returns:
-        Simulated seconds per playback second (at least 1)."""
+        max_playback: The longest replay [s]."""
     return max(1.0, duration / max_playback)
 
 
 class _RobotViewer:
-    """A plant's geometry in Meshcat through a MeshcatVisualizer (publishing at
-    ``fps``), drawn one plant state at a time: live, or as the frame of a recording
-    at a playback time. ``add_plant(builder)`` returns (plant, scene_graph)."""
+    """A plant's geometry in Meshcat, drawn one state at a time (live or recorded)."""
 
     def __init__(self, meshcat: Meshcat, fps: float, add_plant):
         self.meshcat = meshcat
@@ -75,8 +64,7 @@ class _RobotViewer:
         return self._plant.num_actuators()
 
     def _Publish(self, x: np.ndarray, time: float) -> RigidTransform:
-        """Draws plant state ``x`` (at playback ``time``, None: live); returns the
-        end effector's pose X_WE."""
+        """Draws plant state ``x`` (at playback ``time``; None: live); returns X_WE."""
         self._context.SetTime(time or 0.0)
         self._plant.SetPositions(self._plant_context, x[:self._plant.num_positions()])
         self.visualizer.ForcedPublish(self._visualizer_context)
@@ -90,12 +78,8 @@ class _RobotViewer:
 
 
 class ArmViewer(_RobotViewer):
-    """The ground-truth planar arm in Meshcat, viewed top-down (the robot's plane).
-
-    It is drawn with the desired end-effector direction alpha_d (wide red bar) and
-    the measured one alpha = theta0 + q1 + ... + qn (thin dark bar on top, so both
-    stay visible when they agree). Draw() shows one plant state, live or into a
-    recording.
+    """The planar arm viewed top-down, with the desired end-effector direction alpha_d
+    (wide red bar) and the measured alpha = theta0 + q1 + ... + qn (thin dark bar).
 
     Args:
         scenario: The scenario (its robot.truth is drawn).
@@ -118,13 +102,10 @@ class ArmViewer(_RobotViewer):
 
     @staticmethod
     def Reach(scenario: Scenario) -> float:
-        """The distance from the base's centre to the arm's stretched-out tip.
+        """The distance [m] from the base's centre to the arm's stretched-out tip.
 
         Args:
-            scenario: The scenario (its robot.truth).
-
-        Returns:
-            The distance [m]."""
+            scenario: The scenario (its robot.truth)."""
         return (scenario.robot.truth.base.size / 2
                 + sum(link.length for link in scenario.robot.truth.links))
 
@@ -135,8 +116,7 @@ class ArmViewer(_RobotViewer):
         Args:
             x: The plant state.
             alpha_desired: alpha_d [rad].
-            time: The playback time [s] of the recording's frame to draw into
-                (None: live)."""
+            time: The playback time [s] of the recording's frame (None: live)."""
         end = self._Publish(x, time).translation()
         base_pose, q, _, _ = self._coordinates.Split(x)
         for path, alpha, height in ((DESIRED_PATH, alpha_desired, 0.02),
@@ -148,11 +128,8 @@ class ArmViewer(_RobotViewer):
 
 
 class LiveView:
-    """Draws a closed loop's ground truth into Meshcat while it simulates.
-
-    Update(root_context) after each advance calls ``draw(root_context, x, t)`` with
-    the plant state x at most ``fps`` times per simulated second and sets Meshcat's
-    simulation time. A robot makes one for its loop (robots.Robot.LiveView).
+    """Draws a closed loop's ground truth into Meshcat while it simulates: Update calls
+    ``draw`` at most ``fps`` times per simulated second.
 
     Args:
         plant: The loop's ground-truth plant.
@@ -169,18 +146,12 @@ class LiveView:
     @staticmethod
     def ForPlanarLoop(loop: "ClosedLoop", meshcat: Meshcat, fps: float = 30.0
                       ) -> "LiveView":
-        """A LiveView of a planar loop through an ArmViewer.
-
-        alpha_d is from the controller's lhs_log output (the measured direction
-        where the controller has none).
+        """A LiveView of a planar loop through an ArmViewer (alpha_d from lhs_log).
 
         Args:
             loop: The planar arm's closed loop.
             meshcat: The Meshcat drawn into.
-            fps: The most frames per simulated second.
-
-        Returns:
-            The LiveView."""
+            fps: The most frames per simulated second."""
         scenario = loop.scenario
         viewer = ArmViewer(scenario, meshcat, 1.5 * ArmViewer.Reach(scenario), fps)
         lhs_log = loop.loggers.get("lhs_log")
@@ -216,11 +187,8 @@ def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
                     out_html: Union[str, Path], fps: float = 30.0,
                     max_playback: float = 60.0, meshcat: Optional[Meshcat] = None
                     ) -> Path:
-    """Writes a planar run's replay as a self-contained HTML file.
-
-    Replays logs["state"] (plant state, sampled at logs["time"]) and the logged
-    alpha_d (lhs_log) through an ArmViewer into a Meshcat recording and writes
-    meshcat.StaticHtml(), with the overlay, to out_html.
+    """Writes a planar run's replay (logs["state"], the logged alpha_d) as an HTML file;
+    returns its path.
 
     Args:
         scenario: The scenario the run ran.
@@ -229,9 +197,6 @@ def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
         fps: The replay's frames per second.
         max_playback: The longest replay [s]: longer runs are sped up to fit.
         meshcat: The Meshcat to record in (None: a new QuietMeshcat).
-
-    Returns:
-        The HTML file's path.
 
     Raises:
         ConfigError: ``fps`` or ``max_playback`` is not positive.
@@ -257,15 +222,11 @@ def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
 
 
 class SpatialViewer(_RobotViewer):
-    """A robot from a description file in Meshcat (perspective view).
-
-    It is drawn with the desired end-effector attitude R_d (thick translucent triad)
-    and the measured one (thin triad) at the end effector; triad axes x, y, z in
-    red, green, blue.
+    """A robot from a description file in Meshcat, with the desired end-effector attitude
+    R_d (thick translucent triad) and the measured one (thin triad).
 
     Args:
-        description: The robot, as AddRobotFromDescription takes it (a scenario's
-            robot section, a shipped name or a path).
+        description: The robot, as AddRobotFromDescription takes it.
         meshcat: The Meshcat to draw into.
         fps: The visualizer's publish rate [1/s].
     """
@@ -288,8 +249,7 @@ class SpatialViewer(_RobotViewer):
         Args:
             x: The plant state.
             R_d: The desired end-effector attitude.
-            time: The playback time [s] of the recording's frame to draw into
-                (None: live)."""
+            time: The playback time [s] of the recording's frame (None: live)."""
         X_WE = self._Publish(x, time)
         for path, R in ((DESIRED_TRIAD, R_d), (MEASURED_TRIAD, X_WE.rotation())):
             self._Place(path, RigidTransform(R, X_WE.translation()), time)
@@ -297,13 +257,10 @@ class SpatialViewer(_RobotViewer):
 
 def write_spatial_animation(robot: DescribedArm, logs: Dict[str, np.ndarray],
                             out_html: Union[str, Path], fps: float = 30.0,
-                            max_playback: float = 60.0, meshcat: Optional[Meshcat] = None
-                            ) -> Path:
-    """Writes a spatial run's replay as a self-contained HTML file.
-
-    Replays logs["state"] (sampled at logs["time"]) with the logged R_d
-    (attitude_log) through a SpatialViewer into a self-contained HTML file with a
-    legend and the simulated time.
+                            max_playback: float = 60.0, meshcat: Optional[Meshcat] = None,
+                            log_name: str = "attitude_log") -> Path:
+    """Writes a spatial run's replay (logs["state"], the logged R_d) as an HTML file;
+    returns its path.
 
     Args:
         robot: The scenario's robot section (its description is drawn).
@@ -312,15 +269,13 @@ def write_spatial_animation(robot: DescribedArm, logs: Dict[str, np.ndarray],
         fps: The replay's frames per second.
         max_playback: The longest replay [s]: longer runs are sped up to fit.
         meshcat: The Meshcat to record in (None: a new QuietMeshcat).
-
-    Returns:
-        The HTML file's path.
+        log_name: The task's log holding R_d (log_layout.AttitudeLog's columns).
 
     Raises:
         ConfigError: ``fps`` or ``max_playback`` is not positive.
         ValueError: The logs hold fewer than two samples."""
     t, x = _RequireReplayable(logs, fps, max_playback)
-    desired = logs["attitude_log"][:, AttitudeLog().desired]
+    desired = logs[log_name][:, AttitudeLog().desired]
     meshcat = meshcat or QuietMeshcat()
     viewer = SpatialViewer(robot, meshcat, fps)
     speedup = _Record(viewer.visualizer, t, fps, max_playback, lambda row, time: viewer.Draw(
@@ -347,13 +302,8 @@ def _RequireReplayable(logs, fps: float, max_playback: float):
 
 
 def QuietMeshcat() -> Meshcat:
-    """A Meshcat without Drake's "listening for connections" message.
-
-    When a file is written nobody is meant to connect (the CLI prints its own line
-    with the URL): Drake's info messages are off while it starts.
-
-    Returns:
-        The Meshcat."""
+    """A Meshcat without Drake's "listening for connections" message (nobody connects
+    when a file is written)."""
     drake_logger = logging.getLogger("drake")
     level = drake_logger.level
     drake_logger.setLevel(logging.WARNING)
@@ -364,9 +314,7 @@ def QuietMeshcat() -> Meshcat:
 
 
 def _Record(visualizer, t: np.ndarray, fps: float, max_playback: float, draw) -> float:
-    """Records draw(row, playback time) for the logged rows nearest each frame into
-    ``visualizer``'s recording and publishes it; returns the speed-up (simulated
-    seconds per playback second)."""
+    """Records ``draw`` into ``visualizer``'s recording; returns the speed-up."""
     speedup = playback_speedup(t[-1] - t[0], max_playback)
     frames = np.arange(t[0], t[-1] + 1e-12, speedup / fps)
     rows = np.minimum(np.searchsorted(t, frames), len(t) - 1)
@@ -398,10 +346,8 @@ def _swatch(rgba) -> str:
 
 
 def _overlay(entries, phases, start: float, speedup: float) -> str:
-    """The legend (``entries``: (rgba, label)), time readout and phase label
-    (``phases``: [start, end, name] rows, or None): an HTML box over the viewer and a
-    script that maps the animation's playback time (viewer.animator.time) to
-    simulated time t = start + speedup * playback time."""
+    """The legend, time readout and phase label over the viewer, with a script that maps
+    playback time to simulated time t = start + speedup * playback time."""
     legend = "".join(f"<div>{_swatch(rgba)}{label}</div>" for rgba, label in entries)
     phases = phases or [[float("-inf"), float("inf"), ""]]
     speed = "" if speedup == 1.0 else f" &times;{speedup:.3g} speed"

@@ -10,10 +10,11 @@ from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.kernels.attitude import attitude_update, turned
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.log_layout import AttitudeLog, PoseLog
 from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
+from dacph_drake.tasks.attitude import reference_at, reference_start
 
 XI_DOT_STEP = 1e-5              # [s] of xi's central difference along the motion
 # [m] beyond the potential's margin, the nearest link keeps xi = -eta grad U zero at
@@ -101,12 +102,19 @@ class AttitudeController(LeafSystem):
         eta: The null-space gain of xi = -eta grad U.
         excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
         identify: Declare input ``inertial_parameters`` (an InertialIdentifier's).
+        position: The pose task's position reference (tasks.end_effector_pose.
+            PositionReference: p_d(t) = p_E(q0) + initial_offset + axis amplitude
+            sin(2 pi t / period), world), which adds the GJM's linear rows to D;
+            None: the attitude task.
+        log_name: The log output's name; with ``position`` its columns are
+            log_layout.PoseLog's.
     """
 
     def __init__(self, *, trials: Sequence[AttitudeTrial], reference: AttitudeReference,
                  gains: AttitudeGains, period: float, eta: float = 0.0,
                  excitation: Excitation = Excitation(amplitude=0.0),
-                 identify: bool = False):
+                 identify: bool = False, position: Optional[object] = None,
+                 log_name: str = "attitude_log"):
         super().__init__()
         self._trials = list(trials)
         model = trials[0].model
@@ -125,13 +133,29 @@ class AttitudeController(LeafSystem):
         axis = np.asarray(reference.axis, float)
         self._R_d0, self._reference_arguments = [], []
         for trial in trials:
-            R_d0 = reference.Start(RotationMatrix(trial.model.FramePose(
+            R_d0 = reference_start(reference, RotationMatrix(trial.model.FramePose(
                 end_effector, trial.model.Evaluate(np.asarray(trial.q0, float),
                                                    derivatives=False))))
             self._R_d0.append(R_d0)
             self._reference_arguments.append((R_d0.matrix(), axis / np.linalg.norm(axis),
                                               float(reference.amplitude),
                                               2 * np.pi / reference.period))
+        p_CE = np.ascontiguousarray(X_CE[:3, 3])
+        self._position_arguments = []
+        for trial in trials:
+            if position is None:
+                self._position_arguments.append((np.zeros(3), np.zeros(3), np.zeros(3),
+                                                 -1.0, 0.0))
+                continue
+            X = trial.model.Evaluate(np.asarray(trial.q0, float), derivatives=False)[4]
+            p_E0 = X[node, :3, :3] @ p_CE + X[node, :3, 3]     # the base at the origin
+            direction = np.asarray(position.axis, float)
+            self._position_arguments.append((
+                p_CE, p_E0 + np.asarray(position.initial_offset, float),
+                direction / np.linalg.norm(direction), float(position.amplitude),
+                2 * np.pi / position.period))
+        self._pose = position is not None
+        self._layout = PoseLog() if self._pose else AttitudeLog()
         self._base_pose = self.DeclareVectorInputPort("base_pose", 7 * count)
         self._base_velocity = self.DeclareVectorInputPort("base_velocity", 6 * count)
         self._q = self.DeclareVectorInputPort("q", n * count)
@@ -140,11 +164,11 @@ class AttitudeController(LeafSystem):
         self._parameters = (self.DeclareVectorInputPort(
             "inertial_parameters", model.parameters.size * count) if identify else None)
         self._tau_index = self.DeclareDiscreteState(n * count)
-        self._log_index = self.DeclareDiscreteState(AttitudeLog().size * count)
+        self._log_index = self.DeclareDiscreteState(self._layout.size * count)
         self._model_index = self.DeclareDiscreteState(2 * n * n * count)
         self.DeclareStateOutputPort("tau_request", self._tau_index)
         self.DeclareVectorOutputPort(
-            "attitude_log", AttitudeLog().size * count, self._CalcAttitudeLog,
+            log_name, self._layout.size * count, self._CalcAttitudeLog,
             prerequisites_of_calc={self.discrete_state_ticket(self._log_index),
                                    self._q.ticket(), self._base_pose.ticket()})
         self.DeclareStateOutputPort("reduced_model", self._model_index)
@@ -161,7 +185,7 @@ class AttitudeController(LeafSystem):
 
         Returns:
             (R_d(t), omega_d(t) in the world frame [rad/s] (3))."""
-        return self._reference.At(self._R_d0[trial], t)
+        return reference_at(self._reference, self._R_d0[trial], t)
 
     def _Secondary(self, potential, q, base_pose):
         """(xi = -eta grad U, the nearest link-base distance if within the
@@ -182,7 +206,7 @@ class AttitudeController(LeafSystem):
         base_pose = self._base_pose.Eval(context).reshape(count, -1)
         for i, trial in enumerate(self._trials):
             if trial.potential is not None:
-                logs[i, AttitudeLog().clearance] = trial.potential.Evaluate(
+                logs[i, self._layout.clearance] = trial.potential.Evaluate(
                     q[i], base_pose[i]).min_distance
         output.SetFromVector(logs.reshape(-1))
 
@@ -200,7 +224,7 @@ class AttitudeController(LeafSystem):
             if parameters is not None:
                 trial.model.SetInertialParameters(parameters[i])
             torque, M, C, log = self._Update(trial, i, t, base_pose[i],
-                                             base_velocity[i][:3], q[i], qdot[i], chi[i])
+                                             base_velocity[i], q[i], qdot[i], chi[i])
             tau.append(torque)
             models += [M.reshape(-1), C.reshape(-1)]
             logs.append(log)
@@ -208,10 +232,10 @@ class AttitudeController(LeafSystem):
         discrete_state.set_value(self._model_index, np.concatenate(models))
         discrete_state.set_value(self._log_index, np.concatenate(logs))
 
-    def _Update(self, trial: AttitudeTrial, i: int, t, base_pose, omega_base, q, qdot,
-                chi):
+    def _Update(self, trial: AttitudeTrial, i: int, t, base_pose, base_velocity, q,
+                qdot, chi):
         """One trial's (tau, M, C', attitude log) (class docstring)."""
-        potential = trial.potential
+        potential, omega_base = trial.potential, base_velocity[:3]
         xi, clearance = self._Secondary(potential, q, base_pose)
         xi_dot = np.zeros_like(xi)
         if potential is not None and clearance <= potential.margin + FAR:
@@ -222,8 +246,10 @@ class AttitudeController(LeafSystem):
                                          base_pose[4:]])
                 sides.append(self._Secondary(potential, q_h, pose_h)[0])
             xi_dot = (sides[0] - sides[1]) / (2 * h)
-        tau, M, C, log, desired = attitude_update(
-            trial.model.kernel_tree, q, qdot, base_pose[:4], omega_base, t,
-            self._reference_arguments[i], self._end_effector_node, xi, xi_dot,
-            self._gain_arguments, chi, self._excitation)
-        return tau, M, C, np.concatenate([log, [np.inf], desired])
+        tau, M, C, log, desired, position = attitude_update(
+            trial.model.kernel_tree, q, qdot, base_pose, base_velocity, t,
+            self._reference_arguments[i], self._end_effector_node,
+            self._position_arguments[i], xi, xi_dot, self._gain_arguments, chi,
+            self._excitation)
+        logged = [log, [np.inf], desired] + ([position] if self._pose else [])
+        return tau, M, C, np.concatenate(logged)

@@ -1,4 +1,4 @@
-"""External disturbance source d(t) (the paper leaves d(t) open; a SPEC setting, docs/equations.md)."""
+"""External disturbance d(t) (left open by the paper; a SPEC setting, docs/equations.md)."""
 from typing import Sequence
 
 import numpy as np
@@ -9,22 +9,16 @@ from dacph_drake.scenario import Disturbance
 
 
 class DisturbanceSource(LeafSystem):
-    """d(t) = scale (d_LF + d_HF) for t >= start, else 0,
+    """d(t) = scale (d_LF + d_HF) for t >= start, else 0, per trial, with
         d_LF = offset + amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), sin, cos, ...]
-        d_HF = a_HF sin(2 pi f_HF t) direction,
+        d_HF = a_HF sin(2 pi f_HF t) direction.
 
-    for every trial of a batch (``settings`` and ``starts``: each trial's; one
-    trial: a single run). Output ``disturbance_model``: the trials' constant
-    parameter vectors of d(t), stacked (kernels.loop.disturbance: [start, scale,
-    2 pi f_HF, offset, amplitude, 2 pi f, quadrature, a_HF direction]); the true
-    RHS evaluates d(t) from it at every integrator stage inside its compiled
-    kernel, so d(t) costs no Python call per stage. Output ``disturbance``: the
-    trials' d(t) (time only), for loggers and users.
+    Output ``disturbance_model``: the constant parameters of d(t), which the true RHS
+    evaluates in its compiled kernel (no Python call per stage); ``disturbance``: d(t).
 
     Args:
         settings: Each trial's disturbance d(t) (scenario.disturbance).
-        starts: Each trial's start time of d(t) [s] (the disturbance phase).
-    """
+        starts: Each trial's start time of d(t) [s]."""
 
     def __init__(self, *, settings: Sequence[Disturbance], starts: Sequence[float]):
         super().__init__()
@@ -41,13 +35,10 @@ class DisturbanceSource(LeafSystem):
             prerequisites_of_calc={self.nothing_ticket()})
 
     def Evaluate(self, t: float) -> np.ndarray:
-        """The trials' d(t), stacked.
+        """The trials' d(t) [N m], stacked (n per trial).
 
         Args:
-            t: The time [s].
-
-        Returns:
-            d(t) [N m] (n per trial)."""
+            t: The time [s]."""
         return np.concatenate([disturbance(t, model) for model in self._models])
 
     def _CalcDisturbance(self, context, output):

@@ -17,58 +17,35 @@ from dacph_drake.scenario import InertiaIdentification
 
 
 class InertialIdentifier(LeafSystem):
-    """Every ``period`` h, at the measured state (inputs ``base_pose``,
-    ``base_velocity``, ``q``, ``qdot``: the base's pose and twist as a satellite's
-    navigation and gyros give them, and the joints'):
+    """Identifies the bodies' inertial parameters pi every ``period`` h from the measured
+    state (inputs ``base_pose``, ``base_velocity``, ``q``, ``qdot``):
 
-        A <- A + Y(x)^T Y(x),      Y(x) pi = [L; P] (the momentum, linear in pi,
-                                               inertial_parameters.MomentumRegressor)
+        A <- A + Y(x)^T Y(x),      Y(x) pi = [L; P] (the momentum, linear in pi)
         pi_hat = argmin pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0),
                  subject to pi0^T S^-2 pi = pi0^T S^-2 pi0
 
-    (inertial_parameters.identify_parameters, r from ``settings.prior_weight``). The
-    robot starts at rest, so L = P = 0 along the whole motion and Y(x) pi~ = 0 for
-    the true parameters pi~: the samples determine the parameters up to one common
-    factor, which the prior pi0 (the controller's model: ``prior``, by default
-    ``plant``'s own inertias) fixes, or, with ``settings.anchor`` "total_mass" or
-    "base_mass", a measured mass (``measured_masses``, the simulated
-    spacecraft's own, when settings.anchor_mass is 0: a navigation system's mass
-    properties), and the directions the motion has not informed stay at the prior.
-    No actuator model enters. The momentum the estimate leaves unexplained
-    (inertial_parameters.momentum_misfit) above settings.fit_tolerance reports the
-    controller's kinematics mismatched (latched); with settings.on_mismatch
-    "nominal" the LHS then returns to the prior.
+    (r = ``settings.prior_weight``). The robot starts at rest, so L = P = 0 and
+    Y(x) pi~ = 0: the samples determine pi only up to a common factor, which the prior
+    pi0 fixes, or a measured mass (``settings.anchor``); uninformed directions stay at
+    the prior. No actuator model enters. A momentum misfit above
+    ``settings.fit_tolerance`` reports the kinematics mismatched (latched; with
+    ``settings.on_mismatch`` "nominal" the LHS then returns to the prior).
 
-    Output ``identification_log`` = [identified total mass [kg], momentum misfit,
-    mismatch (0/1)] per trial. Output ``inertial_parameters`` is pi0 until
-    ``settings.start`` and pi_hat after it, every period until ``settings.duration`` has passed (then it is kept: the
-    bodies' inertias do not change, while the directions the data hardly inform
-    keep refining); an estimate with a mass <= 0, or whose mass matrix at the
-    sample is not positive definite, is not used. Output ``model_epoch`` counts the
-    estimates that changed the reduced mass matrix M(q) at the sample by more than
-    ``settings.change_threshold`` in some entry (relative to sqrt(M_ii M_jj), so that
-    a light wrist's change counts as much as a heavy shoulder's) since the last such
-    one: the learner treats a new epoch as a change of the port relation it observes
-    (Learner.model_change), while the refinements in between reach the LHS without
-    disturbing it.
-
-    What the controller does with it: the LHS controller's M, C' and task Jacobian D
-    are those of pi_hat (its input of the same name), so the port observer's tau_obs
-    and the learner's samples are too.
-
-    For a batch (``plants``: each trial's controller plant, ``priors`` each trial's
-    pi0 or None; one: a single run) every port carries the trials' signals
-    stacked and each trial is identified alone: the regressor's information and
-    the mass matrices of all trials are one compiled call each
-    (kernels.identification), the solves one stacked numpy call.
+    Outputs ``identification_log`` = [total mass [kg], momentum misfit, mismatch (0/1)],
+    ``inertial_parameters`` (pi0 until ``settings.start``, then pi_hat until
+    ``settings.duration`` has passed; an estimate with a mass <= 0 or an indefinite M is
+    not used) and ``model_epoch``, which counts the estimates that changed M(q) by more
+    than ``settings.change_threshold`` relative to sqrt(M_ii M_jj): the learner treats a
+    new epoch as a change of the port relation; smaller refinements do not disturb it.
+    Every port stacks the trials' signals; each trial is identified alone.
 
     Args:
         plants: Each trial's controller plant (its kinematic tree and layout).
         settings: The identification's settings (scenario.inertia).
-        period: The sample period [s] (periods.learner_sample).
+        period: The sample period [s].
         priors: Each trial's prior pi0, or None for the plant's own inertias.
-        measured_masses: Each trial's simulated mass measurement, (total, base)
-            [kg] of its ground truth (the anchor with settings.anchor_mass 0).
+        measured_masses: Each trial's measured (total, base) mass [kg] of its ground
+            truth (the anchor when settings.anchor_mass is 0).
     """
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
@@ -162,8 +139,7 @@ class InertialIdentifier(LeafSystem):
 
 
     def _Anchor(self, settings, measured_masses, count):
-        """Each trial's anchor (its constraint vector and value), or (None, None)
-        for the model's scale (identify_parameters)."""
+        """Each trial's anchor (constraint vector, value); (None, None): the model's."""
         if settings.anchor == "model":
             return None, None
         layout = self.parameters
@@ -186,9 +162,8 @@ def _PositiveDefinite(M: np.ndarray) -> np.ndarray:
 
 
 class _TreeStack:
-    """The trials' controller plants as the compiled kernels read them
-    (kernels.identification): one kinematic tree topology, each trial's fixed
-    transforms and the fixed inertias of its bodies without parameters, stacked."""
+    """The trials' controller plants as the compiled kernels read them: one topology,
+    each trial's fixed transforms and fixed inertias, stacked."""
 
     def __init__(self, plants: Sequence[MultibodyPlant]):
         trees = [KinematicTree.FromPlant(plant) for plant in plants]
@@ -210,15 +185,13 @@ class _TreeStack:
         self._inertias = tuple(np.array(x) for x in zip(*fixed))
 
     def AddInformation(self, base_pose, base_velocity, q, qdot, information) -> None:
-        """information[i] += vec(Y^T Y) of the momentum regressor at trial i's
-        measured state, for every trial (in place)."""
+        """information[i] += vec(Y^T Y) at trial i's measured state (in place)."""
         identification.add_momentum_information(
             *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
             self.nodes, base_pose, base_velocity, q, qdot, information)
 
     def ReducedMassMatrices(self, pis: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """M(q_i) with trial i's bodies at pis[i] (non-finite where H_bb is not
-        positive definite)."""
+        """M(q_i) with trial i's bodies at pis[i] (non-finite where H_bb is not PD)."""
         return identification.reduced_mass_matrices(
             *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
             self._joint_below, *self._inertias, self.nodes, pis, q)

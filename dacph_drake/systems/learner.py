@@ -11,40 +11,29 @@ from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 
 class RhsLearner(LeafSystem):
-    """The slowest loop. Every ``sample_period`` it appends the input
-    ``port_sample`` (the RegressionFilter's [q, p, filtered channels] in regularized
-    mode, the observer's identification.PortSample in plain mode) with its time to
-    a ring buffer of ``settings.window`` samples; every ``period`` it hands the
-    buffer, oldest first, to the learner ``settings.model`` names
-    (learning.make_port_learner: learning.PortLearner.Update), which fits it and
-    returns what it publishes, its log row and its state (kept in this system's
-    Context). The learner watches the LHS model (input ``model_epoch``, declared
-    with ``watch_model``: an InertialIdentifier's new epoch is a change of the port
-    relation it observes, settings.model_change), and the identifier's
-    ``identification_log``: after a reported kinematic mismatch the log's
-    ``physical`` column is 0 (log_layout.LearnerLog).
+    """The slowest loop: learns the RHS's port relation online.
 
-    Outputs: ``weights`` (the published vector, held between updates; the fast
-    loops evaluate it with the learner's learning.PublishedModel), ``beta_hat`` (the
-    learner's 1 + RMS residual / RMS tau_obs, used by the gain rule),
-    ``learner_log`` (log_layout.LearnerLog), ``estimates`` = [vec(B_hat(x)),
-    diag(D_hat(x))] and ``estimate_bounds`` = the credible intervals' [lower, upper]
-    of the same (the point twice for a learner without intervals), at the current
-    plant state (p = M qdot with the LHS's M, input ``reduced_model``, as the
-    integrator forms it), for the metrics. With ``learning`` False the prior (B0,
-    D0) is published throughout: the dac-nominal ablation.
+    Every ``sample_period`` it appends input ``port_sample`` with its time to a ring
+    buffer of ``settings.window`` samples; every ``period`` the learner
+    ``settings.model`` names (learning.make_port_learner) fits the buffer, oldest first,
+    and returns what it publishes, its log row and its state. With ``watch_model`` an
+    InertialIdentifier's new ``model_epoch`` is a change of the port relation
+    (settings.model_change); after a kinematic mismatch reported in its
+    ``identification_log`` the log's ``physical`` column is 0.
 
-    For a batch (``trials``: each trial's learning.LearnerTrial; one: a single run)
-    every port carries the trials' signals stacked, and each trial is learned alone
-    (its updates are its solo run's, whatever the other trials do).
+    Outputs ``weights`` (the published vector, held), ``beta_hat`` (1 + RMS residual /
+    RMS tau_obs, for the gain rule), ``learner_log`` (log_layout.LearnerLog),
+    ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] and ``estimate_bounds`` (their
+    credible [lower, upper]) at the current state. Every port stacks the trials' signals;
+    each trial is learned alone.
 
     Args:
-        trials: Each trial's LearnerTrial (model, prior, seed, q0).
+        trials: Each trial's LearnerTrial.
         settings: The learner's settings (scenario.learner).
-        period: The training period [s] (periods.learner).
-        sample_period: The sampling period [s] (periods.learner_sample).
-        learning: False publishes the prior throughout (the dac-nominal ablation).
-        watch_model: Declare input ``model_epoch`` (an InertialIdentifier's).
+        period: The training period [s].
+        sample_period: The sampling period [s].
+        learning: False publishes the prior (B0, D0) throughout (the dac-nominal ablation).
+        watch_model: Declare inputs ``model_epoch`` and ``identification_log``.
     """
 
     def __init__(self, *, trials: Sequence[LearnerTrial], settings: Learner,
@@ -133,9 +122,7 @@ class RhsLearner(LeafSystem):
         discrete_state.get_mutable_vector(self._log).SetFromVector(logs.reshape(-1))
 
     def _ModelChanges(self, context, discrete_state) -> np.ndarray:
-        """Whether each trial's LHS model changed since the last check (input
-        ``model_epoch``, InertialIdentifier's; False where not watched), the
-        epochs seen recorded."""
+        """Whether each trial's LHS model epoch changed since the last check (recorded)."""
         if (self._model_epoch is None or not self._model_epoch.HasValue(context)
                 or not (self._settings.mode == "regularized"
                         and self._settings.model_change)):

@@ -16,17 +16,12 @@ from dacph_drake.scenario import Excitation, LhsGains
 
 
 def boundary_layer_per_chi(gains: LhsGains, lambda_min_M: float) -> float:
-    """d phi / d chi of the robust term's boundary layer.
-
-    1 / (boundary_rate inf_q lambda_min(M)) (0 with boundary_rate 0: phi =
-    epsilon).
+    """d phi / d chi of the robust term's boundary layer: 1 / (boundary_rate inf_q
+    lambda_min(M)) (0 with boundary_rate 0: phi = epsilon).
 
     Args:
         gains: The sliding-mode gains (their boundary_rate [1/s]).
-        lambda_min_M: inf_q lambda_min(M) of the controller's model.
-
-    Returns:
-        d phi / d chi."""
+        lambda_min_M: inf_q lambda_min(M) of the controller's model."""
     return 1.0 / (gains.boundary_rate * lambda_min_M) if gains.boundary_rate > 0 else 0.0
 
 
@@ -38,8 +33,7 @@ class LhsTrial:
         model: The controller's model of its robot.
         potential: The base-repulsion potential of that robot.
         reference: Its reference (theta0(0) from its q0).
-        lambda_min_M: inf_q lambda_min(M) of its model (the boundary layer's
-            scale).
+        lambda_min_M: inf_q lambda_min(M) of its model (the boundary layer's scale).
     """
     model: ReducedOrderModel
     potential: BaseRepulsionPotential
@@ -61,26 +55,19 @@ class LhsController(LeafSystem):
     with nu_dot exact: it uses dD/dq from the reduced model and Hess U qdot from the
     potential (no numerical differentiation). chi comes from input ``chi``: the RHS
     loop's bound on ||e_tau|| in DAC, a constant source in the baseline. The
-    boundary layer phi follows chi (Slotine and Li's balance condition, as the
-    spatial LHS's): the robust term's slope chi / phi then adds at most
-    ``gains.boundary_rate`` [1/s] to any joint's rate, whatever chi; with the
-    paper's phi = epsilon (boundary_rate 0) a large chi makes the sampled loop
-    stiff (chi / (epsilon M) h > 1), and chi grows with e_tau: actuators 3.5x
-    stronger than B0 make e_tau, chi and the request grow together and the loop
-    diverges within 10 ms. Output ``tau_request`` is held between updates; output
-    ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)];
-    output ``reduced_model`` = [vec(M), vec(C')] at the same sample (row-major), for
-    the port observer. With ``identify``, input ``inertial_parameters`` (each
-    trial's in the layout of its model's bodies, InertialParameters) replaces the
-    model's inertias (an
-    InertialIdentifier's estimate): M, C', D and their derivatives are those of the
-    identified bodies (ReducedOrderModel.CoefficientBasis: the mass matrix is linear
-    in them). Every port carries the trials' signals stacked in trial order. The
-    update is one compiled kernel for all trials (kernels.loop.lhs_samples);
-    lambda_min(M) of the log is computed when the log is read.
+    boundary layer phi follows chi (Slotine and Li's balance condition): the robust
+    term's slope chi / phi then adds at most ``gains.boundary_rate`` [1/s] to any
+    joint's rate, whatever chi (with the paper's phi = epsilon a large chi makes the
+    sampled loop stiff). Output ``tau_request`` is held between updates; ``lhs_log`` =
+    [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]; ``reduced_model`` =
+    [vec(M), vec(C')] at the same sample (row-major), for the port observer. With
+    ``identify``, input ``inertial_parameters`` (InertialParameters, an
+    InertialIdentifier's estimate) replaces the models' inertias in M, C', D and their
+    derivatives. Ports stack the trials' signals in trial order; the update is one
+    compiled kernel for all trials (kernels.loop.lhs_samples).
 
     Args:
-        trials: Each trial's LhsTrial (model, potential, reference, lambda_min_M).
+        trials: Each trial's LhsTrial.
         gains: The sliding-mode gains (task.gains).
         period: The update period [s] (periods.lhs).
         excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
@@ -131,7 +118,7 @@ class LhsController(LeafSystem):
 
     def Control(self, t: float, theta0: float, q: np.ndarray, qdot: np.ndarray,
                 chi: float, trial: int = 0) -> Tuple[np.ndarray, np.ndarray]:
-        """(tau_c^r, lhs_log) of one trial at one state, outside a simulation.
+        """(tau_c^r [N m] (n), lhs_log (log_layout.LhsLog)) of one trial at one state.
 
         Args:
             t: The time [s].
@@ -139,10 +126,7 @@ class LhsController(LeafSystem):
             q: The joint angles [rad] (n).
             qdot: The joint rates [rad/s] (n).
             chi: The RHS loop's bound chi [N m].
-            trial: The trial's index in the batch.
-
-        Returns:
-            (tau_c^r [N m] (n), lhs_log (log_layout.LhsLog))."""
+            trial: The trial's index in the batch."""
         tau, log, model = lhs_samples(
             t, np.array([theta0]), q, qdot, np.array([chi]),
             self._coefficients[trial:trial + 1],

@@ -1,4 +1,4 @@
-"""The model-based baseline's RHS (docs/equations.md, SPEC settings): static inversion of the nominal RHS."""
+"""The model-based baseline's RHS: static inversion of the nominal RHS (SPEC settings)."""
 from typing import Sequence
 
 import numpy as np
@@ -9,18 +9,13 @@ from dacph_drake.scenario import Uncertainty
 
 
 class ModelBasedInverter(Diagram):
-    """u = B0^-1 (tau_c^r + D0 qdot) for every trial of a batch (``uncertainties``:
-    each trial's B0 and D0; one: a single run); stateless (output ``u`` depends on
-    the inputs ``tau_request`` and ``qdot`` only, the trials' signals stacked).
+    """u = B0^-1 (tau_c^r + D0 qdot) per trial; stateless, inputs ``tau_request``, ``qdot``.
 
-    It feeds the true RHS, which the integrator evaluates at every stage, so it is
-    built from Drake's C++ primitives (no Python call per stage): a Multiplexer
-    stacks [tau_c^r; qdot] and a MatrixGain applies [blockdiag(B0^-1) |
-    blockdiag(B0^-1 diag(D0))] over the trials.
+    Built from Drake's C++ primitives (Multiplexer, MatrixGain) so that the true RHS's
+    evaluation at every integrator stage makes no Python call.
 
     Args:
-        uncertainties: Each trial's uncertainty (its nominal B0 and D0).
-    """
+        uncertainties: Each trial's uncertainty (its nominal B0 and D0)."""
 
     def __init__(self, *, uncertainties: Sequence[Uncertainty]):
         super().__init__()

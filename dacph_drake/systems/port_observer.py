@@ -9,45 +9,22 @@ from dacph_drake.kernels.loop import observer_samples
 
 
 class PortObserver(LeafSystem):
-    """tau_obs = M(q) qddot + C'(q, qdot) qdot + b qdot (+ seeded Gaussian
-    measurement noise) from the measured joint rates, over each sample interval
-    [t_k-1, t_k] of length h = ``sample_period`` (the RHS period):
+    """Port torque observer over each sample interval, h = ``sample_period`` (E32):
 
         qddot = (qdot(t_k) - qdot(t_k-1)) / h,   qdot_mid = (qdot(t_k) + qdot(t_k-1)) / 2
-        tau_obs(k) = M qddot + C' qdot_mid + b qdot_mid
+        tau_obs(k) = M qddot + C' qdot_mid + b qdot_mid   (+ seeded Gaussian noise)
 
-    b is the description's joint damping (``joint_damping``), part of the LHS
-    model like M: the port's RHS B~ u - D~ qdot + d is what acts beyond it.
-
-    the port torque at the interval's midpoint (second-order accurate: the mean
-    of the port torque over the interval, during which the plant received the held
-    u(k-1)). M and C' are input ``reduced_model`` = [vec(M), vec(C')], the LHS
-    controller's evaluation of the controller's (nominal) reduced model at its last
-    sample (they change on the seconds scale of the arm's motion). Output
-    ``tau_observed`` is held until the next sample: the RHS integrator reads it one
-    sample later, as it would read a sample-and-hold sensor.
-
-    Output ``port_sample`` (identification.PortSample) = [q, p = M qdot_mid,
-    qdot_mid, u, tau_obs] of the same interval: u is the input ``u`` held over it
-    (the RHS integrator's output before its update at this sample; zero when not
-    connected), so
-    tau_obs = B~ u - D~ qdot + d holds on every sample. With ``anti_alias_cutoff``
-    f > 0, [qdot, u, tau_obs] pass a first-order low-pass at f Hz at the sample rate
-    (before the learner samples them at a lower rate).
-
-    Inputs ``q``, ``qdot`` (the plant's joint state), ``reduced_model`` and ``u``.
-    For a batch of trials (``seeds``: each trial's noise seed; one: a single run)
-    every port carries the trials' signals stacked, and the sample of all trials
-    is one compiled kernel (kernels.loop.observer_samples).
+    the interval's mean port torque (second order), held until the next sample. M, C'
+    come from input ``reduced_model``; b, the joint damping, is part of the LHS model, so
+    tau_obs = B~ u - D~ qdot + d. Output ``port_sample`` = [q, p, qdot_mid, u, tau_obs].
 
     Args:
         num_joints: n.
-        sample_period: The observer's period h [s] (periods.rhs).
+        sample_period: The observer's period h [s].
         noise_std: The standard deviation of the measurement noise on tau_obs [N m].
-        seeds: Each trial's noise seed.
-        anti_alias_cutoff: The anti-alias filter's cutoff [Hz] (0: none).
-        joint_damping: b (n) [N m s/rad] (the LHS model's ReducedModel.joint_damping;
-            none: zero).
+        seeds: Each trial's noise seed (one per stacked trial).
+        anti_alias_cutoff: Cutoff [Hz] of a low-pass on [qdot, u, tau_obs] (0: none).
+        joint_damping: b (n) [N m s/rad] (none: zero).
     """
 
     def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,

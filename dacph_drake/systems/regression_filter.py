@@ -1,4 +1,4 @@
-"""Band-pass prefilter of the learner's port samples (Learner.band; a project extension, docs/equations.md E33)."""
+"""Band-pass prefilter of the learner's port samples (Learner.band; equations.md E33)."""
 from typing import Optional
 
 import numpy as np
@@ -11,27 +11,18 @@ from dacph_drake.scenario import Learner
 
 
 class RegressionFilter(LeafSystem):
-    """Every ``period`` it forms the learner's channels from the input
-    ``port_sample`` (learning.Channels: the network's [qdot, u, tau_obs], the local
-    Bayesian learner's products of them with its features), passes them through
-    identification.BandPassCascade (settings.band, settings.band_sections) and holds
-    [q, p, filtered channels] on the output ``filtered_sample``.
-
-    The same linear filter on every signal keeps the port relation
-    tau = B u - D qdot + d for the filtered signals while B(x), D(x) vary slowly
-    against the filter's memory (the products' relation holds however they vary),
-    and removes d(t) where it lies outside the band. q and p pass unfiltered: they
-    are the learner's features. For a batch of ``trials`` trials every port carries
-    the trials' samples stacked, each filtered alone (the cascade acts entry by
-    entry).
+    """Every ``period`` it forms the learner's channels from input ``port_sample``, passes
+    them through identification.BandPassCascade (settings.band, settings.band_sections)
+    and holds [q, p, filtered channels] on output ``filtered_sample``. One linear filter
+    on every signal keeps the port relation tau = B u - D qdot + d while B(x), D(x) vary
+    slowly, and removes d(t) outside the band; q and p, the features, pass unfiltered.
 
     Args:
         settings: The learner's settings (its band and sections).
         num_joints: n.
-        period: The sample period [s] (periods.learner_sample).
+        period: The sample period [s].
         trials: The number of trials of the batch.
-        channels: The learner's channels (default: the port sample's [qdot, u,
-            tau_obs], so that the output keeps the PortSample layout).
+        channels: The learner's channels (default: PortSample's [qdot, u, tau_obs]).
     """
 
     def __init__(self, *, settings: Learner, num_joints: int, period: float,

@@ -23,19 +23,13 @@ class RhsTrial:
     """One trial's part of an RhsIntegrator.
 
     Attributes:
-        model: The controller's model (p = M qdot where input ``reduced_model`` is
-            not connected).
-        network: The evaluator of the learner's published vector
-            (learning.PublishedModel: a network.ExportedNetwork, a
-            learning.local_bayes.LocalModel).
+        model: The controller's model (p = M qdot without input ``reduced_model``).
+        network: The evaluator of the learner's published vector (PublishedModel).
         Kd_max: lambda_max(K_d) of the LHS, for the gain rule (eq. 48).
         lambda_min_M: inf_q lambda_min(M), for the gain rule (eq. 48).
         B0: The nominal RHS's B0 (its diagonal, n).
         D0: The nominal RHS's D0 (its diagonal, n) [N m s].
-        prior_set: The prior's range of B as the learner publishes it before it
-            has learned anything ([lower, upper], 2 x n x n), or None (a learner
-            without a credible set): the loop without learning certifies B0 on it,
-            and the learned gains never fall below that loop's.
+        prior_set: The prior's range of B ([lower, upper], 2 x n x n) or None (gain floor).
     """
     model: ReducedModel
     network: PublishedModel
@@ -47,97 +41,47 @@ class RhsTrial:
 
 
 class RhsIntegrator(LeafSystem):
-    """Every ``period`` h (the fastest loop), at sample k:
+    """Decentralized integral control around the learned inverse feed-forward.
+
+    Every ``period`` h, at sample k (kernels.loop.integrator_samples):
 
         e_tau = tau_c^r(k-1) - tau_obs(k)
         u_I <- u_I + h K e_tau
         u    = B_hat^-1 (tau_c^r + D_hat qdot) + u_I
         chi  = max(||e_tau||, chi e^(-h / chi_window), chi_floor)
 
-    (one compiled kernel, kernels.loop.integrator_sample). tau_obs(k), the
-    observer's held output, was formed at sample k-1 (for the interval before it),
-    so e_tau compares it with the request of that same instant (the paper's
-    e_tau = tau_c^r - tau_c^g). Against the current request instead, e_tau would
-    also carry the request's own increment over one sample, which the feed-forward
-    already delivers: the integrator would wind up on it and no model of the RHS
-    could remove that error.
+    tau_obs(k) was formed at sample k-1, so e_tau compares it with that instant's
+    request (the paper's e_tau = tau_c^r - tau_c^g); against the current request the
+    integrator would wind up on the request's increment, which the feed-forward delivers.
 
-    Every ``model_period`` it refreshes, from the learner's exported weights at the
-    sampled state x = (q, p = M qdot): B_hat(x), D_hat(x), the gains k_p = c / Re(lambda_hat_p)
-    and c, which follows (1 + c_margin) c_min(beta) (eq. 48) through a first-order
-    filter with time constant c_time_constant and never drops below c_min (with
-    ``gain_rule`` "well_damped", c stays at the fastest well-damped rate
-    1 / (4 period), which the build-time check keeps above the paper's), where
-    beta = min(beta_hat, beta_max): c never exceeds (1 + c_margin) c_min(beta_max),
-    the decay rate the RHS period was checked for when the diagram was built
-    (gain_rule.check_rhs_period), so h c stays within the well-damped bound. If the DIC
-    check (det B_hat != 0, Re lambda_hat_p > 0) fails, or B_hat's eigenvalues leave the
-    trust band (``trust_ratio``, gain_rule.within_trust) around its anchor
-    (``trust_anchor``: the eigenvalues in use, c / K_p, or B0's), the previous
-    B_hat^-1, D_hat and K are kept and ``dic_ok`` (resp. ``trusted``) is 0 until the
-    estimate passes again. An estimate outside the band that passes DIC is accepted
-    on evidence (``evidence_ratio`` > 0): the learner's port samples (input
-    ``port_sample``, its own data, band-passed in regularized mode) of the last
-    ``evidence_window`` seconds (identification.PortEvidence, at least half of the
-    window's samples) leave a residual of its port relation at most evidence_ratio
-    times that of the estimate in use, and the loop with its gains would stay
-    stable (spectral radius at most 1 - STABILITY_MARGIN) if the estimate in use
-    were the truth (gain_rule.stays_stable_if_wrong: evidence from a window that
-    still holds a change's transient can be wrong). With the band anchored at the
-    estimate in use, no estimate is adopted, by band or by evidence, whose
-    eigenvalues leave trust_ratio^2 of B0's: a learner that drifts in small steps
-    is bounded too (at the default trust_ratio 2, B_hat within [0.25, 4] B0, where
-    the loop would stay stable even if B0 were right: it is stable down to about
-    0.24 B0 on the paper's arm). So a learner that follows a truth far from B0 is
-    adopted however fast it got there, and a jump that the data do not support (a
-    biased learner, ``stress``), or that would destabilize the loop if they
-    misled, is refused.
+    Every ``model_period`` it refreshes B_hat(x), D_hat(x) at x = (q, p = M qdot), the
+    gains k_p = c / Re(lambda_hat_p) and c, which follows (1 + c_margin) c_min(beta)
+    (eq. 48), beta = min(beta_hat, beta_max), through a first-order filter and never
+    drops below c_min (gain_rule "well_damped": c = 1 / (4 period)). An estimate that
+    fails DIC (det B_hat != 0, Re lambda_hat_p > 0) or leaves the trust band
+    (``trust_ratio`` around ``trust_anchor``) is not adopted; outside the band it is
+    adopted on evidence if its port residual is at most ``evidence_ratio`` times the
+    in-use one and the loop would stay stable were the in-use estimate true. B_hat
+    always stays within trust_ratio^2 of B0, so a slowly drifting learner is bounded.
 
-    With ``adoption`` "certified_set" and a learner that publishes a credible set of
-    B (learning.PortEstimate.B_set; the local Bayesian learner's, its prior's range
-    while it has not determined B), the trust band and the evidence give way to the
-    set's certificate (kernels.certificate.certified_gains): the estimate passing
-    DIC is adopted only if some c, at least c_min and the rate at which the set's
-    slowest mode meets the time-scale separation, at most the well-damped rate
-    1 / (4 period) and the rate at which the set's fastest mode keeps the spectral
-    radius within 1 - STABILITY_MARGIN, certifies the discrete loop for every B of
-    the set, and every paired eigenvalue of the estimate lies within ``trust_ratio``
-    of the in-use set's range of it (the trust band, around the set in use: a
-    confidently wrong jump is refused, and a real change passes through the
-    prior's range, which the learner publishes once it detects the change); c is
-    then the paper's filtered rule clipped into that range, with
-    beta = max(beta_hat, 1 / the set's slowest mode ratio) (the paper's beta_hat_p
-    is the worst ratio of the estimated to the true mode gain), and c and each
-    k_p are raised to those the loop without learning settles at (B0 certified on
-    the prior's set, RhsTrial.prior_set) where the set certifies them too:
-    learning never runs a mode slower than that loop. Otherwise the estimate in
-    use is kept with its c and K. At t = 0 the learner publishes its
-    prior's range: the loop starts certified for every actuator that range allows.
-
-    ``stress`` (a verification setting) replaces B_hat by stress.B_hat_scale * B_hat
-    (and its set likewise) from stress.start on.
+    With ``adoption`` "certified_set" and a learner that publishes a credible set of B,
+    the set's certificate (kernels.certificate.certified_gains) replaces band and
+    evidence: an estimate is adopted only if some c in [c_min, 1 / (4 period)]
+    certifies the discrete loop for every B of the set and each mode lies within
+    ``trust_ratio`` of the in-use set's range; c and K never fall below those of the
+    loop without learning (RhsTrial.prior_set).
 
     Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
-    ``port_sample`` (optional: without it, the band alone decides), ``reduced_model``
-    (optional: the LHS's M for p = M qdot; without it the model's).
-    Outputs ``u``, ``chi`` and ``rhs_log`` = [e_tau (n), ||e_tau||, chi, K (n), c,
-    c_min, dic_ok, trusted, certified, set_slowest, set_fastest]
-    (log_layout.RhsLog). For a batch (``trials``: each trial's RhsTrial; one: a
-    single run) every port carries the trials' signals stacked; the fast sample of
-    all trials is one compiled kernel (kernels.loop.integrator_samples), the
-    model refresh one evaluation of all trials' published models and stacked
-    numpy (the evidence test, which few refreshes reach, trial by trial; the
-    set's certificate, one compiled kernel, kernels.certificate).
+    ``port_sample`` and ``reduced_model`` (both optional). Outputs ``u``, ``chi`` and
+    ``rhs_log`` (log_layout.RhsLog); for several trials each port stacks theirs.
 
     Args:
-        trials: Each trial's RhsTrial (model, published model, LHS rates, nominal
-            RHS).
+        trials: Each trial's RhsTrial.
         settings: The RHS loop's settings (scenario.rhs).
-        period: The integrator's period h [s] (periods.rhs).
-        model_period: The model refresh's period [s] (periods.learner_sample).
-        stress: A verification setting that scales B_hat from a time on.
-        channels: The learner's channels, whose filtered samples input
-            ``port_sample`` carries (default: the PortSample layout).
+        period: The integrator's period h [s].
+        model_period: The model refresh's period [s].
+        stress: Verification setting: B_hat scaled by B_hat_scale from stress.start on.
+        channels: The learner's channels carried by ``port_sample`` (default: PortSample).
     """
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
@@ -241,21 +185,14 @@ class RhsIntegrator(LeafSystem):
                           self._c_floor)
 
     def GetModelGroup(self, context: Context) -> np.ndarray:
-        """The model groups in ``context``, for inspection.
+        """A copy of the trials' stacked model groups (log_layout.RhsState) in ``context``.
 
         Args:
-            context: This system's context.
-
-        Returns:
-            The model groups (log_layout.RhsState: B_hat^-1, D_hat, K, c, c_min,
-                dic_ok, trusted; per trial, stacked), a copy."""
+            context: This system's context."""
         return context.get_discrete_state(self._gains).get_value().copy()
 
     def _Refresh(self, gains, weights, t, q, p, beta, B_hat_scale, evidence=None):
-        """The trials' model groups after one refresh from ``gains`` (trials x
-        model group) at their states x = (q, p) (see class docstring; every trial
-        at once); ``evidence``: the PortEvidence states of the learner's samples,
-        or None."""
+        """The trials' model groups after one refresh from ``gains`` at x = (q, p)."""
         L = self._layout
         gains = gains.copy()
         estimate = self._published.Estimate(weights, t, q, p)
@@ -285,13 +222,10 @@ class RhsIntegrator(LeafSystem):
         return gains
 
     def _SetGains(self, B_set, eigenvalues, beta, c, floor, c_floor):
-        """certified_gains for each trial's set (2, trials, n, n) and estimate's paired
-        eigenvalues, at the gain rule's beta = max(beta, 1 / the set's slowest mode
-        ratio) capped at beta_max, with c moved from ``c`` towards its target by the
-        rule's filter (``c`` None: the target itself) and at least ``c_floor``, and
-        the gains raised to ``floor`` where certified: (out (trials, 4), K (trials,
-        n), c_min, each mode's eigenvalue range over the set (Gershgorin: low,
-        high))."""
+        """certified_gains for each trial's set (2, trials, n, n) at
+        beta = max(beta, 1 / slowest mode ratio) <= beta_max, c filtered from ``c`` (None:
+        the target) and >= ``c_floor``, gains raised to ``floor`` where certified.
+        Returns (out (trials, 4), K, c_min, mode_low, mode_high) (Gershgorin ranges)."""
         settings = self._settings
         lower, upper = np.minimum(B_set[0], B_set[1]), np.maximum(B_set[0], B_set[1])
         radius = _off_diagonal_bound(lower, upper)
@@ -313,9 +247,7 @@ class RhsIntegrator(LeafSystem):
         return out, K, c_min, mode_low, mode_high
 
     def _Certify(self, gains, B_hat, D_hat, B_set, paired, dic_ok, beta):
-        """The certified-set adoption (class docstring): each trial's candidate is
-        adopted with the c its set certifies, or the estimate in use is kept with its
-        c and K."""
+        """Certified-set adoption: adopt with the set's c, or keep the estimate in use."""
         L, settings = self._layout, self._settings
         eigenvalues = np.where(dic_ok[:, None], paired.real, 1.0)
         out, K, c_min, mode_low, mode_high = self._SetGains(
@@ -347,9 +279,7 @@ class RhsIntegrator(LeafSystem):
         return gains
 
     def _Accepts(self, gains, B_hat, D_hat, paired, k, dic_ok, evidence) -> np.ndarray:
-        """Which trials' estimates that passed DIC are adopted (class docstring):
-        within trust_ratio^2 of B0 and within trust_ratio of the anchor (B0 or the
-        estimate in use), or outside the latter on evidence."""
+        """Which DIC-passing estimates are adopted: in the trust band, or on evidence."""
         L, settings = self._layout, self._settings
         # Anchored at the estimate in use, the band could follow a learner that
         # drifts slowly: overall, the estimate stays within trust_ratio^2 of B0.

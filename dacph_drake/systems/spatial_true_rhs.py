@@ -16,31 +16,17 @@ from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
 
 
 class SpatialTrueRhs(TrueRhsSystem):
-    """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p) and p the joint rows of
-    H(q_full) v, which at zero momentum is M(q) qdot exactly (the base rows of H v
-    are the conserved momentum), for every trial of a batch (one trial: a single
-    run). B~, D~ (uncertainty.TrueRhsModel) and d(t) (DisturbanceSource's
-    parameters, input ``disturbance_model``) are the planar ground truth's
-    compiled kernels, which hold for any number of joints; p comes from each
-    trial's kinematic tree and inertias (kernels.spatial.joint_momentum), all
-    trials in one compiled call (kernels.loop.spatial_true_torques).
+    """tau = B~(x) u - D~(x) qdot + d(t) (E19) for a robot from a description file.
 
-    Stateless: output ``tau`` depends only on the inputs ``u``, ``state`` (the
-    batch's plant's, each trial's part read through plant.trial_coordinates) and
-    time, so it adds no delay; it feeds the plant's actuation input. u is clipped
-    to the actuators' effort limits (scenario.DescribedArm.effort_limits; output
-    ``saturated``: 1 for each joint whose command was clipped). Output
-    ``true_matrices`` = [vec(B~) (row-major), diag(D~)] per trial for the metrics:
-    the port's, beyond the description's joint damping b, which the plant applies
-    itself and the LHS model knows (PortObserver, AttitudeController). ``plant`` is
-    the batch's ground truth (finalized), ``arms`` each trial's arm as a plant of
-    its own (its inertias the defaults), ``uncertainties`` and ``phases`` each
-    trial's.
+    As TrueRhs, with p the joint rows of H(q_full) v (kernels.spatial.joint_momentum),
+    M(q) qdot exactly at zero momentum, all trials in one compiled call. u is clipped to
+    the effort limits (output ``saturated``: 1 per clipped joint). Output
+    ``true_matrices`` is the port's [vec(B~), diag(D~)] beyond the description's joint
+    damping b, which the plant applies itself and the LHS model knows.
 
     Args:
         plant: The batch's ground truth (finalized).
-        arms: Each trial's arm as a plant of its own (its kinematic tree and
-            inertias).
+        arms: Each trial's arm as a plant of its own (kinematic tree, default inertias).
         uncertainties: Each trial's true RHS (scenario.uncertainty).
         phases: Each trial's phases.
     """

@@ -18,23 +18,18 @@ RUNAWAY_RATE = 50.0     # [rad/s]: a trial whose joint or base rate exceeds it s
 
 
 class TrueRhsSystem(LeafSystem):
-    """What every true RHS (TrueRhs, SpatialTrueRhs) does for the trials of its
-    batch beside its torque, at every evaluation (every integrator stage), inside
-    its kernel: a trial stopped by the run (Stop) gets zero torque, and so does a
-    trial whose state or torque goes unsound, which is reported (Unsound), so that
-    a NaN of one trial never reaches the plant that the others share."""
+    """Base of the true RHSs: in the kernel, a stopped trial (Stop) or one whose state
+    or torque goes unsound (Unsound) gets zero torque, so that one trial's NaN never
+    reaches the plant the others share."""
 
     def DeclareTrueRhsPorts(self, n: int, state_size: int, trials: int = 1
                             ) -> Tuple[InputPort, InputPort, InputPort]:
-        """DeclareTrueRhsPorts, and the trials' running flags.
+        """Declares the ports (DeclareTrueRhsPorts; returns its inputs) and running flags.
 
         Args:
             n: The number of joints.
             state_size: The size of the plant's state.
-            trials: The number of trials of the batch.
-
-        Returns:
-            The input ports (``u``, ``state``, ``disturbance_model``)."""
+            trials: The number of trials of the batch."""
         self._n, self._trials = n, trials
         # 1 for a trial that runs, 0 for one stopped (Stop): its torque is zero.
         self._running = self.DeclareNumericParameter(BasicVector(np.ones(trials)))
@@ -44,11 +39,7 @@ class TrueRhsSystem(LeafSystem):
         return DeclareTrueRhsPorts(self, n, state_size, trials)
 
     def Stop(self, context: Context, trial: int) -> None:
-        """Zeroes a trial's torque from now on.
-
-        From now on in ``context``, trial ``trial``'s torque is zero, whatever its
-        inputs hold: a trial of a batch that stopped (loop.simulate) stays where it
-        is while the others run on.
+        """Zeroes trial ``trial``'s torque from now on: it stays put while the others run.
 
         Args:
             context: This system's context.
@@ -57,22 +48,18 @@ class TrueRhsSystem(LeafSystem):
         self._any_stopped = True
 
     def Unsound(self) -> Dict[int, Tuple[str, float]]:
-        """The trials whose state or torque went unsound (a non-finite value, or a
-        rate beyond RUNAWAY_RATE), with the reason and the first time it was;
-        their torque has been zero since. The monitor of a run reads it; it is a
-        record of this diagram's simulation, not part of its state."""
+        """The trials whose state or torque went unsound (non-finite, or a rate beyond
+        RUNAWAY_RATE): trial -> (reason, first time [s]); their torque is zero since."""
         return dict(self._unsound)
 
     def _Running(self, context) -> np.ndarray:
-        """The trials' running flags (Stop), for the kernel: read from the context
-        once a trial has stopped, all ones before."""
+        """The trials' running flags (Stop), for the kernel."""
         if not self._any_stopped:
             return self._all_running
         return context.get_numeric_parameter(self._running).get_value()
 
     def _Record(self, context) -> None:
-        """Records the trials whose verdict (self._verdicts, written by the
-        kernel: kernels.loop.RUNNING ...; its last entry the largest) is unsound."""
+        """Records the trials whose kernel verdict is unsound."""
         if self._verdicts[-1] <= STOPPED:
             return
         t = context.get_time()
@@ -84,29 +71,16 @@ class TrueRhsSystem(LeafSystem):
 
 
 class TrueRhs(TrueRhsSystem):
-    """tau = B~(x) u - D~(x) qdot + d(t), with x = (q, p), p = M(q) qdot of the true
-    robot, for every trial of a batch (one trial: a single run). Stateless: output
-    ``tau`` depends only on the inputs ``u``, ``state`` (the batch's plant's, each
-    trial's part read through plant.trial_coordinates) and time (the phases and
-    d(t)), so it adds no delay. It feeds the plant's actuation input and runs at
-    every integrator stage, as one compiled kernel for all trials
-    (kernels.loop.true_torques) that evaluates d(t) from input
-    ``disturbance_model`` (DisturbanceSource's constant parameters).
+    """tau = B~(x) u - D~(x) qdot + d(t) (E19), x = (q, p), p = M(q) qdot of the true robot.
 
-    p is the joint rows of H(q_full) v (kernels.arm.joint_momentum): at zero momentum
-    this equals M(q) qdot exactly (the base rows of H v are the conserved momentum).
-    Output ``true_matrices``: [vec(B~) (row-major), diag(D~)] per trial, for the
-    metrics. ``plant`` is the batch's ground truth (finalized); ``truths`` each
-    trial's arm (RobotParams), whose mass matrix's closed form (ReducedOrderModel)
-    is fitted once here; ``uncertainties`` and ``phases`` each trial's. Port sizes
-    are the trials' signals stacked in trial order.
+    Stateless (no delay), one compiled kernel for all trials; p is the joint rows of
+    H(q_full) v, M(q) qdot exactly at zero momentum. Also outputs ``true_matrices``.
 
     Args:
         plant: The batch's ground truth (finalized).
         truths: Each trial's true arm (RobotParams).
         uncertainties: Each trial's true RHS (scenario.uncertainty).
-        phases: Each trial's phases.
-    """
+        phases: Each trial's phases."""
 
     def __init__(self, *, plant: MultibodyPlant, truths: Sequence[RobotParams],
                  uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):
@@ -139,22 +113,14 @@ class TrueRhs(TrueRhsSystem):
 
 def DeclareTrueRhsPorts(system: LeafSystem, n: int, state_size: int, trials: int = 1
                         ) -> Tuple[InputPort, InputPort, InputPort]:
-    """Declares the ports every true RHS has (TrueRhsSystem).
-
-    Inputs ``u`` (n per trial), ``state`` (the plant's, ``state_size``) and
-    ``disturbance_model`` (DisturbanceSource's parameters); outputs ``tau`` (n per
-    trial, system._CalcTau) and ``true_matrices`` (n * n + n per trial,
-    system._CalcMatrices), each depending only on time, the inputs it reads and
-    (tau) the parameters.
+    """Declares a true RHS's ports and returns its inputs ``u``, ``state``,
+    ``disturbance_model``; outputs ``tau``, ``true_matrices`` (on time, inputs, parameters).
 
     Args:
         system: The true RHS that declares them.
         n: The number of joints.
         state_size: The size of the plant's state.
-        trials: The number of trials of the batch.
-
-    Returns:
-        The three input ports (``u``, ``state``, ``disturbance_model``)."""
+        trials: The number of trials of the batch."""
     u = system.DeclareVectorInputPort("u", trials * n)
     state = system.DeclareVectorInputPort("state", state_size)
     disturbance_model = system.DeclareVectorInputPort("disturbance_model",

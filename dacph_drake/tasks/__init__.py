@@ -1,2 +1,2 @@
-"""The tasks an LHS controller tracks: the planar end-effector angle's reference and
-the 3D attitude's error and rates."""
+"""Tasks: what an LHS controller tracks, as its own axis beside the robot
+(tasks.task.Task; the registered ones in tasks.registry.TASKS)."""

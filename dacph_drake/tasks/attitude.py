@@ -6,8 +6,13 @@ GJM's angular rows, and the damped pseudo-inverse law for the reference joint ra
 
 mu the damping that keeps nu bounded near singular configurations (mu = 0: the
 Moore-Penrose pseudo-inverse of a full-rank D)."""
+from typing import Tuple
+
 import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RotationMatrix
+
+from dacph_drake.scenario import AttitudeReference
 
 
 def attitude_error(R_WE: RotationMatrix, R_WD: RotationMatrix) -> np.ndarray:
@@ -64,3 +69,29 @@ def reference_rates(D: np.ndarray, omega_d: np.ndarray, e: np.ndarray,
         nu (n) [rad/s]."""
     D_plus = damped_pseudo_inverse(D, damping)
     return D_plus @ (omega_d - Lambda * e) + (np.eye(D.shape[1]) - D_plus @ D) @ xi
+
+
+def reference_start(reference: AttitudeReference, R_WE0: RotationMatrix) -> RotationMatrix:
+    """R_d(0): the attitude at q0 turned by initial_error about initial_error_axis.
+
+    Args:
+        reference: The scenario.AttitudeReference.
+        R_WE0: The end effector's attitude at q0."""
+    axis = np.asarray(reference.initial_error_axis, float)
+    return RotationMatrix(AngleAxis(reference.initial_error,
+                                    axis / np.linalg.norm(axis))) @ R_WE0
+
+
+def reference_at(reference: AttitudeReference, R_d0: RotationMatrix, t: float
+                 ) -> Tuple[RotationMatrix, np.ndarray]:
+    """(R_d(t), omega_d(t) in the world [rad/s]) of scenario.AttitudeReference.
+
+    Args:
+        reference: The scenario.AttitudeReference.
+        R_d0: R_d(0) (reference_start).
+        t: The time [s]."""
+    axis = np.asarray(reference.axis, float) / np.linalg.norm(reference.axis)
+    w = 2 * np.pi / reference.period
+    phi = reference.amplitude * np.sin(w * t)
+    phi_dot = reference.amplitude * w * np.cos(w * t)
+    return R_d0 @ RotationMatrix(AngleAxis(phi, axis)), R_d0.matrix() @ axis * phi_dot

@@ -1,0 +1,109 @@
+"""The built-in scenarios by name (``dacph ... paper|short|satellite_6dof|
+satellite_3dof``) and the sections a described arm's scenario changes from the planar
+defaults; scenarios/*.yaml are their files."""
+import numpy as np
+
+from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAttitude,
+                                  Learner, Periods, Phases, Rhs, Scenario, Uncertainty)
+
+
+def paper_scenario() -> Scenario:
+    """The paper's 1500 s scenario, its exact LHS model stated
+    (learner.bayes.model_error 0); scenarios/paper.yaml."""
+    scenario = Scenario()
+    scenario.learner.bayes.model_error = 0.0
+    return scenario
+
+
+def short_scenario() -> Scenario:
+    """The paper's phases compressed to 2 + 8 + 8 + 8 s; scenarios/short.yaml."""
+    return Scenario(phases=Phases(warmup=2.0, linear=8.0, nonlinear=8.0, disturbance=8.0))
+
+
+def described_arm_periods() -> Periods:
+    """A described arm's periods (K_d = damping_rate M asks periods.rhs <= 1.25 ms)."""
+    return Periods(rhs=5e-4, lhs=1e-3, learner=0.1, learner_sample=1e-2, log=1e-2)
+
+
+def described_arm_rhs() -> Rhs:
+    """chi forgets over 0.25 s: the first request's peak would hold it for seconds."""
+    return Rhs(chi_window=0.25)
+
+
+def described_arm_learner() -> Learner:
+    """The learner for joints whose inertias lie decades apart (docs: Settings)."""
+    return Learner(momentum_scale=0.5, prior_weight=0.1, band_sections=[8, 8],
+                   coupling="inertia", prior_scale="per_input", prior_fallback=True)
+
+
+def six_dof_uncertainty(scale: float = 1.0) -> Uncertainty:
+    """satellite_6dof's true RHS: the paper's form sized to each joint.
+
+    Args:
+        scale: linear_scale and nonlinear_scale.
+
+    Returns:
+        The section."""
+    pair = np.array([[-0.1, 0.0], [0.05, 0.15]])
+    coupling = np.zeros((6, 6))
+    coupling[:2, :2] = [[0.0, -0.1], [0.4, 0.0]]
+    return Uncertainty(
+        B0=[1.0] * 6, D0=[0.2, 0.2, 0.1, 0.01, 0.01, 0.005],
+        D_offset=[0.04, 0.05, 0.02, 0.002, 0.003, 0.001],
+        D_linear=[0.05, 0.15, 0.1, 0.1, 0.1, 0.1],
+        D_quadratic=[-0.01, 0.1, 0.1, 1.0, -1.0, 1.0],
+        B_linear=np.kron(np.eye(3), pair).tolist(),
+        B_quadratic=[0.02, -0.5, 0.5, 5.0, -5.0, 5.0],
+        B_q1_squared=coupling.tolist(), linear_scale=scale, nonlinear_scale=scale)
+
+
+def six_dof_disturbance(scale: float = 1.0) -> Disturbance:
+    """satellite_6dof's d(t).
+
+    Args:
+        scale: Disturbance.scale.
+
+    Returns:
+        The section."""
+    return Disturbance(
+        scale=scale, lf_offset=[0.03, -0.02, 0.02, -0.002, 0.002, -0.001],
+        lf_amplitude=[0.02, 0.02, 0.01, 0.002, 0.002, 0.001],
+        lf_frequency=[0.05, 0.07, 0.06, 0.08, 0.09, 0.1],
+        hf_direction=[1.0, -1.0, 0.5, -0.1, 0.1, -0.05])
+
+
+SATELLITE_PHASES = dict(warmup=2.0, linear=4.0, nonlinear=4.0, disturbance=4.0)
+
+
+def satellite_6dof_scenario() -> Scenario:
+    """The 6-DOF satellite arm (scenarios/satellite_6dof.yaml)."""
+    return Scenario(
+        robot=DescribedArm("satellite_6dof"), task=EndEffectorAttitude(),
+        q0=[0.3, -0.8, 1.6, 0.2, 0.6, -0.3], phases=Phases(**SATELLITE_PHASES),
+        rhs=described_arm_rhs(), periods=described_arm_periods(),
+        uncertainty=six_dof_uncertainty(), disturbance=six_dof_disturbance(),
+        learner=described_arm_learner())
+
+
+def satellite_3dof_scenario() -> Scenario:
+    """The 3-DOF variant (scenarios/satellite_3dof.yaml)."""
+    return Scenario(
+        robot=DescribedArm("satellite_3dof"), task=EndEffectorAttitude(),
+        q0=[0.3, -0.8, 1.6], phases=Phases(**SATELLITE_PHASES),
+        rhs=described_arm_rhs(), periods=described_arm_periods(),
+        uncertainty=Uncertainty(
+            B0=[1.0] * 3, D0=[0.2, 0.2, 0.01], D_offset=[0.04, 0.05, 0.002],
+            D_linear=[0.15, 0.05, 0.1], D_quadratic=[0.1, -0.01, 1.0],
+            B_linear=[[-0.1, 0.0, 0.0], [0.05, 0.15, 0.0], [0.0, 0.0, 0.1]],
+            B_quadratic=[0.5, 0.02, 5.0],
+            B_q1_squared=[[0.0, -0.1, 0.0], [0.4, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        disturbance=Disturbance(lf_offset=[0.03, -0.02, 0.002],
+                                lf_amplitude=[0.02, 0.02, 0.002],
+                                lf_frequency=[0.05, 0.07, 0.09],
+                                hf_direction=[1.0, -1.0, 0.1]),
+        learner=described_arm_learner())
+
+
+BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario,
+                      "satellite_6dof": satellite_6dof_scenario,
+                      "satellite_3dof": satellite_3dof_scenario}

@@ -1,0 +1,125 @@
+"""task: !EndEffectorPose, a described arm's end-effector position and attitude: the
+AttitudeController with the GJM's linear rows stacked under its angular ones
+(kernels.attitude.pose_rates), so
+
+    nu = D^+ [omega_d - Lambda e; v_d - Lambda e_p] + (I - D^+ D) xi,
+    D = [angular rows; linear rows] of the generalized Jacobian (6 x n),
+
+e_p = p_E - p_d(t) in the world; the null space (n > 6) keeps the links off the base
+as in the attitude task. The sliding-mode law, its Lyapunov function V = s^T M s / 2
+and hence the certificate are the attitude task's (E26-E28 hold for any nu)."""
+from dataclasses import dataclass, field
+from typing import Dict, List
+
+import numpy as np
+
+from dacph_drake.analysis.phases import phase_windows, rms
+from dacph_drake.errors import ConfigError, require_finite_numbers, require_positive
+from dacph_drake.log_layout import PoseLog
+from dacph_drake.scenario import AttitudeGains, AttitudeReference, Periods
+from dacph_drake.robots.robot import Robot
+from dacph_drake.tasks.end_effector_attitude import EndEffectorAttitudeTask
+
+# The smallest singular value of the 6-row task Jacobian a run may start at.
+REFUSED_SINGULAR_VALUE = 1e-3
+
+
+@dataclass
+class PositionReference:
+    """p_d(t) = p_E(q0) + initial_offset + axis amplitude sin(2 pi t / period), world.
+
+    Attributes:
+        axis: A non-zero 3-vector (world).
+        amplitude: [m], >= 0.
+        period: [s], > 0.
+        initial_offset: p_d(0) - p_E(q0) [m] (3)."""
+    axis: List[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
+    amplitude: float = 0.03
+    period: float = 8.0
+    initial_offset: List[float] = field(default_factory=lambda: [0.02, 0.0, 0.0])
+
+
+@dataclass
+class EndEffectorPose:
+    """task: !EndEffectorPose, the end effector's position and attitude.
+
+    Attributes:
+        reference: The attitude reference R_d(t).
+        position: The position reference p_d(t).
+        gains: The LHS gains (Lambda acts on both errors)."""
+    reference: AttitudeReference = field(default_factory=AttitudeReference)
+    position: PositionReference = field(default_factory=PositionReference)
+    gains: AttitudeGains = field(default_factory=AttitudeGains)
+
+
+class EndEffectorPoseTask(EndEffectorAttitudeTask):
+    """tasks.task.Task of a described arm's end-effector pose."""
+    section = EndEffectorPose
+    lhs_name, log_name = "pose_controller", "pose_log"
+    panels = ("e_pose_dac_vs_model_based",)
+    log_layout = PoseLog
+
+    def Validate(self, section: EndEffectorPose, periods: Periods) -> None:
+        """The attitude task's checks, then the position reference's.
+
+        Args:
+            section: The task section.
+            periods: The scenario's periods."""
+        super().Validate(section, periods)
+        p = section.position
+        require_positive("task.position.period", p.period, "s")
+        require_finite_numbers("task.position.amplitude", [p.amplitude])
+        if p.amplitude < 0:
+            raise ConfigError(f"task.position.amplitude = {p.amplitude!r} m; allowed: "
+                              ">= 0")
+        for name in ("axis", "initial_offset"):
+            vector = getattr(p, name)
+            require_finite_numbers(f"task.position.{name}", list(vector))
+            if len(vector) != 3 or (name == "axis" and np.linalg.norm(vector) == 0):
+                raise ConfigError(f"task.position.{name} = {list(vector)}; allowed: a "
+                                  + ("non-zero " if name == "axis" else "") + "3-vector")
+
+    def RequireRegularStart(self, robot: Robot) -> None:
+        """The attitude task's check, then the 6 x n GJM's smallest singular value
+        at q0 against REFUSED_SINGULAR_VALUE (n >= 6 joints are needed).
+
+        Args:
+            robot: The trial's DescribedRobot."""
+        if robot.num_joints < 6:
+            raise ConfigError(f"task: !EndEffectorPose on a {robot.num_joints}-joint "
+                              "arm; allowed: an arm of at least 6 joints (or task: "
+                              "!EndEffectorAttitude)")
+        super().RequireRegularStart(robot)
+        from dacph_drake.dynamics.plant import END_EFFECTOR
+        q0 = np.asarray(robot.scenario.q0, float)
+        frame = robot.model.plant.GetFrameByName(END_EFFECTOR)
+        sigma = np.linalg.svd(robot.model.GeneralizedJacobian(q0, frame),
+                              compute_uv=False)[-1]
+        if sigma < REFUSED_SINGULAR_VALUE:
+            raise ConfigError(f"q0 = {list(q0)}: the end effector's pose is singular "
+                              f"there (the 6-row task Jacobian's smallest singular "
+                              f"value {sigma:.2g} < {REFUSED_SINGULAR_VALUE:g}); "
+                              "allowed: a q0 away from the pose's singularities")
+
+    def ControllerOptions(self, section: EndEffectorPose) -> Dict:
+        """The position rows and the pose log.
+
+        Args:
+            section: The task section."""
+        return {"position": section.position, "log_name": self.log_name}
+
+    def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The attitude task's metrics, and the RMS |e_p| [m] per phase (the
+        attitude's is the shared tracking_error_rms).
+
+        Args:
+            robot: The trial's DescribedRobot.
+            logs: The run's logs."""
+        out = super().Metrics(robot, logs)
+        log, L = logs[self.log_name], PoseLog()
+        for phase, mask in phase_windows(robot.scenario, logs["time"]).items():
+            out[f"{phase}.position_error_rms"] = rms(log[mask, L.e_position_norm])
+        return out
+
+
+END_EFFECTOR_POSE = EndEffectorPoseTask()

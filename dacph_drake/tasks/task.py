@@ -1,0 +1,121 @@
+"""The Task protocol: what an LHS controller tracks, as its own axis beside the robot
+(robots.robot.Robot). A task owns its scenario section (``task: !Name``), the LHS
+system it adds, its log and panels, its signals and metrics, and its part of the
+certificate; it names the robot sections it can serve. A new task is one module
+with one Task and one line in tasks.TASKS."""
+from dataclasses import dataclass
+from typing import Dict, NamedTuple, Protocol, Sequence, Tuple
+
+import numpy as np
+
+from dacph_drake.robots.robot import Robot
+from dacph_drake.scenario import Excitation, Periods
+
+
+class TaskSignals(NamedTuple):
+    """A task's signals over a run, one row per logged sample.
+
+    Attributes:
+        error: The tracking error the tables compare (rad for the shipped tasks).
+        sliding: s, or ||s|| (T or T x n).
+        clearance: The link-base clearance [m].
+        base_turn: The base's rotation from its start [rad].
+    """
+    error: np.ndarray
+    sliding: np.ndarray
+    clearance: np.ndarray
+    base_turn: np.ndarray
+
+
+@dataclass
+class LhsSide:
+    """What ``dacph verify`` needs of a run's LHS (the task's part of the certificate).
+
+    Attributes:
+        V: V = s^T M s / 2 at every logged sample [J].
+        s0_norm: ||s(0)|| [rad/s].
+        constants: The envelope's lyapunov_envelope.EnvelopeConstants.
+        lambda_lhs: lambda_LHS of eq. (45) [1/s].
+        region: The region-of-attraction certificate at q0.
+        settings: The LHS's settings, for the report.
+    """
+    V: np.ndarray
+    s0_norm: float
+    constants: object
+    lambda_lhs: float
+    region: object
+    settings: Dict
+
+
+class Task(Protocol):
+    """A task, as the loop builder, the metrics, the figures and verify use it.
+
+    Attributes:
+        section: Its scenario section's dataclass (YAML tag ``!section``).
+        robots: The robot sections (scenario.PlanarArm, DescribedArm) it can serve.
+        lhs_name: The LHS system's name.
+        log_name: Its log output's name.
+        panels: figures.make_panels' panels of this task.
+    """
+    section: type
+    robots: Tuple[type, ...]
+    lhs_name: str
+    log_name: str
+    panels: Tuple[str, ...]
+
+    def Validate(self, section: object, periods: Periods) -> None:
+        """ConfigError naming the section's first invalid setting.
+
+        Args:
+            section: The scenario's task section.
+            periods: The scenario's periods."""
+
+    def RequireRegularStart(self, robot: Robot) -> None:
+        """ConfigError if the task is (nearly) singular at q0.
+
+        Args:
+            robot: The trial's Robot."""
+
+    def GainRuleRates(self, robot: Robot) -> Tuple[float, float]:
+        """(lambda_max(K_d), inf_q lambda_min(M)) for eq. (48).
+
+        Args:
+            robot: The trial's Robot."""
+
+    def AddLhsController(self, controller: "ControllerBuilder", trials: Sequence[Robot],
+                         excitation: Excitation,
+                         identify: bool) -> Dict:
+        """Adds the batch's LHS system (outputs tau_request, reduced_model and
+        log_name; input chi), and with ``identify`` its inertial identifier.
+
+        Args:
+            controller: The controller's closed_loop.ControllerBuilder.
+            trials: Each trial's Robot.
+            excitation: The learner's excitation tau_pe.
+            identify: Feed the LHS from an InertialIdentifier.
+
+        Returns:
+            System name -> system."""
+
+    def Signals(self, robot: Robot, logs: Dict[str, np.ndarray]) -> TaskSignals:
+        """The task's signals over a run.
+
+        Args:
+            robot: The trial's Robot.
+            logs: The run's logs."""
+
+    def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The task's own metrics beside analysis.metrics' shared ones.
+
+        Args:
+            robot: The trial's Robot.
+            logs: The run's logs."""
+
+    def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
+                  ) -> LhsSide:
+        """The task's part of the certificate.
+
+        Args:
+            robot: The trial's Robot.
+            logs: The run's logs.
+            region_budget: The region search's wall-time budget [s]."""
