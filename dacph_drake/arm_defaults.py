@@ -101,7 +101,9 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     parsed = ParsedDescription(robot)
     model = FloatingBaseModel(parsed.plant)
     require_every_joint_moves_inertia(model, robot.description)
+    from dacph_drake.tasks.registry import TASKS
     task = EndEffectorAttitude() if task is None else task
+    rows = getattr(TASKS.get(type(task)), "jacobian_rows", 3)
     reference = task.reference
     rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
     clearance = link_base_clearance(parsed, model)     # one SceneGraph context
@@ -109,12 +111,14 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
         try:
             q0 = choose_start(model, task, clearance,
                               null_space_rate(parsed, model, robot.potential),
-                              rehearsal_time)
+                              rehearsal_time, rows)
         except ValueError as e:
+            what, how = (("attitude", "turn about every axis") if rows == 3 else
+                         ("pose", "turn about every axis and move in every direction"))
             raise ConfigError(
                 f"robot.description {robot.description!r}: no start pose found for "
-                f"the end-effector attitude task ({e}); allowed: a q0 in the file, or "
-                "an arm whose end effector can turn about every axis") from e
+                f"the end-effector {what} task ({e}); allowed: a q0 in the file, or "
+                f"an arm whose end effector can {how}") from e
     q0 = np.asarray(q0, float)
     robot = copy.deepcopy(robot)
     if len(q0) == model.num_joints:

@@ -22,17 +22,19 @@ SHIPPED = ("scenarios/satellite_6dof_pose.yaml", "scenarios/panda_pose.yaml")
 CONTROLLERS = ("dac", "dac-nominal", "model-based")
 
 
-def family(count: int, seed: int):
-    """Pose scenarios of our own: the two shipped arms with random starts near their
-    shipped q0 (+-0.3 rad), position references along random axes of 1-5 cm and
-    periods of 5-12 s, initial offsets up to 3 cm and attitude amplitudes 0.1-0.5 rad."""
+def family(count: int, seed: int, bases=None):
+    """Pose scenarios of our own: the bases (default: the two shipped pose scenarios)
+    in turn with random starts near their q0 (+-0.3 rad), position references along
+    random axes of 1-5 cm and periods of 5-12 s, initial offsets up to 3 cm and
+    attitude amplitudes 0.1-0.5 rad."""
     from dacph_drake.scenario_files import load_scenario
     rng = np.random.default_rng(seed)
+    bases = bases or [(Path(path).stem, load_scenario(path)) for path in SHIPPED]
     for k in range(count):
-        path = SHIPPED[k % len(SHIPPED)]
-        scenario = load_scenario(path)
-        scenario.q0 = list(np.asarray(scenario.q0) + rng.uniform(-0.3, 0.3,
-                                                                 len(scenario.q0)))
+        stem, base = bases[k % len(bases)]
+        scenario = copy.deepcopy(base)
+        scenario.q0 = [float(x) for x in np.asarray(scenario.q0) + rng.uniform(
+            -0.3, 0.3, len(scenario.q0))]
         p = scenario.task.position
         axis = rng.normal(size=3)
         p.axis = list(axis / np.linalg.norm(axis))
@@ -42,7 +44,7 @@ def family(count: int, seed: int):
         p.initial_offset = list(offset / np.linalg.norm(offset) * rng.uniform(0.0, 0.03))
         scenario.task.reference.amplitude = float(rng.uniform(0.1, 0.5))
         scenario.seed = int(seed * 1000 + k)
-        yield f"{Path(path).stem}_family_{seed}_{k:02d}", scenario
+        yield f"{stem}_family_{seed}_{k:02d}", scenario
 
 
 def zoo_arms(folder: Path, family_count: int, seed: int):
@@ -178,6 +180,8 @@ def main() -> None:
     parser.add_argument("--out", default="results/pose_task")
     parser.add_argument("--family", type=int, default=0)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--variations", type=int, default=0,
+                        help="with --zoo: this many random references per zoo arm")
     parser.add_argument("--zoo", action="store_true",
                         help="the zoo's arms (with --family N: N of its random arms)")
     args = parser.parse_args()
@@ -187,7 +191,11 @@ def main() -> None:
     rows_file = out / "rows.jsonl"
     done = {json.loads(line)["name"]: json.loads(line)
             for line in rows_file.read_text().splitlines()} if rows_file.exists() else {}
-    if args.zoo:
+    if args.zoo and args.variations:
+        arms = [(name, scenario) for name, scenario in zoo_arms(out / "arms", 0, 0)
+                if not isinstance(scenario, Exception)]
+        cases = family(args.variations * len(arms), args.seed, arms)
+    elif args.zoo:
         cases = zoo_arms(out / "arms", args.family, args.seed)
     elif args.family:
         cases = family(args.family, args.seed)

@@ -24,6 +24,17 @@ from dacph_drake.tasks.attitude import (attitude_error, damped_pseudo_inverse,
 # 1 / SINGULAR_BOUND times larger. REFUSED_SINGULAR_VALUE: a given q0 closer than this
 # to a singularity is refused.
 SINGULAR_BOUND, REFUSED_SINGULAR_VALUE = 0.2, 0.02
+# The same for the pose's 6 rows, whose linear rows are lever arms [m]: 5 cm (the
+# shipped arms' wrists give their smallest singular value 0.06-0.18 at their starts).
+POSE_BOUNDS = (0.05, 0.005)
+
+
+def singular_bounds(rows: int) -> tuple:
+    """(the bound a chosen start keeps, the bound below which a q0 is refused).
+
+    Args:
+        rows: The task Jacobian's rows (3: attitude; 6: pose)."""
+    return (SINGULAR_BOUND, REFUSED_SINGULAR_VALUE) if rows == 3 else POSE_BOUNDS
 LIMIT_MARGIN = 0.1          # [-] share of a joint's range kept free at each end
 CLEARANCE_BOUND = 0.05      # [m] link-base clearance a chosen start keeps
 CANDIDATES = 256            # starts sampled by choose_start
@@ -59,26 +70,30 @@ def end_effector_frame(model: FloatingBaseModel) -> Frame:
 
 
 def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
-                  base_positions: Optional[np.ndarray] = None) -> np.ndarray:
-    """D(q), the generalized Jacobian's angular rows (3 x n).
+                  base_positions: Optional[np.ndarray] = None, rows: int = 3
+                  ) -> np.ndarray:
+    """D(q), the generalized Jacobian's first ``rows`` rows (3: the attitude's angular
+    rows; 6: the pose's, angular and linear) (rows x n).
 
     Args:
         model: The arm's model.
         q: The joint angles [rad].
-        base_positions: The base joint's coordinates (default: the identity pose)."""
+        base_positions: The base joint's coordinates (default: the identity pose).
+        rows: The task's rows (tasks.task.Task.jacobian_rows)."""
     return model.GeneralizedJacobian(np.asarray(q, float), end_effector_frame(model),
-                                     base_positions=base_positions)[:3]
+                                     base_positions=base_positions)[:rows]
 
 
 def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAttitude,
-             duration: float) -> ReferenceRehearsal:
+             duration: float, rows: int = 3) -> ReferenceRehearsal:
     """Follows the task's reference kinematically from q0 (module docstring).
 
     Args:
         model: The arm's model.
         q0: The start [rad].
         task: The task (its reference, Lambda and task_damping).
-        duration: How long [s]."""
+        duration: How long [s].
+        rows: The task Jacobian's rows whose smallest singular value is recorded."""
     frame, reference, gains = end_effector_frame(model), task.reference, task.gains
     q = np.asarray(q0, float).copy()
     base = RotationMatrix()
@@ -97,7 +112,9 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
             omega_d - gains.Lambda * attitude_error(R_WE, R_d))
         qs.append(q.copy())
         ps.append(evaluation[0] @ qdot)
-        sigmas.append(np.linalg.svd(D, compute_uv=False)[-1])
+        sigmas.append(np.linalg.svd(D if rows == 3 else model.GeneralizedJacobian(
+            q, frame, base_positions=positions, evaluation=evaluation)[:rows],
+            compute_uv=False)[-1])
         omega_base = model.BaseVelocity(q, qdot, positions)[:3]
         angle = np.linalg.norm(omega_base) * REHEARSAL_STEP
         if angle > 0:
@@ -148,7 +165,7 @@ def within_limits(model: FloatingBaseModel, q: np.ndarray) -> bool:
 def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
                  clearance: Callable[[np.ndarray], float],
                  null_space_rate: Optional[Callable[[np.ndarray], float]],
-                 duration: float) -> np.ndarray:
+                 duration: float, rows: int = 3) -> np.ndarray:
     """The start q0 [rad] a scenario file does not give.
 
     Candidates: the middle of the limits and CANDIDATES quasi-random points of the
@@ -165,6 +182,7 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
         clearance: q -> the link-base clearance [m].
         null_space_rate: q -> ||xi|| of the clearance potential [rad/s] (None: none).
         duration: How long the rehearsal runs [s].
+        rows: The task Jacobian's rows that must stay regular (task_jacobian).
 
     Raises:
         ValueError: No candidate qualifies (naming the test that failed most)."""
@@ -172,15 +190,16 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
     n = model.num_joints
     points = _halton(CANDIDATES, n)
     candidates = np.vstack([0.5 * (low + high), low + points * (high - low)])
-    sigma = np.array([np.linalg.svd(task_jacobian(model, q), compute_uv=False)[-1]
-                      for q in candidates])
+    sigma = np.array([np.linalg.svd(task_jacobian(model, q, rows=rows),
+                                    compute_uv=False)[-1] for q in candidates])
     best, best_key = None, None
     failures = {"limits": 0, "singular": 0, "clearance": 0}
-    regular = np.flatnonzero(sigma >= SINGULAR_BOUND)
+    bound = singular_bounds(rows)[0]
+    regular = np.flatnonzero(sigma >= bound)
     failures["singular"] = len(candidates) - len(regular)
     clearances = np.array([clearance(candidates[k]) for k in regular])
-    bound = min(CLEARANCE_BOUND, 0.5 * float(np.max(clearances, initial=0.0)))
-    clear = regular[clearances > max(bound, 0.0)]
+    near = min(CLEARANCE_BOUND, 0.5 * float(np.max(clearances, initial=0.0)))
+    clear = regular[clearances > max(near, 0.0)]
     failures["clearance"] = len(regular) - len(clear)
     pushing = np.array([null_space_rate(candidates[k]) if null_space_rate else 0.0
                         for k in clear])
@@ -188,12 +207,12 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
         max(pushing[i], IDLE_NULL_SPACE_RATE), -sigma[clear[i]]))
     for k in clear[order[:REHEARSED]]:
         q = candidates[k]
-        rehearsal = rehearse(model, q, task, duration)
+        rehearsal = rehearse(model, q, task, duration, rows)
         if not within_limits(model, rehearsal.q):
             failures["limits"] += 1
             continue
         smallest = float(np.min(rehearsal.singular_value))
-        if smallest < SINGULAR_BOUND:
+        if smallest < bound:
             failures["singular"] += 1
             continue
         push = (0.0 if null_space_rate is None else max(
@@ -206,7 +225,7 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
     return best.copy()
 
 
-def task_singularity(model: FloatingBaseModel, q0: Sequence[float]
+def task_singularity(model: FloatingBaseModel, q0: Sequence[float], rows: int = 3
                      ) -> Optional[str]:
     """None unless the attitude task is (nearly) singular at q0 (D's smallest singular
     value < REFUSED_SINGULAR_VALUE), else a sentence naming it and the joints that turn
@@ -214,11 +233,13 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float]
 
     Args:
         model: The arm's model.
-        q0: The start [rad]."""
+        q0: The start [rad].
+        rows: The task Jacobian's rows (task_jacobian)."""
     from dacph_drake.robots.described import arm_joints
-    D = task_jacobian(model, q0)
+    D = task_jacobian(model, q0, rows=rows)
     _, sigma, Vt = np.linalg.svd(D)
-    if sigma[-1] >= REFUSED_SINGULAR_VALUE:
+    refused = singular_bounds(rows)[1]
+    if sigma[-1] >= refused:
         return None
     # The joint-rate directions that leave the end effector's attitude (nearly)
     # still beyond the null space a redundant arm has anyway.
@@ -226,10 +247,11 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float]
     names = [joint.name() for joint in arm_joints(model)]
     involved = [names[k] for k in np.argsort(-np.abs(direction))
                 if abs(direction[k]) >= 0.3]
-    return (f"the end effector's attitude is singular there (the task Jacobian's "
-            f"smallest singular value {sigma[-1]:.2g} < {REFUSED_SINGULAR_VALUE:g}): "
-            f"joints {', '.join(repr(name) for name in involved)} turn it about the "
-            "same axis")
+    what, how = (("attitude", "turn it about the same axis") if rows == 3 else
+                 ("pose", "move it the same way"))
+    return (f"the end effector's {what} is singular there (the task Jacobian's "
+            f"smallest singular value {sigma[-1]:.2g} < {refused:g}): "
+            f"joints {', '.join(repr(name) for name in involved)} {how}")
 
 
 def _halton(count: int, dimension: int) -> np.ndarray:

@@ -43,55 +43,29 @@ class AttitudeTrial:
 SAMPLED_SLOPE = 0.5
 
 class AttitudeController(LeafSystem):
-    """Every ``period`` seconds, from the measured state (inputs ``base_pose`` =
-    (qw, qx, qy, qz, x, y, z), ``base_velocity`` = (omega_W, v_W), ``q``, ``qdot``):
+    """The spatial LHS (the attitude or, with ``position``, the pose task). Every
+    ``period`` seconds, from the measured base pose and twist, q and qdot:
 
-        e   = attitude_error(R_WE, R_d(t)),   D = angular rows of the end effector's GJM
+        e   = attitude_error(R_WE, R_d(t)),   D = the end effector's GJM rows
         nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
+              (pose: D^+ [omega_d - Lambda e; v_d - Lambda e_p], D 6 x n)
         s   = qdot - nu
         tau = M nu_dot + C' nu + b nu - damping_rate M s - chi tanh(diag(M) s / phi)
               + tau_pe(t),   phi = epsilon + chi max(1, rho / rho_allowed) / boundary_rate
 
-    rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1 is how much lighter the
-    lightest coupled motion is than the joints' own inertias say: the layer's
-    slope chi diag(M) / phi adds up to boundary_rate rho to that motion's rate, so
-    the layer thickens where (damping_rate + boundary_rate rho) periods.lhs would
-    pass SAMPLED_SLOPE (rho_allowed = (SAMPLED_SLOPE / periods.lhs - damping_rate)
-    / boundary_rate; 24 for the default gains). A 5-joint arm with a 4 kg tool
-    (rho = 195) ran away in its first 22 ms without it; the shipped arms (rho 1-4)
-    never reach it.
-
-    with b the description's joint damping (the model's joint_damping), which the
-    LHS model holds as it holds M: the port observer adds b qdot to the port
-    torque, so V = s^T M s / 2 has dV/dt = -2 damping_rate V - s^T b s - chi s^T
-    tanh(...) + s^T (e_tau + tau_pe) (Mdot - 2C' skew); the heavy damping of a
-    light wrist (xArm7: 2 N m s/rad on 1e-4 kg m^2) then damps s instead of
-    leaving the RHS loop a torque b qdot to supply. chi from input ``chi`` (the RHS loop's
-    bound on ||e_tau|| in DAC, a constant in the baseline) and tau_pe the
-    learner's excitation (``excitation``, scenario.Excitation). nu_dot
-    is nu's exact rate along the current motion (joints at qdot, the base turning
-    at omega_b, the reference at t: kernels.attitude.task_rates), from dD = d(R_WB
-    D_B)/dt with dA/dq of the same evaluation; xi's rate is the central difference
-    along the motion (q +- h qdot, the base turned by +- h omega_b; h =
-    XI_DOT_STEP), zero unless a link is within FAR beyond the potential's margin
-    (xi = 0 at all three points then). M, dM, C' and the Jacobians come from one
-    compiled evaluation of the model inside the update's one compiled call
-    (kernels.attitude.attitude_update). U is the link-base clearance potential (``potential``: robots.clearance_potential.
-    BaseClearancePotential, or None).
-    Output ``tau_request`` is held between updates; ``attitude_log``
-    (log_layout.AttitudeLog) = [e (3), |e|, ||s||, V, R_d(t) as a quaternion] of the
-    last update, which a replay reads, with the smallest link-base distance [m] at
-    the current state (inf without a potential; the potential itself queries only
-    the pairs within its margin + FAR);
-    ``reduced_model`` = [vec(M), vec(C')] of the same sample (row-major), for the
-    port observer. With ``identify``, input ``inertial_parameters`` (an
-    InertialIdentifier's estimate) sets the model's inertias before every update
-    (FloatingBaseModel.SetInertialParameters): M, C', the GJM and the clearance
-    potential's gradient are then the identified bodies'.
-
-    For a batch (``trials``: each trial's AttitudeTrial; one: a single run) every
-    port carries the trials' signals stacked; each trial's update is its own
-    compiled call, in one callback for all trials.
+    rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1: the layer thickens where
+    (damping_rate + boundary_rate rho) periods.lhs would pass SAMPLED_SLOPE, so the
+    sampled loop stays well damped on arms whose coupled motion is much lighter than
+    their joints' inertias. b is the description's joint damping, held by the LHS
+    model as M is (the port observer adds b qdot): V = s^T M s / 2 has
+    dV/dt = -2 damping_rate V - s^T b s - chi s^T tanh(...) + s^T (e_tau + tau_pe)
+    (Mdot - 2C' skew). chi comes from input ``chi``; nu_dot is nu's exact rate along
+    the motion (kernels.attitude); xi's rate a central difference (XI_DOT_STEP),
+    zero unless a link is within FAR beyond the potential's margin. Outputs:
+    ``tau_request`` (held), the log (log_layout.AttitudeLog, PoseLog) and
+    ``reduced_model`` = [vec(M), vec(C')] for the port observer. With ``identify``
+    the input ``inertial_parameters`` sets the model's inertias before each update.
+    A batch's trials are stacked on every port.
 
     Args:
         trials: Each trial's AttitudeTrial (model, clearance potential, q0); one: a

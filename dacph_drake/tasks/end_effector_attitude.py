@@ -28,6 +28,7 @@ class EndEffectorAttitudeTask:
     lhs_name, log_name = "attitude_controller", "attitude_log"
     panels = ("e_attitude_dac_vs_model_based",)
     log_layout = AttitudeLog
+    jacobian_rows = 3               # the GJM's rows the task tracks (start_pose)
 
     def Validate(self, section: EndEffectorAttitude, periods: Periods) -> None:
         """ConfigError naming the first invalid gain or reference setting.
@@ -62,13 +63,13 @@ class EndEffectorAttitudeTask:
                     "sampled sliding-mode loop stays well damped)")
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """ConfigError if the attitude rows of the GJM are (nearly) singular at q0,
+        """ConfigError if the task's rows of the GJM are (nearly) singular at q0,
         naming the joints.
 
         Args:
             robot: The trial's robots.described.DescribedRobot."""
         q0 = robot.scenario.q0
-        singular = task_singularity(robot.model, q0)
+        singular = task_singularity(robot.model, q0, self.jacobian_rows)
         if singular:
             raise ConfigError(f"q0 = {list(q0)}: {singular}; allowed: a q0 away from "
                               "the task's singularities, or none (a start is then "

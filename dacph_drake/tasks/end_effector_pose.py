@@ -20,10 +20,6 @@ from dacph_drake.scenario import AttitudeGains, AttitudeReference, Periods
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.end_effector_attitude import EndEffectorAttitudeTask
 
-# The smallest singular value of the 6-row task Jacobian a run may start at.
-REFUSED_SINGULAR_VALUE = 1e-3
-
-
 @dataclass
 class PositionReference:
     """p_d(t) = p_E(q0) + initial_offset + axis amplitude sin(2 pi t / period), world.
@@ -58,6 +54,7 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
     lhs_name, log_name = "pose_controller", "pose_log"
     panels = ("e_pose_dac_vs_model_based",)
     log_layout = PoseLog
+    jacobian_rows = 6
 
     def Validate(self, section: EndEffectorPose, periods: Periods) -> None:
         """The attitude task's checks, then the position reference's.
@@ -80,8 +77,8 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
                                   + ("non-zero " if name == "axis" else "") + "3-vector")
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """The attitude task's check, then the 6 x n GJM's smallest singular value
-        at q0 against REFUSED_SINGULAR_VALUE (n >= 6 joints are needed).
+        """ConfigError on fewer than 6 joints, or where the 6-row GJM is (nearly)
+        singular at q0 (naming the joints).
 
         Args:
             robot: The trial's DescribedRobot."""
@@ -90,16 +87,6 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
                               "arm; allowed: an arm of at least 6 joints (or task: "
                               "!EndEffectorAttitude)")
         super().RequireRegularStart(robot)
-        from dacph_drake.dynamics.plant import END_EFFECTOR
-        q0 = np.asarray(robot.scenario.q0, float)
-        frame = robot.model.plant.GetFrameByName(END_EFFECTOR)
-        sigma = np.linalg.svd(robot.model.GeneralizedJacobian(q0, frame),
-                              compute_uv=False)[-1]
-        if sigma < REFUSED_SINGULAR_VALUE:
-            raise ConfigError(f"q0 = {list(q0)}: the end effector's pose is singular "
-                              f"there (the 6-row task Jacobian's smallest singular "
-                              f"value {sigma:.2g} < {REFUSED_SINGULAR_VALUE:g}); "
-                              "allowed: a q0 away from the pose's singularities")
 
     def ControllerOptions(self, section: EndEffectorPose) -> Dict:
         """The position rows and the pose log.
