@@ -144,7 +144,7 @@ def bench_kernel_compilation():
     import tempfile
     code = ("import time; t = time.perf_counter(); "
             "from dacph_drake.loop.simulate import simulate; "
-            "from dacph_drake.scenario import short_scenario; "
+            "from dacph_drake.built_in_scenarios import short_scenario; "
             "simulate(short_scenario(), 'dac', duration=0.01); "
             "print(time.perf_counter() - t)")
     with tempfile.TemporaryDirectory() as cache:

@@ -57,7 +57,8 @@ BATCH = """\
 import resource, sys
 import numpy as np
 from dacph_drake.loop.simulate import simulate_batch
-from dacph_drake.scenario import Phases, short_scenario
+from dacph_drake.scenario import Phases
+from dacph_drake.built_in_scenarios import short_scenario
 controller, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 rng = np.random.default_rng(1)
 trials = []
@@ -100,7 +101,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 from dacph_drake.dynamics.plant import AddFreeFloatingArm, SetArmAtRest
 from dacph_drake.loop.simulator import MakeSimulator
-from dacph_drake.scenario import short_scenario
+from dacph_drake.built_in_scenarios import short_scenario
 duration = float(sys.argv[1])
 scenario = short_scenario()
 builder = DiagramBuilder()

@@ -58,6 +58,8 @@ def test_to_pandas_and_plot_name_their_columns(run):
     ax = run.plot("chi", "e_tau", logy=True)
     assert len(ax.get_lines()) == 1 + n
     assert [t.get_text() for t in ax.get_legend().get_texts()][0] == "chi"
+    import matplotlib.pyplot as plt
+    plt.close(ax.figure)
 
 
 def test_metrics_are_typed_per_phase_with_units(run):

@@ -106,6 +106,8 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
     from dacph_drake.assembly import robot_of
     html = robot_of(scenario).WriteAnimation(run.logs, tmp_path / "pose.html")
     assert html.stat().st_size > 10_000
+    import matplotlib.pyplot as plt
+    plt.close("all")
 
 
 def test_a_pose_task_needs_six_joints_and_a_regular_start():

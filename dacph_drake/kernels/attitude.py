@@ -165,7 +165,7 @@ def desired_position(position: tuple, t: float
 @njit(cache=True)
 def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                    joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
-                   node: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   node: int, rows: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """G = S_m - S_b A, the twist of a node's body about the base origin per qdot at
     zero momentum (the base at the identity), its rate along the motion and the
     joints' own twist of the body.
@@ -181,13 +181,14 @@ def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
         evaluation: The compiled model at the configuration (M, dM, A, dA, X, S).
         qdot: The joint rates (n) [rad/s].
         node: The body's node.
+        rows: 3: the angular rows only (the linear ones left 0); 6: all.
 
     Returns:
         (G (6 x n), G_dot (6 x n), sum over the body's joints of S_j qdot_j (6))."""
     A, dA, S = evaluation[2], evaluation[3], evaluation[5]
     n, nb = qdot.shape[0], base_subspace.shape[1]
     G, G_dot = np.zeros((6, n)), np.zeros((6, n))
-    for i in range(6):
+    for i in range(rows):
         for c in range(n):
             value, rate = 0.0, 0.0
             for m in range(nb):
@@ -196,6 +197,7 @@ def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                     rate -= base_subspace[i, m] * dA[k, m, c] * qdot[k]
             G[i, c], G_dot[i, c] = value, rate
     relative, w = np.zeros(6), np.empty(6)
+    twist = 3 if rows == 3 else 6          # the entries of w the rows need
     ancestor = node
     while ancestor > 0:
         j = joint[ancestor]
@@ -203,11 +205,22 @@ def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
             w[:] = 0.0
             for k in range(n):
                 if joint_below[k, j]:
-                    w += qdot[k] * S[k]
-            G[:, j] += S[j]
-            relative += qdot[j] * S[j]
-            G_dot[:3, j] += _cross(w[:3], S[j, :3])
-            G_dot[3:, j] += _cross(w[:3], S[j, 3:]) + _cross(w[3:], S[j, :3])
+                    for i in range(twist):
+                        w[i] += qdot[k] * S[k, i]
+            for i in range(6):
+                if i < rows:
+                    G[i, j] += S[j, i]
+                relative[i] += qdot[j] * S[j, i]
+            G_dot[0, j] += w[1] * S[j, 2] - w[2] * S[j, 1]
+            G_dot[1, j] += w[2] * S[j, 0] - w[0] * S[j, 2]
+            G_dot[2, j] += w[0] * S[j, 1] - w[1] * S[j, 0]
+            if rows == 6:                  # omega_w x S_lin + v_w x S_ang
+                G_dot[3, j] += (w[1] * S[j, 5] - w[2] * S[j, 4]
+                                + w[4] * S[j, 2] - w[5] * S[j, 1])
+                G_dot[4, j] += (w[2] * S[j, 3] - w[0] * S[j, 5]
+                                + w[5] * S[j, 0] - w[3] * S[j, 2])
+                G_dot[5, j] += (w[0] * S[j, 4] - w[1] * S[j, 3]
+                                + w[3] * S[j, 1] - w[4] * S[j, 0])
         ancestor = parent[ancestor]
     return G, G_dot, relative
 
@@ -243,7 +256,7 @@ def position_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
         (p_E [m], v_E [m/s], D (3 x n), D_dot (3 x n))."""
     X, n = evaluation[4], qdot.shape[0]
     G, G_dot, relative = twist_jacobian(base_subspace, parent, joint, joint_below,
-                                        evaluation, qdot, node)
+                                        evaluation, qdot, node, 6)
     p = matvec(X[node, :3, :3], p_CE) + X[node, :3, 3]
     p_dot = relative[3:] + _cross(relative[:3], p)
     J, J_dot = np.empty((3, n)), np.empty((3, n))
@@ -294,7 +307,7 @@ def attitude_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
     error = rotation_quaternion(R_err)                  # eta >= 0
     e = 2.0 * error[1:]
     G, G_dot, relative = twist_jacobian(base_subspace, parent, joint, joint_below,
-                                        evaluation, qdot, node)
+                                        evaluation, qdot, node, 3)
     D = matmul(R_WB, G[:3])
     D_dot = matmul(_skew(omega_base), D) + matmul(R_WB, G_dot[:3])
     omega_error = omega_base + matvec(R_WB, relative[:3]) - matvec(R_err, omega_d)
