@@ -146,18 +146,19 @@ def desired_attitude(R_d0: np.ndarray, axis: np.ndarray, amplitude: float, omega
 
 
 @njit(cache=True)
-def desired_position(position: tuple, t: float
+def desired_position(position: np.ndarray, t: float
                      ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """p_d(t) = p_d0 + axis amplitude sin(omega t) and its rates (world).
 
     Args:
-        position: (p_CE, p_d0, unit axis (world), amplitude [m], omega [rad/s]).
+        position: [p_CE (3), p_d0 (3), unit axis (3, world), amplitude [m],
+            omega [rad/s]] (one array: a tuple of arrays costs numba's dispatch).
         t: The time [s].
 
     Returns:
         (p_d [m], v_d [m/s], a_d [m/s^2]) (3 each)."""
-    axis, amplitude, omega = position[2], position[3], position[4]
-    return (position[1] + axis * (amplitude * np.sin(omega * t)),
+    axis, amplitude, omega = position[6:9], position[9], position[10]
+    return (position[3:6] + axis * (amplitude * np.sin(omega * t)),
             axis * (amplitude * omega * np.cos(omega * t)),
             axis * (-amplitude * omega * omega * np.sin(omega * t)))
 
@@ -229,8 +230,8 @@ def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
 def position_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                   joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
                   quaternion: np.ndarray, base_position: np.ndarray,
-                  base_velocity: np.ndarray, node: int, p_CE: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
-                                             np.ndarray]:
+                  base_velocity: np.ndarray, node: int, p_CE: np.ndarray
+                  ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The end effector's position p_E, its velocity v_E and the linear rows of the
     GJM with their exact rate along the motion (world frame).
 
@@ -370,7 +371,7 @@ def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
 def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
                base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
-               reference: tuple, end_effector: tuple, position: tuple, xi: np.ndarray,
+               reference: tuple, end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
     """The pose task's reference joint rates: the attitude rows (attitude_rows) and
     the position rows (position_rows) stacked, r = [omega_d - Lambda e;
@@ -401,7 +402,7 @@ def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
         base_velocity[:3], t, reference, end_effector, Lambda)
     p_E, v_E, D_p, D_p_dot = position_rows(
         base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
-        base_pose[4:], base_velocity, end_effector[0], position[0])
+        base_pose[4:], base_velocity, end_effector[0], position[:3])
     p_d, v_d, a_d = desired_position(position, t)
     e_p = p_E - p_d
     nu, nu_dot = reference_rates(
@@ -443,7 +444,7 @@ def coupling_ratio(M: np.ndarray) -> float:
 @njit(cache=True)
 def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.ndarray,
                     base_velocity: np.ndarray, t: float, reference: tuple,
-                    end_effector: tuple, position: tuple, xi: np.ndarray,
+                    end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                     xi_dot: np.ndarray, gains: np.ndarray, chi: float,
                     excitation: np.ndarray) -> tuple:
     """One AttitudeController update (its docstring states the law).
@@ -482,7 +483,7 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.
     Lambda, damping, damping_rate, epsilon, boundary_rate = (
         gains[0], gains[1], gains[2], gains[3], gains[4])
     position_log = np.zeros(7)
-    if position[3] < 0:
+    if position[9] < 0:
         nu, nu_dot, e, R_d = task_rates(base_subspace, parent, joint, joint_below,
                                         evaluation, qdot, base_pose[:4],
                                         base_velocity[:3], t, reference, end_effector,

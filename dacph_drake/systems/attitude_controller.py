@@ -118,16 +118,15 @@ class AttitudeController(LeafSystem):
         self._position_arguments = []
         for trial in trials:
             if position is None:
-                self._position_arguments.append((np.zeros(3), np.zeros(3), np.zeros(3),
-                                                 -1.0, 0.0))
+                self._position_arguments.append(np.concatenate([np.zeros(9), [-1.0, 0.0]]))
                 continue
             X = trial.model.Evaluate(np.asarray(trial.q0, float), derivatives=False)[4]
             p_E0 = X[node, :3, :3] @ p_CE + X[node, :3, 3]     # the base at the origin
             direction = np.asarray(position.axis, float)
-            self._position_arguments.append((
+            self._position_arguments.append(np.concatenate([
                 p_CE, p_E0 + np.asarray(position.initial_offset, float),
-                direction / np.linalg.norm(direction), float(position.amplitude),
-                2 * np.pi / position.period))
+                direction / np.linalg.norm(direction),
+                [float(position.amplitude), 2 * np.pi / position.period]]))
         self._pose = position is not None
         self._layout = PoseLog() if self._pose else AttitudeLog()
         self._base_pose = self.DeclareVectorInputPort("base_pose", 7 * count)
