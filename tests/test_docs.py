@@ -63,6 +63,13 @@ def test_the_site_builds_in_strict_mode(tmp_path):
     assert (site / "reference" / "systems" / "index.html").read_text().count(
         "RhsIntegrator") > 0
     assert "jp-OutputArea" in (site / "tutorial" / "index.html").read_text()
+    # Math is rendered (pymdownx.arithmatex + MathJax): the equations page's $...$
+    # are all MathJax spans, none left as raw text outside them and code.
+    equations = (site / "equations" / "index.html").read_text()
+    assert equations.count('class="arithmatex"') > 300
+    text = re.sub(r'<(span|div) class="arithmatex">.*?</\1>', "", equations, flags=re.S)
+    text = re.sub(r"<(script|code|pre)[^>]*>.*?</\1>", "", text, flags=re.S)
+    assert re.findall(r"\$[^$<>]{1,80}\$", text) == []
 
 
 def _documents_its_arguments(function) -> list:

@@ -262,6 +262,15 @@ def _AddSimulateArguments(command) -> None:
     _AddLiveViewing(command)
 
 
+def _version() -> str:
+    """The installed package's version (its metadata; "unknown" if not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("dacph-drake")
+    except PackageNotFoundError:
+        return "unknown"
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """The ``dacph`` command line: parses ``argv``, runs the command and returns the exit
     status (2 for bad input, with one line naming it; 130 when interrupted).
@@ -269,6 +278,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     Args:
         argv: The arguments after the program's name (default: sys.argv[1:])."""
     parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {_version()}")
     commands = parser.add_subparsers(dest="command", required=True)
     free = commands.add_parser(
         "free-flight", help="passive simulation of the ground truth: momentum and "
