@@ -171,3 +171,22 @@ def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
     assert main(["report", str(out)]) == 0
     alpha = np.load(out / "logs_dac.npz")["lhs_log"][:, 2 + 1]      # alpha_d, n = 2
     assert np.ptp(alpha) == 0.0                                      # held still
+
+
+@pytest.mark.parametrize("setting, value, message", [
+    ("period", 0.0, r"task.position.period"),
+    ("amplitude", -0.01, r"task.position.amplitude = -0.01 m; allowed: >= 0"),
+    ("axis", [0.0, 0.0, 0.0], r"task.position.axis = \[0.0, 0.0, 0.0\]; allowed: a "
+                              r"non-zero 3-vector"),
+    ("initial_offset", [0.01, 0.0], r"task.position.initial_offset = \[0.01, 0.0\]; "
+                                    r"allowed: a 3-vector"),
+    ("axis", [float("nan"), 0.0, 1.0], r"task.position.axis"),
+])
+def test_a_bad_position_reference_is_named(setting, value, message):
+    """Each of the pose task's own settings, out of range, ends in one ConfigError
+    naming it and what is allowed."""
+    from dacph_drake.assembly import robot_of
+    scenario = _pose_scenario(1.0)
+    setattr(scenario.task.position, setting, value)
+    with pytest.raises(ConfigError, match=message):
+        robot_of(scenario)
