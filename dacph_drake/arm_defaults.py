@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Optional, Sequence, Union
 
 import numpy as np
 
+from dacph_drake.errors import require_positive
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.loop.simulator import FixedStepConfig
 from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAngle,
@@ -105,6 +106,7 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     task = EndEffectorAttitude() if task is None else task
     rows = getattr(TASKS.get(type(task)), "jacobian_rows", 3)
     reference = task.reference
+    require_positive("task.reference.period", reference.period, "s")  # sizes by it
     rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
     clearance = link_base_clearance(parsed, model)     # one SceneGraph context
     if q0 is None:

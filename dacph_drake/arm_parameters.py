@@ -3,6 +3,7 @@ chain of n revolute links in the x-y plane, zero gravity; the defaults are the p
 robot (docs/equations.md). Each link's frame sits at its proximal joint with x along the
 link. Descriptions load from YAML with ``pydrake.common.yaml``."""
 import dataclasses
+import difflib
 import logging
 import typing
 from dataclasses import dataclass, field
@@ -203,6 +204,23 @@ class _TaggedLoader(yaml.SafeLoader):
     """PyYAML's safe loader reading a tagged node (e.g. !Uniform) as its untagged value."""
 
 
+def _construct_unique_mapping(loader, node, deep=False):
+    """A mapping whose keys are each given once (PyYAML keeps the last of a repeated
+    key silently; a file setting q0: twice is refused, naming the key and lines)."""
+    seen = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        line = key_node.start_mark.line + 1
+        if key in seen:
+            raise ConfigError(f"{key_node.start_mark.name}: {key} is given twice (lines "
+                              f"{seen[key]} and {line}); allowed: each setting once")
+        seen[key] = line
+    return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
+
+
+_TaggedLoader.construct_mapping = _construct_unique_mapping
+
+
 class _TaggedMapping(dict):
     """A mapping read with its YAML tag (``tag``: the name after the !)."""
     tag = ""
@@ -247,9 +265,18 @@ def _check_kinds(raw, schema, where: str, name: str = "") -> None:
             raise ConfigError(f"{where}{shown} = {raw!r} is not a mapping; allowed: a "
                               f"section of settings")
         types = {f.name: f.type for f in dataclasses.fields(schema)}
+        unknown = [key for key in raw if key not in types]
+        if unknown:
+            guesses = [(f"{close[0]!r}" if len(unknown) == 1 else
+                        f"{close[0]!r} for {key!r}") for key in unknown
+                       for close in [difflib.get_close_matches(str(key), list(types), 1)]
+                       if close]
+            raise ConfigError(
+                f"{where}{name or 'top level'}: the fields {unknown} were unknown"
+                + (f" (did you mean {', '.join(guesses)}?)" if guesses else "")
+                + f"; allowed: {', '.join(types)}")
         for key, value in raw.items():
-            if key in types:
-                _check_kinds(value, types[key], where, f"{name}.{key}" if name else key)
+            _check_kinds(value, types[key], where, f"{name}.{key}" if name else key)
     elif typing.get_origin(schema) in (list, List):
         if not isinstance(raw, list):
             raise ConfigError(f"{where}{shown} = {raw!r} is not a list; allowed: a list "
@@ -259,6 +286,20 @@ def _check_kinds(raw, schema, where: str, name: str = "") -> None:
     elif schema in (float, int) and not _reads_as_number(raw):
         raise ConfigError(f"{where}{shown} = {raw!r} is not a number; allowed: a "
                           f"{'whole ' if schema is int else ''}number")
+    elif schema is int and not _reads_as_whole_number(raw):
+        leaf = shown.rpartition(".")[2].partition("[")[0]
+        raise ConfigError(f"{where}{shown} = {raw!r} is not a whole number (an int "
+                          f"value for {leaf!r}); allowed: a whole number (e.g. 1, not "
+                          "1.5 or 1.0)")
+
+
+def _reads_as_whole_number(raw) -> bool:
+    """Whether a YAML scalar is an integer to Drake's YAML reader (1, not 1.0)."""
+    try:
+        int(str(raw), 0)
+    except ValueError:
+        return False
+    return True
 
 
 def _reads_as_number(raw) -> bool:

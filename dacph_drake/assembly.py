@@ -8,7 +8,6 @@ from dacph_drake.robots.described import DescribedRobot
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import DescribedArm, PlanarArm, Scenario
-from dacph_drake.scenario_checks import validate_seed
 from dacph_drake.tasks.registry import TASKS
 from dacph_drake.tasks.task import Task
 
@@ -63,12 +62,12 @@ def robots_of(scenarios: Sequence[Scenario]) -> List[Robot]:
 
 
 def validate_scenario(scenario: Scenario) -> None:
-    """Checks every setting (the seed, then the robot and its task).
+    """Checks every setting (the robot's constructor checks the seed, the robot and
+    its task: scenario_checks.validate_shared).
 
     Args:
         scenario: The scenario.
 
     Raises:
         ConfigError: Naming the first invalid setting and its allowed range."""
-    validate_seed(scenario.seed)
     robot_of(scenario)

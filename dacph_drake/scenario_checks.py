@@ -15,7 +15,8 @@ from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNE
 
 def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Sequence[str] = ()
                     ) -> None:
-    """Checks the sections every robot shares (a robot's constructor calls it).
+    """Checks the seed and the sections every robot shares (a robot's constructor
+    calls it, so a scenario built in Python is checked as a file is).
 
     Args:
         scenario: The scenario.
@@ -25,6 +26,7 @@ def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Seque
 
     Raises:
         ConfigError: Naming the first invalid setting of those sections."""
+    validate_seed(scenario.seed)
     if joint_names and len(scenario.q0) != n:
         raise ConfigError(f"q0 has {len(scenario.q0)} entries; allowed: {n} (one per "
                           f"joint); the joints in q0's order: "
@@ -100,6 +102,7 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     require_in_range("rhs.beta_max", scenario.rhs.beta_max, 1.0, 1e6)
     require_positive("stress.B_hat_scale", scenario.stress.B_hat_scale)
     require_nonnegative("stress.start", scenario.stress.start, "s")
+    require_before_end("stress.start", scenario.stress.start, scenario.duration)
     periods = scenario.periods
     for key in ("rhs", "lhs", "learner", "learner_sample", "log"):
         require_positive(f"periods.{key}", getattr(periods, key), "s")
@@ -134,11 +137,13 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
                               f"allowed: a joint number in [1, {n}]")
         require_in_range(f"{where}.joint", fault.joint, 1, n, "(1-based joint number)")
         require_in_range(f"{where}.gain", fault.gain, 1e-2, 1e2)
+        require_before_end(f"{where}.time", fault.time, scenario.duration)
     d = scenario.disturbance
     for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
         require_length(f"disturbance.{name}", getattr(d, name), n)
     require_nonnegative("disturbance.scale", d.scale)
     require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
+    require_before_end("disturbance.start", d.start, scenario.duration)
     L = scenario.learner
     require_one_of("learner.mode", L.mode, LEARNER_MODES)
     require_one_of("learner.coupling", L.coupling, LEARNER_COUPLINGS)
@@ -258,3 +263,19 @@ def require_length(name: str, values: Sequence, n: int, meaning: str = "one per 
     if len(values) != n:
         raise ConfigError(f"{name} has {len(values)} entries; allowed: {n} "
                           f"({meaning})")
+
+
+def require_before_end(name: str, time: float, duration: float) -> None:
+    """Requires an event to start before the run ends (a later one never takes effect).
+
+    Args:
+        name: The setting's name, for the message.
+        time: When the event starts [s].
+        duration: The run's duration, the phases' end [s].
+
+    Raises:
+        ConfigError: The event starts at or after the run's end."""
+    if time >= duration:
+        raise ConfigError(f"{name} = {time:g} s is at or after the run's end "
+                          f"({duration:g} s, the phases' end), so it never takes effect; "
+                          f"allowed: < {duration:g} s, or longer phases")

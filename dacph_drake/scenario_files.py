@@ -2,6 +2,8 @@
 fingerprint is taken from (saved_forms), and the layouts before the robot: and task:
 sections (PlanarLayoutV1, SpatialLayoutV1), read so that older files keep loading
 (with a logged note) and saved runs keep their fingerprints."""
+import dataclasses
+import difflib
 import logging
 import re
 from dataclasses import dataclass, field, replace
@@ -290,6 +292,11 @@ def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
     if not isinstance(raw, dict):
         return None
     robot = raw.get("robot")
+    current_robot = isinstance(robot, dict) and (
+        getattr(robot, "tag", "") or {"truth", "nominal", "potential"} & set(robot))
+    current = sorted(key for key in raw if key not in _field_names(SpatialLayoutV1)
+                     and key not in _field_names(PlanarLayoutV1))
+    current += ["robot"] if current_robot else []
     if isinstance(robot, str) or any(key in raw for key in SpatialLayoutV1.KEYS):
         layout, note = SpatialLayoutV1, (
             "robot: DESCRIPTION, gains:, reference:, potential:, "
@@ -298,18 +305,31 @@ def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
             "!EndEffectorAttitude {reference, gains} and periods:, and the duration "
             "is the phases' end")
     elif any(key in raw for key in PlanarLayoutV1.KEYS) or (
-            isinstance(robot, dict) and not getattr(robot, "tag", "")
-            and not {"truth", "nominal", "potential"} & set(robot)):
+            isinstance(robot, dict) and not current_robot):
         layout, note = PlanarLayoutV1, (
             "robot:, nominal_robot:, potential:, lhs: and reference: are now robot: "
             "{truth, nominal, potential} and task: {gains, reference}")
     else:
         return None
+    older = [key for key in raw if key in layout.KEYS] + (
+        ["robot"] if isinstance(robot, str) else [])
+    if current:                 # the whole file decides: a mix is neither layout
+        raise ConfigError(
+            f"{path}: {', '.join(f'{key}:' for key in older)} "
+            f"{'is a setting' if len(older) == 1 else 'are settings'} of the layout "
+            "before the robot: and task: sections, "
+            f"{', '.join(f'{key}:' for key in current)} of the current one; allowed: "
+            f"one layout ({note})")
     logging.getLogger(__name__).warning(
         "%s: read in the layout before the robot: and task: sections (%s); save it "
         "again to update the file", path, note)
     return load_yaml_dataclass(path, layout,
                                migrate=_migrate_older_file).ToScenario(path)
+
+
+def _field_names(layout) -> Tuple[str, ...]:
+    """The top-level settings of a file layout."""
+    return tuple(f.name for f in dataclasses.fields(layout))
 
 
 def load_scenario(path: Union[str, Path]) -> Scenario:
@@ -325,8 +345,10 @@ def load_scenario(path: Union[str, Path]) -> Scenario:
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
+        close = difflib.get_close_matches(str(path), list(BUILT_IN_SCENARIOS), n=1)
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
-                          f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})")
+                          f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})"
+                          + (f"; did you mean {close[0]!r}?" if close else ""))
     scenario = load_older_layout(path) or _load_current_layout(path)
     resolve_paths(scenario.robot, Path(path).resolve().parent)   # paths in the file
     validate_scenario(scenario)
@@ -390,7 +412,6 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
 
     Raises:
         ConfigError: An unknown joint (and the closest), joints left out, no description."""
-    import difflib
     import json
 
     from pydrake.common.yaml import yaml_dump, yaml_load_typed

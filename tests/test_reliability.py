@@ -411,3 +411,95 @@ def test_live_meshcat_shows_the_run_without_changing_it():
 def test_realtime_rate_setting_is_checked(capsys):
     assert main(["simulate", "short", "--out", "x", "--realtime-rate", "-1"]) == 2
     assert "--realtime-rate = -1.0 is out of range; allowed: >= 0" in capsys.readouterr().err
+
+
+def _short_run(tmp_path, name="run", controller="dac"):
+    simulate(short_scenario(), controller, duration=0.3, out_dir=tmp_path / name)
+    return tmp_path / name
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda run: np.savez(run / "logs_dac.npz", time=np.zeros(3)),
+     r"logs_dac.npz is damaged \(no state, u, tau, lhs_log\)"),
+    (lambda run: np.savez(run / "logs_dac.npz", **{
+        **dict(np.load(run / "logs_dac.npz")), "u": np.zeros((2, 2))}),
+     r"logs_dac.npz is damaged \(u not one sample per time\)"),
+    (lambda run: (run / "run_dac.json").write_text(json.dumps(
+        {**json.loads((run / "run_dac.json").read_text()), "status": 5})),
+     r"run_dac.json is damaged \(status 5, final_time .*status one of ok, diverged"),
+    (lambda run: (run / "run_dac.json").write_text(json.dumps(
+        {**json.loads((run / "run_dac.json").read_text()), "final_time": "soon"})),
+     r"run_dac.json is damaged \(status 'ok', final_time 'soon'\)"),
+])
+@pytest.mark.parametrize("command", ["report", "verify", "animate", "export"])
+def test_a_damaged_run_file_is_named(tmp_path, capsys, damage, message, command):
+    run = _short_run(tmp_path)
+    damage(run)
+    assert main([command, str(run)]) == 2
+    err = capsys.readouterr().err
+    assert re.search(message, err) and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("command", ["report", "verify"])
+def test_a_run_that_no_longer_matches_its_scenario_is_refused(tmp_path, capsys, command):
+    """An edited scenario.yaml, and a described arm's run copied over a planar run's:
+    verify refuses them as report does, instead of a wrong PASS or a shape error."""
+    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    edited = _short_run(tmp_path, "edited")
+    text = (edited / "scenario.yaml").read_text()
+    (edited / "scenario.yaml").write_text(text.replace("seed: 0", "seed: 1"))
+    copied = _short_run(tmp_path, "copied")
+    simulate(satellite_3dof_scenario(), "dac", duration=0.3, out_dir=tmp_path / "spatial")
+    for name in ("logs_dac.npz", "run_dac.json"):
+        (copied / name).write_bytes((tmp_path / "spatial" / name).read_bytes())
+    for run in (edited, copied):
+        assert main([command, str(run)]) == 2
+        err = capsys.readouterr().err
+        assert "the dac run was made from another scenario than scenario.yaml" in err
+        assert len(err.strip().splitlines()) == 1, err
+
+
+def test_python_simulate_checks_the_seed():
+    for seed, message in [(-1, "seed = -1 is out of range"),
+                          (1.5, "seed = 1.5 is not an integer")]:
+        scenario = short_scenario()
+        scenario.seed = seed
+        with pytest.raises(ConfigError, match=message):
+            simulate(scenario, "dac", duration=0.01)
+
+
+def test_a_sweep_never_writes_into_a_run_directory(tmp_path, capsys):
+    run = _short_run(tmp_path)
+    before = {p.name: p.read_bytes() for p in run.iterdir() if p.is_file()}
+    sweep = Path(__file__).parents[1] / "sweeps" / "short_sweep.yaml"
+    assert main(["sweep", str(sweep), "--out", str(run), "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "holds a run (logs_dac.npz, run_dac.json, scenario.yaml)" in err, err
+    assert {p.name: p.read_bytes() for p in run.iterdir() if p.is_file()} == before
+
+
+def _urdf(tmp_path, old: str, new: str) -> Path:
+    source = Path(__file__).parent / "data" / "arms" / "coupled_light_joints.urdf"
+    text = source.read_text()
+    assert old in text
+    (tmp_path / "arm.urdf").write_text(text.replace(old, new, 1))
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text("robot: !DescribedArm\n  description: arm.urdf\n"
+                        "  end_effector: {frame: tool}\n")
+    return scenario
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('<mass value="0.393133"/>', '<mass value="-0.393133"/>',
+     r"arm.urdf:1: a link's mass or inertia is not physical \(Drake: condition "
+     r"'mass > 0' failed\); allowed: mass > 0"),
+    ('<joint name="joint3" type="revolute">', '<joint name="joint3" type="floating">',
+     r"2 free bodies: the base 'root' and 'link3' \(a floating joint"),
+])
+def test_a_description_drake_would_change_is_refused(tmp_path, capsys, old, new,
+                                                     message):
+    scenario = _urdf(tmp_path, old, new)
+    assert main(["simulate", str(scenario), "--out", str(tmp_path / "out")]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines()
+           if not line.startswith("dacph: note: ")]
+    assert len(err) == 1 and re.search(message, err[0]), err

@@ -165,6 +165,41 @@ BAD_SCENARIO_FILES = [
     ("learner: {bayes: {model_error: 1.0}}\n",
      r"learner.bayes.model_error = 1.0 .*in \[0, 0.999\]"),
     ("learner: {bayes: {prior: wide}}\n", r"s.yaml.*\['prior'\] were unknown"),
+    # A mistyped key names its section and the closest setting.
+    ("learner: {bayes: {credible_levl: 0.9}}\n",
+     r"learner.bayes: the fields \['credible_levl'\] were unknown \(did you mean "
+     r"'credible_level'\?\); allowed: "),
+    ("sed: 3\n", r"top level: the fields \['sed'\] were unknown \(did you mean 'seed'\?\)"),
+    ("robot: !DescribedArm\n  description: satellite_3dof\n  base: {mas: 3.0}\n",
+     r"robot.base: the fields \['mas'\] were unknown \(did you mean 'mass'\?\); "
+     r"allowed: mass, size, mount"),
+    # Whole numbers, keys given once.
+    ("uncertainty: {faults: [{time: 1.0, joint: 1.5, gain: 0.5}]}\n",
+     r"uncertainty.faults\[0\].joint = 1.5 is not a whole number"),
+    ("learner: {hidden: [16.5, 8]}\n", r"learner.hidden\[0\] = 16.5 is not a whole number"),
+    ("q0: [0.3, 1.0]\nseed: 2\nq0: [0.2, 1.0]\n",
+     r"q0 is given twice \(lines 1 and 3\); allowed: each setting once"),
+    # Events after the run's end never take effect.
+    ("uncertainty: {faults: [{time: 1500.0, joint: 2, gain: 0.5}]}\n",
+     r"uncertainty.faults\[0\].time = 1500 s is at or after the run's end \(1500 s"),
+    ("disturbance: {start: 1600.0}\n",
+     r"disturbance.start = 1600 s is at or after the run's end \(1500 s"),
+    ("stress: {B_hat_scale: 2.0, start: 2000.0}\n",
+     r"stress.start = 2000 s is at or after the run's end"),
+    # A reference the sized defaults cannot size by.
+    ("robot: !DescribedArm\n  description: satellite_3dof\ntask: !EndEffectorAttitude\n"
+     "  reference: {period: 0.0}\n", r"task.reference.period = 0.0 is out of range; "
+                                     r"allowed: > 0 s"),
+    ("robot: {truth: {links: [{mass: 1.0, length: 0.5, com: 0.25, inertia: 0.02}, "
+     "{mass: 1.0, length: 0.5, com: 0.25, inertia: 0.02}, {mass: 1.0, length: 0.5, "
+     "com: 0.25, inertia: 0.02}]}}\ntask: {reference: {periods: [0.0, 11.0]}}\n",
+     r"task.reference.periods\[0\] = 0.0 is out of range; allowed: > 0 s"),
+    # One stray key of the older layout in a current file: the whole file decides.
+    ("robot: !DescribedArm\n  description: satellite_3dof\nduration: 5.0\n",
+     r"duration: is a setting of the layout before the robot: and task: sections, "
+     r"robot: of the current one; allowed: one layout"),
+    ("task: {gains: {Kd: 0.5}}\nlhs: {Kd: 0.5}\n",
+     r"lhs: is a setting of the layout before .* task: of the current one"),
 ]
 
 

@@ -87,6 +87,18 @@ def test_process_pool_gives_identical_rows(serial, tmp_path):
     assert comparable(pooled) == comparable(rows)
 
 
+def test_a_local_pool_is_joined_before_the_sweep_returns(serial, tmp_path):
+    """No pool thread is left for the interpreter's exit to join: a Ctrl-C there
+    would end in a threading traceback and exit 0."""
+    import threading
+    path, _, rows = serial
+    before = set(threading.enumerate())
+    pooled = run_sweep(load_sweep(path), tmp_path / "out", slots=1)
+    assert comparable(pooled) == comparable(rows)
+    left = [t for t in threading.enumerate() if t not in before and not t.daemon]
+    assert left == [], left
+
+
 def test_a_trials_row_is_the_same_whatever_batch_it_lands_in(serial, tmp_path):
     """The serial sweep ran its 4 trials as one batch (one diagram per controller);
     one trial per diagram gives the same rows, and so does a batch_size in the

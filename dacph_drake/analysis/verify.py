@@ -184,6 +184,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
                  "dic_violations": int(np.sum(rhs[:, R.dic_ok] < 0.5))}
     from dacph_drake.analysis.metrics import learning_report
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
+              "controller": run_meta.get("controller", "dac"),
               "learning": learning_report(logs, scenario),
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,

@@ -1,4 +1,4 @@
-"""Command line: ``dacph <command> ...`` (``dacph --help`` lists the commands)."""
+"""Command line: ``dacph COMMAND ...`` (``dacph --help`` lists the commands)."""
 import argparse
 import logging
 import sys
@@ -11,6 +11,11 @@ from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed
 # The built-in scenarios' names (scenario.BUILT_IN_SCENARIOS), without loading Drake.
 BUILT_IN_SCENARIO_NAMES = ("paper", "short", "satellite_6dof", "satellite_3dof")
 from dacph_drake.errors import ConfigError, require_nonnegative, require_positive
+
+DESCRIPTION = ("Data-Assisted Control in the port-Hamiltonian framework (DAC-pH) on "
+               "free-floating manipulators: simulate, reproduce, report, verify and "
+               "sweep closed loops of any arm. 'dacph COMMAND --help' shows a "
+               "command's arguments.")
 
 
 def _free_flight(args) -> int:
@@ -33,31 +38,27 @@ def _free_flight(args) -> int:
 
 def _simulate(args) -> int:
     from pathlib import Path
-    from dacph_drake.analysis.metrics import PHASES, run_metrics
+    from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.assembly import robot_of
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
-                      out_dir=args.out, progress=True, interruptible=True,
+                      out_dir=args.out, progress=not args.quiet, interruptible=True,
                       checkpoint_seconds=args.checkpoint, meshcat=meshcat)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
     if result.final_time > scenario.phases.linear_start:
-        starts = dict(zip(PHASES, (scenario.phases.linear_start,
-                                   scenario.phases.nonlinear_start,
-                                   scenario.phases.disturbance_start)))
-        for name, value in run_metrics(result.logs, scenario).items():
-            phase = name.split(".")[0]
-            reached = phase not in starts or result.final_time > starts[phase]
-            print(f"  {name:32s} {value:.6g}" if reached and value == value else
-                  f"  {name:32s} n/a, not reached (the run ended at "
-                  f"{result.final_time:g} s)")
+        if not args.quiet:
+            _print_metrics(run_metrics(result.logs, scenario), scenario,
+                           result.final_time)
         if "learner_log" in result.logs:
             from dacph_drake.analysis.metrics import learning_report
             for text in learning_report(result.logs, scenario)["warnings"]:
                 print(f"dacph: warning: {text}", file=sys.stderr)
+    if len(result.logs["time"]) > 1:
+        _report_run(Path(args.out), args.controller)
     if args.animate and len(result.logs["time"]) > 1:
         print(robot_of(scenario).WriteAnimation(
             result.logs, Path(args.out) / f"animation_{args.controller.replace('-', '_')}"
@@ -65,6 +66,53 @@ def _simulate(args) -> int:
     print(f"saved to {args.out}")
     _KeepViewerOpen(meshcat)
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
+
+
+def _report_run(out, controller: str) -> None:
+    """The report (panels, metrics.json) of a new run with the directory's runs it
+    belongs with: those of its duration (the others are named in a note)."""
+    import json
+    from dacph_drake.app.reproduce import report, runs_in
+    duration = json.loads((out / f"run_{controller}.json").read_text())["duration"]
+    together, apart = [], []
+    for other in runs_in(out):
+        try:
+            record = json.loads((out / f"run_{other}.json").read_text())
+        except (OSError, ValueError):
+            record = {}
+        (together if record.get("duration") == duration else apart).append(other)
+    if apart:
+        print(f"dacph: note: the report in {out} leaves out the {', '.join(apart)} "
+              f"run{'s' if len(apart) > 1 else ''} (another duration or unreadable)",
+              file=sys.stderr)
+    summary = report(out, together)
+    print(f"panels in {out / 'figures'} ({len(summary['figures']) // 2} PNG, PDF); "
+          f"metrics in {out / 'metrics.json'}")
+
+
+def _print_metrics(flat, scenario, final_time: float) -> None:
+    """A run's metrics, over the run and then grouped by the scenario's phases (their
+    names and times), each with its unit and its metrics.json key."""
+    from dacph_drake.analysis.metrics import PHASE_NAMES, RunMetrics
+    record = RunMetrics.FromFlat(flat)
+    p = scenario.phases
+    spans = dict(zip(PHASE_NAMES, ((p.linear_start, p.nonlinear_start),
+                                   (p.nonlinear_start, p.disturbance_start),
+                                   (p.disturbance_start, p.end))))
+    groups = [("run (phases 1-3)", "", record.run, final_time)] + [
+        (f"{key}: {name}, {spans[key][0]:g}-{spans[key][1]:g} s", f"{key}.",
+         record.phases[name], final_time if final_time > spans[key][0] else None)
+        for key, name in PHASE_NAMES.items()]
+    for title, prefix, values, reached in groups:
+        print(f"  {title}")
+        if reached is None:
+            print(f"    {prefix + '*':44s} n/a, not reached (the run ended at "
+                  f"{final_time:g} s)")
+            continue
+        for name, value in values.items():
+            unit = record.units.get(name, "")
+            text = f"{value:.6g}{' ' + unit if unit else ''}" if value == value else "n/a"
+            print(f"    {prefix + name:44s} {text}")
 
 
 def _spatial(args) -> int:
@@ -123,7 +171,8 @@ def _reproduce(args) -> int:
     from dacph_drake.scenario_files import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
-    summary = reproduce(load_scenario(name), args.out, jobs=args.jobs)
+    summary = reproduce(load_scenario(name), args.out, progress=not args.quiet,
+                        jobs=args.jobs)
     print(f"reproduced {name} in {time.perf_counter() - start:.0f} s -> {args.out}")
     _print_table(summary)
     if args.animate:
@@ -132,13 +181,67 @@ def _reproduce(args) -> int:
 
 
 def _report(args) -> int:
-    from dacph_drake.app.reproduce import report
-    _print_table(report(args.run_dir))
+    from dacph_drake.app.reproduce import REQUIRED, report
+    from dacph_drake.scenario_files import load_scenario
+    summary = report(args.run_dir)
+    if summary["table"]:
+        _print_table(summary)
+    else:
+        scenario = load_scenario(f"{args.run_dir}/scenario.yaml")
+        for controller, flat in summary["metrics"].items():
+            print(f"{controller} ({summary['runs'][controller]['status']})")
+            _print_metrics(flat, scenario, summary["runs"][controller]["final_time"])
+        if summary["ablation"]:
+            _print_table({"table": [], "ablation": summary["ablation"]})
+    print(f"panels in {args.run_dir}/figures; tables in metrics.md, ablation.md, "
+          "metrics.json" + ("" if summary["table"] else
+                            f" (the comparison with the paper needs the "
+                            f"{' and '.join(REQUIRED)} runs)"))
     return 0
 
 
 def _animate(args) -> int:
     print(_animate_run(args.run_dir, args.controller, args.out))
+    return 0
+
+
+EXPORT_FORMATS = ("csv", "parquet")
+
+
+def _export(args) -> int:
+    """A saved run's logs as a table for pandas: one row per logged time, one column
+    per named signal entry (RunResult.to_pandas)."""
+    from pathlib import Path
+    from dacph_drake.loop.files import replaced_atomically
+    from dacph_drake.loop.run_store import RunResult, load_run
+    logs, scenario, meta = load_run(args.run_dir, args.controller)
+    run = RunResult(args.controller, meta["status"], meta.get("reason", ""),
+                    meta["final_time"], meta.get("wall_time", float("nan")), logs,
+                    scenario=scenario)
+    try:
+        frame = run.to_pandas(args.signals or ())
+    except ImportError as e:
+        raise ConfigError(f"--format {args.format} needs pandas ({e}); allowed: pip "
+                          "install 'dacph-drake[pandas,parquet]'") from e
+    except KeyError as e:
+        raise ConfigError(f"--signals: {e.args[0]}") from e
+    out = (Path(args.out) if args.out else Path(args.run_dir) /
+           f"logs_{args.controller}.{args.format}")
+    if out.is_dir():
+        raise ConfigError(f"--out = {str(out)!r} is a directory; allowed: a file")
+    try:
+        with replaced_atomically(out) as path:
+            if args.format == "csv":
+                frame.to_csv(path)
+            else:
+                frame.to_parquet(path)
+    except ImportError as e:
+        raise ConfigError(f"--format parquet needs pyarrow ({e}); allowed: --format "
+                          "csv, or pip install 'dacph-drake[parquet]'") from e
+    except OSError as e:
+        raise ConfigError(f"--out = {str(out)!r} cannot be written ({e.strerror}); "
+                          "allowed: a file in a writable directory") from e
+    print(f"{out} ({len(frame)} rows x {frame.shape[1]} columns)")
     return 0
 
 
@@ -158,8 +261,8 @@ def _verify(args) -> int:
             raise ConfigError("--out is required when verifying a scenario (the DAC "
                               "run is saved there)")
         run_dir = Path(args.out)
-        result = simulate(scenario, args.controller, out_dir=run_dir, progress=True,
-                          interruptible=True)
+        result = simulate(scenario, args.controller, out_dir=run_dir,
+                          progress=not args.quiet, interruptible=True)
         if result.status == "interrupted":
             print(f"{args.controller}: interrupted ({result.reason}; "
                   f"{result.final_time:.2f} s simulated), saved to {run_dir}; not "
@@ -195,14 +298,14 @@ def _sweep(args) -> int:
         try:
             if args.dask:
                 with dask_executor(args.dask, args.workers) as (executor, slots):
-                    run_sweep(definition, args.out, executor, slots, progress=True,
-                              batch_size=args.batch_size)
+                    run_sweep(definition, args.out, executor, slots,
+                              progress=not args.quiet, batch_size=args.batch_size)
             elif args.workers == 0:
-                run_sweep(definition, args.out, InProcessExecutor(), 1, progress=True,
-                          batch_size=args.batch_size)
+                run_sweep(definition, args.out, InProcessExecutor(), 1,
+                          progress=not args.quiet, batch_size=args.batch_size)
             else:
-                run_sweep(definition, args.out, slots=args.workers, progress=True,
-                          batch_size=args.batch_size)
+                run_sweep(definition, args.out, slots=args.workers,
+                          progress=not args.quiet, batch_size=args.batch_size)
         except KeyboardInterrupt:
             print(f"\ninterrupted: {len(read_rows(args.out))} trials saved in {args.out}; "
                   "run the same command to resume", file=sys.stderr)
@@ -246,20 +349,80 @@ def _KeepViewerOpen(meshcat) -> None:
               "close it. ")
 
 
+RUN_DIR_HELP = "a run directory written by dacph simulate or reproduce"
+SCENARIO_HELP = ("scenario YAML (e.g. scenarios/short.yaml) or a built-in name: "
+                 f"{', '.join(BUILT_IN_SCENARIO_NAMES)}")
+
+
 def _AddSimulateArguments(command) -> None:
-    command.add_argument("--out", required=True, help="output directory")
-    command.add_argument("--controller", choices=CONTROLLERS, default="dac",
-                         help="; ".join(f"{name}: {c.description}"
-                                        for name, c in REGISTRY.items()))
-    command.add_argument("--duration", type=float, default=None,
-                         help="[s] (default: the scenario's phases)")
+    command.add_argument("--out", required=True, metavar="DIR",
+                         help="run directory (created if missing): logs_CONTROLLER.npz, "
+                              "run_CONTROLLER.json, scenario.yaml, figures/ (the run's "
+                              "panels, PNG and PDF), metrics.json, metrics.md, "
+                              "ablation.md")
+    _AddController(command, "the closed loop to simulate")
+    command.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+                         help="simulated time [s] (default: the scenario's phases)")
     command.add_argument("--checkpoint", type=float, default=60.0, metavar="SECONDS",
                          help="save the logs so far every SECONDS of wall time (status "
-                              "'incomplete' until the run ends; default 60)")
+                              "'incomplete' until the run ends; default: %(default)g)")
     command.add_argument("--animate", action="store_true",
                          help="also write an HTML replay of the run "
-                              "(animation_CONTROLLER.html)")
+                              "(animation_dac.html, animation_dac_nominal.html or "
+                              "animation_model_based.html)")
     _AddLiveViewing(command)
+
+
+def _AddController(command, what: str, default: Optional[str] = "dac") -> None:
+    command.add_argument(
+        "--controller", choices=CONTROLLERS, default=default,
+        help=f"{what} (default: {default or 'all'}); " + "; ".join(
+            f"{name}: {c.description}" for name, c in REGISTRY.items()))
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, with the closest allowed value named after an invalid
+    choice."""
+
+    def error(self, message: str):
+        import difflib
+        import re
+        match = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if match:
+            allowed = re.findall(r"'([^']*)'", match.group(2))
+            close = difflib.get_close_matches(match.group(1), allowed, n=1)
+            if close:
+                message += f"; did you mean {close[0]!r}?"
+        super().error(message)
+
+
+class _Once(logging.Filter):
+    """Lets each distinct message through once (a description parsed for the
+    controller's model and for the ground truth repeats the parser's warnings)."""
+
+    def __init__(self):
+        super().__init__()
+        self.seen = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        first = message not in self.seen
+        self.seen.add(message)
+        return first
+
+
+def _ShowNotes(quiet: bool) -> None:
+    """Logged notes and Drake's warnings (pydrake logs through Python's logging) on
+    stderr as "dacph: note: ...", each once; with --quiet, errors only. Where the root
+    logger already has handlers (an application embedding main), they stay as set."""
+    root = logging.getLogger()
+    if root.handlers:
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("dacph: note: %(message)s"))
+    handler.addFilter(_Once())
+    root.addHandler(handler)
+    root.setLevel(logging.ERROR if quiet else logging.WARNING)
 
 
 def _version() -> str:
@@ -271,85 +434,110 @@ def _version() -> str:
         return "unknown"
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    """The ``dacph`` command line: parses ``argv``, runs the command and returns the exit
-    status (2 for bad input, with one line naming it; 130 when interrupted).
-
-    Args:
-        argv: The arguments after the program's name (default: sys.argv[1:])."""
-    parser = argparse.ArgumentParser(prog="dacph", description=__doc__)
+def make_parser() -> argparse.ArgumentParser:
+    """The ``dacph`` parser: every command with its arguments, each with its help."""
+    parser = _Parser(prog="dacph", description=DESCRIPTION)
     parser.add_argument("--version", action="version",
                         version=f"%(prog)s {_version()}")
-    commands = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bars, notes or metric listings: the outcome "
+                             "line, the files written, warnings and errors only")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND",
+                                     parser_class=_Parser,
+                                     help="'dacph COMMAND --help' for its arguments")
     free = commands.add_parser(
         "free-flight", help="passive simulation of the ground truth: momentum and "
                             "energy bookkeeping")
-    free.add_argument("--robot", help="robot YAML (default: the paper's robot)")
-    free.add_argument("--duration", type=float, default=10.0, help="[s]")
+    free.add_argument("--robot", metavar="YAML",
+                      help="planar robot YAML (default: the paper's two-link arm)")
+    free.add_argument("--duration", type=float, default=10.0, metavar="SECONDS",
+                      help="simulated time [s] (default: %(default)g)")
     free.set_defaults(run=_free_flight)
-    sim = commands.add_parser("simulate", help="simulate a closed loop of any robot "
-                                               "and save its logs")
-    sim.add_argument("scenario", help="scenario YAML (e.g. scenarios/short.yaml) or a "
-                                      "built-in name: "
-                                      f"{', '.join(BUILT_IN_SCENARIO_NAMES)}")
+    sim = commands.add_parser("simulate", help="simulate a closed loop of any robot; "
+                                               "save its logs, panels and metrics")
+    sim.add_argument("scenario", help=SCENARIO_HELP)
     _AddSimulateArguments(sim)
     sim.set_defaults(run=_simulate)
     graph = commands.add_parser("diagram", help="render the diagram graph (SVG, PNG)")
-    graph.add_argument("scenario")
-    graph.add_argument("--controller", choices=CONTROLLERS, default=None,
-                       help="default: all")
-    graph.add_argument("--out", default=None,
-                       help="folder for the files (default: the current directory)")
+    graph.add_argument("scenario", help=SCENARIO_HELP)
+    _AddController(graph, "the closed loop to draw", default=None)
+    graph.add_argument("--out", default=None, metavar="DIR",
+                       help="folder for SCENARIO_CONTROLLER.svg, .png and .dot "
+                            "(default: the current directory)")
     graph.set_defaults(run=_diagram)
     rep = commands.add_parser(
         "reproduce", help="run DAC, its learning ablation (dac-nominal) and the "
                           "model-based baseline, write the paper's panels, the metrics "
                           "table beside the paper's numbers and the ablation table")
     rep.add_argument("scenario", nargs="?", default=None,
-                     help="scenario YAML or built-in name (default: paper, 1500 s)")
-    rep.add_argument("--out", required=True, help="output directory")
+                     help=SCENARIO_HELP + " (default: paper, 1500 s; short with --quick)")
+    rep.add_argument("--out", required=True, metavar="DIR",
+                     help="run directory: every controller's run files, figures/, "
+                          "metrics.md, ablation.md, metrics.json, scenario.yaml")
     rep.add_argument("--quick", action="store_true",
                      help="the short scenario (26 s) instead of the paper's")
     rep.add_argument("--animate", action="store_true",
-                     help="also write an HTML animation of the DAC run")
+                     help="also write animation_dac.html, a replay of the DAC run")
     rep.add_argument("--jobs", type=int, choices=range(1, len(CONTROLLERS) + 1), default=1,
-                     help="run the three controllers in this many processes (no "
-                          "progress bars above 1)")
+                     metavar="N", help="run the controllers in N processes, 1 to "
+                     f"{len(CONTROLLERS)} (no progress bars above 1; default: "
+                     "%(default)s)")
     rep.set_defaults(run=_reproduce)
-    rpt = commands.add_parser("report", help="panels, metrics and ablation tables of a "
-                                             "directory holding a DAC and a model-based "
-                                             "run (and a dac-nominal run)")
-    rpt.add_argument("run_dir")
+    rpt = commands.add_parser("report", help="panels and tables of a run directory: "
+                                             "one run alone, or DAC beside the "
+                                             "baseline and the paper's numbers")
+    rpt.add_argument("run_dir", metavar="RUN_DIR",
+                     help=RUN_DIR_HELP + "; figures/, metrics.md, ablation.md and "
+                                         "metrics.json are written into it")
     rpt.set_defaults(run=_report)
     ani = commands.add_parser("animate", help="self-contained HTML animation of a run "
                                               "(Meshcat)")
-    ani.add_argument("run_dir")
-    ani.add_argument("--controller", choices=CONTROLLERS, default="dac")
-    ani.add_argument("--out", default=None, help="HTML file (default: in run_dir)")
+    ani.add_argument("run_dir", metavar="RUN_DIR", help=RUN_DIR_HELP)
+    _AddController(ani, "the run to replay")
+    ani.add_argument("--out", default=None, metavar="HTML",
+                     help="the HTML file (default: RUN_DIR/animation_CONTROLLER.html, "
+                          "with - as _, e.g. animation_model_based.html)")
     ani.set_defaults(run=_animate)
+    exp = commands.add_parser("export", help="a run's logs as a CSV or Parquet table "
+                                             "for pandas (one row per logged time)")
+    exp.add_argument("run_dir", metavar="RUN_DIR", help=RUN_DIR_HELP)
+    _AddController(exp, "the run to export")
+    exp.add_argument("--format", choices=EXPORT_FORMATS, default="csv",
+                     help="csv or parquet (Parquet needs pyarrow; default: "
+                          "%(default)s)")
+    exp.add_argument("--signals", nargs="+", default=None, metavar="NAME",
+                     help="only these signals, by name (e.g. u e_tau attitude_error; "
+                          "default: every named signal)")
+    exp.add_argument("--out", default=None, metavar="FILE",
+                     help="the table (default: RUN_DIR/logs_CONTROLLER.csv or .parquet)")
+    exp.set_defaults(run=_export)
     ver = commands.add_parser(
         "verify", help="check the paper's Lyapunov claims on a DAC run (exit 1 on a "
                        "failed check)")
-    ver.add_argument("target", help="a run directory holding a DAC run, or a scenario "
-                                    "YAML / built-in name to simulate first")
-    ver.add_argument("--out", default=None, help="where to save the run of a scenario")
-    ver.add_argument("--controller", choices=CONTROLLERS, default="dac",
-                     help="the run to verify (one with the RHS integrator; default: dac)")
+    ver.add_argument("target", metavar="RUN_DIR_OR_SCENARIO",
+                     help="a run directory holding a DAC run, or a scenario YAML / "
+                          "built-in name to simulate first (then --out is required); "
+                          "verification.md, .json and .png are written beside the run")
+    ver.add_argument("--out", default=None, metavar="DIR",
+                     help="where to save the run of a scenario")
+    _AddController(ver, "the run to verify (one with the RHS integrator)")
     ver.add_argument("--region-budget", type=float, default=300.0, metavar="SECONDS",
                      help="wall time for a planar arm's region-of-attraction "
                           "sums-of-squares program (it grows steeply with the links); "
-                          "beyond it the check is reported as skipped (default 300). "
-                          "Spatial arms' certificate takes milliseconds")
+                          "beyond it the check is reported as skipped (default: "
+                          "%(default)g). Spatial arms' certificate takes milliseconds")
     ver.set_defaults(run=_verify)
     swp = commands.add_parser(
         "sweep", help="Monte Carlo sweep over uncertainty (resumes where it stopped)")
-    swp.add_argument("sweep", help="sweep YAML (e.g. sweeps/short_sweep.yaml)")
-    swp.add_argument("--out", required=True,
-                     help="output directory; run the same command again to resume")
-    swp.add_argument("--workers", type=int, default=None,
+    swp.add_argument("sweep", metavar="SWEEP", help="sweep YAML (e.g. "
+                                                    "sweeps/short_sweep.yaml)")
+    swp.add_argument("--out", required=True, metavar="DIR",
+                     help="sweep directory: rows.jsonl, summary.json, summary.md, "
+                          "rows.parquet, plots; run the same command again to resume")
+    swp.add_argument("--workers", type=int, default=None, metavar="N",
                      help="local worker processes (default: one per core; 0: run in "
                           "this process); with --dask local, the cluster's workers")
-    swp.add_argument("--batch-size", type=int, default=None,
+    swp.add_argument("--batch-size", type=int, default=None, metavar="N",
                      help="trials simulated together in one diagram (default: the "
                           "sweep's batch_size, else 64 for a planar arm, 16 for a "
                           "described arm); no trial's row depends on it")
@@ -363,13 +551,27 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     spa = commands.add_parser(
         "spatial", help="the former command for described arms: dacph simulate "
                         "(default scenario satellite_6dof)")
-    spa.add_argument("scenario", nargs="?", default="satellite_6dof")
+    spa.add_argument("scenario", nargs="?", default="satellite_6dof",
+                     help=SCENARIO_HELP + " (default: %(default)s)")
     _AddSimulateArguments(spa)
     spa.add_argument("--panels", action="store_true",
                      help="now: dacph reproduce SCENARIO --out DIR")
     spa.set_defaults(run=_spatial)
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """The ``dacph`` command line: parses ``argv``, runs the command and returns the exit
+    status (2 for bad input, with one line naming it; 130 when interrupted).
+
+    Args:
+        argv: The arguments after the program's name (default: sys.argv[1:])."""
+    parser = make_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(format="dacph: note: %(message)s", level=logging.WARNING)
+    if args.command is None:            # bare dacph: what it can do
+        parser.print_help(sys.stderr)
+        return 2
+    _ShowNotes(quiet=args.quiet)
     try:
         with single_threaded():         # verify and report too (loop.threads)
             return args.run(args)

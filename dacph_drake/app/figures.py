@@ -10,9 +10,12 @@
 (e) every run: |alpha~| and ||s|| (log axes), d(t)
 (f) control inputs (DAC, and the model-based input's difference from it) and states
 
-(a)-(d) are DAC's; (e) and (f) are the planar task's (robots.Robot.task_panels). A
-described arm's runs get, in place of (e) and (f),
-(e) every run: the attitude error |e|, ||s||, the smallest link-base distance, d(t).
+(a)-(d) are DAC's (or, without a DAC run, the first run's with a learner); (e) and
+(f) are the planar task's (tasks.task.Task.panels). A described arm's runs get
+(e) every run: the attitude error |e| (the pose task: and |e_p|), ||s||, the
+    smallest link-base distance, d(t)
+(f) control inputs u and joint angles and rates (f_inputs_and_joints).
+A single run is drawn by itself (its own inputs, no difference to a baseline).
 Each controller is drawn in its registered style (controllers.REGISTRY).
 
 Each panel is written as PNG and PDF. Warm-up and phases are shaded and labelled,
@@ -33,7 +36,7 @@ from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
 from dacph_drake.log_layout import LhsLog, PoseLog, RhsLog  # noqa: E402
 from dacph_drake.analysis.metrics import nominal_estimates  # noqa: E402
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
-from dacph_drake.assembly import task_of  # noqa: E402
+from dacph_drake.assembly import robot_of, task_of  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]
@@ -251,10 +254,16 @@ def _compared(runs: Dict[str, Logs]):
     return sorted(runs.items(), key=lambda item: item[0] == REFERENCE)
 
 
+def _primary(runs: Dict[str, Logs]) -> Logs:
+    """The run whose own signals (d(t), u, the states) a panel shows: DAC's where
+    it ran, else the first."""
+    return runs.get(REFERENCE, next(iter(runs.values())))
+
+
 def _panel_e(runs: Dict[str, Logs], scenario: Scenario):
     n = len(scenario.q0)
     layout = LhsLog(n)
-    dac = runs[REFERENCE]
+    dac = _primary(runs)
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
     for name, logs in _compared(runs):
         t, lhs = logs["time"], logs["lhs_log"]
@@ -275,30 +284,48 @@ def _panel_e(runs: Dict[str, Logs], scenario: Scenario):
 
 
 def _panel_f(runs: Dict[str, Logs], scenario: Scenario):
-    """Needs the baseline's run (controllers.BASELINE) beside DAC's."""
+    """(f) of a planar arm: _panel_inputs with the base's angle and alpha_d."""
+    return _panel_inputs(runs, scenario, ArmCoordinates.ForPlanarArm(len(scenario.q0)),
+                         planar=True)
+
+
+def _panel_inputs(runs: Dict[str, Logs], scenario: Scenario,
+                  coordinates: ArmCoordinates, planar: bool = False):
+    """The primary run's inputs u, joint angles and rates; with the baseline's run
+    (controllers.BASELINE) beside DAC's, the baseline's input minus DAC's; a planar
+    arm's base angle theta_0 and reference alpha_d with its angles."""
     n = len(scenario.q0)
-    dac, model_based = runs[REFERENCE], runs[BASELINE]
-    fig, (ax1, ax2, ax3, ax4), xlim = _figure(4, scenario)
+    dac = _primary(runs)
+    name = next(c for c, logs in runs.items() if logs is dac)
+    label = REGISTRY[name].label or name
+    compared = REFERENCE in runs and BASELINE in runs
+    fig, axes, xlim = _figure(4 if compared else 3, scenario)
+    ax1, ax3, ax4 = axes[0], axes[-2], axes[-1]
     t = dac["time"]
     for k in range(n):
-        _trace(ax1, t, dac["u"][:, k], xlim, color=f"C{k}", label=f"$u_{k + 1}$")
-        u_model_based = np.interp(t, model_based["time"], model_based["u"][:, k],
-                                  right=np.nan)
-        _trace(ax2, t, u_model_based - dac["u"][:, k], xlim, color=f"C{k}",
-               label=f"$u_{k + 1}$")
-    ax1.set_ylabel("u, DAC-pH [N m]")
-    ax2.set_ylabel("u, model-based\nminus DAC-pH [N m]")
+        _trace(ax1, t, dac["u"][:, k], xlim, color=f"C{k % 10}", label=f"$u_{k + 1}$")
+        if compared:
+            u_model_based = np.interp(t, runs[BASELINE]["time"],
+                                      runs[BASELINE]["u"][:, k], right=np.nan)
+            _trace(axes[1], t, u_model_based - dac["u"][:, k], xlim,
+                   color=f"C{k % 10}", label=f"$u_{k + 1}$")
+    ax1.set_ylabel(f"u, {label} [N m]")
     _legend_outside(ax1)
-    _legend_outside(ax2)
-    base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(n).Split(dac["state"])
-    _trace(ax3, t, base_pose[:, 2], xlim, color="k", label=r"$\theta_0$ (base)")
+    if compared:
+        axes[1].set_ylabel(f"u, model-based\nminus {label} [N m]")
+        _legend_outside(axes[1])
+    base_pose, q, _, qdot = coordinates.Split(dac["state"])
+    if planar:
+        _trace(ax3, t, base_pose[:, 2], xlim, color="k", label=r"$\theta_0$ (base)")
     for k in range(n):
-        _trace(ax3, t, q[:, k], xlim, color=f"C{k}", label=f"$q_{k + 1}$")
-        _trace(ax4, t, qdot[:, k], xlim, color=f"C{k}", label=r"$\dot q_{%d}$" % (k + 1))
-    _trace(ax3, t, dac["lhs_log"][:, LhsLog(n).alpha_desired], xlim, color="C3",
-           ls="--", label=r"$\alpha_d$")
-    ax3.set_ylabel("angles, DAC-pH [rad]")
-    ax4.set_ylabel("joint rates, DAC-pH [rad/s]")
+        _trace(ax3, t, q[:, k], xlim, color=f"C{k % 10}", label=f"$q_{k + 1}$")
+        _trace(ax4, t, qdot[:, k], xlim, color=f"C{k % 10}",
+               label=r"$\dot q_{%d}$" % (k + 1))
+    if planar:
+        _trace(ax3, t, dac["lhs_log"][:, LhsLog(n).alpha_desired], xlim, color="C3",
+               ls="--", label=r"$\alpha_d$")
+    ax3.set_ylabel(f"angles, {label} [rad]")
+    ax4.set_ylabel(f"joint rates, {label} [rad/s]")
     _legend_outside(ax3)
     _legend_outside(ax4)
     return fig
@@ -309,7 +336,7 @@ def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
     run, the smallest link-base distance against the potential's margin, d(t)."""
     n, layout = len(scenario.q0), PoseLog()
     pose = log_name == "pose_log"
-    dac = runs[REFERENCE]
+    dac = _primary(runs)
     fig, axes, xlim = _figure(5 if pose else 4, scenario)
     error_axes, (ax2, ax3, ax4) = axes[:-3], axes[-3:]
     for name, logs in _compared(runs):
@@ -356,25 +383,33 @@ TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f
                "e_attitude_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
                    runs, scenario, "attitude_log"),
                "e_pose_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
-                   runs, scenario, "pose_log")}
+                   runs, scenario, "pose_log"),
+               "f_inputs_and_joints": lambda runs, scenario: _panel_inputs(
+                   runs, scenario, robot_of(scenario).model.coordinates)}
 
 
 def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
     """The panels as matplotlib figures, by name.
 
-    DAC_PANELS of the DAC run (runs["dac"]) and the robot's task panels comparing
-    every run in ``runs``.
+    DAC_PANELS of the learning run (DAC's, else the first run with an RHS loop and
+    estimates; none without one) and the robot's task panels comparing every run in
+    ``runs``.
 
     Args:
-        runs: Controller -> the logs of its run (one of them DAC's).
+        runs: Controller -> the logs of its run (any registered controllers; one run
+            alone is drawn by itself).
         scenario: The scenario the runs ran.
 
     Returns:
         Panel name -> matplotlib figure."""
-    dac = runs[REFERENCE]
-    figures = {name: figure for name, figure in zip(DAC_PANELS, (
-        _panel_a(dac, scenario), _entries(dac, scenario),
-        _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)))}
+    learning = [logs for name, logs in sorted(runs.items(), key=lambda r: r[0] != REFERENCE)
+                if "rhs_log" in logs and "estimates" in logs]
+    figures = {}
+    if learning:
+        dac = learning[0]
+        figures = {name: figure for name, figure in zip(DAC_PANELS, (
+            _panel_a(dac, scenario), _entries(dac, scenario),
+            _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)))}
     for name in task_of(scenario).panels:
         figures[name] = TASK_PANELS[name](runs, scenario)
     for fig in figures.values():
@@ -387,7 +422,7 @@ def plot_panels(runs: Dict[str, Logs], scenario: Scenario,
     """Writes the panels (make_panels; PNG and PDF) into out_dir.
 
     Args:
-        runs: Controller -> the logs of its run (one of them DAC's).
+        runs: Controller -> the logs of its run (any registered controllers).
         scenario: The scenario the runs ran.
         out_dir: The folder for the files (created if missing).
 

@@ -14,10 +14,12 @@ from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduc
                                      REFERENCE)                         # runs them all
 from dacph_drake.errors import ConfigError
 from dacph_drake.app.figures import plot_panels
-from dacph_drake.analysis.metrics import PHASES, comparison, run_metrics
+from dacph_drake.analysis.metrics import (PHASE_NAMES, PHASES, RunMetrics, comparison,
+                                          run_metrics)
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.loop.files import prepare_out_dir
-from dacph_drake.loop.run_store import load_logs, load_run_meta, require_run_files, scenario_fingerprints, versions
+from dacph_drake.loop.run_store import (load_logs, load_run_meta, require_run_files,
+                                        require_run_of, versions)
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario_files import load_scenario, save_scenario
 
@@ -103,7 +105,8 @@ def ablation_rows(metrics: Dict[str, Dict[str, float]]) -> List[AblationRow]:
              for c in rhs_loop]
     rows += [AblationRow(f"{REFERENCE}.e_tau_rms",
                          f"RMS ||e_tau||, {label[REFERENCE]} / {c}", "-",
-                         over=f"{c}.e_tau_rms") for c in rhs_loop if c != REFERENCE]
+                         over=f"{c}.e_tau_rms") for c in rhs_loop
+             if c != REFERENCE and REFERENCE in ran]
     rows += [AblationRow(f"{c}.chi_rms", f"RMS chi, {label[c]}", "N m") for c in rhs_loop]
     return rows + list(LEARNER_ROWS)
 
@@ -231,13 +234,8 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
 
     Raises:
         ConfigError: A run was made from another scenario, or the runs' durations differ."""
-    fingerprints = scenario_fingerprints(scenario)
     for controller, run in runs.items():
-        if run.get("scenario_fingerprint", fingerprints[0]) not in fingerprints:
-            raise ConfigError(
-                f"{run_dir}: the {controller} run was made from another scenario than "
-                "scenario.yaml (the last run saved there); allowed: runs of one "
-                "scenario in one directory")
+        require_run_of(scenario, run, run_dir, controller)
     durations = {c: run["duration"] for c, run in runs.items() if "duration" in run}
     if len(set(durations.values())) > 1:
         listed = ", ".join(f"{c} {d:g} s" for c, d in durations.items())
@@ -245,25 +243,39 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                           "allowed: runs of one duration in one directory")
 
 
-def report(run_dir: Union[str, Path]) -> Dict:
-    """Writes the panels and tables of a directory holding the runs (figures/, metrics.md,
-    ablation.md, metrics.json); returns the summary written to metrics.json (scenario,
-    duration, runs, table, ablation, metrics, figures, versions).
+def runs_in(run_dir: Union[str, Path]) -> List[str]:
+    """The registered controllers with a run in a directory (its logs_CONTROLLER.npz or
+    run_CONTROLLER.json), in the registry's order.
 
     Args:
-        run_dir: The runs' directory (dac, model-based; dac-nominal for the ablation).
+        run_dir: The run directory."""
+    return [c for c in CONTROLLERS if (Path(run_dir) / f"logs_{c}.npz").exists()
+            or (Path(run_dir) / f"run_{c}.json").exists()]
+
+
+def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None) -> Dict:
+    """Writes the panels and tables of a directory's runs (figures/, metrics.md,
+    ablation.md, metrics.json); returns the summary written to metrics.json (scenario,
+    duration, runs, table, ablation, metrics, figures, versions). With DAC's and the
+    baseline's runs, the table sets them beside the paper's numbers; a run alone
+    gets its own panels and its metrics per phase.
+
+    Args:
+        run_dir: The runs' directory (saved by dacph simulate or reproduce).
+        controllers: The runs to report (default: every run in it, runs_in).
 
     Raises:
-        ConfigError: A required file is missing, or the runs do not belong together."""
-    run_dir = require_run_files(run_dir, REQUIRED)
+        ConfigError: A required file is missing or damaged, or the runs do not belong
+            together."""
+    controllers = controllers or runs_in(run_dir) or [REFERENCE]
+    run_dir = require_run_files(run_dir, controllers)
     scenario = load_scenario(run_dir / "scenario.yaml")
-    controllers = [c for c in CONTROLLERS
-                   if c in REQUIRED or (run_dir / f"logs_{c}.npz").exists()]
-    logs = {c: load_logs(run_dir, c) for c in controllers}
     runs = {c: load_run_meta(run_dir, c) for c in controllers}
     check_runs_belong_together(run_dir, scenario, runs)
+    logs = {c: load_logs(run_dir, c, scenario) for c in controllers}
     metrics = {c: run_metrics(logs[c], scenario) for c in controllers}
-    rows = metrics_table(metrics)
+    compared = all(c in metrics for c in REQUIRED)
+    rows = metrics_table(metrics) if compared else []
     ablation = ablation_table(metrics)
     figures = plot_panels(logs, scenario, run_dir / "figures")
     summary = {"scenario": "scenario.yaml", "duration": scenario.duration,
@@ -271,14 +283,37 @@ def report(run_dir: Union[str, Path]) -> Dict:
                "figures": [str(p.relative_to(run_dir)) for p in figures],
                "versions": versions()}
     (run_dir / "metrics.json").write_text(json.dumps(summary, indent=2))
-    status = ", ".join(f"{c}: {runs[c]['status']} in {runs[c]['wall_time']:.0f} s wall"
-                       for c in controllers)
+    status = ", ".join(f"{c}: {runs[c]['status']} in {runs[c].get('wall_time', 0):.0f} s "
+                       "wall" for c in controllers)
     (run_dir / "metrics.md").write_text(table_markdown(
-        rows, f"DAC-pH against the paper ({scenario.duration:g} s scenario; {status})"))
+        rows, f"DAC-pH against the paper ({scenario.duration:g} s scenario; {status})")
+        if compared else phase_metrics_markdown(metrics, scenario, status))
     (run_dir / "ablation.md").write_text(ablation_markdown(
         ablation, f"Learning per phase: {', '.join(controllers)} "
                   f"({scenario.duration:g} s scenario)"))
     return summary
+
+
+def phase_metrics_markdown(metrics: Dict[str, Dict[str, float]], scenario: Scenario,
+                           status: str) -> str:
+    """A Markdown table of each run's metrics by phase, with units (RunMetrics).
+
+    Args:
+        metrics: Controller -> its run's metrics (run_metrics).
+        scenario: The scenario the runs ran.
+        status: The runs' status, for the heading."""
+    records = {c: RunMetrics.FromFlat(values) for c, values in metrics.items()}
+    lines = [f"## Metrics per phase ({scenario.duration:g} s scenario; {status})", "",
+             "| metric | unit | " + " | ".join(
+                 f"{c}, {phase}" for c in records for phase in PHASE_NAMES.values())
+             + " |", "|---|---|" + "---|" * len(records) * len(PHASE_NAMES)]
+    first = next(iter(records.values()))
+    for name in first.phases[next(iter(PHASE_NAMES.values()))]:
+        unit = first.units.get(name, "")
+        lines.append(f"| {name} | {unit or '-'} | " + " | ".join(
+            format_value(record.phases[phase].get(name), "-", NOT_REACHED)
+            for record in records.values() for phase in PHASE_NAMES.values()) + " |")
+    return "\n".join(lines) + "\n"
 
 
 CHECKPOINT_SECONDS = 60.0    # wall time between saves of a run's logs so far

@@ -209,6 +209,43 @@ def save_run(result: RunResult, scenario: Scenario, out_dir: Union[str, Path],
     return out
 
 
+# The files derived from a directory's runs: the report's (app.reproduce.report, of
+# every run there), and per controller the HTML replay and verify's report.
+REPORT_OUTPUTS = ("metrics.json", "metrics.md", "ablation.md", "figures")
+VERIFICATION_OUTPUTS = ("verification.json", "verification.md", "verification.png")
+
+
+def remove_outputs_of(out: Path, controller: str) -> List[str]:
+    """Removes the files derived from a controller's earlier run in a directory, which
+    a new run replaces: the report (REPORT_OUTPUTS, rewritten from the runs by
+    ``dacph simulate`` and ``dacph report``), animation_CONTROLLER.html, and
+    verify's report where it verified that controller. Returns the names removed.
+
+    Args:
+        out: The run directory.
+        controller: The controller whose run is replaced."""
+    import shutil
+    names = list(REPORT_OUTPUTS) + [f"animation_{controller.replace('-', '_')}.html"]
+    try:
+        verified = json.loads((out / "verification.json").read_text()).get(
+            "controller", "dac")
+    except (OSError, ValueError, AttributeError):
+        verified = controller           # unreadable: it cannot be told apart
+    if verified == controller:
+        names += VERIFICATION_OUTPUTS
+    removed = []
+    for name in names:
+        path = out / name
+        if path.is_dir():
+            shutil.rmtree(path)
+        elif path.exists():
+            path.unlink()
+        else:
+            continue
+        removed.append(name)
+    return removed
+
+
 def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
     """Refuses, before the run, a directory where a new run would sit beside another
     scenario's (which report() refuses).
@@ -239,37 +276,81 @@ def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None
                 "scenario in one directory), or another directory")
 
 
+RUN_STATUSES = ("ok", "diverged", "interrupted", "incomplete")   # RunResult.status
+
+
 def load_run(run_dir: Union[str, Path], controller: str
              ) -> Tuple[Dict[str, np.ndarray], Scenario, Dict]:
-    """Loads a saved run: (logs, scenario, run_C.json's contents).
+    """Loads a saved run, checked against the directory's scenario.yaml: (logs,
+    scenario, run_C.json's contents).
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
 
     Raises:
-        ConfigError: Naming a missing or damaged file."""
+        ConfigError: Naming a missing or damaged file, or a run made from another
+            scenario than scenario.yaml (an edited file, or files copied in)."""
     run_dir = require_run_files(run_dir, [controller])
     scenario = load_scenario(run_dir / "scenario.yaml")
-    return load_logs(run_dir, controller), scenario, load_run_meta(run_dir, controller)
+    meta = load_run_meta(run_dir, controller)
+    require_run_of(scenario, meta, run_dir, controller)
+    return load_logs(run_dir, controller, scenario), scenario, meta
 
 
-def load_logs(run_dir: Union[str, Path], controller: str) -> Dict[str, np.ndarray]:
+def require_run_of(scenario: Scenario, meta: Dict, run_dir: Union[str, Path],
+                   controller: str) -> None:
+    """Requires that a saved run was made from ``scenario`` (its recorded fingerprint;
+    runs saved before run.json recorded it are not checked).
+
+    Args:
+        scenario: The directory's scenario (its scenario.yaml).
+        meta: The run's record (run_CONTROLLER.json).
+        run_dir: The run directory, for the message.
+        controller: The run's controller, for the message.
+
+    Raises:
+        ConfigError: The run's fingerprint is not one of the scenario's."""
+    fingerprints = scenario_fingerprints(scenario)
+    if meta.get("scenario_fingerprint", fingerprints[0]) not in fingerprints:
+        raise ConfigError(
+            f"{run_dir}: the {controller} run was made from another scenario than "
+            "scenario.yaml (the file was edited, or the run's files come from another "
+            "directory); allowed: runs of one scenario in one directory, with the "
+            "scenario.yaml they were saved with")
+
+
+def load_logs(run_dir: Union[str, Path], controller: str,
+              scenario: Optional[Scenario] = None) -> Dict[str, np.ndarray]:
     """Loads a run's logs (logs_CONTROLLER.npz): signal name -> samples.
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
+        scenario: Its scenario: the logs must then hold the signals every run of its
+            task logs (time, state, u, tau and the task's log), one sample per time.
 
     Raises:
-        ConfigError: Naming the file when it is damaged."""
+        ConfigError: Naming the file when it is damaged or lacks a signal."""
     path = Path(run_dir) / f"logs_{controller}.npz"
     try:
         with np.load(path) as data:
-            return {k: data[k] for k in data.files}
+            logs = {k: data[k] for k in data.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:
         raise ConfigError(f"{path} is damaged ({type(e).__name__}: {e}); allowed: a "
                           "logs file saved by dacph simulate") from e
+    if scenario is not None:
+        from dacph_drake.assembly import task_of
+        required = ("time", "state", "u", "tau", task_of(scenario).log_name)
+        missing = [name for name in required if name not in logs]
+        uneven = [name for name, values in logs.items()
+                  if "time" in logs and np.shape(values)[:1] != logs["time"].shape]
+        if missing or uneven:
+            problem = (f"no {', '.join(missing)}" if missing else
+                       f"{', '.join(uneven)} not one sample per time")
+            raise ConfigError(f"{path} is damaged ({problem}); allowed: a logs file "
+                              "saved by dacph simulate")
+    return logs
 
 
 def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
@@ -280,6 +361,14 @@ def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
         controller: The run's controller.
 
     Raises:
-        ConfigError: Naming the file when it is damaged."""
-    return read_json_record(Path(run_dir) / f"run_{controller}.json",
-                            ("status", "final_time"), "dacph simulate")
+        ConfigError: Naming the file when it is damaged (a status not in RUN_STATUSES,
+            a final time that is not a number)."""
+    path = Path(run_dir) / f"run_{controller}.json"
+    meta = read_json_record(path, ("status", "final_time"), "dacph simulate")
+    final_time = meta["final_time"]
+    if meta["status"] not in RUN_STATUSES or isinstance(final_time, bool) or not (
+            isinstance(final_time, (int, float)) and np.isfinite(final_time)):
+        raise ConfigError(f"{path} is damaged (status {meta['status']!r}, final_time "
+                          f"{final_time!r}); allowed: a file saved by dacph simulate "
+                          f"(status one of {', '.join(RUN_STATUSES)})")
+    return meta

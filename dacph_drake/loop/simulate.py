@@ -1,6 +1,7 @@
 """Simulating a closed loop of any robot (controllers.REGISTRY): initial state,
 divergence monitor, progress bar, SIGINT/SIGTERM, checkpoints and the saved run
 (loop.run_store)."""
+import logging
 import resource
 import signal
 import threading
@@ -19,7 +20,8 @@ from dacph_drake.loop.progress import progress_bar
 from dacph_drake.loop.threads import single_threaded
 from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
-                                        require_one_scenario, save_run)
+                                        remove_outputs_of, require_one_scenario,
+                                        save_run)
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.loop.closed_loop import ClosedLoop
 from dacph_drake.scenario import Scenario
@@ -52,7 +54,8 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         controller: A name of controllers.REGISTRY ("dac", "dac-nominal", "model-based").
         duration: Simulated time [s]; default: the scenario's phases.
         out_dir: Where to save logs_C.npz, scenario.yaml, run_C.json (None: not saved);
-            checked and locked first, refused beside another scenario's runs.
+            checked and locked first, refused beside another scenario's runs; the
+            files made from its earlier runs are removed (run_store.remove_outputs_of).
         progress: Show a progress bar.
         interruptible: SIGINT and SIGTERM stop the run as "interrupted", its logs saved
             (the CLI's single runs; sweeps leave it off to redo the trial on resume).
@@ -76,6 +79,12 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
         except ConfigError:
             ReleaseRun(lock)
             raise
+        removed = remove_outputs_of(Path(out_dir), controller)
+        if removed:
+            logging.getLogger(__name__).warning(
+                "%s: removed %s, made from the runs this %s run joins or replaces "
+                "(dacph simulate and report write them anew)", out_dir,
+                ", ".join(removed), controller)
     checkpoint = None
     if out_dir is not None and checkpoint_seconds is not None:
         checkpoint = (checkpoint_seconds,
@@ -126,6 +135,7 @@ def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
             if out_dir is not None:
                 locks.append(LockRun(prepare_out_dir(out_dir), controller))
                 require_one_scenario(Path(out_dir), scenario, controller)
+                remove_outputs_of(Path(out_dir), controller)
         results = _Simulate(scenarios, controller, duration, progress=False,
                             interruptible=False)
         for result, scenario, out_dir in zip(results, scenarios, out_dirs):

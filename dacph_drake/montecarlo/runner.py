@@ -104,8 +104,8 @@ def _run_on_local_pools(tasks: Iterator[List[Trial]], workers: int, record) -> N
         # interpreter from exiting: such a pool's other workers are stopped.
         if any(not worker.is_alive() for worker in (pool._processes or {}).values()):
             stop_local_pool(pool)
-        else:
-            pool.shutdown(wait=False, cancel_futures=True)
+        else:       # joined here: at the interpreter's exit a Ctrl-C would hit the join
+            pool.shutdown(wait=True, cancel_futures=True)
         if not suspects:
             return
         print(f"\na worker process died: trials "

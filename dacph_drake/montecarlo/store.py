@@ -75,6 +75,19 @@ def read_manifest(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
     return manifest
 
 
+def _require_no_run(out: Path) -> None:
+    """Refuses a directory holding a run (dacph simulate's or reproduce's) but no
+    sweep: a new sweep would write its scenario.yaml over the run's."""
+    if (out / MANIFEST).exists():
+        return
+    run = sorted(p.name for p in out.iterdir()
+                 if p.name.startswith(("run_", "logs_")) or (
+                     p.name == "scenario.yaml" and not (out / "sweep.yaml").exists()))
+    if run:
+        raise ConfigError(f"--out = {str(out)!r} holds a run ({', '.join(run)}); "
+                          "allowed: a sweep's directory (to resume it) or a new one")
+
+
 class RowStore:
     """A sweep's output directory, opened (created or resumed) for one session.
 
@@ -90,6 +103,7 @@ class RowStore:
     def __init__(self, out_dir: Union[str, Path], definition: SweepDefinition,
                  versions: Dict[str, str], executor: str):
         self.out = prepare_out_dir(out_dir)
+        _require_no_run(self.out)
         self._fd = os.open(self.out / ROWS, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
         try:
             fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

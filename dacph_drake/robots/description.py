@@ -461,11 +461,27 @@ def MakeRobotPlant(name_or_path: Union[str, Path, DescribedArm, RobotParams]
 def _RequireFreeFloating(plant: MultibodyPlant, name_or_path) -> None:
     if isinstance(name_or_path, RobotParams):
         return                                  # its base is on a planar joint
+    description = described_arm(name_or_path).description
     floating = plant.GetFloatingBaseBodies()
-    if len(floating) != 1:
-        raise ConfigError(f"{described_arm(name_or_path).description}: {len(floating)} "
-                          "free bodies; allowed: one root body (the base), the arm "
-                          "attached to it by joints (or robot.base to mount it on one)")
+    multi = [plant.get_joint(j) for j in plant.GetJointIndices()
+             if plant.get_joint(j).num_velocities() > 1
+             and plant.get_joint(j).parent_body().index() != plant.world_body().index()]
+    if multi:
+        raise ConfigError(f"{description}: joint {multi[0].name()!r} "
+                          f"({multi[0].type_name()}) moves {multi[0].child_body().name()!r} "
+                          f"in {multi[0].num_velocities()} directions; allowed: an arm of "
+                          "revolute, prismatic and fixed joints")
+    if len(floating) > 1:
+        base, *loose = [plant.get_body(b).name() for b in sorted(floating)]
+        raise ConfigError(f"{description}: {len(floating)} free bodies: the base "
+                          f"{base!r} and {', '.join(map(repr, loose))} (a floating "
+                          "joint, which Drake's parser frees, or a link without a joint "
+                          "to the arm); allowed: one root body (the base), the arm "
+                          "attached to it by revolute, prismatic and fixed joints")
+    if not floating:
+        raise ConfigError(f"{description}: 0 free bodies; allowed: one root body (the "
+                          "base), the arm attached to it by joints (or robot.base to "
+                          "mount it on one)")
     base = plant.get_body(next(iter(floating)))
     if not base.default_mass() > 0:
         raise ConfigError(f"{described_arm(name_or_path).description}: the free base "

@@ -19,6 +19,9 @@ _MATERIAL = re.compile(r'<material\s+name\s*=\s*"([^"]*)"\s*>(.*?)</material>', 
 _LOCATION = re.compile(r"^(?:[^:\s]*<literal-string>[^:]*|[^:\s]+\.(?:urdf|sdf|xml)):"
                        r"(\d+):\s*(?:warning:\s*)?")
 _QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")     # names and values within a kind
+# Drake's parser warnings on an <inertial> it could not use as written.
+_UNPHYSICAL_INERTIA = re.compile(r"condition 'mass > 0' failed|not physically valid|"
+                                 r"central inertia", re.I)
 _logger = logging.getLogger(__name__)
 _reported: set = set()
 
@@ -104,6 +107,15 @@ def parser_warnings_once(path: Path) -> Iterator[None]:
             more = (f" ({len(lines)} lines of this kind: {_Lines(lines)})"
                     if len(lines) > 1 else "")
             _Once(f"{where}: {first}{more}")
+    for first, lines in kinds.values():
+        if _UNPHYSICAL_INERTIA.search(first):     # Drake simulates a substitute body
+            where = f"{path}:{lines[0]}" if lines[0] else str(path)
+            failed = re.search(r"condition '([^']*)' failed", first)
+            raise ConfigError(f"{where}: a link's mass or inertia is not physical "
+                              f"(Drake: {failed.group(0) if failed else first.strip()})"
+                              "; allowed: mass > 0 and a "
+                              "physically valid inertia on every link with an "
+                              "<inertial>")
 
 
 def _Lines(lines: List[int]) -> str:

@@ -26,7 +26,7 @@ class EndEffectorAttitudeTask:
     """tasks.task.Task of a described arm's end-effector attitude."""
     section, robots = EndEffectorAttitude, (DescribedArm,)
     lhs_name, log_name = "attitude_controller", "attitude_log"
-    panels = ("e_attitude_dac_vs_model_based",)
+    panels = ("e_attitude_dac_vs_model_based", "f_inputs_and_joints")
     log_layout = AttitudeLog
     jacobian_rows = 3               # the GJM's rows the task tracks (start_pose)
 

@@ -52,7 +52,7 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
     """tasks.task.Task of a described arm's end-effector pose."""
     section = EndEffectorPose
     lhs_name, log_name = "pose_controller", "pose_log"
-    panels = ("e_pose_dac_vs_model_based",)
+    panels = ("e_pose_dac_vs_model_based", "f_inputs_and_joints")
     log_layout = PoseLog
     jacobian_rows = 6
 
