@@ -1,5 +1,4 @@
-"""Online identification of the RHS (paper section "RHS Control and Learning", SPEC section
-6), free of Drake: the learner's regression, its band-pass prefilter and its change
+"""Online identification of the RHS (paper section "RHS Control and Learning"), free of Drake: the learner's regression, its band-pass prefilter and its change
 detector. A port sample [q, p, qdot, u, tau_obs] (PortSample) is one instant of the port
 relation (the paper's tau_breve model)
 

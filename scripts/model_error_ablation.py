@@ -78,10 +78,10 @@ def scenario_of(name: str, seed: int):
     return s
 
 
-# name -> the settings that remove (or add) one part; "earlier release" switches
+# name -> the settings that remove (or add) one part; "every part off" switches
 # every new part back.
 CONFIGURATIONS = {
-    "this release": {},
+    "shipped defaults": {},
     "trust band around B0": {"rhs.trust_anchor": "prior"},
     "no acceptance on evidence": {"rhs.evidence_ratio": 0.0},
     "no start hold": {"learner.start_hold": 0.0},
@@ -93,7 +93,7 @@ CONFIGURATIONS = {
     "+ well-damped gain rule": {"rhs.gain_rule": "well_damped"},
     "+ boundary layer (rate 400)": {"lhs.boundary_rate": 400.0},
     "exact model": {},                      # the controller's model is the robot
-    "earlier release": {"rhs.trust_anchor": "prior", "rhs.evidence_ratio": 0.0,
+    "every part off": {"rhs.trust_anchor": "prior", "rhs.evidence_ratio": 0.0,
                         "learner.start_hold": 0.0, "learner.min_window": 0.0,
                         "learner.warm_start": False, "learner.model_change": False,
                         "learner.step_guard": 0.0, "inertia.identify": False},
@@ -206,13 +206,13 @@ def main():
                  ["nominal", "x0.4", "x3", "x0.5,x2.5", "fault", "inertia +-20 %",
                   "inertia -+20 %", "inertia each +-20 %"])
     seeds = [0] if args.quick else [0, 1]
-    tasks = [(s, k, "this release", "dac-nominal") for s in scenarios for k in seeds]
+    tasks = [(s, k, "shipped defaults", "dac-nominal") for s in scenarios for k in seeds]
     tasks += [(s, k, c, "dac") for s in scenarios for c in CONFIGURATIONS for k in seeds
               if c != "exact model" or s.startswith("inertia")]
     if args.spatial:
         for name in SPATIAL:
-            tasks += [(name, 0, "this release", "dac-nominal")]
-            tasks += [(name, 0, c, "dac") for c in ("this release", "exact model",
+            tasks += [(name, 0, "shipped defaults", "dac-nominal")]
+            tasks += [(name, 0, c, "dac") for c in ("shipped defaults", "exact model",
                                                     "no inertial identification",
                                                     "no hold on a new model",
                                                     "no step guard")]

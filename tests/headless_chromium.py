@@ -7,49 +7,40 @@ vgalin/html2image#97, "hangs 1 out of 10 cases"). One CI run failed on it: the
 screenshot of a page whose DOM dump had just succeeded never came. So each
 browser run gets a wall-clock limit, a fresh profile, and its process group is
 killed when the limit passes; a hung run is started again, up to ``attempts``
-times. What the tests assert about the page is unchanged: a run that finishes is
-used as it is.
+times (scripts/check_site.run_chromium, which the site check shares). What the
+tests assert about the page is unchanged: a run that finishes is used as it is.
 """
-import os
-import shutil
-import signal
-import subprocess
-import tempfile
+import importlib.util
+from pathlib import Path
 
 import pytest
 
+_spec = importlib.util.spec_from_file_location(
+    "check_site", Path(__file__).resolve().parents[1] / "scripts" / "check_site.py")
+_site = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_site)
+
+OFFLINE_WEBGL = ("--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+                 "--proxy-server=127.0.0.1:9")
+
 
 def chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name)
-    pytest.fail("no Chromium: scripts/setup.sh installs Debian's chromium package")
+    executable = _site.chromium()
+    if executable is None:
+        pytest.fail("no Chromium: scripts/setup.sh installs Debian's chromium package")
+    return executable
 
 
 def run_chromium(page_uri: str, action: str, *, virtual_time_ms: int,
                  wall_limit: float = 60.0, attempts: int = 3) -> str:
     """Runs ``chromium --headless=new <action> page_uri`` (action: "--dump-dom" or
-    "--screenshot=PATH") and returns its stdout; fails the test with Chromium's
-    last stderr if every attempt passed ``wall_limit`` seconds or exited non-zero."""
-    failures = []
-    for _ in range(attempts):
-        with tempfile.TemporaryDirectory() as profile:
-            command = [chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
-                       "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-                       "--proxy-server=127.0.0.1:9", "--window-size=800,800",
-                       f"--user-data-dir={profile}",
-                       f"--virtual-time-budget={virtual_time_ms}", action, page_uri]
-            process = subprocess.Popen(command, stdout=subprocess.PIPE,
-                                       stderr=subprocess.PIPE, text=True,
-                                       start_new_session=True)
-            try:
-                stdout, stderr = process.communicate(timeout=wall_limit)
-            except subprocess.TimeoutExpired:
-                os.killpg(process.pid, signal.SIGKILL)
-                process.communicate()
-                failures.append(f"no exit within {wall_limit} s")
-                continue
-            if process.returncode == 0:
-                return stdout
-            failures.append(f"exit {process.returncode}: {stderr[-2000:]}")
-    pytest.fail(f"headless Chromium failed {attempts} times on {page_uri}: {failures}")
+    "--screenshot=PATH") offline with WebGL in software, in an 800 x 800 window, and
+    returns its stdout; fails the test with Chromium's last stderr if every attempt
+    passed ``wall_limit`` seconds or exited non-zero."""
+    try:
+        return _site.run_chromium(page_uri, action, window="800,800",
+                                  virtual_time_ms=virtual_time_ms,
+                                  wall_limit=wall_limit, attempts=attempts,
+                                  executable=chromium(), flags=OFFLINE_WEBGL)
+    except RuntimeError as error:
+        pytest.fail(f"headless Chromium failed on {page_uri}: {error}")

@@ -35,7 +35,7 @@ PHASES = ("phase1", "phase2", "phase3")
 def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
     """Phase name (PHASES) -> boolean mask over t of the three uncertainty phases: linear,
     plus nonlinear, plus disturbance (the last from phases.disturbance_start to the end;
-    docs/equations.md, SPEC settings).
+    docs/equations.md).
 
     Args:
         scenario: The scenario (its phases).

@@ -38,7 +38,6 @@ def _free_flight(args) -> int:
 
 def _simulate(args) -> int:
     from pathlib import Path
-    from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.assembly import robot_of
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario_files import load_scenario
@@ -49,16 +48,19 @@ def _simulate(args) -> int:
                       checkpoint_seconds=args.checkpoint, meshcat=meshcat)
     print(f"{args.controller}: {result.status}{': ' + result.reason if result.reason else ''}"
           f" ({result.final_time:.2f} s simulated in {result.wall_time:.1f} s)")
-    if result.final_time > scenario.phases.linear_start:
+    summary = (_report_run(Path(args.out), args.controller)
+               if len(result.logs["time"]) > 1 else None)
+    if summary and result.final_time > scenario.phases.linear_start:
         if not args.quiet:
-            _print_metrics(run_metrics(result.logs, scenario), scenario,
+            _print_metrics(summary["metrics"][args.controller], scenario,
                            result.final_time)
         if "learner_log" in result.logs:
             from dacph_drake.analysis.metrics import learning_report
             for text in learning_report(result.logs, scenario)["warnings"]:
                 print(f"dacph: warning: {text}", file=sys.stderr)
-    if len(result.logs["time"]) > 1:
-        _report_run(Path(args.out), args.controller)
+    if summary:
+        print(f"panels in {Path(args.out) / 'figures'} ({len(summary['figures'])} PNG); "
+              f"metrics in {Path(args.out) / 'metrics.json'}")
     if args.animate and len(result.logs["time"]) > 1:
         print(robot_of(scenario).WriteAnimation(
             result.logs, Path(args.out) / f"animation_{args.controller.replace('-', '_')}"
@@ -68,9 +70,10 @@ def _simulate(args) -> int:
     return {"ok": 0, "interrupted": 130}.get(result.status, 1)
 
 
-def _report_run(out, controller: str) -> None:
-    """The report (panels, metrics.json) of a new run with the directory's runs it
-    belongs with: those of its duration (the others are named in a note)."""
+def _report_run(out, controller: str) -> dict:
+    """The report (PNG panels, metrics.json) of a new run with the directory's runs
+    it belongs with: those of its duration (the others are named in a note); returns
+    its summary (app.reproduce.report)."""
     import json
     from dacph_drake.app.reproduce import report, runs_in
     duration = json.loads((out / f"run_{controller}.json").read_text())["duration"]
@@ -85,9 +88,7 @@ def _report_run(out, controller: str) -> None:
         print(f"dacph: note: the report in {out} leaves out the {', '.join(apart)} "
               f"run{'s' if len(apart) > 1 else ''} (another duration or unreadable)",
               file=sys.stderr)
-    summary = report(out, together)
-    print(f"panels in {out / 'figures'} ({len(summary['figures']) // 2} PNG, PDF); "
-          f"metrics in {out / 'metrics.json'}")
+    return report(out, together, formats=("png",))
 
 
 def _print_metrics(flat, scenario, final_time: float) -> None:

@@ -23,7 +23,7 @@ every axis carries one unit, legends sit outside the data. A series with more
 samples than the figure has pixel columns is drawn as its min/max envelope per
 column, so fast ripple shows as the band it fills, not as overdrawn lines."""
 from pathlib import Path
-from typing import Dict, List, Tuple, Union
+from typing import Dict, List, Sequence, Tuple, Union
 
 import matplotlib
 
@@ -418,13 +418,15 @@ def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
 
 
 def plot_panels(runs: Dict[str, Logs], scenario: Scenario,
-                out_dir: Union[str, Path]) -> List[Path]:
-    """Writes the panels (make_panels; PNG and PDF) into out_dir.
+                out_dir: Union[str, Path],
+                formats: Sequence[str] = ("png", "pdf")) -> List[Path]:
+    """Writes the panels (make_panels) into out_dir, one file per format.
 
     Args:
         runs: Controller -> the logs of its run (any registered controllers).
         scenario: The scenario the runs ran.
         out_dir: The folder for the files (created if missing).
+        formats: The files' formats (matplotlib's: png, pdf, svg).
 
     Returns:
         The files' paths."""
@@ -432,8 +434,8 @@ def plot_panels(runs: Dict[str, Logs], scenario: Scenario,
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, fig in make_panels(runs, scenario).items():
-        paths += [out / f"{name}.png", out / f"{name}.pdf"]
-        fig.savefig(paths[-2], dpi=DPI)
-        fig.savefig(paths[-1])
+        for suffix in formats:
+            paths.append(out / f"{name}.{suffix}")
+            fig.savefig(paths[-1], dpi=DPI)
         plt.close(fig)
     return paths

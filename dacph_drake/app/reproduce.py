@@ -7,7 +7,7 @@ import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Sequence, Union
 
 
 from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduce()
@@ -253,7 +253,8 @@ def runs_in(run_dir: Union[str, Path]) -> List[str]:
             or (Path(run_dir) / f"run_{c}.json").exists()]
 
 
-def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None) -> Dict:
+def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None,
+           formats: Sequence[str] = ("png", "pdf")) -> Dict:
     """Writes the panels and tables of a directory's runs (figures/, metrics.md,
     ablation.md, metrics.json); returns the summary written to metrics.json (scenario,
     duration, runs, table, ablation, metrics, figures, versions). With DAC's and the
@@ -263,6 +264,7 @@ def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None) -
     Args:
         run_dir: The runs' directory (saved by dacph simulate or reproduce).
         controllers: The runs to report (default: every run in it, runs_in).
+        formats: The panels' file formats (plot_panels).
 
     Raises:
         ConfigError: A required file is missing or damaged, or the runs do not belong
@@ -277,7 +279,7 @@ def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None) -
     compared = all(c in metrics for c in REQUIRED)
     rows = metrics_table(metrics) if compared else []
     ablation = ablation_table(metrics)
-    figures = plot_panels(logs, scenario, run_dir / "figures")
+    figures = plot_panels(logs, scenario, run_dir / "figures", formats)
     summary = {"scenario": "scenario.yaml", "duration": scenario.duration,
                "runs": runs, "table": rows, "ablation": ablation, "metrics": metrics,
                "figures": [str(p.relative_to(run_dir)) for p in figures],

@@ -1,5 +1,5 @@
-"""The model-based baseline (docs/equations.md, SPEC settings): the robot's LHS
-controller with a constant chi (task.gains.chi_model_based) and the static
+"""The model-based baseline (a reading of docs/equations.md where the paper is
+silent): the robot's LHS controller with a constant chi (task.gains.chi_model_based) and the static
 inversion u = B0^-1 (tau_c^r + D0 qdot); no integrator, no learning."""
 from pydrake.systems.primitives import ConstantVectorSource
 

@@ -1,4 +1,4 @@
-"""The ground truth's RHS matrices B~(x) and D~(x) by phase (docs/equations.md E19, SPEC settings)."""
+"""The ground truth's RHS matrices B~(x) and D~(x) by phase (docs/equations.md E19)."""
 from typing import Tuple
 
 import numpy as np

@@ -1,5 +1,5 @@
 """Learners of the port's RHS behind one protocol (paper section "RHS Control and
-Learning", SPEC section 6).
+Learning").
 
 A learner fits the port relation (the paper's tau_breve model, eq. "rhs_data_model")
 

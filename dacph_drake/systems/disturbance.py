@@ -1,4 +1,4 @@
-"""External disturbance d(t) (left open by the paper; a SPEC setting, docs/equations.md)."""
+"""External disturbance d(t) (left open by the paper; docs/equations.md)."""
 from typing import Sequence
 
 import numpy as np

@@ -1,4 +1,5 @@
-"""Online learner of the RHS (SPEC section 6; the learning package's learners)."""
+"""Online learner of the RHS (paper section "RHS Control and Learning"; the learning
+package's learners)."""
 from typing import Sequence
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""The model-based baseline's RHS: static inversion of the nominal RHS (SPEC settings)."""
+"""The model-based baseline's RHS: static inversion of the nominal RHS (docs/equations.md)."""
 from typing import Sequence
 
 import numpy as np

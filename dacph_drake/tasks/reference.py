@@ -1,4 +1,5 @@
-"""Desired end-effector orientation alpha_d(t) (not given in the paper; a SPEC setting, docs/equations.md):
+"""Desired end-effector orientation alpha_d(t) (not given in the paper; a reading of
+docs/equations.md where the paper is silent):
 alpha_d(t) = alpha(0) + sum_i a_i sin(2 pi t / T_i), smooth and persistently exciting."""
 import numpy as np
 
