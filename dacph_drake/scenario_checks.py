@@ -1,7 +1,7 @@
 """The checks of the sections every robot and task share (the robot's and the task's
 own sections are checked by their robots/ and tasks/ modules). Each raises
 ConfigError naming the first invalid setting and what is allowed."""
-from typing import Sequence
+from typing import List, Sequence, Tuple
 
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
@@ -102,7 +102,6 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     require_in_range("rhs.beta_max", scenario.rhs.beta_max, 1.0, 1e6)
     require_positive("stress.B_hat_scale", scenario.stress.B_hat_scale)
     require_nonnegative("stress.start", scenario.stress.start, "s")
-    require_before_end("stress.start", scenario.stress.start, scenario.duration)
     periods = scenario.periods
     for key in ("rhs", "lhs", "learner", "learner_sample", "log"):
         require_positive(f"periods.{key}", getattr(periods, key), "s")
@@ -137,13 +136,13 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
                               f"allowed: a joint number in [1, {n}]")
         require_in_range(f"{where}.joint", fault.joint, 1, n, "(1-based joint number)")
         require_in_range(f"{where}.gain", fault.gain, 1e-2, 1e2)
-        require_before_end(f"{where}.time", fault.time, scenario.duration)
     d = scenario.disturbance
     for name in ("lf_offset", "lf_amplitude", "lf_frequency", "hf_direction"):
         require_length(f"disturbance.{name}", getattr(d, name), n)
     require_nonnegative("disturbance.scale", d.scale)
     require_nonnegative("disturbance.hf_frequency", d.hf_frequency, "Hz")
-    require_before_end("disturbance.start", d.start, scenario.duration)
+    for name, time in scheduled_events(scenario):
+        require_before_end(name, time, scenario.duration)
     L = scenario.learner
     require_one_of("learner.mode", L.mode, LEARNER_MODES)
     require_one_of("learner.coupling", L.coupling, LEARNER_COUPLINGS)
@@ -263,6 +262,22 @@ def require_length(name: str, values: Sequence, n: int, meaning: str = "one per 
     if len(values) != n:
         raise ConfigError(f"{name} has {len(values)} entries; allowed: {n} "
                           f"({meaning})")
+
+
+def scheduled_events(scenario: Scenario) -> List[Tuple[str, float]]:
+    """The events a scenario schedules at a time it sets: (setting, time [s]) of each
+    actuator fault, of a disturbance start given in seconds (not phase 3's) and of
+    the stress test's start where it scales B_hat.
+
+    Args:
+        scenario: The scenario."""
+    events = [(f"uncertainty.faults[{i}].time", fault.time)
+              for i, fault in enumerate(scenario.uncertainty.faults)]
+    if scenario.disturbance.start >= 0:
+        events.append(("disturbance.start", scenario.disturbance.start))
+    if scenario.stress.B_hat_scale != 1.0:
+        events.append(("stress.start", scenario.stress.start))
+    return events
 
 
 def require_before_end(name: str, time: float, duration: float) -> None:

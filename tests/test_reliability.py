@@ -503,3 +503,19 @@ def test_a_description_drake_would_change_is_refused(tmp_path, capsys, old, new,
     err = [line for line in capsys.readouterr().err.splitlines()
            if not line.startswith("dacph: note: ")]
     assert len(err) == 1 and re.search(message, err[0]), err
+
+
+def test_a_run_cut_before_its_events_says_so(caplog):
+    """Events after the phases' end are refused (the scenario table); a --duration
+    that ends the run before an event runs, with a note naming it."""
+    from dacph_drake.scenario import ActuatorFault
+    scenario = short_scenario()
+    scenario.uncertainty.faults = [ActuatorFault(time=12.0, joint=2, gain=0.5)]
+    with caplog.at_level("WARNING"):
+        simulate(scenario, "model-based", duration=0.1)
+    assert ("the run ends at 0.1 s, before uncertainty.faults[0].time = 12 s: never in "
+            "effect in this run") in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING"):
+        simulate(scenario, "model-based", duration=12.5)
+    assert "never in effect" not in caplog.text

@@ -25,6 +25,7 @@ from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.loop.closed_loop import ClosedLoop
 from dacph_drake.scenario import Scenario
+from dacph_drake.scenario_checks import scheduled_events
 
 
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state
@@ -69,6 +70,12 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
     require_controller(controller)
     duration = scenario.duration if duration is None else duration
     require_positive("duration", duration, "s")
+    late = [f"{name} = {time:g} s" for name, time in scheduled_events(scenario)
+            if time >= duration]
+    if late:
+        logging.getLogger(__name__).warning(
+            "the run ends at %g s, before %s: never in effect in this run", duration,
+            ", ".join(late))
     if checkpoint_seconds is not None:
         require_positive("checkpoint_seconds (--checkpoint)", checkpoint_seconds, "s")
     lock = None
