@@ -74,14 +74,14 @@ def _report_run(out, controller: str) -> dict:
     """The report (PNG panels, metrics.json) of a new run with the directory's runs
     it belongs with: those of its duration (the others are named in a note); returns
     its summary (app.reproduce.report)."""
-    import json
     from dacph_drake.app.reproduce import report, runs_in
-    duration = json.loads((out / f"run_{controller}.json").read_text())["duration"]
+    from dacph_drake.loop.run_store import load_run_meta
+    duration = load_run_meta(out, controller)["duration"]
     together, apart = [], []
     for other in runs_in(out):
         try:
-            record = json.loads((out / f"run_{other}.json").read_text())
-        except (OSError, ValueError):
+            record = load_run_meta(out, other)
+        except ConfigError:
             record = {}
         (together if record.get("duration") == duration else apart).append(other)
     if apart:

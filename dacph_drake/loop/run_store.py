@@ -14,6 +14,7 @@ from typing import IO, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from dacph_drake.assembly import task_of
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import read_json_record, replaced_atomically
 from dacph_drake.loop.signals import Signals
@@ -340,7 +341,6 @@ def load_logs(run_dir: Union[str, Path], controller: str,
         raise ConfigError(f"{path} is damaged ({type(e).__name__}: {e}); allowed: a "
                           "logs file saved by dacph simulate") from e
     if scenario is not None:
-        from dacph_drake.assembly import task_of
         required = ("time", "state", "u", "tau", task_of(scenario).log_name)
         missing = [name for name in required if name not in logs]
         uneven = [name for name, values in logs.items()
