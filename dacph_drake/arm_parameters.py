@@ -264,6 +264,11 @@ def _check_kinds(raw, schema, where: str, name: str = "") -> None:
         if not isinstance(raw, dict):
             raise ConfigError(f"{where}{shown} = {raw!r} is not a mapping; allowed: a "
                               f"section of settings")
+        tag = getattr(raw, "tag", "")
+        if tag and tag != schema.__name__:
+            raise ConfigError(f"{where}{shown} has the tag !{tag}, which this section "
+                              f"does not take; allowed: no tag (a {schema.__name__} "
+                              "section of settings)")
         types = {f.name: f.type for f in dataclasses.fields(schema)}
         unknown = [key for key in raw if key not in types]
         if unknown:

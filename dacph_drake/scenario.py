@@ -94,7 +94,13 @@ class InertiaIdentification:
         anchor_error: The measurement's relative error, in [-0.5, 0.5].
         fit_tolerance: The momentum misfit that reports the kinematics mismatched,
             >= 0 (0: no test).
-        on_mismatch: What the LHS uses after a mismatch, one of ON_MISMATCH."""
+        on_mismatch: What the LHS uses after a mismatch, one of ON_MISMATCH.
+        nominal_tolerance: The relative sd to which robot.nominal's inertial
+            parameters are known, in [0, 1) (dynamics/model_error.py).
+        anchor_tolerance: The anchor's mass known to this relative sd, in [0, 0.5].
+        kinematic_tolerance: Every joint placement's components known to this
+            relative sd, in [0, 0.5] (0: robot.nominal's kinematics are exact).
+        error_draws: The plausible models per trial that measure E, in [2, 256]."""
     identify: bool = True
     prior_weight: float = 1e-12
     start: float = 0.2
@@ -105,6 +111,10 @@ class InertiaIdentification:
     anchor_error: float = 0.0
     fit_tolerance: float = 1e-5
     on_mismatch: str = "identified"
+    nominal_tolerance: float = 0.1
+    anchor_tolerance: float = 0.01
+    kinematic_tolerance: float = 0.0
+    error_draws: int = 16
 
 
 @dataclass
@@ -327,7 +337,9 @@ class LocalBayes:
         change_floor: The relative residual that is a change, >= 0.
         inconsistency: The relative residual that restarts a window,
             > change_floor.
-        model_error: The LHS model's relative inertia sd the claims allow, [0, 1)."""
+        model_error: A relative sd of the LHS model's inertia error E the claims
+            allow beyond the one the run measures (dynamics/model_error.py), in
+            quadrature, [0, 1)."""
     gain_range: List[float] = field(default_factory=lambda: [0.5, 2.0])
     coupling: float = 0.05
     damping_range: List[float] = field(default_factory=lambda: [0.0, 3.0])
@@ -343,7 +355,7 @@ class LocalBayes:
     margin: float = 2.0
     change_floor: float = 5e-3
     inconsistency: float = 0.1
-    model_error: float = 0.1
+    model_error: float = 0.0
 
 
 @dataclass

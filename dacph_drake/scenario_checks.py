@@ -46,6 +46,13 @@ def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Seque
     require_in_range("inertia.anchor_error", scenario.inertia.anchor_error, -0.5, 0.5)
     require_nonnegative("inertia.fit_tolerance", scenario.inertia.fit_tolerance)
     require_one_of("inertia.on_mismatch", scenario.inertia.on_mismatch, ON_MISMATCH)
+    require_in_range("inertia.nominal_tolerance", scenario.inertia.nominal_tolerance,
+                     0.0, 0.999)
+    require_in_range("inertia.anchor_tolerance", scenario.inertia.anchor_tolerance, 0.0,
+                     0.5)
+    require_in_range("inertia.kinematic_tolerance", scenario.inertia.kinematic_tolerance,
+                     0.0, 0.5)
+    require_in_range("inertia.error_draws", scenario.inertia.error_draws, 2, 256)
     validate_port_settings(scenario, n)
     validate_simulator_config(scenario.simulator)
     # Last, so that a setting with a range names it: every other number finite.

@@ -41,10 +41,11 @@ ADDED_SETTING_DEFAULTS = ("  coupling: uniform", "  prior_scale: pooled",
                           "  adoption: certified_set", "  fit_tolerance: 1.0e-05",
                           "  anchor: total_mass")
 # Settings added to the current layout since it was introduced: (section, key, the
-# value that reproduces the behaviour before it). A file whose section lacks the key
-# was written before it and is read with that value (not the robot's sized default);
-# the key's line at that value is left out of the fingerprinted text, so a run
-# saved before it keeps its fingerprint (saved_forms).
+# value that reproduces the behaviour before it). An input file that does not name
+# one runs it at its current default, like any setting; a saved run's scenario.yaml
+# (load_saved_scenario) that lacks it was written before it and is read with that
+# value, the run's meaning. The key's line at that value is left out of the
+# fingerprinted text, so a run saved before it keeps its fingerprint (saved_forms).
 ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("learner", "model", "network"),
                            ("rhs", "adoption", "trust_band"),
@@ -53,7 +54,11 @@ ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("inertia", "anchor_error", 0.0),
                            ("inertia", "fit_tolerance", 0.0),
                            ("inertia", "on_mismatch", "identified"),
-                           ("excitation", "joint_scale", []))
+                           ("excitation", "joint_scale", []),
+                           ("inertia", "nominal_tolerance", 0.1),
+                           ("inertia", "anchor_tolerance", 0.01),
+                           ("inertia", "kinematic_tolerance", 0.0),
+                           ("inertia", "error_draws", 16))
 # Sections added to the current layout's sections since it was introduced: their
 # lines at the defaults are left out of the fingerprinted text too (a file without
 # them reads them at their defaults).
@@ -279,12 +284,14 @@ def _shared(settings, periods: bool = True):
     return {name: getattr(settings, name) for name in names}
 
 
-def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
-    """Reads a scenario file of an older layout, with a logged note naming it; None for a
-    file of the current layout.
+def load_older_layout(path: Union[str, Path], saved_run: bool = False
+                      ) -> Optional[Scenario]:
+    """Reads a scenario file of an older layout, with a logged note naming it (and
+    note_changed_defaults); None for a file of the current layout.
 
     Args:
         path: The scenario file.
+        saved_run: A saved run's: the settings added since as they were.
 
     Raises:
         ConfigError: The file cannot be read or does not fit its layout."""
@@ -323,8 +330,12 @@ def load_older_layout(path: Union[str, Path]) -> Optional[Scenario]:
     logging.getLogger(__name__).warning(
         "%s: read in the layout before the robot: and task: sections (%s); save it "
         "again to update the file", path, note)
-    return load_yaml_dataclass(path, layout,
-                               migrate=_migrate_older_file).ToScenario(path)
+    if saved_run:
+        return load_yaml_dataclass(path, layout,
+                                   migrate=_migrate_older_saved_file).ToScenario(path)
+    scenario = load_yaml_dataclass(path, layout, migrate=_migrate_file).ToScenario(path)
+    note_changed_defaults(raw, scenario, path)
+    return scenario
 
 
 def _field_names(layout) -> Tuple[str, ...]:
@@ -333,15 +344,35 @@ def _field_names(layout) -> Tuple[str, ...]:
 
 
 def load_scenario(path: Union[str, Path]) -> Scenario:
-    """Loads and validates a scenario. A file without a robot: section gets the paper's
-    arm and a logged warning saying so; files of the older layouts (PlanarLayoutV1,
-    SpatialLayoutV1) load with a logged note.
+    """Loads and validates a scenario: every setting the file does not name at its
+    current default. A file without a robot: section gets the paper's arm and a logged
+    warning saying so; files of the older layouts (PlanarLayoutV1, SpatialLayoutV1)
+    load with a logged note, which names each setting added since whose default is not
+    what the file's release ran.
 
     Args:
         path: A YAML file, or a built-in name (BUILT_IN_SCENARIOS) if no file has that name.
 
     Raises:
         ConfigError: No such file or name, bad YAML, or a bad key, type or value (named)."""
+    return _load(path, saved_run=False)
+
+
+def load_saved_scenario(path: Union[str, Path]) -> Scenario:
+    """Loads a saved run's scenario.yaml with the meaning it had when it ran: a setting
+    added since (ADDED_TO_CURRENT_LAYOUT) that the file lacks at the value that
+    reproduces the run (its release's behaviour), not at today's default.
+
+    Args:
+        path: The run directory's scenario.yaml.
+
+    Raises:
+        ConfigError: As load_scenario."""
+    return _load(path, saved_run=True)
+
+
+def _load(path: Union[str, Path], saved_run: bool) -> Scenario:
+    """load_scenario's body; ``saved_run`` reads the settings added since as they were."""
     if str(path) in BUILT_IN_SCENARIOS and not Path(path).is_file():
         return BUILT_IN_SCENARIOS[str(path)]()
     if not Path(path).is_file():
@@ -349,19 +380,21 @@ def load_scenario(path: Union[str, Path]) -> Scenario:
         raise ConfigError(f"scenario {str(path)!r}: no such file; allowed: a scenario "
                           f"YAML file or a built-in name ({', '.join(BUILT_IN_SCENARIOS)})"
                           + (f"; did you mean {close[0]!r}?" if close else ""))
-    scenario = load_older_layout(path) or _load_current_layout(path)
+    scenario = load_older_layout(path, saved_run) or _load_current_layout(path,
+                                                                          saved_run)
     resolve_paths(scenario.robot, Path(path).resolve().parent)   # paths in the file
     validate_scenario(scenario)
     return scenario
 
 
-def _load_current_layout(path) -> Scenario:
+def _load_current_layout(path, saved_run: bool) -> Scenario:
     """A file of the current layout, read over its robot's defaults: Scenario's own
     for a planar arm; for an arm from its description, the settings sized to it
     (arm_defaults.sized_defaults), so that a file naming only the robot
-    and q0 runs."""
+    and q0 runs (a saved run's: the settings added since as they were)."""
+    migrate = _migrate_saved_file if saved_run else _migrate_file
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
-                                   migrate=_migrate_file)
+                                   migrate=migrate)
     resolve_paths(scenario.robot, Path(path).resolve().parent)   # before it is parsed
     raw = read_yaml(path)
     given = raw if isinstance(raw, dict) else {}
@@ -370,36 +403,64 @@ def _load_current_layout(path) -> Scenario:
         scenario.task if "task" in given else None)
     if defaults is None:
         return scenario
-    return load_yaml_dataclass(path, Scenario, migrate=_migrate_file,
-                               defaults=defaults)
+    return load_yaml_dataclass(path, Scenario, migrate=migrate, defaults=defaults)
 
 
-def _migrate_older_file(raw, path):
-    """_migrate_file, with the sections an older layout's file lacks added holding
-    ADDED_TO_CURRENT_LAYOUT's values before them (every such file was written
+def _migrate_older_saved_file(raw, path):
+    """_migrate_saved_file, with the sections an older layout's file lacks added
+    holding ADDED_TO_CURRENT_LAYOUT's values before them (every such file was written
     before them)."""
     if isinstance(raw, dict):
         raw = {**raw, **{section: {} for section, _, _ in ADDED_TO_CURRENT_LAYOUT
                          if section not in raw}}
-    migrated = _migrate_file(raw, path)
+    migrated = _migrate_saved_file(raw, path)
     return raw if migrated is None else migrated
 
 
-def _migrate_file(raw, path):
-    """move_integration_scheme, then each setting of ADDED_TO_CURRENT_LAYOUT that
-    the file's section lacks set to its value before it existed (None: nothing
-    to change)."""
-    migrated = move_integration_scheme(raw, path)
+def _migrate_saved_file(raw, path):
+    """_migrate_file, then each setting of ADDED_TO_CURRENT_LAYOUT that the file's
+    section lacks set to its value before it existed (a saved run's meaning)."""
+    migrated = _migrate_file(raw, path)
     source = migrated if migrated is not None else raw
     if not isinstance(source, dict):
         return migrated
-    if isinstance(source.get("q0"), dict):
-        source = {**source, "q0": q0_by_joint_name(source, path)}
     for section, key, before in ADDED_TO_CURRENT_LAYOUT:
         if isinstance(source.get(section), dict) and key not in source[section]:
             source = dict(source)
             source[section] = {**source[section], key: before}
     return source if source is not raw else None
+
+
+def _migrate_file(raw, path):
+    """move_integration_scheme, and a q0 by joint name as a list (None: nothing to
+    change)."""
+    migrated = move_integration_scheme(raw, path)
+    source = migrated if migrated is not None else raw
+    if isinstance(source, dict) and isinstance(source.get("q0"), dict):
+        return {**source, "q0": q0_by_joint_name(source, path)}
+    return migrated
+
+
+def note_changed_defaults(raw: Dict, scenario: Scenario, path: Union[str, Path]) -> None:
+    """Logs, for a file of an older layout, each setting added since that the file does
+    not name and whose current default differs from what the file's release ran (its
+    value before the setting existed): the file now runs with the current one.
+
+    Args:
+        raw: The parsed file.
+        scenario: The scenario it loaded into.
+        path: The file, for the note."""
+    changed = []
+    for section, key, before in ADDED_TO_CURRENT_LAYOUT:
+        named = isinstance(raw.get(section), dict) and key in raw[section]
+        now = getattr(getattr(scenario, section), key)
+        if not named and now != before:
+            changed.append(f"{section}.{key} = {now!r} (before it existed: {before!r})")
+    if changed:
+        logging.getLogger(__name__).warning(
+            "%s: settings whose default changed since this file's layout now run at "
+            "today's: %s; name them in the file to run them otherwise", path,
+            "; ".join(changed))
 
 
 def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:

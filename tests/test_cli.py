@@ -154,3 +154,22 @@ def test_export_writes_a_table_pandas_reads(tmp_path, capsys, fmt):
     err = capsys.readouterr().err
     assert "--signals: 'atitude_error' is not a signal of this run; did you mean" in err
     assert len(err.splitlines()) == 1
+
+
+def test_a_ctrl_c_as_the_program_exits_keeps_its_status():
+    """Once ``dacph`` has its exit status, a SIGINT (Ctrl-C while a sweep's pool is torn
+    down at exit) leaves it: the process ends with the command's status, not by the
+    signal (Python resets its own SIGINT handler to the default one as it finalizes)."""
+    import signal as signals
+    import subprocess
+    import sys
+    script = ("import os, signal, sys\n"
+              "from dacph_drake.app.cli import console_main\n"
+              "sys.argv = ['dacph', '--version']\n"
+              "status = console_main()\n"
+              "os.kill(os.getpid(), signal.SIGINT)\n"
+              "sys.exit(status)\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, (done.returncode, done.stderr[-1000:])
+    assert done.returncode != -signals.SIGINT

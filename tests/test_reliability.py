@@ -519,3 +519,27 @@ def test_a_run_cut_before_its_events_says_so(caplog):
     with caplog.at_level("WARNING"):
         simulate(scenario, "model-based", duration=12.5)
     assert "never in effect" not in caplog.text
+
+
+def test_a_live_run_leaves_its_meshcat_to_the_thread_that_made_it():
+    """simulate(meshcat=...) leaves nothing that holds the Meshcat behind it: deleted on
+    the thread that made it, the Meshcat is gone, so a garbage collection on another
+    thread afterwards cannot destroy it there (Drake aborts the process when it does:
+    the tutorial notebook's kernel died that way at random)."""
+    script = """
+import gc, threading
+from pydrake.geometry import StartMeshcat
+from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.loop.simulate import simulate
+meshcat = StartMeshcat()
+run = simulate(short_scenario(), "model-based", duration=0.1, meshcat=meshcat)
+del meshcat, run
+worker = threading.Thread(target=gc.collect)
+worker.start()
+worker.join()
+print("collected elsewhere, still alive")
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "collected elsewhere, still alive" in done.stdout

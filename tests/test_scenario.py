@@ -230,16 +230,21 @@ def test_files_of_the_older_layout_load(tmp_path, caplog):
 
 def test_files_written_before_a_setting_was_added_keep_their_meaning(tmp_path):
     """A spatial scenario file as the release before learner.prior_fallback wrote
-    it (the shipped satellite_3dof without that line) is read with the fallback
-    off, as it ran, not with the sized default's on, and its fingerprinted text is
-    the file as written (scenario_files.ADDED_TO_CURRENT_LAYOUT); the shipped file
-    itself keeps it on."""
+    it (the shipped satellite_3dof without that line), saved with a run, is read with
+    the fallback off, as it ran (load_saved_scenario), not with the sized default's
+    on, and its fingerprinted text is the file as written
+    (scenario_files.ADDED_TO_CURRENT_LAYOUT); the shipped file itself keeps it on. As
+    an input file, the same text runs the setting at its current default."""
+    from dacph_drake.scenario_files import load_saved_scenario
     shipped = (SCENARIOS / "satellite_3dof.yaml").read_text()
     assert "  prior_fallback: true\n" in shipped
-    before = shipped.replace("  prior_fallback: true\n", "")
+    # The release before wrote neither that line nor excitation.joint_scale's.
+    before = shipped.replace("  prior_fallback: true\n", "").replace(
+        "  joint_scale: []\n", "")
     path = tmp_path / "before.yaml"
     path.write_text(before)
-    scenario = load_scenario(path)
+    assert load_scenario(path).learner.prior_fallback
+    scenario = load_saved_scenario(path)
     assert not scenario.learner.prior_fallback
     assert saved_forms(scenario)[0] == before
     assert load_scenario(SCENARIOS / "satellite_3dof.yaml").learner.prior_fallback
@@ -255,10 +260,11 @@ def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplo
     reads it."""
     import json
     from dacph_drake.app.reproduce import check_runs_belong_together
-    from dacph_drake.scenario_files import PlanarLayoutV1, as_before_added
+    from dacph_drake.scenario_files import (PlanarLayoutV1, as_before_added,
+                                            load_saved_scenario)
     results = Path(__file__).resolve().parent / "data" / "paper_run_before_sections"
     with caplog.at_level("WARNING"):
-        scenario = load_scenario(results / "scenario.yaml")
+        scenario = load_saved_scenario(results / "scenario.yaml")
     assert "read in the layout before the robot: and task: sections" in caplog.text
     assert scenario == as_before_added(BUILT_IN_SCENARIOS["paper"]())
     runs = {c: json.loads((results / f"run_{c}.json").read_text())
@@ -354,3 +360,39 @@ def test_simulate_refuses_a_bad_duration_before_building(duration):
     from dacph_drake.loop.simulate import simulate
     with pytest.raises(ConfigError, match=r"duration = .* allowed: > 0 s"):
         simulate(BUILT_IN_SCENARIOS["short"](), "dac", duration=duration)
+
+
+def test_a_section_named_without_a_newer_setting_runs_it_at_its_default(tmp_path):
+    """Defaults are the defaults: a file naming rhs: and learner: sections without the
+    settings added to them since (rhs.adoption, learner.model, the identifier's anchor)
+    runs those at today's defaults, as a file without the sections would; a tag the
+    section does not take is refused; a file of an older layout loads at today's
+    defaults with a note naming each setting whose default is not what its release
+    ran."""
+    from dacph_drake.scenario_files import PlanarLayoutV1
+    path = tmp_path / "sections.yaml"
+    path.write_text("rhs: {Td: 2.0}\nlearner: {window: 400}\ninertia: {start: 0.2}\n")
+    named, bare = load_scenario(path), Scenario()
+    assert named.rhs.adoption == bare.rhs.adoption == "certified_set"
+    assert named.learner.model == bare.learner.model == "local_bayes"
+    assert named.inertia == bare.inertia
+    path.write_text("learner: !LocalBayes {}\n")
+    with pytest.raises(ConfigError, match=r"learner has the tag !LocalBayes, which this "
+                                          r"section does not take"):
+        load_scenario(path)
+    old = yaml_dump_typed(PlanarLayoutV1.From(BUILT_IN_SCENARIOS["short"]()))
+    old = old.replace("  model: local_bayes\n", "").replace("  adoption: certified_set\n", "")
+    path.write_text(old)
+    import logging
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logging.getLogger("dacph_drake.scenario_files").addHandler(handler)
+    try:
+        loaded = load_scenario(path)
+    finally:
+        logging.getLogger("dacph_drake.scenario_files").removeHandler(handler)
+    assert loaded.learner.model == "local_bayes" and loaded.rhs.adoption == "certified_set"
+    notes = " ".join(record.getMessage() for record in records)
+    assert "learner.model = 'local_bayes' (before it existed: 'network')" in notes
+    assert "rhs.adoption = 'certified_set' (before it existed: 'trust_band')" in notes

@@ -214,11 +214,13 @@ def test_learning_beats_the_prior_on_the_3dof_arm_without_costing_tracking():
     error in phases 2 and 3 stays within 1.5x of the learner-off loop's (with the
     planar learner's settings on this arm: 8x). The network learner with the point
     rule and the model's inertial scale, as released before the local Bayesian
-    learner, its estimates taken as the claims (model_error 0)."""
+    learner, its estimates taken as the claims (model_error 0, and the model stated
+    exact: no tolerance on its inertias or the anchor, so the measured E is 0)."""
     scenario = load_scenario("satellite_3dof")
     scenario.learner.model, scenario.rhs.adoption = "network", "trust_band"
     scenario.inertia.anchor, scenario.inertia.fit_tolerance = "model", 0.0
     scenario.learner.bayes.model_error = 0.0
+    scenario.inertia.nominal_tolerance = scenario.inertia.anchor_tolerance = 0.0
     dac = simulate(scenario, "dac")
     nominal = simulate(scenario, "dac-nominal")
     assert dac.status == "ok" and nominal.status == "ok"

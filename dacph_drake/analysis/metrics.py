@@ -1,14 +1,17 @@
 """The metrics of a run (the paper's reported quantities and this project's,
 docs/results/paper.md), computed from its logs."""
 from dataclasses import dataclass
-from typing import Dict, Tuple
+from typing import Dict, Optional, Tuple
 
 import numpy as np
 
 from dacph_drake.analysis.phases import (PHASES, phase_windows,  # noqa: F401
                                          relative_error_rms, rms)
+from dacph_drake.dynamics.model_error import realized_model_error
+from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.log_layout import LearnerLog, RhsLog
 from dacph_drake.assembly import robot_of
+from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Scenario
 
 
@@ -52,9 +55,10 @@ def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
     intervals.
 
     The logged ``estimates`` with the learner's ``estimate_bounds`` (a point for
-    a learner without intervals) widened by the LHS model's inertia error
-    (learning.local_bayes.physical_claims, with learner.bayes' model_error, margin
-    and credible_level whatever the learner); where the learner's log says the
+    a learner without intervals) widened by the LHS model's inertia error E
+    (learning.local_bayes.physical_claims, with learner.bayes' margin and
+    credible_level whatever the learner): E's sd as the run measured it (the
+    ``model_error`` log, model_error_sd); where the learner's log says the
     observed port is not in physical units (LearnerLog.physical: a kinematic
     mismatch reported by the inertial identifier), the prior (B0, D0) with the
     prior's range (learning.local_bayes.prior_range).
@@ -73,7 +77,7 @@ def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
     point = logs["estimates"]
     bounds = logs.get("estimate_bounds", np.concatenate([point, point], axis=1))
     estimate, lower, upper = physical_claims(point, bounds[:, :k], bounds[:, k:], bayes,
-                                             u.B0, u.D0)
+                                             u.B0, u.D0, model_error_sd(logs, scenario))
     learner = logs.get("learner_log")
     if learner is None or learner.shape[1] <= LearnerLog().physical:
         return estimate, lower, upper
@@ -84,8 +88,27 @@ def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
             np.where(physical, upper, prior_high[None, :]))
 
 
+def model_error_sd(logs: Dict[str, np.ndarray], scenario: Scenario) -> np.ndarray:
+    """E's sd per entry at every logged sample (T, n, n): the run's measurement (the
+    ``model_error`` log of the inertial identifier); for a run without it, what the
+    scenario states (dynamics.model_error.stated_model_error: the nominal's tolerances
+    when nothing was identified; 0 for a run saved before E was measured, whose claims
+    then allow learner.bayes.model_error alone, as they did).
+
+    Args:
+        logs: The run's logs.
+        scenario: The scenario it ran."""
+    from dacph_drake.dynamics.model_error import stated_model_error
+    n, T = len(scenario.q0), len(logs["time"])
+    if "model_error" in logs:
+        return logs["model_error"].reshape(T, n, n)
+    stated = stated_model_error(scenario.inertia, "inertial_parameters" in logs)
+    return np.full((T, n, n), stated)
+
+
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
-                     mask: np.ndarray, total_mass: float) -> Dict[str, float]:
+                     mask: np.ndarray, total_mass: float,
+                     realized_error: Optional[np.ndarray] = None) -> Dict[str, float]:
     """Learning's own value over the samples ``mask``.
 
     The time-RMS relative errors ||X_hat - X~|| / ||X~|| of the run's claims about
@@ -104,6 +127,8 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
         scenario: The scenario it ran.
         mask: The samples to average over (boolean, T).
         total_mass: The ground truth's total mass [kg].
+        realized_error: The run's true E at every sample (T, n, n)
+            (realized_model_error; simulation only), for model_error_metrics.
 
     Returns:
         Metric name -> value."""
@@ -131,6 +156,8 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
             out[f"{name}_error_ratio_scaled"] = (learned / nominal if nominal > 0
                                                  else float("nan"))
     out.update(interval_metrics(view, truth, nominal_estimates(scenario), n, mask))
+    if realized_error is not None:
+        out.update(model_error_metrics(logs, scenario, mask, realized_error))
     learner, layout = logs["learner_log"], LearnerLog()
     learned = mask & (learner[:, layout.holding] < 0.5)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -142,6 +169,77 @@ def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
     beta_hat = logs["learner_log"][mask, LearnerLog().beta_hat]
     out["beta_clipped_share"] = (float(np.mean(beta_hat > scenario.rhs.beta_max))
                                  if len(beta_hat) else float("nan"))
+    return out
+
+
+def port_truth(true_matrices: np.ndarray, realized_error: np.ndarray) -> np.ndarray:
+    """The port's own truth, what a perfect learner publishes through the LHS model:
+    [vec((I + E) B~), diag((I + E) D~)] per sample (T, n^2 + n).
+
+    Args:
+        true_matrices: The true [vec(B~), diag(D~)] per sample (T, n^2 + n).
+        realized_error: The run's true E per sample (T, n, n)."""
+    n = realized_error.shape[1]
+    port = np.eye(n) + realized_error
+    B = port @ true_matrices[:, :n * n].reshape(-1, n, n)
+    D = np.einsum("tii->ti", port * true_matrices[:, None, n * n:])
+    return np.concatenate([B.reshape(-1, n * n), D], axis=1)
+
+
+def realized_error_of(logs: Dict[str, np.ndarray], robot: Robot) -> np.ndarray:
+    """The run's true E per sample (dynamics.model_error.realized_model_error): the
+    identified parameters where an identifier ran, else the model's own.
+
+    Args:
+        logs: The run's logs.
+        robot: Its robots.Robot."""
+    t = logs["time"]
+    pis = logs.get("inertial_parameters")
+    if pis is None:
+        pis = np.tile(robot.model.inertial_parameters, (len(t), 1))
+    joints = ArmCoordinates.FromPlant(robot.model.plant).joint_q
+    return realized_model_error(robot.model.plant, robot.truth_plant, pis,
+                                logs["state"][:, joints])
+
+
+def model_error_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
+                        mask: np.ndarray, realized_error: np.ndarray) -> Dict[str, float]:
+    """What the run measured of the LHS model's inertia error E against the E it had
+    (a simulation knows it), over the samples ``mask``: ``model_error_sd``, the median
+    of E's largest measured sd (model_error_sd, with learner.bayes.model_error);
+    ``model_error_realized``, the median of the true E's largest entry;
+    ``model_error_coverage``, the share of (sample, entry) pairs whose true E_ij lies
+    within the claims' z sd; and ``X_port_error_ratio`` (X in B, D), the port model the
+    loop closes on against its own truth, (I + E) B~ and diag((I + E) D~), over the
+    prior's error against the same.
+
+    Args:
+        logs: The run's logs.
+        scenario: The scenario it ran.
+        mask: The samples to average over.
+        realized_error: The run's true E at every sample (T, n, n)."""
+    from statistics import NormalDist
+    n = len(scenario.q0)
+    z = NormalDist().inv_cdf(0.5 + 0.5 * scenario.learner.bayes.credible_level)
+    sd = np.sqrt(model_error_sd(logs, scenario)[mask] ** 2
+                 + scenario.learner.bayes.model_error ** 2)
+    E = realized_error[mask]
+    if not len(E):
+        return {name: float("nan") for name in (
+            "model_error_sd", "model_error_realized", "model_error_coverage",
+            "B_port_error_ratio", "D_port_error_ratio")}
+    out = {"model_error_sd": float(np.median(np.max(sd, axis=(1, 2)))),
+           "model_error_realized": float(np.median(np.max(np.abs(E), axis=(1, 2)))),
+           "model_error_coverage": float(np.mean(np.abs(E) <= z * sd + 1e-12))}
+    truth = port_truth(logs["true_matrices"][mask], E)
+    published = logs["estimates"][mask]
+    prior = nominal_estimates(scenario)[None, :]
+    for name, columns in (("B", slice(0, n * n)), ("D", slice(n * n, n * n + n))):
+        learned = relative_error_rms(published[:, columns], truth[:, columns])
+        nominal = relative_error_rms(np.broadcast_to(prior[:, columns],
+                                                     truth[:, columns].shape),
+                                     truth[:, columns])
+        out[f"{name}_port_error_ratio"] = learned / nominal if nominal > 0 else float("nan")
     return out
 
 
@@ -305,7 +403,9 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
         "base_attitude_max_excursion": float(np.max(np.abs(base_turn))),
         "min_clearance": float(np.min(clearance)),
     }
+    realized_error = None
     if "estimates" in logs:
+        realized_error = realized_error_of(logs, robot)
         window = (t >= max(phases.nonlinear_start, phases.disturbance_start - 60.0)) & \
                  (t < phases.disturbance_start)
         truth = logs["true_matrices"][window]
@@ -331,8 +431,8 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
         out[f"{phase}.e_tau_rms"] = rms(e_tau[mask])
         if "estimates" in logs:
             out[f"{phase}.chi_rms"] = rms(logs["rhs_log"][mask, R.chi])
-            out.update({f"{phase}.{k}": v for k, v in
-                        learning_metrics(logs, scenario, mask, total_mass).items()})
+            out.update({f"{phase}.{k}": v for k, v in learning_metrics(
+                logs, scenario, mask, total_mass, realized_error).items()})
     if "identification_log" in logs and len(t):
         identified = logs["identification_log"]
         out["identified_mass_error"] = float(identified[-1, 0] / total_mass - 1.0)

@@ -1,6 +1,7 @@
 """Command line: ``dacph COMMAND ...`` (``dacph --help`` lists the commands)."""
 import argparse
 import logging
+import signal
 import sys
 from typing import Optional, Sequence
 
@@ -183,12 +184,12 @@ def _reproduce(args) -> int:
 
 def _report(args) -> int:
     from dacph_drake.app.reproduce import REQUIRED, report
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario_files import load_saved_scenario
     summary = report(args.run_dir)
     if summary["table"]:
         _print_table(summary)
     else:
-        scenario = load_scenario(f"{args.run_dir}/scenario.yaml")
+        scenario = load_saved_scenario(f"{args.run_dir}/scenario.yaml")
         for controller, flat in summary["metrics"].items():
             print(f"{controller} ({summary['runs'][controller]['status']})")
             _print_metrics(flat, scenario, summary["runs"][controller]["final_time"])
@@ -587,5 +588,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 130
 
 
+def console_main() -> int:
+    """The ``dacph`` program: main, after which the process exits with its status
+    whatever comes: a Ctrl-C during the interpreter's exit (a sweep's pool being torn
+    down) is ignored rather than ending the process by the signal, since Python resets
+    its own SIGINT handler to the default one as it finalizes."""
+    status = main()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return status
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console_main())

@@ -34,7 +34,8 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
 from dacph_drake.log_layout import LhsLog, PoseLog, RhsLog  # noqa: E402
-from dacph_drake.analysis.metrics import nominal_estimates  # noqa: E402
+from dacph_drake.analysis.metrics import (nominal_estimates, physical_view,  # noqa: E402
+                                          port_truth, realized_error_of)
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
 from dacph_drake.assembly import robot_of, task_of  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
@@ -42,6 +43,9 @@ from dacph_drake.scenario import Scenario  # noqa: E402
 Logs = Dict[str, np.ndarray]
 DAC_PANELS = ("a_uncertainty_and_errors", "b_estimated_entries", "c_zoom_nonlinear",
               "d_rhs_gains")
+# The port model the loop closes on against its own truth, for a run whose LHS model
+# error was measured (its ``model_error`` log).
+PORT_PANEL = "g_port_entries"
 WIDTH, DPI = 11.0, 130          # [in], PNG dots per inch
 COLUMNS = 1000                  # envelope columns per axis (about one per pixel)
 LOG_DECADES = 7                 # a log axis spans at most this many decades
@@ -162,9 +166,10 @@ def _legend_outside(ax, **kwargs) -> None:
               fontsize=7, **kwargs)
 
 
-def _matrix_norms(logs: Logs, n: int, B0, D0):
-    """||B~ - B0||_F, ||D~ - D0||, ||B_hat - B~||_F, ||D_hat - D~|| over time."""
-    truth, estimate = logs["true_matrices"], logs["estimates"]
+def _matrix_norms(logs: Logs, scenario: Scenario, n: int, B0, D0):
+    """||B~ - B0||_F, ||D~ - D0||, ||B_hat - B~||_F, ||D_hat - D~|| over time, B_hat and
+    D_hat the claims about B~ and D~ (analysis.metrics.physical_view)."""
+    truth, estimate = logs["true_matrices"], physical_view(logs, scenario)[0]
     B0 = np.diag(B0).reshape(-1)
     return (np.linalg.norm(truth[:, :n * n] - B0, axis=1),
             np.linalg.norm(truth[:, n * n:] - np.asarray(D0), axis=1),
@@ -175,7 +180,8 @@ def _matrix_norms(logs: Logs, n: int, B0, D0):
 def _panel_a(dac: Logs, scenario: Scenario):
     n = len(scenario.q0)
     t = dac["time"]
-    dB, dD, eB, eD = _matrix_norms(dac, n, scenario.uncertainty.B0, scenario.uncertainty.D0)
+    dB, dD, eB, eD = _matrix_norms(dac, scenario, n, scenario.uncertainty.B0,
+                                   scenario.uncertainty.D0)
     fig, (ax1, ax2, ax3), xlim = _figure(3, scenario)
     for ax, prior, learned, name, unit in [
             (ax1, dB, eB, r"\tilde B", "[-]"), (ax2, dD, eD, r"\tilde D", "[N m s]")]:
@@ -183,7 +189,7 @@ def _panel_a(dac: Logs, scenario: Scenario):
         _trace(ax, t, prior, xlim, log=True, color="0.4", ls=":", lw=1.2,
                label=rf"$\|{symbol}_0 - {name}\|$ (nominal prior = uncertainty)")
         _trace(ax, t, learned, xlim, log=True, color="C0",
-               label=rf"$\|\hat {symbol} - {name}\|$ (learned)")
+               label=rf"$\|\hat {symbol} - {name}\|$ (claimed)")
         ax.set_ylabel(f"error of {symbol} {unit}")
         _legend_outside(ax)
     _trace(ax3, t, dac["rhs_log"][:, RhsLog(n).e_norm], xlim, log=True, color="C3",
@@ -193,14 +199,30 @@ def _panel_a(dac: Logs, scenario: Scenario):
     return fig
 
 
-def _entries(dac: Logs, scenario: Scenario, xlim=None):
-    """One small axis per entry: B_rc in an n x n grid, D_kk in a row below."""
+def _entries(dac: Logs, scenario: Scenario, xlim=None, port: bool = False):
+    """One small axis per entry: B_rc in an n x n grid, D_kk in a row below. The claims
+    about the physical B~ and D~ (analysis.metrics.physical_view, what the metrics
+    report) with their credible interval as a band, the truth and the prior; with
+    ``port``, the port model the loop closes on (the published estimates) against its
+    own truth (I + E) B~, diag((I + E) D~), E the run's true LHS model error."""
     n = len(scenario.q0)
     t = dac["time"]
     xlim = xlim or (0.0, scenario.duration)
     fig, grid = plt.subplots(n + 1, n, figsize=(WIDTH, 1.7 * (n + 1) + 1.0),
                              sharex=True, squeeze=False, layout="constrained")
     prior = nominal_estimates(scenario)
+    if port:
+        truth = port_truth(dac["true_matrices"],
+                           realized_error_of(dac, robot_of(scenario)))
+        estimate, band = dac["estimates"], None
+        labels = (r"port truth $(I + E)\,\tilde X$", "port model (the loop's)")
+    else:
+        truth = dac["true_matrices"]
+        estimate, lower, upper = physical_view(dac, scenario)
+        band = (lower, upper)
+        labels = ("true", "claimed (learned or prior)")
+    inside = (t >= xlim[0]) & (t <= xlim[1])
+    stride = max(1, int(np.count_nonzero(inside) // (2 * COLUMNS)))
     cells = [(grid[r, c], r * n + c, r"$B_{%d%d}$ [-]" % (r + 1, c + 1))
              for r in range(n) for c in range(n)]
     cells += [(grid[n, k], n * n + k, r"$D_{%d%d}$ [N m s]" % (k + 1, k + 1))
@@ -208,9 +230,12 @@ def _entries(dac: Logs, scenario: Scenario, xlim=None):
     for ax, column, name in cells:
         _shade(ax, scenario, xlim, label=False)
         ax.grid(True, lw=0.3)
-        _trace(ax, t, dac["true_matrices"][:, column], xlim, label="true",
-               **ENTRY_STYLES["true"])
-        _trace(ax, t, dac["estimates"][:, column], xlim, label="learned",
+        if band is not None:
+            ax.fill_between(t[inside][::stride], band[0][inside, column][::stride],
+                            band[1][inside, column][::stride], color="C0", alpha=0.18,
+                            lw=0, label="90 % interval")
+        _trace(ax, t, truth[:, column], xlim, label=labels[0], **ENTRY_STYLES["true"])
+        _trace(ax, t, estimate[:, column], xlim, label=labels[1],
                **ENTRY_STYLES["learned"])
         ax.axhline(prior[column], label="nominal (prior)", **ENTRY_STYLES["nominal"])
         ax.set_ylabel(name, fontsize=8)
@@ -220,7 +245,7 @@ def _entries(dac: Logs, scenario: Scenario, xlim=None):
     grid[-1, 0].set_xlim(xlim)
     series = grid[0, 0].get_legend_handles_labels()[0]
     fig.legend(handles=series + _phase_handles(scenario), loc="outside upper center",
-               ncol=3 + len(_phase_handles(scenario)), fontsize=8)
+               ncol=4, fontsize=8)
     return fig
 
 
@@ -392,8 +417,8 @@ def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
     """The panels as matplotlib figures, by name.
 
     DAC_PANELS of the learning run (DAC's, else the first run with an RHS loop and
-    estimates; none without one) and the robot's task panels comparing every run in
-    ``runs``.
+    estimates; none without one), its PORT_PANEL where it measured the LHS model's
+    error, and the robot's task panels comparing every run in ``runs``.
 
     Args:
         runs: Controller -> the logs of its run (any registered controllers; one run
@@ -410,6 +435,8 @@ def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
         figures = {name: figure for name, figure in zip(DAC_PANELS, (
             _panel_a(dac, scenario), _entries(dac, scenario),
             _entries(dac, scenario, zoom_window(scenario)), _panel_d(dac, scenario)))}
+        if "model_error" in dac:
+            figures[PORT_PANEL] = _entries(dac, scenario, port=True)
     for name in task_of(scenario).panels:
         figures[name] = TASK_PANELS[name](runs, scenario)
     for fig in figures.values():

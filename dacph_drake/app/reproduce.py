@@ -21,7 +21,7 @@ from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.loop.run_store import (load_logs, load_run_meta, require_run_files,
                                         require_run_of, versions)
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario_files import load_scenario, save_scenario
+from dacph_drake.scenario_files import load_saved_scenario, save_scenario
 
 REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
 #                                        the other controllers' runs
@@ -271,7 +271,7 @@ def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None,
             together."""
     controllers = controllers or runs_in(run_dir) or [REFERENCE]
     run_dir = require_run_files(run_dir, controllers)
-    scenario = load_scenario(run_dir / "scenario.yaml")
+    scenario = load_saved_scenario(run_dir / "scenario.yaml")
     runs = {c: load_run_meta(run_dir, c) for c in controllers}
     check_runs_belong_together(run_dir, scenario, runs)
     logs = {c: load_logs(run_dir, c, scenario) for c in controllers}

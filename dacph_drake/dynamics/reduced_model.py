@@ -75,6 +75,11 @@ class ReducedOrderModel:
         return self._plant
 
     @property
+    def inertial_parameters(self) -> np.ndarray:
+        """The model's inertial parameters pi (InertialParameters' layout), its plant's."""
+        return InertialParameters(self._plant).FromContext(self._context)
+
+    @property
     def joint_damping(self) -> np.ndarray:
         """The plant's joint damping b (n) [N m s/rad] (dynamics.ReducedModel)."""
         return joint_damping(self._plant, self._coordinates.joint_v)

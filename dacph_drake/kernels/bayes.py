@@ -101,7 +101,7 @@ def _correlation_time(r: np.ndarray, lags: int) -> float:
 def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
             prior_sd: np.ndarray, lags: int, min_tau: float, floor: float, newest: int,
             nuisance: float, min_dof: float, mean: np.ndarray, variance: np.ndarray,
-            statistics: np.ndarray) -> bool:
+            statistics: np.ndarray, detectable: float = 0.0) -> bool:
     """One row's posterior on its window (module docstring); whether the window determines
     the fit: (sum w - nuisance - tr hat) / tau >= min_dof (if not, mean and variance are the
     prior's).
@@ -122,7 +122,11 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         mean: The posterior mean (P), written.
         variance: The posterior variances (P), written.
         statistics: Written: [sigma^2, residual dof, effective parameters, change statistic
-            (new samples' RMS prediction error / its sd), newest relative residual, tau]."""
+            (new samples' RMS prediction error / its sd), newest relative residual, tau].
+        detectable: The relative residual below which a change of the port goes
+            undetected (the change test's floor), over the intervals' quantile: each
+            coefficient's variance gains (detectable RMS_w(y) / RMS_w(A_c))^2, the
+            largest step of it that the change test cannot see."""
     K, P = A.shape
     scaled = A * prior_sd.reshape(1, P)
     offset = y - _matvec(A, prior_mean)
@@ -180,12 +184,14 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
     phi = _matvec(C, b / sigma2)
     r = offset - _matvec(scaled, phi)
     residual = np.sqrt(np.sum(w * r * r) / weight)
+    signal = np.sqrt(np.sum(w * y * y) / weight)
     for c in range(P):
         mean[c] = prior_mean[c] + prior_sd[c] * phi[c]
         column = np.sqrt(np.sum(w * A[:, c] ** 2) / weight)
         variance[c] = prior_sd[c] ** 2 * C[c, c]
         if column > 0.0:
             variance[c] += (floor * residual / column) ** 2
+            variance[c] += (detectable * signal / column) ** 2
     old = K - newest
     # The newest samples predicted by the fit to the others (their rows removed
     # from the normal equations), each against its predictive variance: the
@@ -307,7 +313,8 @@ def row_design(rows: np.ndarray, i: int, n: int, t_now: float, p_now: float
 def fit_rows(times: np.ndarray, rows: np.ndarray, starts: np.ndarray, n: int,
              prior_mean: np.ndarray, prior_sd: np.ndarray, free_response: np.ndarray,
              forgetting: float, lags: int, min_tau: float, floor: float,
-             newest_period: float, minimum: int, min_dof: float, mean: np.ndarray,
+             detectable: float, newest_period: float, minimum: int, min_dof: float,
+             mean: np.ndarray,
              variance: np.ndarray,
              statistics: np.ndarray, determined: np.ndarray) -> None:
     """Every row's fit of one trial (fit_row on row_design, the nuisance projected).
@@ -324,6 +331,7 @@ def fit_rows(times: np.ndarray, rows: np.ndarray, starts: np.ndarray, n: int,
         lags: fit_row's lags.
         min_tau: fit_row's min_tau.
         floor: fit_row's floor.
+        detectable: fit_row's detectable.
         newest_period: The newest samples' span, for the change test [s].
         minimum: The fewest samples a row's window must hold.
         min_dof: fit_row's min_dof.
@@ -355,4 +363,4 @@ def fit_rows(times: np.ndarray, rows: np.ndarray, starts: np.ndarray, n: int,
                 newest += 1
         determined[i] = fit_row(A, y, w, prior_mean[i], prior_sd[i], lags, min_tau,
                                 floor, newest, spent, min_dof, mean[i],
-                                variance[i], statistics[i])
+                                variance[i], statistics[i], detectable)

@@ -23,7 +23,7 @@ is no worse than the prior; else at the prior, with the learned interval (or, wh
 row is not determined, the prior's range) around it."""
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import Sequence, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -32,6 +32,7 @@ from dacph_drake.kernels.bayes import fit_rows, row_design
 from dacph_drake.learning.protocol import (Channels, LearnerTrial, PortEstimate,
                                    PortLearner)
 from dacph_drake.log_layout import LearnerLog
+from dacph_drake.quantiles import student_quantile
 from dacph_drake.scenario import Learner, LocalBayes
 
 # The correlation-time estimate's longest lag [samples] (kernels.bayes.fit_row): the
@@ -194,17 +195,20 @@ def entry_coupling(bayes: LocalBayes, n: int) -> float:
 
 
 def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                    bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
+                    bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float],
+                    error_sd: Optional[np.ndarray] = None
                     ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What the published estimates say about the physical B~ and D~: (estimate, lower,
     upper), each (T, n^2 + n).
 
     The port is tau_obs = p_dot + dH/dq of the LHS model: with M_hat = (I + E) M~ the
-    learner sees (I + E) B~ and (I + E) D~ (port data cannot tell gain from inertia).
-    With E's entries of sd eps = bayes.model_error, each half-width grows in quadrature
-    by z eps ||B_:j|| (B_ij) or z eps ||D|| (D_i: damping leaks across joints through E),
-    z the normal quantile of credible_level; an entry within bayes.margin half-widths of
-    the prior is claimed at the prior.
+    learner sees (I + E) B~ and (I + E) D~ (port data cannot tell gain from inertia), so
+    B~ = (I + E)^-1 B ~ (I - E) B. With E's entries of sd e_ik (``error_sd``, the run's
+    measurement, dynamics/model_error.py, and bayes.model_error in quadrature), each
+    half-width grows in quadrature by z sqrt(sum_k e_ik^2 B_kj^2) (B_ij) or
+    z sqrt(sum_k e_ik^2 D_k^2) (D_i: damping leaks across joints through E), z the
+    normal quantile of credible_level; an entry within bayes.margin half-widths of the
+    prior is claimed at the prior.
 
     Args:
         point: The published estimates [vec(B), diag(D)] (T, n^2 + n).
@@ -212,17 +216,19 @@ def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
         upper: Their intervals' upper ends (T, n^2 + n).
         bayes: The learner's settings.
         B0: The prior's B0 (its diagonal, n).
-        D0: The prior's D0 (its diagonal, n)."""
+        D0: The prior's D0 (its diagonal, n).
+        error_sd: E's sd per entry at each sample (T, n, n); None: 0."""
     n = len(B0)
     z = NormalDist().inv_cdf(0.5 + 0.5 * bayes.credible_level)
     prior = np.concatenate([np.diag(np.asarray(B0, float)).reshape(-1),
                             np.asarray(D0, float)])[None, :]
     B = point[:, :n * n].reshape(-1, n, n)
     D = np.maximum(np.abs(point[:, n * n:]), prior[:, n * n:])
-    scale = np.concatenate([
-        np.repeat(np.linalg.norm(B, axis=1)[:, None, :], n, axis=1).reshape(-1, n * n),
-        np.repeat(np.linalg.norm(D, axis=1)[:, None], n, axis=1)], axis=1)
-    widening = (z * bayes.model_error * scale) ** 2
+    variance = (0.0 if error_sd is None else np.asarray(error_sd, float) ** 2) \
+        + np.full((len(point), n, n), bayes.model_error ** 2)
+    widening = z ** 2 * np.concatenate([
+        np.einsum("tik,tkj->tij", variance, B ** 2).reshape(-1, n * n),
+        np.einsum("tik,tk->ti", variance, D ** 2)], axis=1)
     below = np.sqrt((point - lower) ** 2 + widening)
     above = np.sqrt((upper - point) ** 2 + widening)
     determined = np.abs(point - prior) > bayes.margin * np.maximum(below, above)
@@ -232,27 +238,18 @@ def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
     return estimate, low, np.maximum(point + above, estimate)
 
 
-def student_quantile(z: float, dof: float) -> float:
-    """Student's t quantile with ``dof`` degrees of freedom at the normal quantile z
-    (the Cornish-Fisher expansion to third order in 1 / dof).
-
-    Args:
-        z: The standard normal quantile.
-        dof: The degrees of freedom, >= 2."""
-    z3, z5, z7 = z ** 3, z ** 5, z ** 7
-    return (z + (z3 + z) / (4 * dof) + (5 * z5 + 16 * z3 + 3 * z) / (96 * dof ** 2)
-            + (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * dof ** 3))
-
-
 class _RowState:
     """One row's state: [window start [s], residuals seen, last HISTORY relative residuals,
-    previous fit's time [s] (-inf: none), its p_i, [const, drift, slope] per entry, sd]."""
+    previous fit's time [s] (-inf: none), its p_i, [const, drift, slope] per entry, sd,
+    the prior's residuals seen, its last HISTORY relative residuals]."""
 
     def __init__(self, n: int):
         self.fit_time, self.fit_momentum = 2 + HISTORY, 3 + HISTORY
         self.fit = slice(4 + HISTORY, 4 + HISTORY + 3 * (n + 1))
         self.fit_spread = slice(self.fit.stop, self.fit.stop + 3 * (n + 1))
-        self.size = self.fit_spread.stop
+        self.prior_seen = self.fit_spread.stop
+        self.prior_history = slice(self.prior_seen + 1, self.prior_seen + 1 + HISTORY)
+        self.size = self.prior_history.stop
 
 
 @dataclass
@@ -382,7 +379,8 @@ class LocalBayesLearner(PortLearner):
         starts = state[:, 0].copy()
         fit_rows(times, rows[:, 1:], starts, n, prior.mean, prior.sd,
                  self._free_response, bayes.forgetting, RESIDUAL_LAGS, self._min_tau,
-                 bayes.floor, self._period, self._minimum, bayes.min_dof, mean, variance,
+                 bayes.floor, bayes.change_floor / self._z_interval, self._period,
+                 self._minimum, bayes.min_dof, mean, variance,
                  statistics, determined)
         # A short window predicts its newest samples poorly whatever holds: only
         # windows of half the forgetting time add to the history, and a row its
@@ -396,6 +394,7 @@ class LocalBayesLearner(PortLearner):
                                            span[i] >= 0.5 * bayes.forgetting)
             elif span[i] >= 0.5 * bayes.forgetting:
                 self._Remember(state[i], statistics[i, 4])
+        changed |= self._PriorResidualJumped(state, t, rows, prior)
         sd = self._EntrySd(trial, t, times, starts, variance)
         changed |= determined & (self._Jumped(state, t, rows[-1], mean, variance, sd)
                                  | self._Unphysical(mean, sd, statistics[:, 1]))
@@ -431,6 +430,39 @@ class LocalBayesLearner(PortLearner):
         if remember:
             self._Remember(row, relative)
         return False
+
+    def _PriorResidualJumped(self, state, t, rows, prior) -> np.ndarray:
+        """Which rows' port relation changed by the prior's own residual: the prior (B0,
+        D0) is one fixed model, so its relative residual on the newest samples moves
+        only with the port. It is tested for every row, determined or not (a young
+        window has no fit to test, and one fitted through a switch it straddles looks
+        good); a jump by change_ratio over its recent median, above change_floor,
+        restarts the row and begins a new history at the new level (``state`` in
+        place)."""
+        S, n = self._row_state, self.n
+        newest = rows[rows[:, 0] > t - self._period + 1e-9, 1:]
+        jumped = np.zeros(n, bool)
+        if len(newest) == 0:
+            return jumped
+        ratio, floor = self._settings.change_ratio, self._bayes.change_floor
+        for i in range(n):
+            A = row_design(newest, i, n, t, newest[-1, n + i])
+            y = newest[:, 2 * n + 5 * n + n * n + i]
+            signal = np.sum(y * y)
+            if not signal > 0.0:
+                continue
+            relative = float(np.sqrt(np.sum((y - A @ prior.mean[i]) ** 2) / signal))
+            row = state[i]
+            count = int(row[S.prior_seen])
+            known = row[S.prior_history][:min(count, HISTORY)]
+            jumped[i] = (count >= MIN_HISTORY and relative > floor
+                         and relative > ratio * np.median(known))
+            if jumped[i]:
+                row[S.prior_seen] = 0.0
+            count = int(row[S.prior_seen])
+            row[S.prior_history.start + count % HISTORY] = relative
+            row[S.prior_seen] = count + 1
+        return jumped
 
     def _EntrySd(self, trial, t, times, starts, variance) -> np.ndarray:
         """Each row's entries' sd (n, n + 1): the posterior's and the local model's error,

@@ -206,7 +206,7 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
         controller: The controller's ControllerBuilder.
         excitation: The learner's excitation tau_pe(t) (amplitude 0: off).
         identify: Add an InertialIdentifier from the state inputs into the LHS (outputs
-            ``inertial_parameters``, ``identification_log``)."""
+            ``inertial_parameters``, ``identification_log``, ``model_error``)."""
     task, builder = loop.robot.task, controller.builder
     systems = task.AddLhsController(controller, loop.robots, excitation, identify)
     lhs = systems[task.lhs_name]
@@ -222,4 +222,5 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
                              "inertial_parameters")
         builder.ExportOutput(identifier.GetOutputPort("identification_log"),
                              "identification_log")
+        builder.ExportOutput(identifier.GetOutputPort("model_error"), "model_error")
     return lhs, systems

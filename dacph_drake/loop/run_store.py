@@ -19,7 +19,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import read_json_record, replaced_atomically
 from dacph_drake.loop.signals import Signals
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario_files import load_scenario, save_scenario, saved_forms
+from dacph_drake.scenario_files import load_saved_scenario, save_scenario, saved_forms
 
 
 @dataclass
@@ -293,7 +293,7 @@ def load_run(run_dir: Union[str, Path], controller: str
         ConfigError: Naming a missing or damaged file, or a run made from another
             scenario than scenario.yaml (an edited file, or files copied in)."""
     run_dir = require_run_files(run_dir, [controller])
-    scenario = load_scenario(run_dir / "scenario.yaml")
+    scenario = load_saved_scenario(run_dir / "scenario.yaml")
     meta = load_run_meta(run_dir, controller)
     require_run_of(scenario, meta, run_dir, controller)
     return load_logs(run_dir, controller, scenario), scenario, meta

@@ -1,6 +1,7 @@
 """Simulating a closed loop of any robot (controllers.REGISTRY): initial state,
 divergence monitor, progress bar, SIGINT/SIGTERM, checkpoints and the saved run
 (loop.run_store)."""
+import gc
 import logging
 import resource
 import signal
@@ -176,9 +177,17 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
     ``checkpoint`` = (wall seconds, save) calls save with the partial result of a
     single run that often; ``meshcat`` gets a LiveView. One thread for the
     numerical libraries throughout (loop.threads)."""
-    with single_threaded():
-        return _SimulateLoop(scenarios, controller, duration, progress, interruptible,
-                             checkpoint, meshcat)
+    try:
+        with single_threaded():
+            return _SimulateLoop(scenarios, controller, duration, progress,
+                                 interruptible, checkpoint, meshcat)
+    finally:
+        if meshcat is not None:
+            # The loop's viewer holds the Meshcat from C++ (its MeshcatVisualizer)
+            # inside reference cycles; Drake's Meshcat must be destroyed on the thread
+            # that made it, so the cycles are collected here, not by whichever thread
+            # the garbage collector next runs on.
+            gc.collect()
 
 
 def _SimulateLoop(scenarios, controller, duration, progress, interruptible, checkpoint,

@@ -299,6 +299,8 @@ class DescribedRobot:
             plants=[trial.model.plant for trial in trials],
             priors=[trial.model.inertial_parameters for trial in trials],
             settings=first.inertia, period=first.periods.learner_sample,
+            error_period=first.periods.learner,
+            seeds=[trial.scenario.seed for trial in trials],
             measured_masses=[trial.MeasuredMasses() for trial in trials])
 
     def BasePotential(self) -> Optional[BaseClearancePotential]:

@@ -66,6 +66,11 @@ class PlanarRobot:
         return self._model
 
     @property
+    def truth_plant(self) -> MultibodyPlant:
+        """The ground truth's arm as a plant of its own (MakeArmPlant of robot.truth)."""
+        return MakeArmPlant(self.scenario.robot.truth)
+
+    @property
     def mass_matrix_bounds(self):
         """(inf_q lambda_min(M), sup_q lambda_max(M)) of the nominal robot."""
         if self._bounds is None:
@@ -111,6 +116,7 @@ class PlanarRobot:
         return InertialIdentifier(
             plants=[t.model.plant for t in trials], settings=scenario.inertia,
             period=scenario.periods.learner_sample,
+            error_period=scenario.periods.learner, seeds=[t.scenario.seed for t in trials],
             measured_masses=[t.MeasuredMasses() for t in trials])
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:

@@ -23,6 +23,11 @@ class Robot(Protocol):
     num_joints: int
     model: object
 
+    @property
+    def truth_plant(self) -> "MultibodyPlant":
+        """The ground truth's arm as a finalized plant of its own, its default context
+        holding the true inertias (for what only a simulation can measure)."""
+
     @classmethod
     def AddGroundTruth(cls, builder: "DiagramBuilder", trials: Sequence["Robot"]) -> Tuple[object, object]:
         """Adds the batch's ground-truth MultibodyPlant and its SceneGraph.

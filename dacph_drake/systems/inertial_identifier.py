@@ -10,9 +10,9 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.dynamics.inertial_parameters import (
     MASS, PER_BODY, InertialParameters, identify_parameters, mass_anchor, momentum_misfit,
     prior_scales)
-from dacph_drake.dynamics.kinematic_tree import KinematicTree
+from dacph_drake.dynamics.model_error import ModelErrorEnsemble
 from dacph_drake.dynamics.plant import ArmCoordinates
-from dacph_drake.kernels import identification
+from dacph_drake.dynamics.tree_stack import TreeStack, positive_definite
 from dacph_drake.scenario import InertiaIdentification
 
 
@@ -31,6 +31,11 @@ class InertialIdentifier(LeafSystem):
     ``settings.fit_tolerance`` reports the kinematics mismatched (latched; with
     ``settings.on_mismatch`` "nominal" the LHS then returns to the prior).
 
+    Every ``error_period`` it measures the LHS model's inertia error E = M_hat M~^-1 - I
+    from the same data (dynamics.model_error.ModelErrorEnsemble): output ``model_error``,
+    E's sd per entry (n x n per trial), from which the learner's claims about the
+    physical B~ and D~ are widened (learning.local_bayes.physical_claims).
+
     Outputs ``identification_log`` = [total mass [kg], momentum misfit, mismatch (0/1)],
     ``inertial_parameters`` (pi0 until ``settings.start``, then pi_hat until
     ``settings.duration`` has passed; an estimate with a mass <= 0 or an indefinite M is
@@ -43,6 +48,8 @@ class InertialIdentifier(LeafSystem):
         plants: Each trial's controller plant (its kinematic tree and layout).
         settings: The identification's settings (scenario.inertia).
         period: The sample period [s].
+        error_period: The period of E's measurement [s].
+        seeds: Each trial's seed (its draws of plausible models).
         priors: Each trial's prior pi0, or None for the plant's own inertias.
         measured_masses: Each trial's measured (total, base) mass [kg] of its ground
             truth (the anchor when settings.anchor_mass is 0).
@@ -50,11 +57,12 @@ class InertialIdentifier(LeafSystem):
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,
+                 error_period: float, seeds: Sequence[int],
                  priors: Optional[Sequence[np.ndarray]] = None,
                  measured_masses: Optional[Sequence[Sequence[float]]] = None):
         super().__init__()
         priors = [None] * len(plants) if priors is None else priors
-        self._trees = _TreeStack(plants)
+        self._trees = TreeStack(plants)
         self.parameters = self._trees.parameters
         self._priors = np.array([
             self.parameters.FromContext(plant.CreateDefaultContext()) if prior is None
@@ -87,6 +95,17 @@ class InertialIdentifier(LeafSystem):
                 context.get_discrete_state(self._epoch).get_value()[epochs]),
             prerequisites_of_calc={self.discrete_state_ticket(self._epoch)})
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
+        self._ensemble = ModelErrorEnsemble(
+            plants=plants, settings=settings, priors=self._priors, scales=self._scales,
+            anchor=self._anchor, anchor_values=self._anchor_value, seeds=seeds)
+        self._ensemble_information = (self.DeclareDiscreteState(
+            size * size * self._ensemble.members) if self._ensemble.own_information
+            else None)
+        n = c.num_joints
+        self._model_error = self.DeclareDiscreteState(
+            np.full(count * n * n, settings.nominal_tolerance))
+        self.DeclareStateOutputPort("model_error", self._model_error)
+        self.DeclarePeriodicDiscreteUpdateEvent(error_period, 0.0, self._UpdateModelError)
 
     def _UpdateEstimate(self, context, discrete_state):
         t, settings = context.get_time(), self._settings
@@ -101,6 +120,12 @@ class InertialIdentifier(LeafSystem):
         self._trees.AddInformation(base_pose, base_velocity, q, qdot, information)
         discrete_state.get_mutable_vector(self._information).SetFromVector(
             information.reshape(-1))
+        if self._ensemble_information is not None:
+            drawn = context.get_discrete_state(self._ensemble_information).get_value(
+                ).reshape(self._ensemble.members, -1).copy()
+            self._ensemble.AddInformation(base_pose, base_velocity, q, qdot, drawn)
+            discrete_state.get_mutable_vector(self._ensemble_information).SetFromVector(
+                drawn.reshape(-1))
         if t < settings.start:
             return
         estimates = context.get_discrete_state(self._estimate).get_value().reshape(
@@ -120,7 +145,7 @@ class InertialIdentifier(LeafSystem):
         if settings.on_mismatch == "nominal":
             candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
         M = self._trees.ReducedMassMatrices(candidates, q)
-        usable = _PositiveDefinite(M) & np.all(candidates[:, MASS::PER_BODY] > 0, axis=1)
+        usable = positive_definite(M) & np.all(candidates[:, MASS::PER_BODY] > 0, axis=1)
         estimates[usable] = candidates[usable]
         # A new epoch where M(q) moved by more than change_threshold in some entry,
         # relative to sqrt(M_ii M_jj), from the epoch's estimate's.
@@ -137,6 +162,18 @@ class InertialIdentifier(LeafSystem):
             estimates.reshape(-1))
         discrete_state.get_mutable_vector(self._epoch).SetFromVector(epochs.reshape(-1))
 
+    def _UpdateModelError(self, context, discrete_state):
+        count, size = len(self._priors), self.parameters.size
+        q = self._q.Eval(context).reshape(count, -1)
+        state = (self._ensemble_information if self._ensemble_information is not None
+                 else self._information)
+        information = context.get_discrete_state(state).get_value().reshape(
+            -1, size, size)
+        estimates = context.get_discrete_state(self._estimate).get_value().reshape(
+            count, -1)
+        sd = self._ensemble.ErrorSd(information,
+                                    self._trees.ReducedMassMatrices(estimates, q), q)
+        discrete_state.get_mutable_vector(self._model_error).SetFromVector(sd.reshape(-1))
 
     def _Anchor(self, settings, measured_masses, count):
         """Each trial's anchor (constraint vector, value); (None, None): the model's."""
@@ -152,46 +189,3 @@ class InertialIdentifier(LeafSystem):
             values = np.array([masses[which] for masses in measured_masses]) * (
                 1.0 + settings.anchor_error)
         return np.tile(c, (count, 1)), values
-
-
-def _PositiveDefinite(M: np.ndarray) -> np.ndarray:
-    """Per matrix of the stack M: finite and positive definite."""
-    finite = np.all(np.isfinite(M), axis=(1, 2))
-    safe = np.where(finite[:, None, None], M, np.eye(M.shape[1]))
-    return finite & (np.linalg.eigvalsh(safe)[:, 0] > 0)
-
-
-class _TreeStack:
-    """The trials' controller plants as the compiled kernels read them: one topology,
-    each trial's fixed transforms and fixed inertias, stacked."""
-
-    def __init__(self, plants: Sequence[MultibodyPlant]):
-        trees = [KinematicTree.FromPlant(plant) for plant in plants]
-        first = trees[0]
-        for tree in trees[1:]:
-            if not all(np.array_equal(a, b) for a, b in zip(
-                    (tree.parent, tree.joint, tree.below, tree.base_subspace),
-                    (first.parent, first.joint, first.below, first.base_subspace))):
-                raise ValueError("the trials' arms differ in their kinematic tree")
-        self.parameters = InertialParameters(plants[0])
-        self.nodes = self.parameters.Nodes(first)
-        self._topology = (first.base_subspace, first.parent, first.joint)
-        self._X_PF, self._axis, self._X_MC = (
-            np.array([getattr(tree, name) for tree in trees])
-            for name in ("X_PF", "axis", "X_MC"))
-        self._below, self._joint_below = first.below, first.joint_below
-        fixed = [tree.Inertias(plant.CreateDefaultContext())
-                 for tree, plant in zip(trees, plants)]
-        self._inertias = tuple(np.array(x) for x in zip(*fixed))
-
-    def AddInformation(self, base_pose, base_velocity, q, qdot, information) -> None:
-        """information[i] += vec(Y^T Y) at trial i's measured state (in place)."""
-        identification.add_momentum_information(
-            *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
-            self.nodes, base_pose, base_velocity, q, qdot, information)
-
-    def ReducedMassMatrices(self, pis: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """M(q_i) with trial i's bodies at pis[i] (non-finite where H_bb is not PD)."""
-        return identification.reduced_mass_matrices(
-            *self._topology, self._X_PF, self._axis, self._X_MC, self._below,
-            self._joint_below, *self._inertias, self.nodes, pis, q)
