@@ -109,7 +109,7 @@ class InertiaIdentification:
     anchor: str = "total_mass"
     anchor_mass: float = 0.0
     anchor_error: float = 0.0
-    fit_tolerance: float = 1e-5
+    fit_tolerance: float = 1e-6
     on_mismatch: str = "identified"
     nominal_tolerance: float = 0.1
     anchor_tolerance: float = 0.01
@@ -349,7 +349,7 @@ class LocalBayes:
     floor: float = 1.0
     forgetting: float = 2.0
     min_window: float = 0.2
-    min_dof: float = 6.0
+    min_dof: float = 3.0
     credible_level: float = 0.9
     certificate_level: float = 0.99
     margin: float = 2.0

@@ -59,16 +59,23 @@ ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("inertia", "anchor_tolerance", 0.01),
                            ("inertia", "kinematic_tolerance", 0.0),
                            ("inertia", "error_draws", 16))
-# Sections added to the current layout's sections since it was introduced: their
-# lines at the defaults are left out of the fingerprinted text too (a file without
-# them reads them at their defaults).
-ADDED_SUBSECTIONS = (("learner", "bayes", LocalBayes),)
+def _bayes_as_introduced() -> LocalBayes:
+    """learner.bayes with the defaults it had when the section was added (a frozen
+    record: the defaults since changed are set back here, never edited)."""
+    return LocalBayes(model_error=0.1, min_dof=6.0)
+
+
+# Sections added to the current layout's sections since it was introduced, with their
+# settings as introduced: their lines at those values are left out of the
+# fingerprinted text too, and a saved run's file without them reads them at those
+# values (an input file, at today's defaults).
+ADDED_SUBSECTIONS = (("learner", "bayes", _bayes_as_introduced),)
 
 
 def as_before_added(scenario: Scenario) -> Scenario:
     """A copy of ``scenario`` with each setting of ADDED_TO_CURRENT_LAYOUT at its
-    value before it existed and ADDED_SUBSECTIONS at their defaults: the settings
-    a file written before them is read with.
+    value before it existed and ADDED_SUBSECTIONS as introduced: the settings a
+    saved run's file written before them is read with.
 
     Args:
         scenario: The scenario."""
@@ -82,7 +89,7 @@ def as_before_added(scenario: Scenario) -> Scenario:
 
 
 def _added_lines() -> Tuple[str, ...]:
-    """ADDED_TO_CURRENT_LAYOUT's lines and ADDED_SUBSECTIONS' default lines as
+    """ADDED_TO_CURRENT_LAYOUT's lines and ADDED_SUBSECTIONS' lines as introduced, as
     yaml_dump_typed writes them."""
     lines = [f"  {key}: {str(value).lower()}" for _, key, value in ADDED_TO_CURRENT_LAYOUT]
     for _, key, section in ADDED_SUBSECTIONS:
@@ -428,6 +435,11 @@ def _migrate_saved_file(raw, path):
         if isinstance(source.get(section), dict) and key not in source[section]:
             source = dict(source)
             source[section] = {**source[section], key: before}
+    for section, key, introduced in ADDED_SUBSECTIONS:
+        if isinstance(source.get(section), dict) and key not in source[section]:
+            source = dict(source)
+            source[section] = {**source[section],
+                               key: dataclasses.asdict(introduced())}
     return source if source is not raw else None
 
 

@@ -148,3 +148,35 @@ def test_warm_up_is_labelled_and_the_controllers_are_distinguishable(panels):
     assert set(styles) == {"DAC-pH", "model-based"}
     dac, model_based = styles["DAC-pH"], styles["model-based"]
     assert dac[0] != model_based[0] and dac[1] != model_based[1]
+
+
+def test_the_entries_panel_draws_the_claims_the_metrics_report():
+    """Panel b draws what the metrics table reports (analysis.metrics.physical_view):
+    the claimed entries, their 90 % interval as a band; panel g the port model the
+    loop closes on against its own truth (I + E) B~, for a run that measured E."""
+    from dacph_drake.analysis.metrics import physical_view
+    from dacph_drake.app.figures import PORT_PANEL
+    from dacph_drake.loop.simulate import simulate
+    from dacph_drake.built_in_scenarios import short_scenario
+    scenario = short_scenario()
+    run = simulate(scenario, "dac", duration=3.0)
+    figures = make_panels({"dac": run.logs}, scenario)
+    try:
+        claims, lower, upper = physical_view(run.logs, scenario)
+        n = len(scenario.q0)
+        axes = [ax for ax in figures[PANELS[1]].axes if ax.lines]
+        assert len(axes) == n * n + n
+        for column, ax in enumerate(axes):
+            drawn = {line.get_label(): line.get_ydata() for line in ax.lines}
+            np.testing.assert_array_equal(drawn["claimed (learned or prior)"],
+                                          claims[:, column])
+            band = ax.collections[-1].get_paths()[0].vertices[:, 1]
+            assert band.min() == pytest.approx(lower[:, column].min())
+            assert band.max() == pytest.approx(upper[:, column].max())
+        port = [ax for ax in figures[PORT_PANEL].axes if ax.lines]
+        drawn = {line.get_label(): line.get_ydata() for line in port[0].lines}
+        np.testing.assert_array_equal(drawn["port model (the loop's)"],
+                                      run.logs["estimates"][:, 0])
+    finally:
+        for fig in figures.values():
+            plt.close(fig)

@@ -396,3 +396,20 @@ def test_a_section_named_without_a_newer_setting_runs_it_at_its_default(tmp_path
     notes = " ".join(record.getMessage() for record in records)
     assert "learner.model = 'local_bayes' (before it existed: 'network')" in notes
     assert "rhs.adoption = 'certified_set' (before it existed: 'trust_band')" in notes
+
+
+def test_a_run_saved_before_the_model_error_was_measured_keeps_its_meaning():
+    """A short DAC run saved by the release before the LHS model error was measured
+    (tests/data: its scenario.yaml and run record, the bayes section written at the
+    defaults of then, model_error 0.1; no inertia tolerances): read as a saved run, it
+    keeps its fingerprint and its settings, while the same file as an input runs
+    today's inertia settings."""
+    import json
+    from dacph_drake.loop.run_store import require_run_of
+    from dacph_drake.scenario_files import load_saved_scenario
+    folder = Path(__file__).resolve().parent / "data" / "short_run_before_measured_error"
+    meta = json.loads((folder / "run_dac.json").read_text())
+    saved = load_saved_scenario(folder / "scenario.yaml")
+    require_run_of(saved, meta, folder, "dac")
+    assert saved.learner.bayes.model_error == 0.1
+    assert saved.inertia == load_scenario(folder / "scenario.yaml").inertia
