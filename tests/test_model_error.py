@@ -392,3 +392,20 @@ def test_the_run_measures_the_lhs_models_inertia_error(length_error, tolerance):
         assert np.max(np.abs(E)) > 0.1
         assert run.logs["identification_log"][-1, 1] < 1e-5     # momentum misfit
         assert np.all(np.abs(E) <= z * sd)
+
+
+def test_draws_sharing_their_information_are_identified_as_each_alone(rng):
+    """identify_draws (one KKT matrix per trial, every draw's prior and anchored mass a
+    right-hand side) gives each draw what identify_parameters gives it alone."""
+    from dacph_drake.dynamics.inertial_parameters import identify_draws
+    trials, draws, size = 2, 5, 12
+    Y = rng.standard_normal((trials, 40, size))
+    A = np.einsum("tki,tkj->tij", Y, Y)
+    pi0 = rng.uniform(0.5, 2.0, (trials, draws, size))
+    S, c = rng.uniform(0.5, 2.0, (trials, size)), rng.uniform(0.0, 1.0, (trials, size))
+    v = rng.uniform(1.0, 2.0, (trials, draws))
+    shared = identify_draws(A, pi0, S, 1e-3, c, v)
+    alone = identify_parameters(np.repeat(A, draws, 0), pi0.reshape(-1, size),
+                                np.repeat(S, draws, 0), 1e-3, np.repeat(c, draws, 0),
+                                v.reshape(-1)).reshape(trials, draws, size)
+    np.testing.assert_allclose(shared, alone, rtol=1e-12, atol=1e-12)

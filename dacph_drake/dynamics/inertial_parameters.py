@@ -232,6 +232,35 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
     return out
 
 
+def identify_draws(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
+                   prior_weight: float, anchor: np.ndarray, anchor_values: np.ndarray
+                   ) -> np.ndarray:
+    """identify_parameters for draws that share their trial's information, scales and
+    anchor and differ in their prior and anchored mass only: one KKT matrix per trial,
+    factored once for all its draws' right-hand sides (trials, draws, size).
+
+    Args:
+        information: Each trial's A (trials, size, size).
+        pi0: Each draw's prior (trials, draws, size).
+        scales: Each trial's prior scales S (trials, size).
+        prior_weight: The prior's weight relative to the average information.
+        anchor: Each trial's constraint c (trials, size).
+        anchor_values: Each draw's anchored value v (trials, draws)."""
+    S2 = np.asarray(scales, float) ** 2
+    size = pi0.shape[-1]
+    r = prior_weight * np.sum(np.diagonal(information, axis1=-2, axis2=-1) * S2,
+                              axis=-1) / size
+    out = np.array(pi0, float)
+    for i in np.flatnonzero(r > 0):
+        system = np.zeros((size + 1, size + 1))
+        system[:size, :size] = S2[i, :, None] * information[i] + r[i] * np.eye(size)
+        system[:size, size] = S2[i] * anchor[i]
+        system[size, :size] = anchor[i]
+        rhs = np.concatenate([r[i] * pi0[i], anchor_values[i][:, None]], axis=1)
+        out[i] = np.linalg.solve(system, rhs.T)[:size].T
+    return out
+
+
 def mass_anchor(parameters: InertialParameters, bodies: Optional[List[int]] = None
                 ) -> np.ndarray:
     """The vector c (parameters.size) with c^T pi the mass of some bodies

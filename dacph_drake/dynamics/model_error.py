@@ -27,7 +27,7 @@ from typing import Optional, Sequence
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
-from dacph_drake.dynamics.inertial_parameters import identify_parameters
+from dacph_drake.dynamics.inertial_parameters import identify_draws, identify_parameters
 from dacph_drake.dynamics.tree_stack import TreeStack, positive_definite
 from dacph_drake.quantiles import student_quantile
 from dacph_drake.scenario import InertiaIdentification
@@ -128,11 +128,18 @@ class ModelErrorEnsemble:
             M_hat: Each trial's identified M(q) (trials, n, n).
             q: Each trial's joint angles (trials, n) [rad]."""
         K, (count, n) = self.draws, q.shape
-        if not self.own_information:
-            information = np.repeat(information, K, axis=0)
-        pis = identify_parameters(information, self._priors, self._scales,
-                                  self._settings.prior_weight, self._anchor,
-                                  self._anchor_values)
+        if not self.own_information and self._anchor is not None:
+            size = self._priors.shape[1]
+            pis = identify_draws(
+                information, self._priors.reshape(count, K, size), self._scales[::K],
+                self._settings.prior_weight, self._anchor[::K],
+                self._anchor_values.reshape(count, K)).reshape(count * K, size)
+        else:
+            if not self.own_information:
+                information = np.repeat(information, K, axis=0)
+            pis = identify_parameters(information, self._priors, self._scales,
+                                      self._settings.prior_weight, self._anchor,
+                                      self._anchor_values)
         M = self._trees.ReducedMassMatrices(pis, np.repeat(q, K, axis=0))
         usable = positive_definite(M).reshape(count, K)
         safe = np.where(usable.reshape(-1)[:, None, None], M, np.eye(n))
