@@ -312,10 +312,12 @@ def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
     (``residual_ratio`` = sqrt of the median, over the samples where the learner
     determined something, of its loss over its nominal loss; below 1: the learned
     model explains the port better), the share
-    of quantities left undetermined (published at the prior) and the reported
-    intervals' relative width; and warnings: a phase where the learned model did
-    not beat the prior, one where nothing was determined, a reported kinematic
-    mismatch (the learned B and D are then the port as the model sees it).
+    of quantities left undetermined (published at the prior), the reported
+    intervals' relative width and the LHS model error's measured sd
+    (``model_error_sd``, the median of its largest entry); and warnings: a phase
+    where the learned model did not beat the prior, one where nothing was
+    determined, a reported kinematic mismatch (the learned B and D are then the port
+    as the model sees it).
 
     Args:
         logs: A DAC run's logs (learner_log; estimate_bounds where the learner
@@ -323,7 +325,8 @@ def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
         scenario: The scenario it ran.
 
     Returns:
-        {"phases": {phase: {residual_ratio, undetermined_share, interval}},
+        {"phases": {phase: {residual_ratio, undetermined_share, interval,
+        model_error_sd}},
         "warnings": [str]}."""
     t, learner = logs["time"], logs["learner_log"]
     layout = LearnerLog()
@@ -342,6 +345,9 @@ def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
         entry = {"residual_ratio": residual, "undetermined_share": undetermined}
         entry["interval"] = relative_half_width(view, mask,
                                                 slice(0, len(scenario.q0) ** 2))
+        error_sd = np.sqrt(model_error_sd(logs, scenario)[mask] ** 2
+                           + scenario.learner.bayes.model_error ** 2)
+        entry["model_error_sd"] = float(np.median(np.max(error_sd, axis=(1, 2))))
         phases[phase] = entry
         if not len(finite):
             warnings.append(f"{phase}: the data determined no quantity; the prior "
