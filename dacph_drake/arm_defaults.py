@@ -382,8 +382,28 @@ def sized_defaults(robot: Union[PlanarArm, DescribedArm], q0: Optional[Sequence[
         robot: The file's robot section.
         q0: The file's q0 [rad] (None where it leaves it out).
         task: The file's task (None where it leaves it out)."""
+    validate_given(q0, task)
     if isinstance(robot, DescribedArm):
         return arm_scenario(robot, q0, task)
     if robot.truth == RobotParams():
         return None
     return planar_arm_scenario(robot, q0, task)
+
+
+
+def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> None:
+    """Checks what a file gives that sizing uses (the start and the task's reference)
+    before any sizing, start-pose search or plant call reads it.
+
+    Args:
+        q0: The file's q0 [rad] (None where it leaves it out).
+        task: The file's task (None where it leaves it out).
+
+    Raises:
+        ConfigError: Naming the first bad setting."""
+    from dacph_drake.scenario_checks import validate_start
+    from dacph_drake.tasks.registry import TASKS
+    if q0 is not None:
+        validate_start(q0)
+    if task is not None and type(task) in TASKS:
+        TASKS[type(task)].Validate(task, described_arm_periods())

@@ -3,6 +3,8 @@ own sections are checked by their robots/ and tasks/ modules). Each raises
 ConfigError naming the first invalid setting and what is allowed."""
 from typing import List, Sequence, Tuple
 
+import numpy as np
+
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.gain_rule import check_period_order
@@ -32,7 +34,7 @@ def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Seque
                           f"joint); the joints in q0's order: "
                           f"{', '.join(joint_names)}")
     require_length("q0", scenario.q0, n)
-    require_finite_numbers("q0", list(scenario.q0))
+    validate_start(scenario.q0)
     task.Validate(scenario.task, scenario.periods)
     validate_phases(scenario.phases)
     require_positive("phases (total)", scenario.phases.end, "s")
@@ -57,6 +59,20 @@ def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Seque
     validate_simulator_config(scenario.simulator)
     # Last, so that a setting with a range names it: every other number finite.
     require_finite_numbers("", scenario)
+
+
+# The largest |q0_i| [rad]: beyond it sin and cos of an angle lose every digit.
+MAX_ANGLE = 1e3
+
+
+def validate_start(q0: Sequence[float]) -> None:
+    """Requires q0's angles finite and within +-MAX_ANGLE rad.
+
+    Args:
+        q0: The initial joint angles [rad]."""
+    require_finite_numbers("q0", list(q0))
+    if len(q0) and float(np.max(np.abs(np.asarray(q0, float)))) > MAX_ANGLE:
+        raise ConfigError(f"q0 = {list(q0)}; allowed: angles within +-{MAX_ANGLE:g} rad")
 
 
 def validate_seed(seed: object) -> None:

@@ -2,7 +2,8 @@
 lines (run: .venv/bin/python scripts/zoo.py --out results/zoo).
 
 Every manipulator of example-robot-data (Panda, UR3/5/10, Kinova j2s6s200, xArm7,
-Unitree Z1, SO-100, SO-101) and arms of our own with extreme properties (heavy
+Unitree Z1, SO-100, SO-101), every arm of robosuite 1.5.2 (its MJCF robot.xml files:
+Panda, Sawyer, iiwa, Jaco, Kinova3, xArm7, UR5e) and arms of our own with extreme properties (heavy
 joint damping, a tiny wrist, a chain of 9 joints, a heavy tool, a light base:
 URDFs written by this script), each from a file naming only the description, the
 base's mass, the end-effector frame and the locked gripper joints. For each arm,
@@ -44,6 +45,12 @@ SHIPPED = {
     "so101": (f"{EXAMPLE}/so_arm_description/urdf/so101.urdf", "gripper_link",
               "gripper: 0.0"),
 }
+# robosuite's arms, each from its own robot.xml as robosuite 1.5.2 ships it (MJCF: STL
+# meshes, massless mount bodies; pip install --no-deps robosuite==1.5.2).
+ROBOSUITE = "package://robosuite/models/assets/robots"
+SHIPPED.update({f"robosuite_{arm}": (f"{ROBOSUITE}/{arm}/robot.xml", "right_hand", "")
+                for arm in ("panda", "sawyer", "iiwa", "jaco", "kinova3", "xarm7",
+                            "ur5e")})
 # Arms of our own (robots.serial_arm): (links as (mass [kg], length [m], damping
 # [N m s/rad]), tool mass [kg], base mass [kg]).
 OWN = {

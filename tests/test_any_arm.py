@@ -320,3 +320,170 @@ def test_a_heavy_joints_actuator_leaks_into_a_light_one_at_its_own_scale(tmp_pat
         assert np.all(leak <= fraction * torque[:, None] * (1 + 1e-12))
     result = simulate(scenario, "model-based", duration=6.5)
     assert result.status == "ok", result.reason
+
+
+def _robosuite_style(tmp_path: Path) -> Path:
+    """arm3.xml as robosuite ships its arms: the arm in an <include>d file, a massless
+    mount body (mass="0" diaginertia="0 0 0") between the root and the arm, a binary
+    STL collision mesh without a name in compiler meshdir, and a MuJoCo .msh one."""
+    from test_arm_mount import _stl
+    (tmp_path / "meshes").mkdir()
+    half = np.array([0.03, 0.03, 0.1])
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+    faces = np.array([(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+                      (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)])
+    (tmp_path / "meshes" / "link1.stl").write_bytes(_stl(corners[faces], True))
+    header = np.array([8, 0, 0, 12], "<i4").tobytes()
+    (tmp_path / "meshes" / "link2.msh").write_bytes(
+        header + corners.astype("<f4").tobytes() + faces.astype("<i4").tobytes())
+    text = (ARMS / "arm3.xml").read_text()
+    arm = text[text.index('<body name="link1"'):text.index("</body>\n    </body>")] \
+        + "</body>"
+    arm = arm.replace('<geom name="link1_geom" type="cylinder" pos="0 0 0.2" '
+                      'size="0.04 0.2"/>', '<geom name="link1_geom" type="mesh" '
+                      'mesh="link1" pos="0 0 0.2"/>')
+    arm = arm.replace('<geom name="link2_geom" type="cylinder" pos="0 0 0.15" '
+                      'size="0.03 0.15"/>', '<geom name="link2_geom" type="mesh" '
+                      'mesh="shoulder" pos="0 0 0.15"/>')
+    (tmp_path / "arm_body.xml").write_text(
+        f'<mujoco><body name="mount" pos="0 0 0"><inertial pos="0 0 0" mass="0" '
+        f'diaginertia="0 0 0"/>{arm}</body></mujoco>')
+    main = text[:text.index('<body name="link1"')].replace(
+        '<compiler angle="radian"/>', '<compiler angle="radian" meshdir="meshes"/>\n'
+        '  <asset><mesh file="link1.stl"/><mesh name="shoulder" file="link2.msh"/>'
+        '</asset>') + '<include file="arm_body.xml"/>\n    </body>\n  </worldbody>\n' \
+        '</mujoco>\n'
+    path = tmp_path / "robot.xml"
+    path.write_text(main)
+    return path
+
+
+def test_an_mjcf_arm_as_robosuite_ships_it_loads_unchanged(tmp_path):
+    """An MJCF with an include, meshdir, an STL and a .msh mesh (one without a name) and a
+    massless mount body loads as MuJoCo reads it: the same joints and mass matrix as the
+    plain arm3.xml (the massless body adds nothing), the meshes converted to OBJ in the
+    cache (the user's folder untouched), the clearance potential measuring them."""
+    from dacph_drake.robots.clearance_potential import BaseClearancePotential
+    path = _robosuite_style(tmp_path)
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    matrices = []
+    for description in (ARMS / "arm3.xml", path):
+        arm = DescribedArm(description=str(description), base=ArmBase(mass=100.0),
+                           end_effector=EndEffectorFrame(frame="link3"))
+        model = FloatingBaseModel(MakeRobotPlant(arm))
+        matrices.append(model.MassMatrix(np.array([0.3, 0.8, -0.4])))
+    np.testing.assert_allclose(matrices[1], matrices[0], rtol=1e-12, atol=1e-14)
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+    potential = BaseClearancePotential(parsed=ParsedDescription(arm), model=model,
+                                       gain=1.0, margin=0.1)
+    assert np.isfinite(potential.Evaluate(np.array([0.3, 2.2, 0.5]), None).min_distance)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda p: (p.parent / "meshes" / "link1.stl").unlink(),
+     r"robot\.xml: mesh 'link1': no such file .*link1\.stl"),
+    (lambda p: p.write_text(p.read_text().replace('file="link1.stl"',
+                                                  'file="link1.ply"')),
+     r"robot\.xml: mesh 'link1' file 'link1\.ply' is a \.ply file; allowed: "
+     r"\.stl, \.obj, \.msh"),
+    (lambda p: (p.parent / "meshes" / "link1.stl").write_bytes(b"solid x\nendsolid x\n"),
+     r"mesh '.*link1\.stl' is not an STL file"),
+    (lambda p: (p.parent / "meshes" / "link2.msh").write_bytes(b"\x01\x00\x00\x00" * 3),
+     r"mesh '.*link2\.msh' is not a MuJoCo \.msh file"),
+    (lambda p: (p.parent / "arm_body.xml").unlink(),
+     r"robot\.xml: <include file='arm_body\.xml'>: no such file"),
+    (lambda p: (p.parent / "arm_body.xml").write_text(
+        '<mujoco><include file="arm_body.xml"/></mujoco>'),
+     r"<include file='arm_body\.xml'> nests more than 16 deep"),
+    (lambda p: (p.parent / "arm_body.xml").write_text("<mujoco><body"),
+     r"arm_body\.xml:1: not an XML file"),
+    (lambda p: (p.parent / "arm_body.xml").write_text("<robot/>"),
+     r"arm_body\.xml: its root element is <robot>; allowed: an MJCF file"),
+    (lambda p: p.parent.joinpath("arm_body.xml").write_text(
+        p.parent.joinpath("arm_body.xml").read_text().replace('mass="0"', 'mass="x"')),
+     r"body 'mount': <inertial mass='x'>; allowed: a number >= 0"),
+])
+def test_a_broken_mjcf_is_refused_in_one_line_naming_the_part(tmp_path, edit, message):
+    """Each way an MJCF can be broken ends in one ConfigError naming the file and the
+    mesh, include or body: never a Drake assertion or a traceback."""
+    path = _robosuite_style(tmp_path)
+    edit(path)
+    arm = DescribedArm(description=str(path), base=ArmBase(mass=100.0),
+                       end_effector=EndEffectorFrame(frame="link3"))
+    with pytest.raises(ConfigError, match=message) as error:
+        MakeRobotPlant(arm)
+    assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("q0: [.nan, 0.1, 0.2]", r"q0\[0\] = nan is not finite"),
+    ("q0: [.inf, 0.1, 0.2]", r"q0\[0\] = inf is not finite"),
+    ("q0: [1.0e308, 0.1, 0.2]", r"q0 = \[1e\+308, 0.1, 0.2\]; allowed: angles within "
+                                r"\+-1000 rad"),
+    ("task: !EndEffectorAttitude\n  reference: {axis: [0, 0, 0]}",
+     r"task\.reference\.axis = \[0\.0, 0\.0, 0\.0\]; allowed: a non-zero 3-vector"),
+    ("task: !EndEffectorAttitude\n  reference: {axis: [0, 1]}",
+     r"task\.reference\.axis = \[0\.0, 1\.0\]; allowed: a non-zero 3-vector"),
+    ("task: !EndEffectorAttitude\n  reference: {axis: [.nan, 0, 1]}",
+     r"task\.reference\.axis\[0\] = nan is not finite"),
+    ("task: !EndEffectorAttitude\n  reference: {initial_error_axis: [0, 0, 0]}",
+     r"task\.reference\.initial_error_axis = \[0\.0, 0\.0, 0\.0\]; allowed"),
+])
+def test_a_described_arms_start_and_reference_are_checked_before_sizing(
+        tmp_path, setting, message):
+    """q0 and the reference's axes are checked before the start-pose search, sizing or a
+    plant reads them: one line naming the setting, never Drake's AllFinite assertion
+    or numpy's 'SVD did not converge'."""
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"robot: !DescribedArm\n  description: satellite_3dof\n{setting}\n")
+    with pytest.raises(ConfigError, match=message):
+        load_scenario(path)
+
+
+def test_an_mjcf_joints_armature_is_in_the_truth_and_in_the_lhs_model(tmp_path):
+    """MuJoCo's armature (a motor's reflected rotor inertia, here with gear 3: Drake's
+    rotor inertia armature / gear^2) is on H's joint diagonal in the ground truth;
+    the reduced model, its derivatives' source and the truth's joint momentum carry it:
+    M matches the plant's H_mm - H_mb H_bb^-1 H_bm to round-off, and p = M qdot its
+    joint rows of H v; an arm without it differs by exactly diag(armature)."""
+    from dacph_drake.kernels.spatial import joint_momentum
+    text = (ARMS / "arm3.xml").read_text()
+    path = tmp_path / "armature.xml"
+    path.write_text(text.replace('<joint name="joint1" type="hinge"',
+                                 '<joint name="joint1" armature="0.05" type="hinge"')
+                    .replace('<joint name="joint3" type="hinge"',
+                             '<joint name="joint3" armature="0.002" type="hinge"')
+                    .replace("</worldbody>", '</worldbody><actuator><motor joint="joint1" '
+                             'gear="3"/><motor joint="joint2"/><motor joint="joint3"/>'
+                             '</actuator>'))
+    rng = np.random.default_rng(48)
+    plain = None
+    for description in (ARMS / "arm3.xml", path):
+        arm = DescribedArm(description=str(description), base=ArmBase(mass=100.0),
+                           end_effector=EndEffectorFrame(frame="link3"))
+        plant = MakeRobotPlant(arm)
+        model = FloatingBaseModel(plant)
+        context = plant.CreateDefaultContext()
+        q = np.array([0.3, 0.8, -0.4])
+        qdot = rng.normal(size=3)
+        plant.SetPositions(context, model.FullPositions(q))
+        H = plant.CalcMassMatrix(context)
+        b, m = model.coordinates.base_v, model.coordinates.joint_v
+        reduced = H[np.ix_(m, m)] - H[np.ix_(m, b)] @ np.linalg.solve(H[np.ix_(b, b)],
+                                                                     H[np.ix_(b, m)])
+        M = model.MassMatrix(q)
+        np.testing.assert_allclose(M, reduced, rtol=0, atol=1e-12 * np.abs(reduced).max())
+        v = np.zeros(plant.num_velocities())
+        v[m] = qdot
+        v[b] = -np.linalg.solve(H[np.ix_(b, b)], H[np.ix_(b, m)] @ qdot)  # zero momentum
+        plant.SetVelocities(context, v)
+        tree, (base_pose, _, base_velocity, _) = model.tree, model.coordinates.Split(
+            plant.GetPositionsAndVelocities(context))
+        p = joint_momentum(tree.base_subspace, tree.parent, tree.joint, tree.X_PF,
+                           tree.axis, tree.X_MC, tree.below, *tree.Inertias(context),
+                           base_pose, base_velocity, q, qdot)
+        np.testing.assert_allclose(p, (H @ v)[m], rtol=0, atol=1e-12 * np.abs(H).max())
+        np.testing.assert_allclose(p, M @ qdot, rtol=1e-10, atol=1e-14)
+        if plain is None:
+            plain = M
+    np.testing.assert_allclose(M - plain, np.diag([0.05, 0.0, 0.002]), atol=1e-14)

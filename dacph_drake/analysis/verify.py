@@ -79,11 +79,14 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     n = len(scenario.q0)
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     learned = B_column == "estimates"
+    # The learner's estimate the gains of sample k were set with: the one the last
+    # refresh before it read (a sample's estimate is judged at the next refresh).
+    read = _refresh_reads(t, scenario.periods.learner_sample) if learned else None
     series = LoopSeries()
     for k in range(0, len(t), every):
         if learned and rhs[k, R.trusted] < 0.5:
             continue               # the integrator rejected this estimate, kept gains
-        B = logs[B_column][k, :n * n].reshape(n, n)
+        B = logs[B_column][k if read is None else read[k], :n * n].reshape(n, n)
         # A logged sample shows the state before the updates at its own time.
         if learned and t[k] > scenario.stress.start:
             B = scenario.stress.B_hat_scale * B
@@ -96,6 +99,15 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
             series.failures.append(f"t = {t[k]:.3f} s: {check.reason}")
             series.failure_times.append(float(t[k]))
     return series
+
+
+def _refresh_reads(t: np.ndarray, period: float) -> np.ndarray:
+    """For each logged sample, the sample whose learner output its gains were set with: a
+    sample logs the state before the discrete updates of its own instant, so its gains
+    come from the integrator's last refresh strictly before it (every ``period`` [s]),
+    which read the learner's output as logged at that refresh's instant."""
+    refresh = (np.ceil(t / period - 1e-9) - 1.0) * period
+    return np.clip(np.searchsorted(t, refresh - 1e-9), 0, len(t) - 1)
 
 
 def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
@@ -113,12 +125,7 @@ def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
                 "skipped": "the learner reports no credible set (a point estimate)"}
     adopted = np.flatnonzero(rhs[:, R.trusted] > 0.5)
     rate = scenario.rhs.Td * lambda_lhs
-    # A sample logs the state before the discrete updates of its own instant, so
-    # the gains it shows come from the integrator's last refresh strictly before it,
-    # which read the learner's output as logged at that refresh's instant.
-    period = scenario.periods.learner_sample
-    refresh = (np.ceil(t / period - 1e-9) - 1.0) * period
-    read = np.clip(np.searchsorted(t, refresh - 1e-9), 0, len(t) - 1)
+    read = _refresh_reads(t, scenario.periods.learner_sample)
     failures, worst_separation, worst_radius = [], np.inf, 0.0
     for i in adopted:
         scale = scenario.stress.B_hat_scale if t[i] > scenario.stress.start else 1.0

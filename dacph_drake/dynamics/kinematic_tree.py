@@ -5,7 +5,9 @@ the planar arms, a planar one), each body on its inboard joint, revolute or a we
     X_WC = X_WP X_PF Rot(axis, q_j) X_MC.
 
 Joints are numbered in actuator order (ArmCoordinates), the reduced model's q. The
-inertias change with the controller's parameters, so they are not part of the tree."""
+inertias change with the controller's parameters, so they are not part of the tree; nor
+are the actuators' reflected inertias rho^2 I_r (an MJCF joint's armature, a URDF's
+transmission), which Drake adds to H's diagonal on their joints (Inertias)."""
 from dataclasses import dataclass
 from typing import Tuple
 
@@ -35,7 +37,8 @@ class KinematicTree:
         X_MC: Each body's frame C in its joint's moving frame M (nodes, 4, 4).
         below: True where joint k moves the node (n, nodes).
         joint_below: True where joint k moves joint j's axis (j != k) (n, n).
-        joint_node: The node each joint moves (n,)."""
+        joint_node: The node each joint moves (n,).
+        actuators: (joint, actuator) of every actuator on a joint of the tree."""
     bodies: list
     base_subspace: np.ndarray
     parent: np.ndarray
@@ -46,6 +49,7 @@ class KinematicTree:
     below: np.ndarray
     joint_below: np.ndarray
     joint_node: np.ndarray
+    actuators: list
 
     @staticmethod
     def FromPlant(plant: MultibodyPlant) -> "KinematicTree":
@@ -124,16 +128,22 @@ class KinematicTree:
             bodies=[plant.get_body(BodyIndex(b)) for b in order],
             base_subspace=base_subspace, parent=parent,
             joint=joint_index, X_PF=X_PF, axis=axis, X_MC=X_MC, below=below,
-            joint_below=joint_below, joint_node=joint_node)
+            joint_below=joint_below, joint_node=joint_node,
+            actuators=[(joint_of_velocity[actuator.joint().velocity_start()], actuator)
+                       for actuator in (plant.get_joint_actuator(i)
+                                        for i in plant.GetJointActuatorIndices())
+                       if actuator.joint().velocity_start() in joint_of_velocity])
 
     def KernelArrays(self) -> tuple:
         """The tree's arrays in kernels.spatial's argument order (the inertias follow)."""
         return (self.base_subspace, self.parent, self.joint, self.X_PF, self.axis,
                 self.X_MC, self.below, self.joint_below)
 
-    def Inertias(self, context: Context) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The bodies' inertias, as the plant holds them in a context, in each body's frame:
-        (mass (nodes,), m c (nodes, 3), inertia about the origin (nodes, 3, 3)).
+    def Inertias(self, context: Context
+                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The bodies' inertias, as the plant holds them in a context, in each body's frame,
+        and the joints' reflected inertias: (mass (nodes,), m c (nodes, 3), inertia about
+        the origin (nodes, 3, 3), reflected rho^2 I_r (n,) [kg m^2]).
 
         Args:
             context: A context of the plant."""
@@ -144,7 +154,10 @@ class KinematicTree:
             mass[node] = M.get_mass()
             moment[node] = M.get_mass() * M.get_com()
             inertia[node] = M.CalcRotationalInertia().CopyToFullMatrix3()
-        return mass, moment, inertia
+        reflected = np.zeros(len(self.joint_node))
+        for joint, actuator in self.actuators:
+            reflected[joint] += actuator.calc_reflected_inertia(context)
+        return mass, moment, inertia, reflected
 
     def Node(self, frame: Frame) -> Tuple[int, np.ndarray]:
         """Where a plant frame sits in the tree: (node, X_CF (4 x 4)), its body's node and

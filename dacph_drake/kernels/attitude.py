@@ -479,7 +479,8 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.
             (zero for the attitude task))."""
     base_subspace, parent, joint, joint_below = tree[0], tree[1], tree[2], tree[7]
     evaluation = reduced_model(tree[0], tree[1], tree[2], tree[3], tree[4], tree[5],
-                               tree[6], tree[7], tree[8], tree[9], tree[10], q, True)
+                               tree[6], tree[7], tree[8], tree[9], tree[10], tree[11], q,
+                               True)
     Lambda, damping, damping_rate, epsilon, boundary_rate = (
         gains[0], gains[1], gains[2], gains[3], gains[4])
     position_log = np.zeros(7)

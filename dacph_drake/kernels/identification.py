@@ -146,7 +146,8 @@ def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
                           joint: np.ndarray, X_PFs: np.ndarray, axes: np.ndarray,
                           X_MCs: np.ndarray, below: np.ndarray, joint_below: np.ndarray,
                           masses: np.ndarray, moments: np.ndarray, inertias: np.ndarray,
-                          nodes: np.ndarray, pis: np.ndarray, q: np.ndarray
+                          reflecteds: np.ndarray, nodes: np.ndarray, pis: np.ndarray,
+                          q: np.ndarray
                           ) -> np.ndarray:
     """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm (trials, n, n) of every trial i, its
     parameter-carrying bodies at pis[i] (spatial.reduced_model); non-finite where H_bb is
@@ -164,6 +165,7 @@ def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
         masses: Each trial's body masses (trials, nodes) [kg]; those in ``nodes`` replaced.
         moments: Each trial's first moments m c in body frames (trials, nodes, 3) [kg m].
         inertias: Each trial's rotational inertias about body origins (..., 3, 3) [kg m^2].
+        reflecteds: Each trial's joints' reflected inertias (trials, n) [kg m^2].
         nodes: Each parameter-carrying body's node (bodies,), in InertialParameters order.
         pis: Each trial's inertial parameters (trials, 10 bodies; InertialParameters).
         q: Each trial's joint angles (trials, n) [rad]."""
@@ -183,5 +185,6 @@ def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
             inertia[node, 0, 2] = inertia[node, 2, 0] = xz
             inertia[node, 1, 2] = inertia[node, 2, 1] = yz
         out[i] = reduced_model(base_subspace, parent, joint, X_PFs[i], axes[i], X_MCs[i],
-                               below, joint_below, mass, moment, inertia, q[i], False)[0]
+                               below, joint_below, mass, moment, inertia, reflecteds[i],
+                               q[i], False)[0]
     return out

@@ -360,7 +360,8 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
                          base_subspace: np.ndarray, parent: np.ndarray,
                          joint: np.ndarray, X_PFs: np.ndarray, axes: np.ndarray,
                          X_MCs: np.ndarray, below: np.ndarray, masses: np.ndarray,
-                         moments: np.ndarray, inertias: np.ndarray, u: np.ndarray,
+                         moments: np.ndarray, inertias: np.ndarray,
+                         reflecteds: np.ndarray, u: np.ndarray,
                          limits: np.ndarray, disturbance_models: np.ndarray,
                          packs: np.ndarray, offsets: np.ndarray, running: np.ndarray,
                          bound: float, verdicts: np.ndarray) -> np.ndarray:
@@ -382,6 +383,7 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
         masses: Each trial's body masses [kg] (trials x nodes).
         moments: Each trial's first moments m c [kg m] (trials x nodes x 3).
         inertias: Each trial's rotational inertias about the body origins [kg m^2].
+        reflecteds: Each trial's joints' reflected inertias (trials, n) [kg m^2].
         u: The trials' commands [N m] (trials n).
         limits: The actuators' effort limits [N m] (trials x n).
         disturbance_models: The trials' d(t) parameters (disturbance; trials (3 + 5 n)).
@@ -403,7 +405,7 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
             q, qdot = arm[13:13 + n], arm[13 + n:]
             p = joint_momentum(base_subspace, parent, joint, X_PFs[i], axes[i],
                                X_MCs[i], below, masses[i], moments[i], inertias[i],
-                               arm[:7], arm[7:13], q, qdot)
+                               reflecteds[i], arm[:7], arm[7:13], q, qdot)
             for j in range(n):
                 command = u[i * n + j]
                 clipped[j] = min(max(command, -limits[i, j]), limits[i, j])

@@ -171,12 +171,13 @@ def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
                                 joint: np.ndarray, X_PF: np.ndarray, axis: np.ndarray,
                                 X_MC: np.ndarray, below: np.ndarray,
                                 joint_below: np.ndarray, mass: np.ndarray,
-                                moment: np.ndarray, inertia: np.ndarray, q: np.ndarray,
-                                derivatives: bool
+                                moment: np.ndarray, inertia: np.ndarray,
+                                reflected: np.ndarray, q: np.ndarray, derivatives: bool
                                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
                                            np.ndarray]:
     """(H (nb + n)^2 in (base; joints) order, dH[k] = dH/dq_k, X, S (forward_kinematics)):
-    the plant's mass matrix at the base's identity pose, and its derivatives.
+    the plant's mass matrix at the base's identity pose, and its derivatives; the joints'
+    reflected inertias on H's joint diagonal, as Drake adds them.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -190,6 +191,7 @@ def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
         moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
         inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
+        reflected: Each joint's reflected inertia rho^2 I_r (n,) [kg m^2].
         q: The joint angles (n) [rad].
         derivatives: Whether to compute dH (zero otherwise)."""
     n, nodes, nb = q.shape[0], parent.shape[0], base_subspace.shape[1]
@@ -220,6 +222,7 @@ def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
                 value = dot(S[j], IcS[l])
                 H[nb + j, nb + l] = value
                 H[nb + l, nb + j] = value
+        H[nb + j, nb + j] += reflected[j]
     if not derivatives:
         return H, dH, X, S
     dS = np.zeros((n, 6))                 # dS_j/dq_k
@@ -304,8 +307,8 @@ def _cholesky_solve(A, B):
 def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                   X_PF: np.ndarray, axis: np.ndarray, X_MC: np.ndarray,
                   below: np.ndarray, joint_below: np.ndarray, mass: np.ndarray,
-                  moment: np.ndarray, inertia: np.ndarray, q: np.ndarray,
-                  derivatives: bool = True) -> tuple:
+                  moment: np.ndarray, inertia: np.ndarray, reflected: np.ndarray,
+                  q: np.ndarray, derivatives: bool = True) -> tuple:
     """(M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S): the reduced
     model and what the Jacobians and their rates need;
     dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A).
@@ -322,12 +325,13 @@ def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
         moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
         inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
+        reflected: Each joint's reflected inertia rho^2 I_r (n,) [kg m^2].
         q: The joint angles (n) [rad].
         derivatives: Whether to compute dM and dA (zero otherwise)."""
     n, nb = q.shape[0], base_subspace.shape[1]
     H, dH, X, S = mass_matrix_and_derivatives(base_subspace, parent, joint, X_PF, axis,
                                               X_MC, below, joint_below, mass, moment,
-                                              inertia, q, derivatives)
+                                              inertia, reflected, q, derivatives)
     Hbb, Hbm, Hmm = H[:nb, :nb], H[:nb, nb:], H[nb:, nb:]
     A = _cholesky_solve(Hbb, Hbm)
     M = Hmm - matmul(Hbm.T, A)
@@ -473,7 +477,7 @@ def body_twist_into(V: np.ndarray, omega_B: np.ndarray, v_B: np.ndarray,
 def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                    X_PF: np.ndarray, axis: np.ndarray, X_MC: np.ndarray,
                    below: np.ndarray, mass: np.ndarray, moment: np.ndarray,
-                   inertia: np.ndarray, base_pose: np.ndarray,
+                   inertia: np.ndarray, reflected: np.ndarray, base_pose: np.ndarray,
                    base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
                    ) -> np.ndarray:
     """p (n), the joint rows of H(q) v, about the base's origin in its axes (so independent
@@ -483,7 +487,8 @@ def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
         V_C = (omega; v_O) = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
         P_C = m (v_O + omega x c),  L_C = R I_c R^T omega + c x P_C,
 
-    c the body's centre of mass, I_c its inertia about it in body axes, R its orientation.
+    c the body's centre of mass, I_c its inertia about it in body axes, R its orientation;
+    plus each joint's reflected inertia times its rate (H's diagonal, as Drake's).
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -496,6 +501,7 @@ def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
         mass: Each body's mass (nodes,) [kg] (zero: a massless body).
         moment: Each body's first moment m c in its frame (nodes, 3) [kg m].
         inertia: Each body's rotational inertia about its origin, in its frame [kg m^2].
+        reflected: Each joint's reflected inertia rho^2 I_r (n,) [kg m^2].
         base_pose: Planar (x, y, theta) [m, rad] or floating (qw, qx, qy, qz, x, y, z) [m].
         base_velocity: Planar (vx, vy, omega) or floating (omega, v), world [rad/s, m/s].
         q: The joint angles (n) [rad].
@@ -537,4 +543,6 @@ def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
         for j in range(n):
             if below[j, node]:
                 p[j] += dot(S[j], h)
+    for j in range(n):
+        p[j] += reflected[j] * qdot[j]
     return p

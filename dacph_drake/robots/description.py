@@ -25,6 +25,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_xacro,
                                                    without_duplicate_materials)
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
+from dacph_drake.robots.mjcf import mjcf_for_drake
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
@@ -72,12 +73,15 @@ def robot_description(name_or_path: Union[str, Path],
     text = str(name_or_path)
     if text.startswith("package://"):
         package, _, rest = text[len("package://"):].partition("/")
+        if package_map is not None and not package_map.Contains(package):
+            _AddPythonPackage(package_map, package)
         if package_map is None or not package_map.Contains(package):
             raise ConfigError(f"robot description {text!r}: unknown package {package!r}; "
                               "allowed: a package on robot.package_paths, "
                               "robot.packages, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH, or "
                               "one installed with pip (e.g. pip install "
-                              "'dacph-drake[robots]' for example-robot-data)")
+                              "'dacph-drake[robots]' for example-robot-data), or an "
+                              "installed Python package of that name (robosuite)")
         path = Path(package_map.GetPath(package)) / rest
     else:
         path = Path(name_or_path)
@@ -89,6 +93,19 @@ def robot_description(name_or_path: Union[str, Path],
                           "a package:// URI of a file (.urdf, .sdf, or MuJoCo's MJCF "
                           ".xml)")
     return path
+
+
+def _AddPythonPackage(package_map: PackageMap, name: str) -> None:
+    """Adds an installed Python package's folder as package ``name`` (robosuite ships its
+    MJCF arms inside its Python package), found without importing it."""
+    import importlib.util
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return
+    folders = list(spec.submodule_search_locations or []) if spec else []
+    if folders:
+        package_map.Add(name, folders[0])
 
 
 def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
@@ -176,8 +193,10 @@ def PopulateFromDescription(plant: MultibodyPlant,
         parser = Parser(plant)
         path = robot_description(arm.description,
                                  package_map_of(arm, parser.package_map()))
-        converted = None
-        if path.suffix == ".urdf":
+        converted, kind = None, path.suffix[1:]
+        if path.suffix == ".xml":
+            converted = mjcf_for_drake(path)
+        elif path.suffix == ".urdf":
             text = path.read_text(encoding="utf-8")
             refuse_xacro(path, text)
             converted = urdf_with_obj_meshes(path, parser.package_map(),
@@ -187,7 +206,7 @@ def PopulateFromDescription(plant: MultibodyPlant,
         try:
             with parser_warnings_once(path):
                 instances = (parser.AddModels(str(path)) if converted is None
-                             else parser.AddModelsFromString(converted, "urdf"))
+                             else parser.AddModelsFromString(converted, kind))
             if arm.base.mass > 0:
                 _MountOnBase(plant, instances, arm.base)
         except RuntimeError as e:

@@ -1,12 +1,16 @@
 """Meshes as robot packages ship them, for Drake's SceneGraph, whose collision meshes must
 be .obj, .vtk or .gltf (it takes their convex hull), while ROS packages give STL and
-Collada .dae. Every STL mesh a URDF names, and every .dae mesh of a <collision>, is
-converted triangle for triangle to an OBJ in a cache folder (named by content hash), so
-the hull is the original's. A .dae's triangles are its geometries' placed by the
-<visual_scene>'s nodes (matrix, translate, rotate, scale, in document order), in metres;
-<up_axis> is not applied, as ROS's tools draw meshes in their link's frame. Visual .dae
-and other meshes stay as they are (relative paths made absolute file:// URIs)."""
+Collada .dae and MuJoCo's STL and its legacy .msh. Every STL mesh a URDF names, and every
+.dae mesh of a <collision>, is converted triangle for triangle to an OBJ in a cache folder
+(named by content hash), so the hull is the original's (robots.mjcf converts an MJCF's
+meshes the same way). STL is read by trimesh. A .dae's triangles are its geometries'
+placed by the <visual_scene>'s nodes (matrix, translate, rotate, scale, in document
+order), in metres; <up_axis> is not applied, as ROS's tools draw meshes in their link's
+frame (read here: pycollada, trimesh's Collada reader, refuses the sources without an
+accessor that exporters write). Visual .dae and other meshes stay as they are (relative
+paths made absolute file:// URIs)."""
 import hashlib
+import io
 import re
 import tempfile
 from pathlib import Path
@@ -48,7 +52,7 @@ def urdf_with_obj_meshes(path: Path, package_map: PackageMap,
     def replace(match):
         name = match.group(2)
         if converted(match):
-            name = "file://" + str(_ObjOf(_Resolve(name, path, package_map)))
+            name = "file://" + str(obj_of(_Resolve(name, path, package_map)))
         elif "://" not in name:          # a string's URIs have no folder of their own
             name = "file://" + str((path.parent / name).resolve())
         return match.group(1) + name + match.group(3)
@@ -69,15 +73,20 @@ def _Resolve(name: str, path: Path, package_map) -> Path:
     return path.parent / name
 
 
-def _ObjOf(mesh: Path) -> Path:
-    """The cached OBJ of an STL or .dae file (ConfigError naming a missing or bad one)."""
+def obj_of(mesh: Path) -> Path:
+    """The cached OBJ of an STL, .dae or MuJoCo .msh file (ConfigError naming a missing
+    or bad one).
+
+    Args:
+        mesh: The mesh file."""
     try:
         data = mesh.read_bytes()
     except OSError as e:
         raise ConfigError(f"mesh {str(mesh)!r} cannot be read ({e.strerror})") from e
     obj = CACHE / f"{hashlib.sha256(data).hexdigest()[:20]}.obj"
     if not obj.is_file():
-        read = dae_triangles if mesh.suffix.lower() == ".dae" else stl_triangles
+        read = {".dae": dae_triangles, ".msh": msh_triangles}.get(mesh.suffix.lower(),
+                                                                  stl_triangles)
         triangles = read(data, mesh)
         CACHE.mkdir(parents=True, exist_ok=True)
         lines = [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in triangles.reshape(-1, 3)]
@@ -89,7 +98,8 @@ def _ObjOf(mesh: Path) -> Path:
 
 
 def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
-    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII.
+    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII, in the
+    file's order (trimesh).
 
     Args:
         data: The file's bytes.
@@ -97,18 +107,42 @@ def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
 
     Raises:
         ConfigError: The bytes are not an STL file."""
-    if len(data) >= 84:
-        count = int(np.frombuffer(data[80:84], "<u4")[0])
-        if len(data) == 84 + 50 * count:                   # binary
-            records = np.frombuffer(data[84:], np.dtype([("normal", "<f4", 3),
-                                                         ("vertices", "<f4", (3, 3)),
-                                                         ("attribute", "<u2")]))
-            return records["vertices"].astype(float)
-    vertices = re.findall(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)", data)
-    if not vertices or len(vertices) % 3:
-        raise ConfigError(f"mesh {str(name)!r} is not an STL file; allowed: binary or "
-                          "ASCII STL")
-    return np.array(vertices, dtype=float).reshape(-1, 3, 3)
+    import trimesh
+    try:
+        mesh = trimesh.load(io.BytesIO(data), file_type="stl", process=False)
+        triangles = (np.asarray(mesh.triangles, float) if len(mesh.faces)
+                     else np.zeros((0, 3, 3)))
+    except Exception as e:               # trimesh raises what its readers raise
+        raise ConfigError(f"mesh {str(name)!r} is not an STL file ({type(e).__name__}: "
+                          f"{e}); allowed: binary or ASCII STL") from None
+    if not len(triangles):
+        raise ConfigError(f"mesh {str(name)!r} is not an STL file with triangles; "
+                          "allowed: binary or ASCII STL")
+    return triangles
+
+
+def msh_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
+    """The triangles (k, 3 vertices, xyz) of MuJoCo's legacy binary .msh (no library reads
+    it): int32 counts (vertices, normals, texture coordinates, faces), then float32
+    positions (3 each), normals (3), texture coordinates (2) and int32 faces (3).
+
+    Args:
+        data: The file's bytes.
+        name: The file's name, for the error message.
+
+    Raises:
+        ConfigError: The bytes are not a .msh file."""
+    if len(data) >= 16:
+        vertices, normals, textures, faces = np.frombuffer(data[:16], "<i4")
+        sizes = (3 * vertices, 3 * normals, 2 * textures, 3 * faces)
+        if min(sizes) >= 0 and vertices > 0 and faces > 0 and \
+                len(data) == 16 + 4 * sum(sizes):
+            floats = np.frombuffer(data[16:16 + 4 * sum(sizes[:3])], "<f4")
+            index = np.frombuffer(data[16 + 4 * sum(sizes[:3]):], "<i4").reshape(-1, 3)
+            if index.min() >= 0 and index.max() < vertices:
+                return floats[:sizes[0]].astype(float).reshape(-1, 3)[index]
+    raise ConfigError(f"mesh {str(name)!r} is not a MuJoCo .msh file (its counts and "
+                      "size disagree); allowed: MuJoCo's binary .msh, STL or OBJ")
 
 
 def dae_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:

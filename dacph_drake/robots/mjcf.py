@@ -1,0 +1,156 @@
+"""MJCF files as MuJoCo reads them, made into one text Drake's MuJoCo parser reads.
+
+MuJoCo's compiler accepts what Drake's parser refuses or asserts on; each is rewritten
+here, on a copy (the user's files are not touched):
+
+- ``<include file>``: replaced by the included file's ``<mujoco>`` children, the path
+  relative to the main file's folder (MuJoCo's rule), else the including file's.
+- Meshes (``<asset><mesh file>``): resolved as MuJoCo resolves them (``compiler
+  meshdir``, else ``assetdir``, relative to the main file's folder; an absolute path as
+  it is), then any that is not .obj (STL, MuJoCo's legacy .msh) converted to OBJ in the
+  mesh cache (robots.meshes.obj_of); a mesh without a name keeps the name MuJoCo gives
+  it, its file's stem.
+- An ``<inertial>`` of zero mass (robosuite's mount bodies carry ``mass="0"
+  diaginertia="0 0 0"``): dropped, so the body is massless, as MuJoCo treats it. A
+  massless body welded to its parent adds nothing to the composite it belongs to; a
+  joint that moves only massless bodies is refused later, naming the joint
+  (dynamics.floating_model).
+
+Errors name the file (and line, where the XML parser gives one) and the element."""
+from pathlib import Path
+from typing import Optional
+import xml.etree.ElementTree as ElementTree
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.robots.meshes import obj_of
+
+# Mesh formats MuJoCo reads; .obj goes to Drake as it is.
+MESH_SUFFIXES = (".stl", ".obj", ".msh")
+# Includes nested deeper than this are a cycle.
+MAX_INCLUDE_DEPTH = 16
+
+
+def mjcf_for_drake(path: Path) -> Optional[str]:
+    """The text Drake reads for the MJCF file ``path`` (module docstring), or None when the
+    file needs no rewriting.
+
+    Args:
+        path: The MJCF file.
+
+    Raises:
+        ConfigError: A bad XML file, a missing or cyclic include, a mesh missing or of a
+            format MuJoCo does not read, naming the file and the element."""
+    root = _Parse(path)
+    changed = _ExpandIncludes(root, path, path.parent, depth=0)
+    changed |= _ConvertMeshes(root, path)
+    changed |= _DropMasslessInertials(root)
+    if not changed:
+        return None
+    return ElementTree.tostring(root, encoding="unicode")
+
+
+def _Parse(path: Path) -> ElementTree.Element:
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError as e:
+        raise ConfigError(f"{path}:{e.position[0]}: not an XML file ({e}); allowed: "
+                          "an MJCF file") from e
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot be read ({e.strerror})") from e
+    if root.tag != "mujoco":
+        raise ConfigError(f"{path}: its root element is <{root.tag}>; allowed: an MJCF "
+                          "file, whose root is <mujoco>")
+    return root
+
+
+def _ExpandIncludes(element: ElementTree.Element, path: Path, main: Path,
+                    depth: int) -> bool:
+    """Replaces every <include> below ``element`` by its file's <mujoco> children (in
+    place); whether any was replaced."""
+    changed = False
+    for index, child in reversed(list(enumerate(element))):
+        if child.tag != "include":
+            changed |= _ExpandIncludes(child, path, main, depth)
+            continue
+        name = child.get("file")
+        if not name:
+            raise ConfigError(f"{path}: an <include> without a file attribute; allowed: "
+                              "<include file=\"...\"/>")
+        if depth >= MAX_INCLUDE_DEPTH:
+            raise ConfigError(f"{path}: <include file={name!r}> nests more than "
+                              f"{MAX_INCLUDE_DEPTH} deep (a cycle?); allowed: includes "
+                              "that end")
+        candidates = [Path(name)] if Path(name).is_absolute() else [main / name,
+                                                                     path.parent / name]
+        found = next((c for c in candidates if c.is_file()), None)
+        if found is None:
+            raise ConfigError(f"{path}: <include file={name!r}>: no such file (looked "
+                              f"in {main}); allowed: a path relative to the main "
+                              "file's folder")
+        included = _Parse(found)
+        _ExpandIncludes(included, found, main, depth + 1)
+        element.remove(child)
+        for offset, part in enumerate(list(included)):
+            element.insert(index + offset, part)
+        changed = True
+    return changed
+
+
+def _AssetFolder(root: ElementTree.Element, path: Path, kind: str) -> Path:
+    """The folder relative asset files of a kind ("mesh", "texture") are in: compiler
+    KINDdir, else assetdir, relative to the main file's folder; else that folder."""
+    folder = None
+    for compiler in root.iter("compiler"):
+        folder = compiler.get(f"{kind}dir") or compiler.get("assetdir") or folder
+    if folder is None:
+        return path.parent
+    return Path(folder) if Path(folder).is_absolute() else path.parent / folder
+
+
+def _ConvertMeshes(root: ElementTree.Element, path: Path) -> bool:
+    """Points every <mesh file> at an absolute .obj (converted where needed), naming it
+    as MuJoCo would, and every <texture file> at its absolute path; whether any mesh
+    was seen."""
+    folder = _AssetFolder(root, path, "mesh")
+    textures = _AssetFolder(root, path, "texture")
+    for texture in root.iter("texture"):
+        if texture.get("file") and not Path(texture.get("file")).is_absolute():
+            texture.set("file", str((textures / texture.get("file")).resolve()))
+    meshes = [mesh for asset in root.iter("asset") for mesh in asset.iter("mesh")
+              if mesh.get("file")]
+    for mesh in meshes:
+        name = mesh.get("file")
+        if mesh.get("name") is None:
+            mesh.set("name", Path(name).stem)
+        source = Path(name) if Path(name).is_absolute() else folder / name
+        suffix = source.suffix.lower()
+        if suffix not in MESH_SUFFIXES:
+            raise ConfigError(f"{path}: mesh {mesh.get('name')!r} file {name!r} "
+                              f"is a {suffix or 'suffix-less'} file; allowed: "
+                              f"{', '.join(MESH_SUFFIXES)} (the formats MuJoCo reads)")
+        if not source.is_file():
+            raise ConfigError(f"{path}: mesh {mesh.get('name')!r}: no such file "
+                              f"{str(source)!r} (compiler meshdir/assetdir: "
+                              f"{folder}); allowed: an existing mesh file")
+        mesh.set("file", str(source.resolve() if suffix == ".obj" else obj_of(source)))
+    for compiler in root.iter("compiler"):
+        for attribute in ("meshdir", "texturedir", "assetdir"):
+            compiler.attrib.pop(attribute, None)
+    return bool(meshes)
+
+
+def _DropMasslessInertials(root: ElementTree.Element) -> bool:
+    """Removes every body's <inertial> of zero mass; whether any was removed."""
+    changed = False
+    for body in root.iter("body"):
+        for inertial in body.findall("inertial"):
+            mass = inertial.get("mass", "1")
+            try:
+                massless = float(mass) == 0.0
+            except ValueError:
+                raise ConfigError(f"body {body.get('name', '(unnamed)')!r}: <inertial "
+                                  f"mass={mass!r}>; allowed: a number >= 0") from None
+            if massless:
+                body.remove(inertial)
+                changed = True
+    return changed
