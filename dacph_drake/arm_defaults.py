@@ -93,7 +93,8 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
         ConfigError: Bad assembly settings, an unloadable description, no start found."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
     from dacph_drake.errors import ConfigError
-    from dacph_drake.robots.described import (link_base_clearance, null_space_rate,
+    from dacph_drake.robots.described import (arm_joints, link_base_clearance,
+                                              null_space_rate,
                                               require_every_joint_moves_inertia)
     from dacph_drake.robots.description import ParsedDescription
     from dacph_drake.robots.described import validate_assembly
@@ -104,9 +105,9 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     require_every_joint_moves_inertia(model, robot.description)
     from dacph_drake.tasks.registry import TASKS
     task = EndEffectorAttitude() if task is None else task
-    rows = getattr(TASKS.get(type(task)), "jacobian_rows", 3)
-    reference = task.reference
-    require_positive("task.reference.period", reference.period, "s")  # sizes by it
+    rows = TASKS[type(task)].jacobian_rows
+    # The reference sizes the arm: its attitude's, or (a position task) its position's.
+    reference = getattr(task, "reference", None) or task.position
     rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
     clearance = link_base_clearance(parsed, model)     # one SceneGraph context
     if q0 is None:
@@ -115,8 +116,9 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                               null_space_rate(parsed, model, robot.potential),
                               rehearsal_time, rows)
         except ValueError as e:
-            what, how = (("attitude", "turn about every axis") if rows == 3 else
-                         ("pose", "turn about every axis and move in every direction"))
+            what, how = {(0, 1, 2): ("attitude", "turn about every axis"),
+                         (3, 4, 5): ("position", "move in every direction")}.get(
+                tuple(rows), ("pose", "turn about every axis and move in every direction"))
             raise ConfigError(
                 f"robot.description {robot.description!r}: no start pose found for "
                 f"the end-effector {what} task ({e}); allowed: a q0 in the file, or "
@@ -131,7 +133,8 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                         periods=described_arm_periods(), learner=described_arm_learner())
     if len(q0) != model.num_joints:
         return scenario         # Validate names q0's length; nothing to size by
-    rate = 2 * np.pi * max(reference.amplitude, MIN_AMPLITUDE) / reference.period
+    rate = 2 * np.pi * max(_reference_angle(model, q0, task), MIN_AMPLITUDE) \
+        / reference.period
     M = model.MassMatrix(q0)
     inertia = np.diag(M)
     rehearsal = rehearse(model, q0, task, rehearsal_time)
@@ -155,8 +158,10 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     scenario.disturbance.scale = disturbance_scale(
         scenario.disturbance, M, rate * 2 * np.pi / reference.period)
     scenario.excitation.joint_scale = excitation_scale(scenario.excitation, M)
+    friction = np.array([parsed.joint_friction.get(joint.name(), 0.0)
+                         for joint in arm_joints(model)])
     scenario.simulator = FixedStepConfig(step=truth_step(
-        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs))
+        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs, friction))
     return scenario
 
 
@@ -229,13 +234,15 @@ def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
 
 
 def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
-               uncertainty: Uncertainty, rhs_period: float) -> float:
+               uncertainty: Uncertainty, rhs_period: float,
+               friction: Optional[np.ndarray] = None) -> float:
     """The ground truth's fixed RK2 step [s] for an arm's fastest damping mode.
 
     The explicit scheme is stable for a mode decaying at rate lambda while
     h lambda <= 2; the step keeps h lambda <= STEP_RATE_PRODUCT for the fastest
     mode, the largest generalized eigenvalue of (D, M(q)) with D the description's
-    joint damping plus D0, D_offset and D_linear at the sized momentum, over
+    joint damping plus D0, D_offset and D_linear at the sized momentum and the joint
+    friction's steepest slope f / FRICTION_VELOCITY (kernels.loop.add_friction), over
     the configurations given. At most the default step (loop.simulator), and
     dividing the RHS period evenly (the discrete updates stop the integrator at
     every RHS sample anyway); at least 1e-7 s (simulator.max_step_size's lower
@@ -245,8 +252,12 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
         model: The arm's model (its plant's joint damping).
         configurations: Joint angles to take the largest rate over (k x n) [rad].
         uncertainty: The sized RHS (D0 and its offset).
-        rhs_period: periods.rhs [s]."""
+        rhs_period: periods.rhs [s].
+        friction: The joints' Coulomb friction f (n) [N m] (None: none)."""
+    from dacph_drake.kernels.loop import FRICTION_VELOCITY
     damping = model.joint_damping + 1.5 * np.asarray(uncertainty.D0, float)
+    if friction is not None:
+        damping = damping + np.asarray(friction, float) / FRICTION_VELOCITY
     rate = 0.0
     for q in configurations[::max(len(configurations) // 16, 1)]:
         M = model.MassMatrix(q)
@@ -407,3 +418,14 @@ def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> Non
         validate_start(q0)
     if task is not None and type(task) in TASKS:
         TASKS[type(task)].Validate(task, described_arm_periods())
+
+
+def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
+    """The reference's amplitude as a joint angle [rad]: the attitude's; a position's
+    [m] over the position rows' largest singular value at q0 [m/rad] (the longest
+    lever the joints move the end effector by)."""
+    if getattr(task, "reference", None) is not None:
+        return task.reference.amplitude
+    from dacph_drake.robots.start_pose import task_jacobian
+    lever = np.linalg.svd(task_jacobian(model, q0, rows=(3, 4, 5)), compute_uv=False)[0]
+    return task.position.amplitude / max(lever, 1e-9)

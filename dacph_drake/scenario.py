@@ -21,6 +21,7 @@ LEARNER_MODES = ("regularized", "plain")                  # Learner.mode
 LEARNER_COUPLINGS = ("uniform", "inertia")                # Learner.coupling
 LEARNER_PRIOR_SCALES = ("pooled", "per_input")            # Learner.prior_scale
 JOINT_DAMPING = ("keep", "zero")                          # DescribedArm.joint_damping
+JOINT_FRICTION = ("keep", "zero")                         # DescribedArm.joint_friction
 JOINT_LIMITS = ("stop", "ignore")                         # DescribedArm.joint_limits
 EFFORT_LIMITS = ("saturate", "ignore")                    # DescribedArm.effort_limits
 
@@ -522,6 +523,10 @@ class DescribedArm:
         package_paths: Folders holding ROS packages.
         packages: Package name -> folder, for package:// URIs.
         joint_damping: One of JOINT_DAMPING ("keep": in the truth and the LHS model).
+        joint_friction: One of JOINT_FRICTION ("keep": the description's Coulomb
+            friction, a URDF's <dynamics friction> or an MJCF's frictionloss, in the
+            truth: a part of the RHS the learner meets, the LHS model has none; "zero",
+            the default: none, as Drake's plant).
         locked_joints: Joints welded at a position (name: [rad] or [m]).
         joint_limits: One of JOINT_LIMITS ("stop": refused at q0, stopped in a run).
         effort_limits: One of EFFORT_LIMITS ("saturate": u clipped in the truth).
@@ -533,6 +538,7 @@ class DescribedArm:
     package_paths: List[str] = field(default_factory=list)
     packages: Dict[str, str] = field(default_factory=dict)
     joint_damping: str = "keep"
+    joint_friction: str = "zero"
     locked_joints: Dict[str, float] = field(default_factory=dict)
     joint_limits: str = "stop"
     effort_limits: str = "saturate"

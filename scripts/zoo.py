@@ -27,7 +27,8 @@ import sys
 import time
 from pathlib import Path
 
-from dacph_drake.robots.serial_arm import AXES, SerialLink, serial_arm_urdf
+from dacph_drake.robots.serial_arm import (AXES, SerialLink, serial_arm_mjcf,
+                                           serial_arm_urdf)
 
 EXAMPLE = "package://example-robot-data/robots"
 # name -> (description, end-effector frame, locked joints)
@@ -67,9 +68,9 @@ OWN = {
 QUICK = ("xarm7", "heavy_damping", "z1")
 
 
-def family(count: int, seed: int) -> dict:
-    """``count`` random serial arms (robots.serial_arm), as OWN's entries: 3 to 9
-    joints; link masses log-uniform in [0.02, 5] kg and lengths uniform in [0.03,
+def family(count: int, seed: int, joints=(3, 9)) -> dict:
+    """``count`` random serial arms (robots.serial_arm), as OWN's entries: ``joints``
+    (3 to 9) joints; link masses log-uniform in [0.02, 5] kg and lengths uniform in [0.03,
     0.45] m, both tapering on average; half the arms with joint damping
     log-uniform in [0.01, 20] N m s/rad; a third with a tool of 0.5-5 kg; the base
     log-uniform in [15, 500] kg; the axes' cycle (z, y, x) started anywhere."""
@@ -77,7 +78,7 @@ def family(count: int, seed: int) -> dict:
     rng = np.random.default_rng(seed)
     arms = {}
     for k in range(count):
-        n = int(rng.integers(3, 10))
+        n = int(rng.integers(joints[0], joints[1] + 1))
         taper = np.linspace(1.0, 0.3, n)
         mass = np.exp(rng.uniform(np.log(0.02), np.log(5.0), n)) * taper
         length = rng.uniform(0.03, 0.45, n) * taper
@@ -91,6 +92,22 @@ def family(count: int, seed: int) -> dict:
             [(float(m), float(max(l, 0.01)), float(d))
              for m, l, d in zip(mass, length, damping)], tool, base, offset)
     return arms
+
+
+def mjcf_extras(name: str, links) -> dict:
+    """What an MJCF of a family arm adds (its own draws, seeded by the arm's name, so
+    the arm is the URDF family's): each joint's armature uniform in [0.5, 3] times its
+    link's own inertia about its joint (geared motors: a reflected rotor inertia of the
+    order of the link's), every joint's frictionloss log-uniform in
+    [0.01, 0.1] N m (ignored by default: robot.joint_friction), each link's inertia from
+    its geom with probability 1/2."""
+    import zlib
+    import numpy as np
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
+    lateral = np.array([m * l * l / 3 for m, l, _ in links])
+    return {"armature": (rng.uniform(0.5, 3.0, len(links)) * lateral).tolist(),
+            "frictionloss": float(np.exp(rng.uniform(np.log(0.01), np.log(0.1)))),
+            "from_geoms": (rng.random(len(links)) < 0.5).tolist()}
 CONTROLLERS = ("dac", "dac-nominal", "model-based")
 
 CHILD = r"""
@@ -142,22 +159,35 @@ print(json.dumps(row, default=float))
 """
 
 
-def scenario_file(folder: Path, name: str) -> Path:
-    """The arm's scenario file (at most six lines)."""
+def scenario_file(folder: Path, name: str, task: str = "attitude",
+                  form: str = "urdf") -> Path:
+    """The arm's scenario file (at most six lines; with ``task`` "position", a line
+    more: task: !EndEffectorPosition {}); an arm of our own as ``form`` "urdf" or
+    "mjcf" (robots.serial_arm.serial_arm_mjcf with mjcf_extras)."""
     if name in SHIPPED:
         description, frame, locked = SHIPPED[name]
         base = 250.0
     else:
         links, tool, base, *offset = OWN[name]
         axes = AXES[offset[0]:] + AXES[:offset[0]] if offset else AXES
-        urdf = folder / f"{name}.urdf"
-        urdf.write_text(serial_arm_urdf(name, [SerialLink(*link) for link in links],
-                                        tool, axes))
-        description, frame, locked = urdf.name, "tool", ""
+        if form == "mjcf":
+            for file, text in serial_arm_mjcf(name, [SerialLink(*link) for link in links],
+                                              tool, axes, **mjcf_extras(name, links)
+                                              ).items():
+                (folder / file).write_text(text)
+            description = f"{name}.xml"
+        else:
+            urdf = folder / f"{name}.urdf"
+            urdf.write_text(serial_arm_urdf(name, [SerialLink(*link) for link in links],
+                                            tool, axes))
+            description = urdf.name
+        frame, locked = "tool", ""
     lines = ["robot: !DescribedArm", f"  description: {description}",
              f"  base: {{mass: {base:g}}}", f"  end_effector: {{frame: {frame}}}"]
     if locked:
         lines.append(f"  locked_joints: {{{locked}}}")
+    if task == "position":
+        lines.append("task: !EndEffectorPosition {}")
     path = folder / f"{name}.yaml"
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -167,9 +197,10 @@ def _cell(value, form="{:.2e}") -> str:
     return "-" if value is None or value != value else form.format(value)
 
 
-def table(rows) -> str:
-    """The results page's table of the rows (one line per arm)."""
-    lines = ["| arm | n | step [s] | DAC RMS phases 1 / 2 / 3 [rad] | dac-nominal 2 / 3 "
+def table(rows, unit: str = "rad") -> str:
+    """The results page's table of the rows (one line per arm; the task's error in
+    ``unit``)."""
+    lines = [f"| arm | n | step [s] | DAC RMS phases 1 / 2 / 3 [{unit}] | dac-nominal 2 / 3 "
              "| model-based 2 / 3 | DAC / baseline (2, 3) | verify | warning lines | "
              "wall DAC [s] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -200,9 +231,10 @@ def table(rows) -> str:
     return "\n".join(lines) + "\n"
 
 
-def run_arm(folder: Path, name: str, duration: float, with_verify: bool) -> dict:
+def run_arm(folder: Path, name: str, duration: float, with_verify: bool,
+            task: str = "attitude", form: str = "urdf") -> dict:
     """One arm in a fresh process (one thread for the numerical libraries)."""
-    path = scenario_file(folder, name)
+    path = scenario_file(folder, name, task, form)
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
            "MKL_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-c", CHILD, str(path), str(duration),
@@ -229,9 +261,18 @@ def main() -> None:
     parser.add_argument("--family", type=int, default=0,
                         help="run this many random arms of our own instead (family)")
     parser.add_argument("--seed", type=int, default=0, help="the family's seed")
+    parser.add_argument("--joints", type=int, nargs=2, default=(3, 9),
+                        metavar=("FEWEST", "MOST"), help="the family's joint counts")
+    parser.add_argument("--task", choices=("attitude", "position"), default="attitude",
+                        help="the task every arm tracks (position: task: "
+                             "!EndEffectorPosition; its error in m)")
+    parser.add_argument("--format", choices=("urdf", "mjcf"), default="urdf",
+                        help="the arms of our own as URDF or as MJCF (an include, a "
+                             "default class, armature, frictionloss, inertia from "
+                             "geoms: mjcf_extras)")
     args = parser.parse_args()
     if args.family:
-        generated = family(args.family, args.seed)
+        generated = family(args.family, args.seed, tuple(args.joints))
         OWN.update(generated)
         args.arms = list(generated)
     arms = args.arms or (list(QUICK) if args.quick else [*SHIPPED, *OWN])
@@ -239,6 +280,7 @@ def main() -> None:
     if unknown:
         parser.error(f"--arms: unknown {unknown}; allowed: {[*SHIPPED, *OWN]}")
     out = Path(args.out)
+    unit = "m" if args.task == "position" else "rad"
     out.mkdir(parents=True, exist_ok=True)
     (out / "files").mkdir(exist_ok=True)
     rows_path = out / "rows.jsonl"
@@ -249,19 +291,20 @@ def main() -> None:
             continue
         start = time.perf_counter()
         row = run_arm((out / "files").resolve(), name,
-                      args.duration if args.quick else 0.0, not args.quick)
+                      args.duration if args.quick else 0.0, not args.quick, args.task,
+                      args.format)
         row["total_s"] = time.perf_counter() - start
         done[name] = row
         with rows_path.open("a") as f:
             f.write(json.dumps(row, default=float) + "\n")
-        print(table([row]).splitlines()[-1], flush=True)
+        print(table([row], unit).splitlines()[-1], flush=True)
     rows = [done[name] for name in [*SHIPPED, *OWN] if name in done]
-    (out / "table.md").write_text(table(rows) + "\n" + summary(rows))
-    print(table(rows) + "\n" + summary(rows))
+    (out / "table.md").write_text(table(rows, unit) + "\n" + summary(rows, unit))
+    print(table(rows, unit) + "\n" + summary(rows, unit))
 
 
-def summary(rows) -> str:
-    """The targets over the rows: how many arms meet each."""
+def summary(rows, unit: str = "rad") -> str:
+    """The targets over the rows: how many arms meet each (the error in ``unit``)."""
     ran = [r for r in rows if "error" not in r
            and not any("error" in r.get(c, {}) for c in CONTROLLERS)]
     every = [r for r in ran if all(r.get(c, {}).get("status") == "ok"
@@ -274,7 +317,7 @@ def summary(rows) -> str:
     return (f"| target ({len(rows)} arms) | met by |\n|---|---|\n"
             f"| loaded and built (no refusal, no traceback) | {len(ran)} |\n"
             f"| every controller runs every phase | {len(every)} |\n"
-            f"| DAC RMS phases 2-3 <= 1e-4 rad | {sum(w <= 1e-4 for w in worst)} "
+            f"| DAC RMS phases 2-3 <= 1e-4 {unit} | {sum(w <= 1e-4 for w in worst)} "
             f"(worst {max(worst, default=float('nan')):.2e}) |\n"
             f"| DAC <= 0.1x the baseline (phases 2-3) | {sum(x <= 0.1 for x in ratio)} "
             f"of {len(ratio)} (worst {max(ratio, default=float('nan')):.3f}) |\n"

@@ -487,3 +487,122 @@ def test_an_mjcf_joints_armature_is_in_the_truth_and_in_the_lhs_model(tmp_path):
         if plain is None:
             plain = M
     np.testing.assert_allclose(M - plain, np.diag([0.05, 0.0, 0.002]), atol=1e-14)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda p: (p.parent / "arm_body.xml").write_text(
+        (p.parent / "arm_body.xml").read_text().replace(
+            '<inertial pos="0 0 0.05" mass="0.5" diaginertia="0.0005 0.0005 0.0002"/>',
+            '<inertial pos="0 0 0.05" mass="0" diaginertia="0 0 0"/>').replace(
+            '<geom name="link3_geom" type="cylinder" pos="0 0 0.05" size="0.02 0.05"/>',
+            "")),
+     r"joint 'joint3' moves no inertia"),
+    (lambda p: p.write_text(p.read_text().replace('<include file="arm_body.xml"/>',
+                                                  "<include/>")),
+     r"robot\.xml: an <include> without a file attribute"),
+    (lambda p: (p.parent / "arm_body.xml").write_text(
+        (p.parent / "arm_body.xml").read_text().replace(
+            '<joint name="joint2" type="hinge"', '<joint name="joint2" type="ball"')),
+     r"joint 'joint2' .*ball.*; allowed: (revolute|an arm of revolute)"),
+])
+def test_a_broken_mjcf_arm_file_exits_2_in_one_line(tmp_path, edit, message, capsys):
+    """Broken descriptions named by a scenario file: `dacph simulate` prints one line
+    naming the joint or element and exits 2 (a joint that moves only a massless body:
+    its <inertial> of mass 0 and no geom to take one from, as MuJoCo would; an include
+    without a file; a ball joint)."""
+    from dacph_drake.app.cli import main
+    path = _robosuite_style(tmp_path)
+    edit(path)
+    scenario = tmp_path / "arm.yaml"
+    scenario.write_text("robot: !DescribedArm\n  description: robot.xml\n"
+                        "  base: {mass: 100.0}\n  end_effector: {frame: link3}\n")
+    with pytest.raises(ConfigError, match=message):
+        load_scenario(scenario)
+    assert main(["--quiet", "simulate", str(scenario), "--out",
+                 str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and error[0].startswith("dacph: error:"), error
+
+
+def test_joint_friction_kept_acts_in_the_truth_and_conserves_momentum(tmp_path):
+    """robot.joint_friction: keep puts an MJCF joint's frictionloss (here through a
+    <default> class and a body's childclass) into the ground truth's RHS as
+    f tanh(qdot / FRICTION_VELOCITY): the logged D~ holds its secant (f / v at rest,
+    f / |qdot| beyond v), the run conserves the spatial momentum, and the step is sized
+    for its slope; the default ("zero") leaves the truth as Drake's plant has it."""
+    from dacph_drake.kernels.loop import FRICTION_VELOCITY, add_friction
+    from dacph_drake.robots.description import joint_friction
+    from dacph_drake.analysis.metrics import run_metrics
+    qdot = np.array([0.0, 1e-9, 0.05, -3.0])
+    D = np.zeros(4)
+    add_friction(np.array([0.2, 0.2, 0.2, 0.0]), qdot, D)
+    np.testing.assert_allclose(D[:2], 0.2 / FRICTION_VELOCITY, rtol=1e-12)
+    np.testing.assert_allclose(D[2] * qdot[2], 0.2 * np.tanh(0.05 / FRICTION_VELOCITY),
+                               rtol=1e-12)
+    assert D[3] == 0.0
+    text = (ARMS / "arm3.xml").read_text()
+    path = tmp_path / "friction.xml"
+    path.write_text(text.replace('<compiler angle="radian"/>',
+                                 '<compiler angle="radian"/><default><default class="arm">'
+                                 '<joint frictionloss="0.05"/></default></default>')
+                    .replace('<body name="link2" pos="0 0 0.4">',
+                             '<body name="link2" pos="0 0 0.4" childclass="arm">'))
+    assert joint_friction(path) == {"joint2": 0.05, "joint3": 0.05}
+    runs = {}
+    for setting in ("zero", "keep"):
+        scenario_file = tmp_path / f"{setting}.yaml"
+        scenario_file.write_text(
+            f"robot: !DescribedArm\n  description: friction.xml\n  base: {{mass: 100.0}}\n"
+            f"  end_effector: {{frame: link3}}\n  joint_friction: {setting}\n"
+            "q0: [0.3, 0.8, -0.4]\n"
+            "phases: {warmup: 0.3, linear: 0.3, nonlinear: 0.3, disturbance: 0.3}\n")
+        scenario = load_scenario(scenario_file)
+        runs[setting] = (scenario, simulate(scenario, "dac"))
+    (zero, plain), (keep, rubbed) = runs["zero"], runs["keep"]
+    assert plain.status == rubbed.status == "ok"
+    assert keep.simulator.max_step_size <= zero.simulator.max_step_size
+    from dacph_drake.arm_defaults import truth_step
+    model = robot_of(keep).model
+    q = np.array([keep.q0])
+    assert truth_step(model, q, keep.uncertainty, keep.periods.rhs, np.full(3, 5.0)) < \
+        truth_step(model, q, keep.uncertainty, keep.periods.rhs)
+    D_keep, D_zero = (run.logs["true_matrices"][:, 9:] for run in (rubbed, plain))
+    # joints 2 and 3: D~ grows by the secant, at least f tanh(3 / v) / 3 below 3 rad/s;
+    # joint 1 (no friction) differs only by the trajectory its state-dependent D~ sees
+    assert np.all(D_keep[:, 1:] - D_zero[:, 1:] > 0.05 * np.tanh(3 / FRICTION_VELOCITY)
+                  / 3 - 1e-3 * D_zero[:, 1:])
+    assert np.all(np.abs(D_keep[:, 0] - D_zero[:, 0]) < 1e-3 * D_zero[:, 0])
+    assert run_metrics(rubbed.logs, keep)["max_momentum"] < 1e-8
+
+
+def test_an_arm_as_mjcf_with_defaults_includes_and_geom_inertia_is_its_urdf(tmp_path):
+    """serial_arm_mjcf writes the serial arm as MuJoCo models are written (its bodies in
+    an included file, the joints' limits and frictionloss from a <default> class passed
+    down by childclass, two links' inertia from their geoms' mass); read as MuJoCo reads
+    it, its reduced mass matrix is the URDF's (to the files' 6 digits), its joint limits
+    and damping too, and with armature it gains exactly diag(armature)."""
+    from dacph_drake.robots.serial_arm import serial_arm_mjcf
+    from dacph_drake.robots.start_pose import joint_limits
+    links = [SerialLink(4.0, 0.4, 0.5), SerialLink(3.0, 0.35), SerialLink(2.0, 0.3),
+             SerialLink(1.0, 0.2, 0.1)]
+    (tmp_path / "arm.urdf").write_text(serial_arm_urdf("arm", links, 0.5))
+    armature = [0.02, 0.0, 0.01, 0.003]
+    for stem, extra in (("plain", {}), ("geared", {"armature": armature})):
+        for file, text in serial_arm_mjcf(stem, links, 0.5, frictionloss=0.05,
+                                          from_geoms=[False, True, False, True],
+                                          **extra).items():
+            (tmp_path / file).write_text(text)
+    q = np.array([0.3, 0.7, -0.2, 0.5])
+    models = {}
+    for file in ("arm.urdf", "plain.xml", "geared.xml"):
+        models[file] = FloatingBaseModel(MakeRobotPlant(DescribedArm(
+            description=str(tmp_path / file), base=ArmBase(mass=100.0),
+            end_effector=EndEffectorFrame(frame="tool"))))
+    M = {file: model.MassMatrix(q) for file, model in models.items()}
+    np.testing.assert_allclose(M["plain.xml"], M["arm.urdf"], rtol=0,
+                               atol=1e-6 * np.abs(M["arm.urdf"]).max())
+    np.testing.assert_allclose(M["geared.xml"] - M["plain.xml"], np.diag(armature),
+                               atol=1e-14)
+    for file in ("plain.xml", "geared.xml"):
+        np.testing.assert_array_equal(models[file].joint_damping, [0.5, 0.0, 0.0, 0.1])
+        np.testing.assert_allclose(joint_limits(models[file]), [[-2.9] * 4, [2.9] * 4])

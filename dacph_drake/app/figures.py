@@ -357,26 +357,28 @@ def _panel_inputs(runs: Dict[str, Logs], scenario: Scenario,
 
 
 def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
-    """(e) of a described arm: |e| (with the pose task: |e_p| too) and ||s|| of every
-    run, the smallest link-base distance against the potential's margin, d(t)."""
+    """(e) of a described arm: |e| (the pose task: and |e_p|; the position task: |e_p|
+    alone) and ||s|| of every run, the smallest link-base distance against the
+    potential's margin, d(t)."""
     n, layout = len(scenario.q0), PoseLog()
-    pose = log_name == "pose_log"
+    errors = {"attitude_log": ("attitude",), "pose_log": ("attitude", "position"),
+              "position_log": ("position",)}[log_name]
     dac = _primary(runs)
-    fig, axes, xlim = _figure(5 if pose else 4, scenario)
+    fig, axes, xlim = _figure(3 + len(errors), scenario)
     error_axes, (ax2, ax3, ax4) = axes[:-3], axes[-3:]
+    columns = {"attitude": layout.e_norm, "position": layout.e_position_norm}
     for name, logs in _compared(runs):
         t, log = logs["time"], logs[log_name]
-        _trace(error_axes[0], t, log[:, layout.e_norm], xlim, log=True, **_style(name))
-        if pose:
-            _trace(error_axes[1], t, log[:, layout.e_position_norm], xlim, log=True,
-                   **_style(name))
+        for ax, error in zip(error_axes, errors):
+            _trace(ax, t, log[:, columns[error]], xlim, log=True, **_style(name))
         _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **_style(name))
         _trace(ax3, t, log[:, layout.clearance], xlim, **_style(name))
     ax3.axhline(scenario.robot.potential.margin, color="k", ls=":", lw=1.0,
                 label="potential's margin")
-    error_axes[0].set_ylabel(r"attitude error $|e|$ [rad]")
-    if pose:
-        error_axes[1].set_ylabel(r"position error $|e_p|$ [m]")
+    labels = {"attitude": r"attitude error $|e|$ [rad]",
+              "position": r"position error $|e_p|$ [m]"}
+    for ax, error in zip(error_axes, errors):
+        ax.set_ylabel(labels[error])
     ax2.set_ylabel(r"$\|s\|$ [rad/s]")
     ax3.set_ylabel("link-base\ndistance [m]")
     for k in range(n):
@@ -409,6 +411,8 @@ TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f
                    runs, scenario, "attitude_log"),
                "e_pose_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
                    runs, scenario, "pose_log"),
+               "e_position_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
+                   runs, scenario, "position_log"),
                "f_inputs_and_joints": lambda runs, scenario: _panel_inputs(
                    runs, scenario, robot_of(scenario).model.coordinates)}
 

@@ -152,7 +152,8 @@ def desired_position(position: np.ndarray, t: float
 
     Args:
         position: [p_CE (3), p_d0 (3), unit axis (3, world), amplitude [m],
-            omega [rad/s]] (one array: a tuple of arrays costs numba's dispatch).
+            omega [rad/s], 1 for the position rows alone else 0] (one array: a tuple
+            of arrays costs numba's dispatch).
         t: The time [s].
 
     Returns:
@@ -413,6 +414,44 @@ def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
 
 
 @njit(cache=True)
+def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                   joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+                   base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
+                   end_effector: tuple, position: np.ndarray, xi: np.ndarray,
+                   xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
+    """The position task's reference joint rates from the position rows alone
+    (position_rows), r = v_d - Lambda e_p, e_p = p_E - p_d(t).
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration.
+        qdot: The joint rates (n) [rad/s].
+        base_pose: The base's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base's (omega_W, v_W) (6).
+        t: The time [s].
+        end_effector: (node, R_CE).
+        position: desired_position's arguments (p_CE first).
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate (n).
+        Lambda: [1/s].
+        damping: mu.
+
+    Returns:
+        (nu, nu_dot, e_p (3) [m], p_d (3) [m])."""
+    p_E, v_E, D_p, D_p_dot = position_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
+        base_pose[4:], base_velocity, end_effector[0], position[:3])
+    p_d, v_d, a_d = desired_position(position, t)
+    e_p = p_E - p_d
+    nu, nu_dot = reference_rates(D_p, D_p_dot, v_d - Lambda * e_p,
+                                 a_d - Lambda * (v_E - v_d), xi, xi_dot, damping)
+    return nu, nu_dot, e_p, p_d
+
+
+@njit(cache=True)
 def coupling_ratio(M: np.ndarray) -> float:
     """rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1: how much lighter the
     lightest coupled motion is than the joints' own inertias M_ii say (1 for a
@@ -489,6 +528,13 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.
                                         evaluation, qdot, base_pose[:4],
                                         base_velocity[:3], t, reference, end_effector,
                                         xi, xi_dot, Lambda, damping)
+    elif position[11] > 0:
+        nu, nu_dot, e_p, p_d = position_rates(
+            base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose,
+            base_velocity, t, end_effector, position, xi, xi_dot, Lambda, damping)
+        e, R_d = np.zeros(3), np.eye(3)
+        position_log[:3], position_log[3] = e_p, np.sqrt(np.sum(e_p * e_p))
+        position_log[4:] = p_d
     else:
         nu, nu_dot, e, R_d, e_p, p_d = pose_rates(
             base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose,

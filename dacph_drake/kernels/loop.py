@@ -327,14 +327,44 @@ def _planar_verdict(x, indices, n, tau, bound):
 @njit(cache=True)
 def _torque_into(t, q, p, qdot, u, disturbance_model, packed, B, D, tau):
     """tau = B~ u - D~ qdot + d(t) into ``tau``; B, D: work arrays (_matrices_into)."""
-    n = u.shape[0]
     _matrices_into(t, q, p, packed, B, D)
+    _torque_of_matrices(t, qdot, u, disturbance_model, B, D, tau)
+
+
+@njit(cache=True)
+def _torque_of_matrices(t, qdot, u, disturbance_model, B, D, tau):
+    """tau = B u - D qdot + d(t) into ``tau`` from the matrices B, diag D."""
+    n = u.shape[0]
     for i in range(n):
         Bu = 0.0
         for j in range(n):
             Bu += B[i, j] * u[j]
         tau[i] = Bu - D[i] * qdot[i]
     _add_disturbance(t, disturbance_model, tau)
+
+
+# [rad/s] The joint rate over which a description's Coulomb friction f reaches its full
+# size in the ground truth, f tanh(qdot / FRICTION_VELOCITY): MuJoCo's frictionloss is
+# a constraint that can stick; a smooth truth keeps the explicit integrator (its
+# stiffest slope f / FRICTION_VELOCITY is counted in the step, arm_defaults.truth_step).
+FRICTION_VELOCITY = 0.1
+
+
+@njit(cache=True)
+def add_friction(friction: np.ndarray, qdot: np.ndarray, D: np.ndarray) -> None:
+    """Adds each joint's Coulomb friction f tanh(qdot / FRICTION_VELOCITY) to D~ as its
+    secant damping f tanh(qdot / v) / qdot (f / v at rest), so that D~ qdot is the torque
+    the joint loses (in place).
+
+    Args:
+        friction: Each joint's f [N m] (n).
+        qdot: The joint rates [rad/s] (n).
+        D: diag D~ [N m s/rad] (n), changed in place."""
+    for j in range(qdot.shape[0]):
+        if friction[j] > 0.0:
+            x = qdot[j] / FRICTION_VELOCITY
+            secant = (np.tanh(x) / x if abs(x) > 1e-8 else 1.0 - x * x / 3.0)
+            D[j] += friction[j] * secant / FRICTION_VELOCITY
 
 
 @njit(cache=True)
@@ -361,13 +391,13 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
                          joint: np.ndarray, X_PFs: np.ndarray, axes: np.ndarray,
                          X_MCs: np.ndarray, below: np.ndarray, masses: np.ndarray,
                          moments: np.ndarray, inertias: np.ndarray,
-                         reflecteds: np.ndarray, u: np.ndarray,
+                         reflecteds: np.ndarray, frictions: np.ndarray, u: np.ndarray,
                          limits: np.ndarray, disturbance_models: np.ndarray,
                          packs: np.ndarray, offsets: np.ndarray, running: np.ndarray,
                          bound: float, verdicts: np.ndarray) -> np.ndarray:
     """The trials' tau [N m] (trials n) = B~ u_c - D~ qdot + d(t) of a batch of spatial arms
     (SpatialTrueRhs), as true_torques: u_c = u clipped to +-limits, p from each trial's tree
-    (joint_momentum).
+    (joint_momentum), D~ with the joints' Coulomb friction (add_friction).
 
     Args:
         t: The time [s].
@@ -384,6 +414,7 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
         moments: Each trial's first moments m c [kg m] (trials x nodes x 3).
         inertias: Each trial's rotational inertias about the body origins [kg m^2].
         reflecteds: Each trial's joints' reflected inertias (trials, n) [kg m^2].
+        frictions: Each trial's joints' Coulomb friction (trials, n) [N m] (add_friction).
         u: The trials' commands [N m] (trials n).
         limits: The actuators' effort limits [N m] (trials x n).
         disturbance_models: The trials' d(t) parameters (disturbance; trials (3 + 5 n)).
@@ -409,8 +440,10 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
             for j in range(n):
                 command = u[i * n + j]
                 clipped[j] = min(max(command, -limits[i, j]), limits[i, j])
-            _torque_into(t, q, p, qdot, clipped, disturbance_models[i * m:(i + 1) * m],
-                         packs[offsets[i]:offsets[i + 1]], B, D, tau)
+            _matrices_into(t, q, p, packs[offsets[i]:offsets[i + 1]], B, D)
+            add_friction(frictions[i], qdot, D)
+            _torque_of_matrices(t, qdot, clipped, disturbance_models[i * m:(i + 1) * m],
+                                B, D, tau)
             verdict = _verdict(running[i], arm, arm[7:13], qdot, tau, bound)
         _settle(out, verdicts, i, verdict, tau)
     return out

@@ -11,7 +11,8 @@ from dacph_drake.log_layout import (AttitudeLog, LearnerLog, LhsLog, PoseLog, Rh
 
 # The logs whose columns are named, and their layouts (n: the number of joints).
 LAYOUTS = {"lhs_log": LhsLog, "rhs_log": RhsLog, "learner_log": lambda n: LearnerLog(),
-           "attitude_log": lambda n: AttitudeLog(), "pose_log": lambda n: PoseLog()}
+           "attitude_log": lambda n: AttitudeLog(), "pose_log": lambda n: PoseLog(),
+           "position_log": lambda n: PoseLog()}
 # Names of the spatial task logs' columns, beside their layout's.
 ALIASES = {"attitude_error": "e", "attitude_error_norm": "e_norm",
            "position_error": "e_position", "position_error_norm": "e_position_norm",
@@ -44,7 +45,7 @@ def signal_index(logs: Dict[str, np.ndarray]) -> Dict[str, Tuple[str, object]]:
     for name, logs_with_it in seen.items():
         if len(logs_with_it) == 1 and name not in index:
             index[name] = index[f"{logs_with_it[0]}.{name}"]
-    for log in ("lhs_log", "attitude_log", "pose_log"):
+    for log in ("lhs_log", "attitude_log", "pose_log", "position_log"):
         for alias, name in ALIASES.items():
             if f"{log}.{name}" in index and alias not in index:
                 index[alias] = index[f"{log}.{name}"]

@@ -22,7 +22,8 @@ from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
 from dacph_drake.robots.description import ParsedDescription
 from dacph_drake.robots.robot import require_clear_start
-from dacph_drake.scenario import (EFFORT_LIMITS, JOINT_DAMPING, JOINT_LIMITS,
+from dacph_drake.scenario import (EFFORT_LIMITS, JOINT_DAMPING, JOINT_FRICTION,
+                                  JOINT_LIMITS,
                                   ClearancePotential, DescribedArm, Scenario)
 from dacph_drake.scenario_checks import require_length, validate_shared
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
@@ -38,6 +39,7 @@ def validate_assembly(arm: DescribedArm) -> None:
     Raises:
         ConfigError: Naming the first invalid setting (base, mount, end effector, ...)."""
     require_one_of("robot.joint_damping", arm.joint_damping, JOINT_DAMPING)
+    require_one_of("robot.joint_friction", arm.joint_friction, JOINT_FRICTION)
     require_one_of("robot.joint_limits", arm.joint_limits, JOINT_LIMITS)
     require_one_of("robot.effort_limits", arm.effort_limits, EFFORT_LIMITS)
     for name, position in arm.locked_joints.items():
@@ -197,6 +199,13 @@ class DescribedRobot:
                 arm.nominal_inertia_scale, PER_BODY))
 
     @property
+    def joint_friction(self) -> np.ndarray:
+        """The description's joint Coulomb friction f (n) [N m] in q's order, which the
+        ground truth's RHS applies (robot.joint_friction "keep"; else zero)."""
+        return np.array([self.parsed.joint_friction.get(joint.name(), 0.0)
+                         for joint in arm_joints(self.model)])
+
+    @property
     def truth_plant(self) -> MultibodyPlant:
         """The ground truth's plant: its default context holds the description's
         inertias; the controller's model evaluates it with its own."""
@@ -234,7 +243,8 @@ class DescribedRobot:
             trials: Each trial's Robot."""
         return SpatialTrueRhs(plant=plant, arms=[trial.parsed.plant for trial in trials],
                               uncertainties=[t.scenario.uncertainty for t in trials],
-                              phases=[t.scenario.phases for t in trials])
+                              phases=[t.scenario.phases for t in trials],
+                              frictions=[t.joint_friction for t in trials])
 
     def RequireRunnableStart(self) -> None:
         """Requires that a run can start at the scenario's q0: within the description's

@@ -8,7 +8,7 @@ import os
 import re
 import sysconfig
 from pathlib import Path
-from typing import Optional, Tuple, Union
+from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
 from pydrake.geometry import (Box, CollisionFilterDeclaration, GeometrySet,
@@ -25,7 +25,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_xacro,
                                                    without_duplicate_materials)
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
-from dacph_drake.robots.mjcf import mjcf_for_drake
+from dacph_drake.robots.mjcf import joint_attribute, mjcf_for_drake
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
@@ -172,9 +172,11 @@ def described_arm(description: Union[str, Path, DescribedArm]) -> DescribedArm:
 
 def PopulateFromDescription(plant: MultibodyPlant,
                             name_or_path: Union[str, Path, DescribedArm, RobotParams]
-                            ) -> None:
+                            ) -> Dict[str, float]:
     """Parses a description into a plant: gravity off, each unactuated revolute joint
     actuated (URDF effort limit if "saturate"), a moving joint of another kind refused.
+    Returns the description's joint Coulomb friction, which the plant does not hold
+    (joint_friction; none with robot.joint_friction "zero").
 
     Args:
         plant: The plant (not finalized; left so).
@@ -183,7 +185,7 @@ def PopulateFromDescription(plant: MultibodyPlant,
 
     Raises:
         ConfigError: Naming what in the description or robot section is not allowed."""
-    efforts = {}
+    efforts, friction, armature = {}, {}, {}
     if isinstance(name_or_path, RobotParams):
         name_or_path.Validate()
         Parser(plant).AddModelsFromString(planar_arm_urdf(name_or_path), "urdf")
@@ -203,6 +205,15 @@ def PopulateFromDescription(plant: MultibodyPlant,
                                              without_duplicate_materials(text, path)[0])
         efforts = (_UrdfEffortLimits(path) if path.suffix == ".urdf"
                    and arm.effort_limits == "saturate" else {})
+        friction = joint_friction(path) if arm.joint_friction == "keep" else {}
+        armature = joint_attribute(path, "armature") if path.suffix == ".xml" else {}
+        if friction:
+            from dacph_drake.kernels.loop import FRICTION_VELOCITY
+            logging.getLogger(__name__).warning(
+                "%s: the joint friction of %s acts in the ground truth as f tanh(qdot / "
+                "%g rad/s), which Drake's parser does not model (robot.joint_friction: "
+                "keep)", path, ", ".join(f"{name} {f:g} N m" for name, f in
+                                        friction.items()), FRICTION_VELOCITY)
         try:
             with parser_warnings_once(path):
                 instances = (parser.AddModels(str(path)) if converted is None
@@ -229,8 +240,11 @@ def PopulateFromDescription(plant: MultibodyPlant,
                 for i in plant.GetJointActuatorIndices()}     # by the file's transmissions
     for joint in joints:
         if joint.index() not in actuated:
-            plant.AddJointActuator(f"tau_{joint.name()}", joint,
-                                   efforts.get(joint.name(), np.inf))
+            actuator = plant.AddJointActuator(f"tau_{joint.name()}", joint,
+                                              efforts.get(joint.name(), np.inf))
+            # An MJCF joint's armature without a <motor> (MuJoCo's joint property;
+            # Drake reads it only through one): the same reflected inertia, gear 1.
+            actuator.set_default_rotor_inertia(armature.get(joint.name(), 0.0))
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
     if not isinstance(name_or_path, RobotParams):
         arm = described_arm(name_or_path)
@@ -242,6 +256,7 @@ def PopulateFromDescription(plant: MultibodyPlant,
             logging.getLogger(__name__).warning(
                 "%s: the joint damping of %s is set to zero (robot.joint_damping: zero)",
                 path, ", ".join(joint.name() for joint in damped))
+    return friction
 
 
 def _DrakeMessage(error: RuntimeError, path: Path) -> str:
@@ -285,6 +300,43 @@ def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
         logging.getLogger(__name__).warning(
             "the description's weld %r to the world is dropped: the arm is mounted on "
             "robot.base", name)
+
+
+def joint_friction(path: Path) -> Dict[str, float]:
+    """Joint name -> the description's Coulomb friction [N m] (joints with a positive
+    one), which Drake's parsers do not model: a URDF's <dynamics friction>, an SDF's
+    <axis><dynamics><friction>, an MJCF's frictionloss (robots.mjcf.joint_attribute).
+
+    Args:
+        path: The description file.
+
+    Raises:
+        ConfigError: A friction that is not a number >= 0, naming the joint."""
+    import xml.etree.ElementTree as ElementTree
+    if path.suffix == ".xml":
+        return joint_attribute(path, "frictionloss")
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError as e:
+        raise ConfigError(f"{path}: {e}") from e
+    where = "dynamics" if path.suffix == ".urdf" else "axis/dynamics/friction"
+    friction = {}
+    for joint in root.iter("joint"):
+        element = joint.find(where)
+        value = (None if element is None else element.get("friction")
+                 if path.suffix == ".urdf" else element.text)
+        if value is None:
+            continue
+        try:
+            loss = float(value)
+        except ValueError:
+            loss = -1.0
+        if not (np.isfinite(loss) and loss >= 0):
+            raise ConfigError(f"{path}: joint {joint.get('name')!r}: friction "
+                              f"{value!r}; allowed: a number >= 0")
+        if loss > 0:
+            friction[joint.get("name")] = loss
+    return friction
 
 
 def _UrdfEffortLimits(path: Path) -> dict:
@@ -379,7 +431,9 @@ class ParsedDescription:
         self.plant.set_name("plant")        # names SceneGraph's plant_pose port
         self.scene_graph.set_name("scene_graph")
         self.plant.RegisterAsSourceForSceneGraph(self.scene_graph)
-        PopulateFromDescription(self.plant, name_or_path)
+        # The description's joint Coulomb friction by joint name [N m] (the plant
+        # does not hold it; the ground truth's RHS applies it).
+        self.joint_friction = PopulateFromDescription(self.plant, name_or_path)
         self.plant.Finalize()
         _RequireFreeFloating(self.plant, name_or_path)
         inspector, source = self.scene_graph.model_inspector(), self.plant.get_source_id()

@@ -16,10 +16,18 @@ here, on a copy (the user's files are not touched):
   joint that moves only massless bodies is refused later, naming the joint
   (dynamics.floating_model).
 
+Drake's parser does not model a joint's ``frictionloss`` (MuJoCo's dry friction), and
+takes a joint's ``armature`` only through a ``<motor>`` on it; joint_attribute reads both,
+through the ``<default>`` classes and ``childclass``, for the ground truth's friction
+(robots.description.joint_friction) and the rotor inertia of the actuators the library
+adds (robots.description.PopulateFromDescription).
+
 Errors name the file (and line, where the XML parser gives one) and the element."""
 from pathlib import Path
-from typing import Optional
+from typing import Dict, Optional
 import xml.etree.ElementTree as ElementTree
+
+import numpy as np
 
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.meshes import obj_of
@@ -28,6 +36,65 @@ from dacph_drake.robots.meshes import obj_of
 MESH_SUFFIXES = (".stl", ".obj", ".msh")
 # Includes nested deeper than this are a cycle.
 MAX_INCLUDE_DEPTH = 16
+
+
+def read_mjcf(path: Path) -> ElementTree.Element:
+    """The MJCF file's root with its includes expanded (ConfigError as mjcf_for_drake).
+
+    Args:
+        path: The MJCF file."""
+    root = _Parse(path)
+    _ExpandIncludes(root, path, path.parent, depth=0)
+    return root
+
+
+def joint_attribute(path: Path, attribute: str) -> Dict[str, float]:
+    """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]; joints
+    with a positive one), as MuJoCo resolves it: the joint's own attribute, else its
+    class's (the joint's ``class``, else the nearest enclosing body's ``childclass``,
+    else "main"), classes inheriting from the <default> that holds them.
+
+    Args:
+        path: The MJCF file.
+        attribute: The joint attribute.
+
+    Raises:
+        ConfigError: As read_mjcf, or a value that is not a number >= 0."""
+    root = read_mjcf(path)
+    classes: Dict[str, Dict[str, str]] = {}
+
+    def visit_default(default, inherited):
+        attributes = dict(inherited)
+        joint = default.find("joint")
+        if joint is not None:
+            attributes.update(joint.attrib)
+        classes[default.get("class", "main")] = attributes
+        for child in default.findall("default"):
+            visit_default(child, attributes)
+    for default in root.findall("default"):
+        visit_default(default, {})
+    values = {}
+
+    def visit_body(body, childclass):
+        childclass = body.get("childclass", childclass)
+        for joint in body.findall("joint"):
+            attributes = {**classes.get(joint.get("class", childclass), {}),
+                          **joint.attrib}
+            value = attributes.get(attribute, "0")
+            try:
+                number = float(value)
+            except ValueError:
+                number = -1.0
+            if not (np.isfinite(number) and number >= 0):
+                raise ConfigError(f"{path}: joint {joint.get('name', '(unnamed)')!r}: "
+                                  f"{attribute}={value!r}; allowed: a number >= 0")
+            if number > 0 and joint.get("name"):
+                values[joint.get("name")] = number
+        for child in body.findall("body"):
+            visit_body(child, childclass)
+    for world in root.findall("worldbody"):
+        visit_body(world, "main")
+    return values
 
 
 def mjcf_for_drake(path: Path) -> Optional[str]:

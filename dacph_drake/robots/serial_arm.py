@@ -8,7 +8,7 @@ link's tip about the k-th of ``axes`` (cycled), with limits +-2.9 rad, an effort
 limit of 1000 N m and the given damping; a massless frame "tool" sits at the last
 link's tip, and a tool mass is added to the last link."""
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Dict, Sequence
 
 AXES = ("0 0 1", "0 1 0", "1 0 0")
 
@@ -61,3 +61,56 @@ def serial_arm_urdf(name: str, links: Sequence[SerialLink], tool_mass: float = 0
                  f'link="{parent}"/><child link="tool"/><origin xyz="0 0 {offset:g}"/>'
                  '</joint></robot>')
     return "".join(parts)
+
+
+def serial_arm_mjcf(name: str, links: Sequence[SerialLink], tool_mass: float = 0.0,
+                    axes: Sequence[str] = AXES, armature: Sequence[float] = (),
+                    frictionloss: float = 0.0, from_geoms: Sequence[bool] = ()
+                    ) -> Dict[str, str]:
+    """The same arm as serial_arm_urdf as MJCF, written the way MuJoCo models are:
+    {file name: text} of NAME.xml, which includes the arm's bodies from NAME_arm.xml;
+    the joints' limits and ``frictionloss`` [N m] from a <default> class that the first
+    link's ``childclass`` passes down; each joint's ``armature`` [kg m^2] (none: 0) on
+    the joint; a link k with ``from_geoms[k]`` without an <inertial>, its inertia from
+    its cylinder geom of the link's mass (MuJoCo's inertiafromgeom); a massless body
+    "tool" at the tip.
+
+    Args:
+        name: The robot's name (its files' stem).
+        links: Its links, from the root outwards.
+        tool_mass: A mass added to the last link [kg].
+        axes: The joints' axes as "x y z" strings, cycled.
+        armature: Each joint's armature [kg m^2] (none: 0).
+        frictionloss: Every joint's frictionloss [N m] (the class's).
+        from_geoms: Per link, whether its inertia comes from its geom (none: no)."""
+    bodies, closing = [], []
+    offset = 0.05
+    for k, link in enumerate(links):
+        mass = link.mass + (tool_mass if k == len(links) - 1 else 0.0)
+        radius = max(0.1 * link.length, 0.01)
+        lateral = mass * (3 * radius**2 + link.length**2) / 12
+        axial = mass * radius**2 / 2
+        geometric = k < len(from_geoms) and from_geoms[k]
+        inertial = ("" if geometric else
+                    f'<inertial pos="0 0 {link.length / 2:g}" mass="{mass:g}" '
+                    f'diaginertia="{lateral:g} {lateral:g} {axial:g}"/>')
+        geom_mass = f' mass="{mass:g}"' if geometric else ""
+        bodies.append(
+            f'<body name="link{k + 1}" pos="0 0 {offset:g}"'
+            + (' childclass="arm"' if k == 0 else "") + ">"
+            f'<joint name="joint{k + 1}" axis="{axes[k % len(axes)]}" '
+            f'damping="{link.damping:g}" armature="{armature[k] if k < len(armature) else 0.0:g}"/>'
+            f'{inertial}<geom name="link{k + 1}_geom" type="cylinder" '
+            f'fromto="0 0 0 0 0 {link.length:g}" size="{radius:g}"{geom_mass}/>')
+        closing.append("</body>")
+        offset = link.length
+    bodies.append(f'<body name="tool" pos="0 0 {offset:g}"/>')
+    arm = "<mujoco>" + "".join(bodies) + "".join(closing) + "</mujoco>\n"
+    main = (f'<mujoco model="{name}"><compiler angle="radian"/><default>'
+            f'<default class="arm"><joint limited="true" range="-2.9 2.9" '
+            f'frictionloss="{frictionloss:g}"/></default></default><worldbody>'
+            '<body name="root"><inertial pos="0 0 0" mass="1" '
+            'diaginertia="0.01 0.01 0.01"/><geom name="root_geom" type="cylinder" '
+            f'size="0.05 0.025"/><include file="{name}_arm.xml"/></body></worldbody>'
+            "</mujoco>\n")
+    return {f"{name}.xml": main, f"{name}_arm.xml": arm}

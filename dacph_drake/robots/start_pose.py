@@ -6,7 +6,7 @@ dynamics, qdot = D^+ (omega_d(t) - Lambda e), D the generalized Jacobian's angul
 p = M(q) qdot and their rates size the gains (arm_defaults): the coupled inertia
 M_jk qdot_k, not M_jj alone, decides a joint's momentum; its excursion checks limits."""
 from dataclasses import dataclass
-from typing import Callable, List, Optional, Sequence
+from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
@@ -29,12 +29,39 @@ SINGULAR_BOUND, REFUSED_SINGULAR_VALUE = 0.2, 0.02
 POSE_BOUNDS = (0.05, 0.005)
 
 
-def singular_bounds(rows: int) -> tuple:
-    """(the bound a chosen start keeps, the bound below which a q0 is refused).
+# The same for the position's 3 linear rows alone, whose singular values are lever arms
+# of any size: their smallest over their largest (the tool placed no worse than 20x
+# slower in one direction than in the best), so that a 20 cm arm and a 2 m arm are
+# judged alike.
+POSITION_BOUNDS = (0.05, 0.005)
+# The GJM's rows of the attitude task (its angular ones) and of the position task.
+ATTITUDE_ROWS, POSITION_ROWS = (0, 1, 2), (3, 4, 5)
+
+
+def singular_bounds(rows: Sequence[int]) -> tuple:
+    """(the bound a chosen start keeps, the bound below which a q0 is refused) on
+    regularity(): the angular rows' [rad/s per rad/s], the position rows' ratio, else
+    (angular and linear rows) POSE_BOUNDS.
 
     Args:
-        rows: The task Jacobian's rows (3: attitude; 6: pose)."""
-    return (SINGULAR_BOUND, REFUSED_SINGULAR_VALUE) if rows == 3 else POSE_BOUNDS
+        rows: The task Jacobian's rows of the GJM (tasks.task.Task.jacobian_rows)."""
+    if tuple(rows) == POSITION_ROWS:
+        return POSITION_BOUNDS
+    angular = all(row < 3 for row in rows)
+    return (SINGULAR_BOUND, REFUSED_SINGULAR_VALUE) if angular else POSE_BOUNDS
+
+
+def regularity(D: np.ndarray, rows: Sequence[int]) -> float:
+    """How far the task Jacobian D (its ``rows``) is from singular: its smallest singular
+    value, or for the position rows alone the smallest over the largest (scale-free).
+
+    Args:
+        D: The task Jacobian (rows x n).
+        rows: Its rows of the GJM."""
+    sigma = np.linalg.svd(D, compute_uv=False)
+    if tuple(rows) == POSITION_ROWS:
+        return float(sigma[-1] / sigma[0]) if sigma[0] > 0 else 0.0
+    return float(sigma[-1])
 LIMIT_MARGIN = 0.1          # [-] share of a joint's range kept free at each end
 CLEARANCE_BOUND = 0.05      # [m] link-base clearance a chosen start keeps
 CANDIDATES = 256            # starts sampled by choose_start
@@ -53,7 +80,7 @@ class ReferenceRehearsal:
         q: The joint angles at each sample (T x n) [rad].
         p: The joint momenta M(q) qdot (T x n) [kg m^2/s].
         p_rate: Their time derivatives (T x n) [N m].
-        singular_value: The smallest singular value of D at each sample (T)."""
+        singular_value: D's regularity() at each sample (T)."""
     time: np.ndarray
     q: np.ndarray
     p: np.ndarray
@@ -70,10 +97,10 @@ def end_effector_frame(model: FloatingBaseModel) -> Frame:
 
 
 def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
-                  base_positions: Optional[np.ndarray] = None, rows: int = 3
-                  ) -> np.ndarray:
-    """D(q), the generalized Jacobian's first ``rows`` rows (3: the attitude's angular
-    rows; 6: the pose's, angular and linear) (rows x n).
+                  base_positions: Optional[np.ndarray] = None,
+                  rows: Sequence[int] = ATTITUDE_ROWS) -> np.ndarray:
+    """D(q), the generalized Jacobian's rows ``rows`` (0-2 angular, 3-5 linear: the
+    attitude's (0, 1, 2), the pose's all six, the position's (3, 4, 5)) (rows x n).
 
     Args:
         model: The arm's model.
@@ -81,12 +108,15 @@ def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
         base_positions: The base joint's coordinates (default: the identity pose).
         rows: The task's rows (tasks.task.Task.jacobian_rows)."""
     return model.GeneralizedJacobian(np.asarray(q, float), end_effector_frame(model),
-                                     base_positions=base_positions)[:rows]
+                                     base_positions=base_positions)[list(rows)]
 
 
 def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAttitude,
-             duration: float, rows: int = 3) -> ReferenceRehearsal:
-    """Follows the task's reference kinematically from q0 (module docstring).
+             duration: float, rows: Sequence[int] = ATTITUDE_ROWS) -> ReferenceRehearsal:
+    """Follows the task's reference kinematically from q0 (module docstring): its
+    attitude reference, or for a task without one (task: !EndEffectorPosition) its
+    position reference p_d(t) (tasks.end_effector_pose.PositionReference) by the
+    linear rows.
 
     Args:
         model: The arm's model.
@@ -94,27 +124,37 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
         task: The task (its reference, Lambda and task_damping).
         duration: How long [s].
         rows: The task Jacobian's rows whose smallest singular value is recorded."""
-    frame, reference, gains = end_effector_frame(model), task.reference, task.gains
+    frame, reference, gains = (end_effector_frame(model), getattr(task, "reference", None),
+                               task.gains)
     q = np.asarray(q0, float).copy()
     base = RotationMatrix()
-    R_d0 = reference_start(reference, RotationMatrix(model.FramePose(frame, model.Evaluate(
-        q, derivatives=False))))
+    evaluation = model.Evaluate(q, derivatives=False)
+    node, X_CE = model.FrameNode(frame)
+    # The end effector's position, the base at the origin at the start, integrated
+    # along the rehearsal by the GJM's linear rows (the base moves with the arm).
+    p_E = evaluation[4][node, :3, :3] @ X_CE[:3, 3] + evaluation[4][node, :3, 3]
+    position = _PositionReference(task, p_E)
+    R_d0 = None if position else reference_start(
+        reference, RotationMatrix(model.FramePose(frame, evaluation)))
     steps = max(int(np.ceil(duration / REHEARSAL_STEP)), 2)
     qs, ps, sigmas = [], [], []
     for k in range(steps + 1):
         positions = np.concatenate([base.ToQuaternion().wxyz(), np.zeros(3)])
         evaluation = model.Evaluate(q, derivatives=False)
-        R_WE = RotationMatrix(model.FramePose(frame, evaluation, positions))
-        R_d, omega_d = reference_at(reference, R_d0, k * REHEARSAL_STEP)
-        D = model.GeneralizedJacobian(q, frame, base_positions=positions,
-                                      evaluation=evaluation)[:3]
-        qdot = damped_pseudo_inverse(D, gains.task_damping) @ (
-            omega_d - gains.Lambda * attitude_error(R_WE, R_d))
+        J = model.GeneralizedJacobian(q, frame, base_positions=positions,
+                                      evaluation=evaluation)
+        if position is None:
+            R_WE = RotationMatrix(model.FramePose(frame, evaluation, positions))
+            R_d, omega_d = reference_at(reference, R_d0, k * REHEARSAL_STEP)
+            D, r = J[:3], omega_d - gains.Lambda * attitude_error(R_WE, R_d)
+        else:
+            p_d, v_d = position(k * REHEARSAL_STEP)
+            D, r = J[3:], v_d - gains.Lambda * (p_E - p_d)
+        qdot = damped_pseudo_inverse(D, gains.task_damping) @ r
+        p_E = p_E + REHEARSAL_STEP * (J[3:] @ qdot)
         qs.append(q.copy())
         ps.append(evaluation[0] @ qdot)
-        sigmas.append(np.linalg.svd(D if rows == 3 else model.GeneralizedJacobian(
-            q, frame, base_positions=positions, evaluation=evaluation)[:rows],
-            compute_uv=False)[-1])
+        sigmas.append(regularity(J[list(rows)], rows))
         omega_base = model.BaseVelocity(q, qdot, positions)[:3]
         angle = np.linalg.norm(omega_base) * REHEARSAL_STEP
         if angle > 0:
@@ -126,6 +166,20 @@ def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAtt
                               q=np.array(qs), p=p,
                               p_rate=np.gradient(p, REHEARSAL_STEP, axis=0),
                               singular_value=np.array(sigmas))
+
+
+def _PositionReference(task, p_E0: np.ndarray
+                       ) -> Optional[Callable[[float], Tuple[np.ndarray, np.ndarray]]]:
+    """t -> (p_d, v_d) [m, m/s] of a task that tracks a position and no attitude
+    (p_d(0) = p_E(q0) + initial_offset, p_E0 [m]), else None."""
+    if getattr(task, "reference", None) is not None:
+        return None
+    p = task.position
+    axis = np.asarray(p.axis, float) / np.linalg.norm(p.axis)
+    origin = p_E0 + np.asarray(p.initial_offset, float)
+    omega = 2 * np.pi / p.period
+    return lambda t: (origin + axis * p.amplitude * np.sin(omega * t),
+                      axis * p.amplitude * omega * np.cos(omega * t))
 
 
 def joint_limits(model: FloatingBaseModel) -> tuple:
@@ -165,7 +219,7 @@ def within_limits(model: FloatingBaseModel, q: np.ndarray) -> bool:
 def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
                  clearance: Callable[[np.ndarray], float],
                  null_space_rate: Optional[Callable[[np.ndarray], float]],
-                 duration: float, rows: int = 3) -> np.ndarray:
+                 duration: float, rows: Sequence[int] = ATTITUDE_ROWS) -> np.ndarray:
     """The start q0 [rad] a scenario file does not give.
 
     Candidates: the middle of the limits and CANDIDATES quasi-random points of the
@@ -190,8 +244,8 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
     n = model.num_joints
     points = _halton(CANDIDATES, n)
     candidates = np.vstack([0.5 * (low + high), low + points * (high - low)])
-    sigma = np.array([np.linalg.svd(task_jacobian(model, q, rows=rows),
-                                    compute_uv=False)[-1] for q in candidates])
+    sigma = np.array([regularity(task_jacobian(model, q, rows=rows), rows)
+                      for q in candidates])
     best, best_key = None, None
     failures = {"limits": 0, "singular": 0, "clearance": 0}
     bound = singular_bounds(rows)[0]
@@ -225,8 +279,8 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
     return best.copy()
 
 
-def task_singularity(model: FloatingBaseModel, q0: Sequence[float], rows: int = 3
-                     ) -> Optional[str]:
+def task_singularity(model: FloatingBaseModel, q0: Sequence[float],
+                     rows: Sequence[int] = ATTITUDE_ROWS) -> Optional[str]:
     """None unless the attitude task is (nearly) singular at q0 (D's smallest singular
     value < REFUSED_SINGULAR_VALUE), else a sentence naming it and the joints that turn
     the end effector least.
@@ -239,7 +293,8 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float], rows: int = 
     D = task_jacobian(model, q0, rows=rows)
     _, sigma, Vt = np.linalg.svd(D)
     refused = singular_bounds(rows)[1]
-    if sigma[-1] >= refused:
+    measure = regularity(D, rows)
+    if measure >= refused:
         return None
     # The joint-rate directions that leave the end effector's attitude (nearly)
     # still beyond the null space a redundant arm has anyway.
@@ -247,10 +302,13 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float], rows: int = 
     names = [joint.name() for joint in arm_joints(model)]
     involved = [names[k] for k in np.argsort(-np.abs(direction))
                 if abs(direction[k]) >= 0.3]
-    what, how = (("attitude", "turn it about the same axis") if rows == 3 else
-                 ("pose", "move it the same way"))
+    what, how = (("attitude", "turn it about the same axis")
+                 if tuple(rows) == ATTITUDE_ROWS else
+                 ("pose" if len(rows) == 6 else "position", "move it the same way"))
+    measured = ("smallest singular value over its largest"
+                if tuple(rows) == POSITION_ROWS else "smallest singular value")
     return (f"the end effector's {what} is singular there (the task Jacobian's "
-            f"smallest singular value {sigma[-1]:.2g} < {refused:g}): "
+            f"{measured} {measure:.2g} < {refused:g}): "
             f"joints {', '.join(repr(name) for name in involved)} {how}")
 
 

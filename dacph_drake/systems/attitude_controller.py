@@ -82,13 +82,15 @@ class AttitudeController(LeafSystem):
             None: the attitude task.
         log_name: The log output's name; with ``position`` its columns are
             log_layout.PoseLog's.
+        attitude: Track the attitude reference; False (with ``position``): the
+            position rows alone (task: !EndEffectorPosition).
     """
 
     def __init__(self, *, trials: Sequence[AttitudeTrial], reference: AttitudeReference,
                  gains: AttitudeGains, period: float, eta: float = 0.0,
                  excitation: Excitation = Excitation(amplitude=0.0),
                  identify: bool = False, position: Optional[object] = None,
-                 log_name: str = "attitude_log"):
+                 log_name: str = "attitude_log", attitude: bool = True):
         super().__init__()
         self._trials = list(trials)
         model = trials[0].model
@@ -118,7 +120,8 @@ class AttitudeController(LeafSystem):
         self._position_arguments = []
         for trial in trials:
             if position is None:
-                self._position_arguments.append(np.concatenate([np.zeros(9), [-1.0, 0.0]]))
+                self._position_arguments.append(np.concatenate([np.zeros(9),
+                                                                [-1.0, 0.0, 0.0]]))
                 continue
             X = trial.model.Evaluate(np.asarray(trial.q0, float), derivatives=False)[4]
             p_E0 = X[node, :3, :3] @ p_CE + X[node, :3, 3]     # the base at the origin
@@ -126,7 +129,8 @@ class AttitudeController(LeafSystem):
             self._position_arguments.append(np.concatenate([
                 p_CE, p_E0 + np.asarray(position.initial_offset, float),
                 direction / np.linalg.norm(direction),
-                [float(position.amplitude), 2 * np.pi / position.period]]))
+                [float(position.amplitude), 2 * np.pi / position.period,
+                 0.0 if attitude else 1.0]]))
         self._pose = position is not None
         self._layout = PoseLog() if self._pose else AttitudeLog()
         self._base_pose = self.DeclareVectorInputPort("base_pose", 7 * count)

@@ -8,8 +8,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import effort_limits, trial_coordinates
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
-from dacph_drake.kernels.loop import (pack_true_rhs, spatial_true_torques, stack_packs,
-                                      true_matrices)
+from dacph_drake.kernels.loop import (add_friction, pack_true_rhs, spatial_true_torques,
+                                      stack_packs, true_matrices)
 from dacph_drake.kernels.spatial import joint_momentum
 from dacph_drake.scenario import Phases, Uncertainty
 from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
@@ -20,19 +20,24 @@ class SpatialTrueRhs(TrueRhsSystem):
 
     As TrueRhs, with p the joint rows of H(q_full) v (kernels.spatial.joint_momentum),
     M(q) qdot exactly at zero momentum, all trials in one compiled call. u is clipped to
-    the effort limits (output ``saturated``: 1 per clipped joint). Output
-    ``true_matrices`` is the port's [vec(B~), diag(D~)] beyond the description's joint
-    damping b, which the plant applies itself and the LHS model knows.
+    the effort limits (output ``saturated``: 1 per clipped joint). The description's
+    joint Coulomb friction f, which Drake's plant does not model, acts here as
+    f tanh(qdot / FRICTION_VELOCITY) (kernels.loop.add_friction): a part of D~(x) qdot.
+    Output ``true_matrices`` is the port's [vec(B~), diag(D~)] (D~ with the friction's
+    secant) beyond the description's joint damping b, which the plant applies itself
+    and the LHS model knows.
 
     Args:
         plant: The batch's ground truth (finalized).
         arms: Each trial's arm as a plant of its own (kinematic tree, default inertias).
         uncertainties: Each trial's true RHS (scenario.uncertainty).
         phases: Each trial's phases.
+        frictions: Each trial's joint Coulomb friction f (n) [N m] (none: zero).
     """
 
     def __init__(self, *, plant: MultibodyPlant, arms: Sequence[MultibodyPlant],
-                 uncertainties: Sequence[Uncertainty], phases: Sequence[Phases]):
+                 uncertainties: Sequence[Uncertainty], phases: Sequence[Phases],
+                 frictions: Sequence[np.ndarray] = ()):
         super().__init__()
         coordinates = trial_coordinates(plant)
         nq = plant.num_positions()
@@ -47,6 +52,8 @@ class SpatialTrueRhs(TrueRhsSystem):
         self._frames = tuple(np.array([getattr(t, name) for t in trees])
                              for name in ("X_PF", "axis", "X_MC"))
         self._below = tree.below
+        self._frictions = (np.array(frictions, float) if len(frictions)
+                           else np.zeros((len(arms), n)))
         self._inertias = tuple(np.array(x) for x in zip(*(
             t.Inertias(arm.CreateDefaultContext()) for t, arm in zip(trees, arms))))
         self._uncertainties = [TrueRhsModel(uncertainty, phase).kernel_arguments
@@ -63,7 +70,7 @@ class SpatialTrueRhs(TrueRhsSystem):
     def _CalcTau(self, context, output):
         output.SetFromVector(spatial_true_torques(
             context.get_time(), self._state.Eval(context), self._indices,
-            *self._topology, *self._frames, self._below, *self._inertias,
+            *self._topology, *self._frames, self._below, *self._inertias, self._frictions,
             self._u.Eval(context), self._effort_limit,
             self._disturbance_model.Eval(context), self._packs, self._offsets,
             self._Running(context), RUNAWAY_RATE, self._verdicts))
@@ -84,5 +91,6 @@ class SpatialTrueRhs(TrueRhsSystem):
                                *(inertia[i] for inertia in self._inertias), arm[:7],
                                arm[7:13], q, qdot)
             B, D = true_matrices(t, q, p, *uncertainty)
+            add_friction(self._frictions[i], qdot, D)
             matrices += [B.reshape(-1), D]
         output.SetFromVector(np.concatenate(matrices))

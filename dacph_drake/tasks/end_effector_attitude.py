@@ -10,8 +10,9 @@ from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.log_layout import AttitudeLog
-from dacph_drake.robots.start_pose import task_singularity
-from dacph_drake.scenario import DescribedArm, EndEffectorAttitude, Excitation, Periods
+from dacph_drake.robots.start_pose import ATTITUDE_ROWS, task_singularity
+from dacph_drake.scenario import (AttitudeGains, AttitudeReference, DescribedArm,
+                                  EndEffectorAttitude, Excitation, Periods)
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.task import LhsSide, TaskSignals
@@ -28,7 +29,7 @@ class EndEffectorAttitudeTask:
     lhs_name, log_name = "attitude_controller", "attitude_log"
     panels = ("e_attitude_dac_vs_model_based", "f_inputs_and_joints")
     log_layout = AttitudeLog
-    jacobian_rows = 3               # the GJM's rows the task tracks (start_pose)
+    jacobian_rows = ATTITUDE_ROWS   # the GJM's rows the task tracks (start_pose)
 
     def Validate(self, section: EndEffectorAttitude, periods: Periods) -> None:
         """ConfigError naming the first invalid gain or reference setting.
@@ -36,7 +37,8 @@ class EndEffectorAttitudeTask:
         Args:
             section: The task section.
             periods: The scenario's periods (the gains' rates against periods.lhs)."""
-        r, g = section.reference, section.gains
+        self.ValidateGains(section.gains, periods)
+        r = section.reference
         require_positive("task.reference.period", r.period, "s")
         require_nonnegative("task.reference.amplitude", r.amplitude, "rad")
         require_in_range("task.reference.initial_error", r.initial_error, 0.0, np.pi,
@@ -47,6 +49,14 @@ class EndEffectorAttitudeTask:
             if len(axis) != 3 or np.linalg.norm(axis) == 0:
                 raise ConfigError(f"task.reference.{name} = {list(axis)}; allowed: a "
                                   "non-zero 3-vector")
+
+    @staticmethod
+    def ValidateGains(g: AttitudeGains, periods: Periods) -> None:
+        """ConfigError naming the first invalid gain.
+
+        Args:
+            g: The task's gains.
+            periods: The scenario's periods (the gains' rates against periods.lhs)."""
         require_positive("task.gains.Lambda", g.Lambda, "1/s")
         require_positive("task.gains.damping_rate", g.damping_rate, "1/s")
         require_nonnegative("task.gains.task_damping", g.task_damping)
@@ -65,6 +75,14 @@ class EndEffectorAttitudeTask:
     def RequireRegularStart(self, robot: Robot) -> None:
         """ConfigError if the task's rows of the GJM are (nearly) singular at q0,
         naming the joints.
+
+        Args:
+            robot: The trial's robots.described.DescribedRobot."""
+        self.RequireRegularRows(robot)
+
+    def RequireRegularRows(self, robot: Robot) -> None:
+        """ConfigError if the task's rows of the GJM are (nearly) singular at q0, naming
+        the joints.
 
         Args:
             robot: The trial's robots.described.DescribedRobot."""
@@ -95,7 +113,10 @@ class EndEffectorAttitudeTask:
         return AttitudeController(
             trials=[AttitudeTrial(model=t.model, potential=t.BasePotential(),
                                   q0=t.scenario.q0) for t in trials],
-            reference=first.task.reference, gains=first.task.gains,
+            # A task without an attitude reference (task: !EndEffectorPosition)
+            # gives the default one, which its position rows leave unused.
+            reference=getattr(first.task, "reference", None) or AttitudeReference(),
+            gains=first.task.gains,
             period=first.periods.lhs, eta=first.robot.potential.eta,
             excitation=excitation, identify=identify,
             **self.ControllerOptions(first.task))

@@ -54,7 +54,7 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
     lhs_name, log_name = "pose_controller", "pose_log"
     panels = ("e_pose_dac_vs_model_based", "f_inputs_and_joints")
     log_layout = PoseLog
-    jacobian_rows = 6
+    jacobian_rows = (0, 1, 2, 3, 4, 5)
 
     def Validate(self, section: EndEffectorPose, periods: Periods) -> None:
         """The attitude task's checks, then the position reference's.
@@ -63,7 +63,14 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
             section: The task section.
             periods: The scenario's periods."""
         super().Validate(section, periods)
-        p = section.position
+        self.ValidatePosition(section.position)
+
+    @staticmethod
+    def ValidatePosition(p: PositionReference) -> None:
+        """ConfigError naming the first invalid setting of the position reference.
+
+        Args:
+            p: The position reference."""
         require_positive("task.position.period", p.period, "s")
         require_finite_numbers("task.position.amplitude", [p.amplitude])
         if p.amplitude < 0:

@@ -7,6 +7,7 @@ from dacph_drake.scenario import Scenario
 from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.tasks.end_effector_attitude import END_EFFECTOR_ATTITUDE
 from dacph_drake.tasks.end_effector_pose import END_EFFECTOR_POSE
+from dacph_drake.tasks.end_effector_position import END_EFFECTOR_POSITION
 from dacph_drake.tasks.task import Task
 
 TASKS = {}
@@ -23,5 +24,6 @@ def register(task: Task) -> None:
         field.type = Union[field.type.__args__ + (task.section,)]
 
 
-for _task in (END_EFFECTOR_ANGLE, END_EFFECTOR_ATTITUDE, END_EFFECTOR_POSE):
+for _task in (END_EFFECTOR_ANGLE, END_EFFECTOR_ATTITUDE, END_EFFECTOR_POSE,
+              END_EFFECTOR_POSITION):
     register(_task)

@@ -1,0 +1,94 @@
+"""task: !EndEffectorPosition, a described arm's end-effector position: the
+AttitudeController with the GJM's linear rows alone (kernels.attitude.position_rates),
+
+    nu = D_p^+ (v_d - Lambda e_p) + (I - D_p^+ D_p) xi,    e_p = p_E - p_d(t) (world),
+
+D_p the generalized Jacobian's linear rows (3 x n). An arm of 3 to 5 joints cannot turn
+its end effector about every axis, but it can place it; on a longer arm the end
+effector's attitude is left to the null space (the clearance potential's xi). The
+sliding-mode law, V = s^T M s / 2 and the certificate are the attitude task's (E26-E28
+hold for any nu); the tracking error the metrics and figures report is |e_p| [m]."""
+from dataclasses import dataclass, field
+from typing import Dict
+
+import numpy as np
+
+from dacph_drake.errors import ConfigError
+from dacph_drake.log_layout import PoseLog
+from dacph_drake.robots.robot import Robot
+from dacph_drake.robots.start_pose import POSITION_ROWS
+from dacph_drake.scenario import AttitudeGains, Periods
+from dacph_drake.tasks.end_effector_pose import EndEffectorPoseTask, PositionReference
+from dacph_drake.tasks.task import TaskSignals
+
+
+@dataclass
+class EndEffectorPosition:
+    """task: !EndEffectorPosition, the end effector's position.
+
+    Attributes:
+        position: The position reference p_d(t).
+        gains: The LHS gains (Lambda acts on e_p)."""
+    position: PositionReference = field(default_factory=PositionReference)
+    gains: AttitudeGains = field(default_factory=AttitudeGains)
+
+
+class EndEffectorPositionTask(EndEffectorPoseTask):
+    """tasks.task.Task of a described arm's end-effector position."""
+    section = EndEffectorPosition
+    lhs_name, log_name = "position_controller", "position_log"
+    panels = ("e_position_dac_vs_model_based", "f_inputs_and_joints")
+    log_layout = PoseLog
+    jacobian_rows = POSITION_ROWS   # the GJM's linear rows (start_pose)
+
+    def Validate(self, section: EndEffectorPosition, periods: Periods) -> None:
+        """The gains' checks (the attitude task's) and the position reference's.
+
+        Args:
+            section: The task section.
+            periods: The scenario's periods."""
+        self.ValidateGains(section.gains, periods)
+        self.ValidatePosition(section.position)
+
+    def RequireRegularStart(self, robot: Robot) -> None:
+        """ConfigError on fewer than 3 joints, or where the linear rows of the GJM are
+        (nearly) singular at q0 (naming the joints).
+
+        Args:
+            robot: The trial's DescribedRobot."""
+        if robot.num_joints < 3:
+            raise ConfigError(f"task: !EndEffectorPosition on a {robot.num_joints}-"
+                              "joint arm; allowed: an arm of at least 3 joints")
+        self.RequireRegularRows(robot)
+
+    def ControllerOptions(self, section: EndEffectorPosition) -> Dict:
+        """The position rows alone, and the position log.
+
+        Args:
+            section: The task section."""
+        return {"position": section.position, "log_name": self.log_name,
+                "attitude": False}
+
+    def Signals(self, robot: Robot, logs: Dict[str, np.ndarray]) -> TaskSignals:
+        """The attitude task's signals with |e_p| [m] as the tracking error.
+
+        Args:
+            robot: The trial's DescribedRobot.
+            logs: The run's logs."""
+        signals = super().Signals(robot, logs)
+        return TaskSignals(logs[self.log_name][:, PoseLog().e_position_norm],
+                           *signals[1:])
+
+
+    def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
+        """The pose task's metrics without the attitude's (no attitude is tracked):
+        the RMS |e_p| [m] per phase, clearance, momentum and saturation.
+
+        Args:
+            robot: The trial's DescribedRobot.
+            logs: The run's logs."""
+        return {key: value for key, value in super().Metrics(robot, logs).items()
+                if not key.startswith("attitude_error")}
+
+
+END_EFFECTOR_POSITION = EndEffectorPositionTask()
