@@ -606,3 +606,24 @@ def test_an_arm_as_mjcf_with_defaults_includes_and_geom_inertia_is_its_urdf(tmp_
     for file in ("plain.xml", "geared.xml"):
         np.testing.assert_array_equal(models[file].joint_damping, [0.5, 0.0, 0.0, 0.1])
         np.testing.assert_allclose(joint_limits(models[file]), [[-2.9] * 4, [2.9] * 4])
+
+
+def test_urdf_and_sdf_joint_friction_is_read_by_joint(tmp_path):
+    """joint_friction reads a URDF's <dynamics friction> and an SDF's
+    <axis><dynamics><friction> by joint name (zero left out), and a negative one is
+    refused naming the joint."""
+    from dacph_drake.robots.description import joint_friction
+    urdf = serial_arm_urdf("rubbed", SIX[:3]).replace(
+        '<dynamics damping="0"/></joint><link name="link2"',
+        '<dynamics damping="0" friction="0.7"/></joint><link name="link2"', 1)
+    (tmp_path / "rubbed.urdf").write_text(urdf)
+    assert joint_friction(tmp_path / "rubbed.urdf") == {"joint1": 0.7}
+    sdf = (ARMS / "arm3.sdf").read_text().replace(
+        "<axis><xyz>0 1 0</xyz>", "<axis><xyz>0 1 0</xyz><dynamics><friction>0.3"
+                                  "</friction></dynamics>")
+    (tmp_path / "rubbed.sdf").write_text(sdf)
+    assert joint_friction(tmp_path / "rubbed.sdf") == {"joint2": 0.3}
+    (tmp_path / "bad.urdf").write_text(urdf.replace('friction="0.7"', 'friction="-1"'))
+    with pytest.raises(ConfigError, match=r"joint 'joint1': friction '-1'; allowed: a "
+                                          r"number >= 0"):
+        joint_friction(tmp_path / "bad.urdf")
