@@ -627,3 +627,21 @@ def test_urdf_and_sdf_joint_friction_is_read_by_joint(tmp_path):
     with pytest.raises(ConfigError, match=r"joint 'joint1': friction '-1'; allowed: a "
                                           r"number >= 0"):
         joint_friction(tmp_path / "bad.urdf")
+
+
+def test_an_mjcf_motors_gear_scales_its_torque_limit(tmp_path):
+    """A <motor gear="3" ctrlrange="-2 2">: MuJoCo's torque is gear x ctrl, so the loop's
+    u (the joint torque, as Drake applies it) is limited to +-6 N m, and its armature is
+    reflected through the gear (rotor inertia armature / 9)."""
+    text = (ARMS / "arm3.xml").read_text()
+    path = tmp_path / "geared.xml"
+    path.write_text(text.replace('<joint name="joint1" type="hinge"',
+                                 '<joint name="joint1" armature="0.05" type="hinge"')
+                    .replace("</worldbody>", '</worldbody><actuator><motor joint="joint1" '
+                             'gear="3" ctrlrange="-2 2" ctrllimited="true"/></actuator>'))
+    plant = MakeRobotPlant(DescribedArm(description=str(path), base=ArmBase(mass=100.0),
+                                        end_effector=EndEffectorFrame(frame="link3")))
+    actuator = next(plant.get_joint_actuator(i) for i in plant.GetJointActuatorIndices()
+                    if plant.get_joint_actuator(i).joint().name() == "joint1")
+    assert actuator.effort_limit() == pytest.approx(6.0)
+    assert actuator.default_rotor_inertia() * 9 == pytest.approx(0.05)

@@ -220,6 +220,8 @@ def PopulateFromDescription(plant: MultibodyPlant,
                              else parser.AddModelsFromString(converted, kind))
             if arm.base.mass > 0:
                 _MountOnBase(plant, instances, arm.base)
+            if path.suffix == ".xml":
+                _GearedEffortLimits(plant)
         except RuntimeError as e:
             raise ConfigError(f"{path}: {_DrakeMessage(e, path)}") from e
         _LockJoints(plant, arm.locked_joints, path)
@@ -282,6 +284,18 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
                                      [0.75, 0.75, 0.8, 1.0])
     plant.WeldFrames(body.body_frame(), root.body_frame(), RigidTransform(
         RollPitchYaw(base.mount[3:]), base.mount[:3]))
+
+
+def _GearedEffortLimits(plant: MultibodyPlant) -> None:
+    """An MJCF <motor>'s torque is gear x ctrl, its ctrlrange a limit on ctrl; Drake's
+    parser keeps the gear (for the reflected inertia) and takes ctrlrange as the effort
+    limit of u, which it applies as the joint torque. The loop's u is that torque, so its
+    limit is |gear| x ctrlrange (robosuite's motors: gear 1, unchanged)."""
+    for index in plant.GetJointActuatorIndices():
+        actuator = plant.get_joint_actuator(index)
+        gear, limit = abs(actuator.default_gear_ratio()), actuator.effort_limit()
+        if np.isfinite(limit) and gear != 1.0:
+            actuator.set_effort_limit(limit * gear)
 
 
 def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
