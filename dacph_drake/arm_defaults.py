@@ -93,12 +93,12 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
         ConfigError: Bad assembly settings, an unloadable description, no start found."""
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
     from dacph_drake.errors import ConfigError
-    from dacph_drake.robots.described import (arm_joints, link_base_clearance,
+    from dacph_drake.robots.described import (joint_friction, link_base_clearance,
                                               null_space_rate,
                                               require_every_joint_moves_inertia)
     from dacph_drake.robots.description import ParsedDescription
     from dacph_drake.robots.described import validate_assembly
-    from dacph_drake.robots.start_pose import choose_start, rehearse
+    from dacph_drake.robots.start_pose import choose_start, rehearse, tracked
     validate_assembly(robot)
     parsed = ParsedDescription(robot)
     model = FloatingBaseModel(parsed.plant)
@@ -116,9 +116,10 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                               null_space_rate(parsed, model, robot.potential),
                               rehearsal_time, rows)
         except ValueError as e:
-            what, how = {(0, 1, 2): ("attitude", "turn about every axis"),
-                         (3, 4, 5): ("position", "move in every direction")}.get(
-                tuple(rows), ("pose", "turn about every axis and move in every direction"))
+            what = tracked(rows)
+            how = {"attitude": "turn about every axis",
+                   "position": "move in every direction"}.get(
+                what, "turn about every axis and move in every direction")
             raise ConfigError(
                 f"robot.description {robot.description!r}: no start pose found for "
                 f"the end-effector {what} task ({e}); allowed: a q0 in the file, or "
@@ -158,10 +159,9 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
     scenario.disturbance.scale = disturbance_scale(
         scenario.disturbance, M, rate * 2 * np.pi / reference.period)
     scenario.excitation.joint_scale = excitation_scale(scenario.excitation, M)
-    friction = np.array([parsed.joint_friction.get(joint.name(), 0.0)
-                         for joint in arm_joints(model)])
     scenario.simulator = FixedStepConfig(step=truth_step(
-        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs, friction))
+        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs,
+        joint_friction(parsed, model)))
     return scenario
 
 
@@ -401,7 +401,6 @@ def sized_defaults(robot: Union[PlanarArm, DescribedArm], q0: Optional[Sequence[
     return planar_arm_scenario(robot, q0, task)
 
 
-
 def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> None:
     """Checks what a file gives that sizing uses (the start and the task's reference)
     before any sizing, start-pose search or plant call reads it.
@@ -426,6 +425,7 @@ def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
     lever the joints move the end effector by)."""
     if getattr(task, "reference", None) is not None:
         return task.reference.amplitude
-    from dacph_drake.robots.start_pose import task_jacobian
-    lever = np.linalg.svd(task_jacobian(model, q0, rows=(3, 4, 5)), compute_uv=False)[0]
+    from dacph_drake.robots.start_pose import POSITION_ROWS, task_jacobian
+    lever = np.linalg.svd(task_jacobian(model, q0, rows=POSITION_ROWS),
+                          compute_uv=False)[0]
     return task.position.amplitude / max(lever, 1e-9)

@@ -401,16 +401,47 @@ def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
     D, D_dot, r, r_dot, e, R_d = attitude_rows(
         base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
         base_velocity[:3], t, reference, end_effector, Lambda)
+    D_p, D_p_dot, r_p, r_p_dot, e_p, p_d = position_task_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose,
+        base_velocity, t, end_effector, position, Lambda)
+    nu, nu_dot = reference_rates(
+        np.vstack((D, D_p)), np.vstack((D_dot, D_p_dot)), np.concatenate((r, r_p)),
+        np.concatenate((r_dot, r_p_dot)), xi, xi_dot, damping)
+    return nu, nu_dot, e, R_d, e_p, p_d
+
+
+@njit(cache=True)
+def position_task_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
+                       joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
+                       base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
+                       end_effector: tuple, position: np.ndarray, Lambda: float) -> tuple:
+    """The position rows of a task (position_rows) with their reference, as attitude_rows
+    gives the attitude's: r_p = v_d - Lambda e_p, e_p = p_E - p_d(t), and its rate
+    r_p_dot = a_d - Lambda (v_E - v_d).
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration.
+        qdot: The joint rates (n) [rad/s].
+        base_pose: The base's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base's (omega_W, v_W) (6).
+        t: The time [s].
+        end_effector: (node, R_CE).
+        position: desired_position's arguments (p_CE first).
+        Lambda: [1/s].
+
+    Returns:
+        (D_p (3 x n) [m], D_p_dot, r_p [m/s], r_p_dot [m/s^2], e_p (3) [m],
+        p_d (3) [m])."""
     p_E, v_E, D_p, D_p_dot = position_rows(
         base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
         base_pose[4:], base_velocity, end_effector[0], position[:3])
     p_d, v_d, a_d = desired_position(position, t)
     e_p = p_E - p_d
-    nu, nu_dot = reference_rates(
-        np.vstack((D, D_p)), np.vstack((D_dot, D_p_dot)),
-        np.concatenate((r, v_d - Lambda * e_p)),
-        np.concatenate((r_dot, a_d - Lambda * (v_E - v_d))), xi, xi_dot, damping)
-    return nu, nu_dot, e, R_d, e_p, p_d
+    return D_p, D_p_dot, v_d - Lambda * e_p, a_d - Lambda * (v_E - v_d), e_p, p_d
 
 
 @njit(cache=True)
@@ -420,7 +451,7 @@ def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                    end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                    xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
     """The position task's reference joint rates from the position rows alone
-    (position_rows), r = v_d - Lambda e_p, e_p = p_E - p_d(t).
+    (position_task_rows).
 
     Args:
         base_subspace: S_b (6, nb).
@@ -441,13 +472,10 @@ def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
 
     Returns:
         (nu, nu_dot, e_p (3) [m], p_d (3) [m])."""
-    p_E, v_E, D_p, D_p_dot = position_rows(
-        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
-        base_pose[4:], base_velocity, end_effector[0], position[:3])
-    p_d, v_d, a_d = desired_position(position, t)
-    e_p = p_E - p_d
-    nu, nu_dot = reference_rates(D_p, D_p_dot, v_d - Lambda * e_p,
-                                 a_d - Lambda * (v_E - v_d), xi, xi_dot, damping)
+    D_p, D_p_dot, r_p, r_p_dot, e_p, p_d = position_task_rows(
+        base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose,
+        base_velocity, t, end_effector, position, Lambda)
+    nu, nu_dot = reference_rates(D_p, D_p_dot, r_p, r_p_dot, xi, xi_dot, damping)
     return nu, nu_dot, e_p, p_d
 
 

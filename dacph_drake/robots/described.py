@@ -137,6 +137,17 @@ def _body_roles(arm: "DescribedArm") -> Tuple[list, int, list]:
     return _BODY_ROLES[key]
 
 
+def joint_friction(parsed: ParsedDescription, model: FloatingBaseModel) -> np.ndarray:
+    """The parsed description's joint Coulomb friction f (n) [N m] in q's order
+    (ParsedDescription.joint_friction, by name; zero where none).
+
+    Args:
+        parsed: The parsed description.
+        model: Its arm's model (the joints' order)."""
+    return np.array([parsed.joint_friction.get(joint.name(), 0.0)
+                     for joint in arm_joints(model)])
+
+
 def require_every_joint_moves_inertia(model: FloatingBaseModel, description: str
                                       ) -> None:
     """Requires every actuated joint of a described arm to move some inertia.
@@ -202,8 +213,7 @@ class DescribedRobot:
     def joint_friction(self) -> np.ndarray:
         """The description's joint Coulomb friction f (n) [N m] in q's order, which the
         ground truth's RHS applies (robot.joint_friction "keep"; else zero)."""
-        return np.array([self.parsed.joint_friction.get(joint.name(), 0.0)
-                         for joint in arm_joints(self.model)])
+        return joint_friction(self.parsed, self.model)
 
     @property
     def truth_plant(self) -> MultibodyPlant:

@@ -25,7 +25,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_xacro,
                                                    without_duplicate_materials)
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
-from dacph_drake.robots.mjcf import joint_attribute, mjcf_for_drake
+from dacph_drake.robots.mjcf import MjcfFile, nonnegative_number
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
 from dacph_drake.arm_parameters import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
@@ -196,8 +196,9 @@ def PopulateFromDescription(plant: MultibodyPlant,
         path = robot_description(arm.description,
                                  package_map_of(arm, parser.package_map()))
         converted, kind = None, path.suffix[1:]
-        if path.suffix == ".xml":
-            converted = mjcf_for_drake(path)
+        mjcf = MjcfFile(path) if path.suffix == ".xml" else None
+        if mjcf is not None:
+            converted = mjcf.drake_text
         elif path.suffix == ".urdf":
             text = path.read_text(encoding="utf-8")
             refuse_xacro(path, text)
@@ -205,8 +206,9 @@ def PopulateFromDescription(plant: MultibodyPlant,
                                              without_duplicate_materials(text, path)[0])
         efforts = (_UrdfEffortLimits(path) if path.suffix == ".urdf"
                    and arm.effort_limits == "saturate" else {})
-        friction = joint_friction(path) if arm.joint_friction == "keep" else {}
-        armature = joint_attribute(path, "armature") if path.suffix == ".xml" else {}
+        friction = ({} if arm.joint_friction != "keep" else
+                    mjcf.JointAttribute("frictionloss") if mjcf else joint_friction(path))
+        armature = mjcf.JointAttribute("armature") if mjcf else {}
         if friction:
             from dacph_drake.kernels.loop import FRICTION_VELOCITY
             logging.getLogger(__name__).warning(
@@ -319,20 +321,16 @@ def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
 def joint_friction(path: Path) -> Dict[str, float]:
     """Joint name -> the description's Coulomb friction [N m] (joints with a positive
     one), which Drake's parsers do not model: a URDF's <dynamics friction>, an SDF's
-    <axis><dynamics><friction>, an MJCF's frictionloss (robots.mjcf.joint_attribute).
+    <axis><dynamics><friction>, an MJCF's frictionloss (robots.mjcf.MjcfFile.JointAttribute).
 
     Args:
         path: The description file.
 
     Raises:
         ConfigError: A friction that is not a number >= 0, naming the joint."""
-    import xml.etree.ElementTree as ElementTree
     if path.suffix == ".xml":
-        return joint_attribute(path, "frictionloss")
-    try:
-        root = ElementTree.parse(path).getroot()
-    except ElementTree.ParseError as e:
-        raise ConfigError(f"{path}: {e}") from e
+        return MjcfFile(path).JointAttribute("frictionloss")
+    root = _XmlRoot(path)
     where = "dynamics" if path.suffix == ".urdf" else "axis/dynamics/friction"
     friction = {}
     for joint in root.iter("joint"):
@@ -341,27 +339,26 @@ def joint_friction(path: Path) -> Dict[str, float]:
                  if path.suffix == ".urdf" else element.text)
         if value is None:
             continue
-        try:
-            loss = float(value)
-        except ValueError:
-            loss = -1.0
-        if not (np.isfinite(loss) and loss >= 0):
-            raise ConfigError(f"{path}: joint {joint.get('name')!r}: friction "
-                              f"{value!r}; allowed: a number >= 0")
+        loss = nonnegative_number(value, f"{path}: joint {joint.get('name')!r}: "
+                                         f"friction {value!r}")
         if loss > 0:
             friction[joint.get("name")] = loss
     return friction
 
 
-def _UrdfEffortLimits(path: Path) -> dict:
-    """Joint name -> the URDF's <limit effort> [N m] (joints with a positive one)."""
+def _XmlRoot(path: Path):
+    """A URDF's or SDF's XML root (ConfigError naming a file that is no XML)."""
     import xml.etree.ElementTree as ElementTree
     try:
-        root = ElementTree.parse(path).getroot()
+        return ElementTree.parse(path).getroot()
     except ElementTree.ParseError as e:
         raise ConfigError(f"{path}: {e}") from e
+
+
+def _UrdfEffortLimits(path: Path) -> dict:
+    """Joint name -> the URDF's <limit effort> [N m] (joints with a positive one)."""
     limits = {}
-    for joint in root.iter("joint"):
+    for joint in _XmlRoot(path).iter("joint"):
         limit = joint.find("limit")
         if limit is not None and float(limit.get("effort", "0") or 0) > 0:
             limits[joint.get("name")] = float(limit.get("effort"))

@@ -17,10 +17,10 @@ here, on a copy (the user's files are not touched):
   (dynamics.floating_model).
 
 Drake's parser does not model a joint's ``frictionloss`` (MuJoCo's dry friction), and
-takes a joint's ``armature`` only through a ``<motor>`` on it; joint_attribute reads both,
-through the ``<default>`` classes and ``childclass``, for the ground truth's friction
-(robots.description.joint_friction) and the rotor inertia of the actuators the library
-adds (robots.description.PopulateFromDescription).
+takes a joint's ``armature`` only through a ``<motor>`` on it; both are read here,
+through the ``<default>`` classes and ``childclass`` (MjcfFile.JointAttribute), for the
+ground truth's friction (robots.description.joint_friction) and the rotor inertia of
+the actuators the library adds (robots.description.PopulateFromDescription).
 
 Errors name the file (and line, where the XML parser gives one) and the element."""
 from pathlib import Path
@@ -38,82 +38,88 @@ MESH_SUFFIXES = (".stl", ".obj", ".msh")
 MAX_INCLUDE_DEPTH = 16
 
 
-def read_mjcf(path: Path) -> ElementTree.Element:
-    """The MJCF file's root with its includes expanded (ConfigError as mjcf_for_drake).
-
-    Args:
-        path: The MJCF file."""
-    root = _Parse(path)
-    _ExpandIncludes(root, path, path.parent, depth=0)
-    return root
-
-
-def joint_attribute(path: Path, attribute: str) -> Dict[str, float]:
-    """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]; joints
-    with a positive one), as MuJoCo resolves it: the joint's own attribute, else its
-    class's (the joint's ``class``, else the nearest enclosing body's ``childclass``,
-    else "main"), classes inheriting from the <default> that holds them.
-
-    Args:
-        path: The MJCF file.
-        attribute: The joint attribute.
-
-    Raises:
-        ConfigError: As read_mjcf, or a value that is not a number >= 0."""
-    root = read_mjcf(path)
-    classes: Dict[str, Dict[str, str]] = {}
-
-    def visit_default(default, inherited):
-        attributes = dict(inherited)
-        joint = default.find("joint")
-        if joint is not None:
-            attributes.update(joint.attrib)
-        classes[default.get("class", "main")] = attributes
-        for child in default.findall("default"):
-            visit_default(child, attributes)
-    for default in root.findall("default"):
-        visit_default(default, {})
-    values = {}
-
-    def visit_body(body, childclass):
-        childclass = body.get("childclass", childclass)
-        for joint in body.findall("joint"):
-            attributes = {**classes.get(joint.get("class", childclass), {}),
-                          **joint.attrib}
-            value = attributes.get(attribute, "0")
-            try:
-                number = float(value)
-            except ValueError:
-                number = -1.0
-            if not (np.isfinite(number) and number >= 0):
-                raise ConfigError(f"{path}: joint {joint.get('name', '(unnamed)')!r}: "
-                                  f"{attribute}={value!r}; allowed: a number >= 0")
-            if number > 0 and joint.get("name"):
-                values[joint.get("name")] = number
-        for child in body.findall("body"):
-            visit_body(child, childclass)
-    for world in root.findall("worldbody"):
-        visit_body(world, "main")
-    return values
-
-
-def mjcf_for_drake(path: Path) -> Optional[str]:
-    """The text Drake reads for the MJCF file ``path`` (module docstring), or None when the
-    file needs no rewriting.
+class MjcfFile:
+    """One MJCF file, read once: ``drake_text``, the text Drake reads for it (module
+    docstring; None when the file needs no rewriting), and its joints' attributes as
+    MuJoCo resolves them (JointAttribute).
 
     Args:
         path: The MJCF file.
 
     Raises:
-        ConfigError: A bad XML file, a missing or cyclic include, a mesh missing or of a
-            format MuJoCo does not read, naming the file and the element."""
-    root = _Parse(path)
-    changed = _ExpandIncludes(root, path, path.parent, depth=0)
-    changed |= _ConvertMeshes(root, path)
-    changed |= _DropMasslessInertials(root)
-    if not changed:
-        return None
-    return ElementTree.tostring(root, encoding="unicode")
+        ConfigError: A bad XML file, a non-MJCF root, a missing or cyclic include, a mesh
+            missing or of a format MuJoCo does not read, naming the file and the
+            element."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self._root = _Parse(path)
+        changed = _ExpandIncludes(self._root, path, path.parent, depth=0)
+        changed |= _ConvertMeshes(self._root, path)
+        changed |= _DropMasslessInertials(self._root)
+        self.drake_text = (ElementTree.tostring(self._root, encoding="unicode")
+                           if changed else None)
+
+    def JointAttribute(self, attribute: str) -> Dict[str, float]:
+        """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]; joints
+        with a positive one), as MuJoCo resolves it: the joint's own attribute, else its
+        class's (the joint's ``class``, else the nearest enclosing body's
+        ``childclass``, else "main"), classes inheriting from the <default> that holds
+        them.
+
+        Args:
+            attribute: The joint attribute.
+
+        Raises:
+            ConfigError: A value that is not a number >= 0, naming the joint."""
+        classes: Dict[str, Dict[str, str]] = {}
+
+        def visit_default(default, inherited):
+            attributes = dict(inherited)
+            joint = default.find("joint")
+            if joint is not None:
+                attributes.update(joint.attrib)
+            classes[default.get("class", "main")] = attributes
+            for child in default.findall("default"):
+                visit_default(child, attributes)
+        for default in self._root.findall("default"):
+            visit_default(default, {})
+        values = {}
+
+        def visit_body(body, childclass):
+            childclass = body.get("childclass", childclass)
+            for joint in body.findall("joint"):
+                attributes = {**classes.get(joint.get("class", childclass), {}),
+                              **joint.attrib}
+                value = attributes.get(attribute, "0")
+                number = nonnegative_number(value, f"{self.path}: joint "
+                                            f"{joint.get('name', '(unnamed)')!r}: "
+                                            f"{attribute}={value!r}")
+                if number > 0 and joint.get("name"):
+                    values[joint.get("name")] = number
+            for child in body.findall("body"):
+                visit_body(child, childclass)
+        for world in self._root.findall("worldbody"):
+            visit_body(world, "main")
+        return values
+
+
+def nonnegative_number(value: str, named: str) -> float:
+    """A description's attribute as a finite number >= 0.
+
+    Args:
+        value: The attribute's text.
+        named: The file, element and attribute, for the message.
+
+    Raises:
+        ConfigError: "{named}; allowed: a number >= 0"."""
+    try:
+        number = float(value)
+    except ValueError:
+        number = -1.0
+    if not (np.isfinite(number) and number >= 0):
+        raise ConfigError(f"{named}; allowed: a number >= 0")
+    return number
 
 
 def _Parse(path: Path) -> ElementTree.Element:

@@ -51,6 +51,14 @@ def singular_bounds(rows: Sequence[int]) -> tuple:
     return (SINGULAR_BOUND, REFUSED_SINGULAR_VALUE) if angular else POSE_BOUNDS
 
 
+def tracked(rows: Sequence[int]) -> str:
+    """What a task with these GJM rows tracks: "attitude", "position" or "pose".
+
+    Args:
+        rows: The task Jacobian's rows of the GJM."""
+    return {ATTITUDE_ROWS: "attitude", POSITION_ROWS: "position"}.get(tuple(rows), "pose")
+
+
 def regularity(D: np.ndarray, rows: Sequence[int]) -> float:
     """How far the task Jacobian D (its ``rows``) is from singular: its smallest singular
     value, or for the position rows alone the smallest over the largest (scale-free).
@@ -302,9 +310,8 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float],
     names = [joint.name() for joint in arm_joints(model)]
     involved = [names[k] for k in np.argsort(-np.abs(direction))
                 if abs(direction[k]) >= 0.3]
-    what, how = (("attitude", "turn it about the same axis")
-                 if tuple(rows) == ATTITUDE_ROWS else
-                 ("pose" if len(rows) == 6 else "position", "move it the same way"))
+    what = tracked(rows)
+    how = "turn it about the same axis" if what == "attitude" else "move it the same way"
     measured = ("smallest singular value over its largest"
                 if tuple(rows) == POSITION_ROWS else "smallest singular value")
     return (f"the end effector's {what} is singular there (the task Jacobian's "
