@@ -183,6 +183,8 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
      r"robot.base.mount has 3 entries; allowed: 6"),
     (dict(package_paths=["/no/such/folder"]), r"robot.package_paths\[0\] = "),
     (dict(joint_damping="ignore"), r"robot.joint_damping = 'ignore'; allowed: keep, zero"),
+    (dict(joint_friction="smooth"), r"robot.joint_friction = 'smooth'; allowed: keep, "
+                                   r"zero"),
     (dict(joint_limits="clip"), r"robot.joint_limits = 'clip'; allowed: stop, ignore"),
     (dict(effort_limits="scale"), r"robot.effort_limits = 'scale'; allowed: saturate, "
                                   r"ignore"),

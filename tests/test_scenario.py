@@ -421,3 +421,25 @@ def test_a_run_saved_before_the_model_error_was_measured_keeps_its_meaning():
     require_run_of(saved, meta, folder, "dac")
     assert saved.learner.bayes.model_error == 0.1
     assert saved.inertia == load_scenario(folder / "scenario.yaml").inertia
+
+
+def test_a_described_run_saved_before_joint_friction_keeps_its_meaning(tmp_path):
+    """robot.joint_friction was added at the behaviour before it ("zero"): a saved
+    described-arm run's file without the line loads with it at "zero", and its line at
+    that value is left out of the fingerprinted text (a run saved before keeps its
+    fingerprint); "keep" changes the fingerprint."""
+    import copy
+    from dacph_drake.scenario_files import (load_saved_scenario, saved_forms,
+                                            save_scenario)
+    from dacph_drake.loop.run_store import scenario_fingerprint
+    scenario = load_scenario("satellite_3dof")
+    save_scenario(scenario, tmp_path / "scenario.yaml")
+    text = (tmp_path / "scenario.yaml").read_text()
+    assert "  joint_friction: zero\n" in text
+    (tmp_path / "before.yaml").write_text(text.replace("  joint_friction: zero\n", ""))
+    before = load_saved_scenario(tmp_path / "before.yaml")
+    assert before.robot.joint_friction == "zero" and before == scenario
+    assert "joint_friction" not in saved_forms(scenario)[0]
+    kept = copy.deepcopy(scenario)
+    kept.robot.joint_friction = "keep"
+    assert scenario_fingerprint(kept) != scenario_fingerprint(scenario)
