@@ -117,6 +117,11 @@ def test_the_mass_matrix_and_the_momentum_are_linear_in_the_inertias(plant):
     parameters.Apply(context, 1.3 * pi)
     np.testing.assert_allclose(plant.CalcMassMatrix(context), 1.3 * H,
                                atol=1e-13 * np.abs(H).max())
+    # The direct map the LHS model takes each estimate by: Apply then Inertias.
+    direct = [x.copy() for x in tree.Inertias(plant.CreateDefaultContext())]
+    parameters.IntoTreeInertias(1.3 * pi, parameters.Nodes(tree), *direct[:3])
+    for mine, drakes in zip(direct, tree.Inertias(context), strict=True):
+        np.testing.assert_allclose(mine, drakes, rtol=1e-14, atol=1e-15)
 
 
 def _prior_20_percent_off():

@@ -37,6 +37,7 @@ class FloatingBaseModel:
         self.parameters = InertialParameters(plant)
         self._inertial_parameters = self.parameters.FromContext(self._context)
         self._inertias = self.tree.Inertias(self._context)
+        self._parameter_nodes = self.parameters.Nodes(self.tree)
         self._frames = {}
 
     @property
@@ -55,11 +56,12 @@ class FloatingBaseModel:
         Args:
             pi: The inertial parameters (InertialParameters layout), e.g. an estimate."""
         pi = np.asarray(pi, float)
-        if np.array_equal(pi, self._inertial_parameters):
+        if pi.tobytes() == self._inertial_parameters.tobytes():
             return
         self._inertial_parameters = pi.copy()
-        self.parameters.Apply(self._context, pi)
-        self._inertias = self.tree.Inertias(self._context)
+        mass, moment, inertia, reflected = (x.copy() for x in self._inertias)
+        self.parameters.IntoTreeInertias(pi, self._parameter_nodes, mass, moment, inertia)
+        self._inertias = (mass, moment, inertia, reflected)
 
     @property
     def num_joints(self) -> int:

@@ -108,6 +108,25 @@ class InertialParameters:
         node_of = {int(body.index()): node for node, body in enumerate(tree.bodies)}
         return np.array([node_of[int(body.index())] for body in self.bodies])
 
+    def IntoTreeInertias(self, pi: np.ndarray, nodes: np.ndarray, mass: np.ndarray,
+                         moment: np.ndarray, inertia: np.ndarray) -> None:
+        """Writes pi into a kinematic tree's inertia arrays (KinematicTree.Inertias' first
+        three, changed in place): what Apply then KinematicTree.Inertias give, without
+        Drake's objects (the LHS model takes each new estimate this way).
+
+        Args:
+            pi: The bodies' parameters (size).
+            nodes: Each body's node in the tree (Nodes).
+            mass: The nodes' masses (nodes,) [kg].
+            moment: Their first moments m c (nodes, 3) [kg m].
+            inertia: Their rotational inertias about their origins (nodes, 3, 3)."""
+        blocks = np.asarray(pi, float).reshape(-1, PER_BODY)
+        mass[nodes] = blocks[:, MASS]
+        moment[nodes] = blocks[:, MOMENT]
+        xx, yy, zz, xy, xz, yz = blocks[:, INERTIA].T
+        inertia[nodes] = np.stack([np.stack([xx, xy, xz], -1), np.stack([xy, yy, yz], -1),
+                                   np.stack([xz, yz, zz], -1)], -2)
+
     def Apply(self, context: Context, pi: np.ndarray) -> None:
         """Sets the plant's bodies in a context to the inertias pi.
 
