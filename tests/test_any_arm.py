@@ -108,6 +108,27 @@ def test_xacro_is_refused_with_the_command_that_expands_it(tmp_path):
                                     base=ArmBase(mass=100.0)))
 
 
+@pytest.mark.parametrize("suffix, edit, message", [
+    (".urdf", lambda text: text.replace('<origin xyz="0 0 0.2"/>', '<origin xyz="0 0"/>', 1),
+     r"a\.urdf: Expected 3 values for attribute xyz got 0 0"),
+    (".urdf", lambda text: text.replace('ixx="0.01"', 'ixx="nan"', 1),
+     r"a\.urdf:1: error: Expected single value for attribute 'ixx' got 'nan'"),
+    (".sdf", lambda text: text.replace("<xyz>0 1 0</xyz>", "<xyz>0 1</xyz>", 1),
+     r"a\.sdf:\d+: error: .*joint\[@name=\"joint2\"\]/axis/xyz: Error reading element"),
+])
+def test_a_malformed_vector_in_a_urdf_or_sdf_is_refused_in_one_line(tmp_path, suffix,
+                                                                     edit, message):
+    """A vector attribute of the wrong count or a non-number (Drake's parser raises a
+    bare ValueError for some) ends in one ConfigError naming the file."""
+    text = (serial_arm_urdf("a", SIX[:3]) if suffix == ".urdf"
+            else (ARMS / "arm3.sdf").read_text())
+    path = tmp_path / f"a{suffix}"
+    path.write_text(edit(text))
+    with pytest.raises(ConfigError, match=message) as error:
+        MakeRobotPlant(DescribedArm(description=str(path), base=ArmBase(mass=100.0)))
+    assert "\n" not in str(error.value)
+
+
 def test_sdf_and_mjcf_go_through_the_same_path_as_urdf():
     """The same three-joint arm in MJCF (its root welded to the world: dropped) and
     SDFormat: the same joints, mass matrix and chosen start."""
@@ -402,6 +423,13 @@ def test_an_mjcf_arm_as_robosuite_ships_it_loads_unchanged(tmp_path):
     (lambda p: p.parent.joinpath("arm_body.xml").write_text(
         p.parent.joinpath("arm_body.xml").read_text().replace('mass="0"', 'mass="x"')),
      r"body 'mount': <inertial mass='x'>; allowed: a number >= 0"),
+    (lambda p: p.parent.joinpath("arm_body.xml").write_text(
+        p.parent.joinpath("arm_body.xml").read_text().replace(
+            '<body name="link1"', '<body name="link1" quat="1 0 0"', 1)),
+     r"robot\.xml: <body name='link1'> quat='1 0 0'; allowed: 4 finite numbers"),
+    (lambda p: p.write_text(p.read_text().replace(
+        "<worldbody>", '<default><joint axis="0 0 nan"/></default><worldbody>', 1)),
+     r"<joint> axis='0 0 nan'; allowed: 3 finite numbers"),
 ])
 def test_a_broken_mjcf_is_refused_in_one_line_naming_the_part(tmp_path, edit, message):
     """Each way an MJCF can be broken ends in one ConfigError naming the file and the
@@ -645,3 +673,39 @@ def test_an_mjcf_motors_gear_scales_its_torque_limit(tmp_path):
                     if plant.get_joint_actuator(i).joint().name() == "joint1")
     assert actuator.effort_limit() == pytest.approx(6.0)
     assert actuator.default_rotor_inertia() * 9 == pytest.approx(0.05)
+
+
+def test_an_mjcfs_compiler_angle_and_eulerseq_are_read_as_mujoco_reads_them(tmp_path):
+    """<compiler angle="degree" eulerseq="ZYX"/> (fixed axes: R = R_x(c) R_y(b) R_z(a) for
+    euler="a b c") with its ranges in degrees gives the arm of the same file in radians
+    with that rotation as a quaternion: the same reduced mass matrix and joint limits; the
+    lowercase (moving-axes) sequence gives another arm."""
+    from pydrake.math import RotationMatrix
+    from dacph_drake.robots.start_pose import joint_limits
+    a, b, c = np.radians([30.0, 20.0, 10.0])
+    R = (RotationMatrix.MakeXRotation(c) @ RotationMatrix.MakeYRotation(b)
+         @ RotationMatrix.MakeZRotation(a))
+    w, x, y, z = R.ToQuaternion().wxyz()
+    text = (ARMS / "arm3.xml").read_text()
+    link2 = '<body name="link2" pos="0 0 0.4"'
+    degrees = f"{np.degrees(2.9):.12g}"
+    files = {
+        "radian": text.replace(link2, f'{link2} quat="{w:.17g} {x:.17g} {y:.17g} {z:.17g}"'),
+        "degree": text.replace('<compiler angle="radian"/>',
+                               '<compiler angle="degree" eulerseq="ZYX"/>')
+                      .replace(link2, f'{link2} euler="30 20 10"')
+                      .replace('range="-2.9 2.9"', f'range="-{degrees} {degrees}"'),
+    }
+    files["moving"] = files["degree"].replace('eulerseq="ZYX"', 'eulerseq="zyx"')
+    models = {}
+    for name, content in files.items():
+        (tmp_path / f"{name}.xml").write_text(content)
+        models[name] = FloatingBaseModel(MakeRobotPlant(DescribedArm(
+            description=str(tmp_path / f"{name}.xml"), base=ArmBase(mass=100.0),
+            end_effector=EndEffectorFrame(frame="link3"))))
+    q = np.array([0.3, 0.7, -0.2])
+    M = {name: model.MassMatrix(q) for name, model in models.items()}
+    np.testing.assert_allclose(M["degree"], M["radian"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(joint_limits(models["degree"]), [[-2.9] * 3, [2.9] * 3],
+                               rtol=1e-12)
+    assert np.abs(M["moving"] - M["radian"]).max() > 1e-4

@@ -224,7 +224,7 @@ def PopulateFromDescription(plant: MultibodyPlant,
                 _MountOnBase(plant, instances, arm.base)
             if path.suffix == ".xml":
                 _GearedEffortLimits(plant)
-        except RuntimeError as e:
+        except (RuntimeError, ValueError) as e:    # Drake's parser raises both
             raise ConfigError(f"{path}: {_DrakeMessage(e, path)}") from e
         _LockJoints(plant, arm.locked_joints, path)
     moving = [plant.get_joint(i) for i in plant.GetJointIndices()
@@ -263,7 +263,7 @@ def PopulateFromDescription(plant: MultibodyPlant,
     return friction
 
 
-def _DrakeMessage(error: RuntimeError, path: Path) -> str:
+def _DrakeMessage(error: Exception, path: Path) -> str:
     """The first line of a parser error, located in the user's file."""
     return re.sub(r"<literal-string>\.urdf", path.name, str(error).splitlines()[0])
 

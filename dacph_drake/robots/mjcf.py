@@ -36,6 +36,11 @@ from dacph_drake.robots.meshes import obj_of
 MESH_SUFFIXES = (".stl", ".obj", ".msh")
 # Includes nested deeper than this are a cycle.
 MAX_INCLUDE_DEPTH = 16
+# The vector attributes MuJoCo reads with a fixed count of numbers (gear: 1 to 6).
+VECTOR_SIZES = {"pos": (3,), "quat": (4,), "euler": (3,), "axis": (3,),
+                "axisangle": (4,), "xyaxes": (6,), "zaxis": (3,), "range": (2,),
+                "diaginertia": (3,), "fullinertia": (6,), "fromto": (6,),
+                "ctrlrange": (2,), "forcerange": (2,), "gear": tuple(range(1, 7))}
 
 
 class MjcfFile:
@@ -55,6 +60,7 @@ class MjcfFile:
         self.path = path
         self._root = _Parse(path)
         changed = _ExpandIncludes(self._root, path, path.parent, depth=0)
+        _CheckVectors(self._root, path)
         changed |= _ConvertMeshes(self._root, path)
         changed |= _DropMasslessInertials(self._root)
         self.drake_text = (ElementTree.tostring(self._root, encoding="unicode")
@@ -210,6 +216,27 @@ def _ConvertMeshes(root: ElementTree.Element, path: Path) -> bool:
         for attribute in ("meshdir", "texturedir", "assetdir"):
             compiler.attrib.pop(attribute, None)
     return bool(meshes)
+
+
+def _CheckVectors(root: ElementTree.Element, path: Path) -> None:
+    """Refuses a vector attribute (VECTOR_SIZES) that is not its count of finite numbers,
+    naming the element: Drake's parser raises a bare ValueError for it."""
+    for element in root.iter():
+        for attribute, sizes in VECTOR_SIZES.items():
+            value = element.get(attribute)
+            if value is None:
+                continue
+            try:
+                numbers = [float(x) for x in value.split()]
+            except ValueError:
+                numbers = [np.nan]
+            if len(numbers) not in sizes or not np.all(np.isfinite(numbers)):
+                name = element.get("name")
+                named = f" name={name!r}" if name else ""
+                count = (f"{sizes[0]}" if len(sizes) == 1
+                         else f"{sizes[0]} to {sizes[-1]}")
+                raise ConfigError(f"{path}: <{element.tag}{named}> {attribute}={value!r}; "
+                                  f"allowed: {count} finite numbers")
 
 
 def _DropMasslessInertials(root: ElementTree.Element) -> bool:
