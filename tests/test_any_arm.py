@@ -10,6 +10,7 @@ import subprocess
 import sys
 import sysconfig
 from pathlib import Path
+from typing import Dict
 
 import numpy as np
 import pytest
@@ -430,6 +431,13 @@ def test_an_mjcf_arm_as_robosuite_ships_it_loads_unchanged(tmp_path):
     (lambda p: p.write_text(p.read_text().replace(
         "<worldbody>", '<default><joint axis="0 0 nan"/></default><worldbody>', 1)),
      r"<joint> axis='0 0 nan'; allowed: 3 finite numbers"),
+    (lambda p: (p.write_text(p.read_text().replace(
+        "<worldbody>", '<default><geom shellinertia="true"/></default><worldbody>', 1)),
+        p.parent.joinpath("arm_body.xml").write_text(
+            p.parent.joinpath("arm_body.xml").read_text().replace(
+                '<inertial pos="0 0 0.2" mass="3" diaginertia="0.04 0.04 0.002"/>', ""))),
+     r"robot\.xml: geom 'link1_geom' of body 'link1': shellinertia='true' \(MuJoCo's "
+     r"thin-shell inertia\) is not modelled; allowed: a solid geom, or an <inertial>"),
 ])
 def test_a_broken_mjcf_is_refused_in_one_line_naming_the_part(tmp_path, edit, message):
     """Each way an MJCF can be broken ends in one ConfigError naming the file and the
@@ -709,3 +717,56 @@ def test_an_mjcfs_compiler_angle_and_eulerseq_are_read_as_mujoco_reads_them(tmp_
     np.testing.assert_allclose(joint_limits(models["degree"]), [[-2.9] * 3, [2.9] * 3],
                                rtol=1e-12)
     assert np.abs(M["moving"] - M["radian"]).max() > 1e-4
+
+
+def _mujoco_reference_files(tmp_path: Path) -> Dict[str, Path]:
+    """MJCF arms of every kind the MJCF path rewrites or reads itself: plain; robosuite's
+    layout (include, meshdir, an STL mesh, a massless mount); <default> classes passed by
+    childclass with frictionloss, armature, two links' inertia from their geoms and a
+    shell geom on a body with an <inertial>; the compiler's degrees and fixed-axes euler
+    sequence with inertiafromgeom="true" and a geom density."""
+    from dacph_drake.robots.serial_arm import serial_arm_mjcf
+    files = {"plain": ARMS / "arm3.xml"}
+    robosuite = tmp_path / "robosuite"
+    robosuite.mkdir()
+    files["robosuite"] = _robosuite_style(robosuite)
+    # MuJoCo 3 no longer reads the legacy .msh: the shoulder as an STL there.
+    text = files["robosuite"].read_text().replace('file="link2.msh"', 'file="link1.stl"')
+    files["robosuite"].write_text(text)
+    links = [SerialLink(4.0, 0.4, 0.5), SerialLink(3.0, 0.35), SerialLink(2.0, 0.3),
+             SerialLink(1.0, 0.2, 0.1)]
+    for file, content in serial_arm_mjcf("classes", links, 0.5, frictionloss=0.05,
+                                         from_geoms=[False, True, False, True],
+                                         armature=[0.02, 0.0, 0.01, 0.003]).items():
+        # A shell geom on a body with an <inertial>: MuJoCo does not use its inertia.
+        (tmp_path / file).write_text(content.replace(
+            'name="link1_geom"', 'name="link1_geom" shellinertia="true"'))
+    files["classes"] = tmp_path / "classes.xml"
+    degrees = f"{np.degrees(2.9):.12g}"
+    compiled = (ARMS / "arm3.xml").read_text().replace(
+        '<compiler angle="radian"/>',
+        '<compiler angle="degree" eulerseq="ZYX" inertiafromgeom="true"/>').replace(
+        '<body name="link2" pos="0 0 0.4"', '<body name="link2" pos="0 0 0.4" '
+        'euler="30 20 10"').replace('range="-2.9 2.9"', f'range="-{degrees} {degrees}"'
+                                    ).replace('name="link2_geom"',
+                                              'name="link2_geom" density="500"')
+    files["compiler"] = tmp_path / "compiler.xml"
+    files["compiler"].write_text(compiled)
+    return files
+
+
+@pytest.mark.parametrize("kind", ["plain", "robosuite", "classes", "compiler"])
+def test_an_mjcf_arm_is_mujocos_own_model(tmp_path, kind):
+    """MuJoCo itself is the reference (robots.mujoco_reference): for each kind of file,
+    the ground truth's joint-space mass matrix (armature included) equals MuJoCo's M at
+    random joint angles, and the joints' damping, frictionloss (as robot.joint_friction:
+    keep reads it) and limits are MuJoCo's, joint by joint."""
+    pytest.importorskip("mujoco")
+    from dacph_drake.robots.mujoco_reference import compare_with_mujoco
+    path = _mujoco_reference_files(tmp_path)[kind]
+    n = {"classes": 4}.get(kind, 3)
+    difference = compare_with_mujoco(path, "link3", samples=3, seed=7)
+    assert difference.joints == difference.dofs == n
+    assert difference.mass_matrix < 1e-12
+    assert difference.damping == difference.frictionloss == 0.0
+    assert difference.limits < 1e-12

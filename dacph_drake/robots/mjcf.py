@@ -24,7 +24,7 @@ the actuators the library adds (robots.description.PopulateFromDescription).
 
 Errors name the file (and line, where the XML parser gives one) and the element."""
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Dict, Iterator, Tuple
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
@@ -61,6 +61,7 @@ class MjcfFile:
         self._root = _Parse(path)
         changed = _ExpandIncludes(self._root, path, path.parent, depth=0)
         _CheckVectors(self._root, path)
+        _RefuseShellInertia(self._root, path)
         changed |= _ConvertMeshes(self._root, path)
         changed |= _DropMasslessInertials(self._root)
         self.drake_text = (ElementTree.tostring(self._root, encoding="unicode")
@@ -68,46 +69,69 @@ class MjcfFile:
 
     def JointAttribute(self, attribute: str) -> Dict[str, float]:
         """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]; joints
-        with a positive one), as MuJoCo resolves it: the joint's own attribute, else its
-        class's (the joint's ``class``, else the nearest enclosing body's
-        ``childclass``, else "main"), classes inheriting from the <default> that holds
-        them.
+        with a positive one), as MuJoCo resolves it (_Resolved).
 
         Args:
             attribute: The joint attribute.
 
         Raises:
             ConfigError: A value that is not a number >= 0, naming the joint."""
-        classes: Dict[str, Dict[str, str]] = {}
-
-        def visit_default(default, inherited):
-            attributes = dict(inherited)
-            joint = default.find("joint")
-            if joint is not None:
-                attributes.update(joint.attrib)
-            classes[default.get("class", "main")] = attributes
-            for child in default.findall("default"):
-                visit_default(child, attributes)
-        for default in self._root.findall("default"):
-            visit_default(default, {})
         values = {}
-
-        def visit_body(body, childclass):
-            childclass = body.get("childclass", childclass)
-            for joint in body.findall("joint"):
-                attributes = {**classes.get(joint.get("class", childclass), {}),
-                              **joint.attrib}
-                value = attributes.get(attribute, "0")
-                number = nonnegative_number(value, f"{self.path}: joint "
-                                            f"{joint.get('name', '(unnamed)')!r}: "
-                                            f"{attribute}={value!r}")
-                if number > 0 and joint.get("name"):
-                    values[joint.get("name")] = number
-            for child in body.findall("body"):
-                visit_body(child, childclass)
-        for world in self._root.findall("worldbody"):
-            visit_body(world, "main")
+        for joint, attributes, _ in _Resolved(self._root, "joint"):
+            value = attributes.get(attribute, "0")
+            number = nonnegative_number(value, f"{self.path}: joint "
+                                        f"{joint.get('name', '(unnamed)')!r}: "
+                                        f"{attribute}={value!r}")
+            if number > 0 and joint.get("name"):
+                values[joint.get("name")] = number
         return values
+
+
+def _Resolved(root: ElementTree.Element, tag: str
+              ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
+    """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them, and
+    its body: the element's own attribute, else its class's (the element's ``class``,
+    else the nearest enclosing body's ``childclass``, else "main"), classes inheriting
+    from the <default> that holds them."""
+    classes: Dict[str, Dict[str, str]] = {}
+
+    def visit_default(default, inherited):
+        attributes = dict(inherited)
+        element = default.find(tag)
+        if element is not None:
+            attributes.update(element.attrib)
+        classes[default.get("class", "main")] = attributes
+        for child in default.findall("default"):
+            visit_default(child, attributes)
+    for default in root.findall("default"):
+        visit_default(default, {})
+
+    def visit_body(body, childclass):
+        childclass = body.get("childclass", childclass)
+        for element in body.findall(tag):
+            yield element, {**classes.get(element.get("class", childclass), {}),
+                            **element.attrib}, body
+        for child in body.findall("body"):
+            yield from visit_body(child, childclass)
+    for world in root.findall("worldbody"):
+        yield from visit_body(world, "main")
+
+
+def _RefuseShellInertia(root: ElementTree.Element, path: Path) -> None:
+    """Refuses a geom whose inertia MuJoCo takes as a thin shell (shellinertia) where the
+    geoms give the body's inertia (no <inertial>, or compiler inertiafromgeom="true"):
+    Drake's parser would take the solid's, silently another robot."""
+    compiler = root.find("compiler")
+    from_geoms = "auto" if compiler is None else compiler.get("inertiafromgeom", "auto")
+    for geom, attributes, body in _Resolved(root, "geom"):
+        uses_geoms = from_geoms == "true" or (from_geoms == "auto"
+                                              and body.find("inertial") is None)
+        if uses_geoms and attributes.get("shellinertia", "false") == "true":
+            raise ConfigError(
+                f"{path}: geom {geom.get('name', '(unnamed)')!r} of body "
+                f"{body.get('name', '(unnamed)')!r}: shellinertia='true' (MuJoCo's thin-"
+                "shell inertia) is not modelled; allowed: a solid geom, or an <inertial> "
+                "on the body")
 
 
 def nonnegative_number(value: str, named: str) -> float:
