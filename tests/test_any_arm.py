@@ -683,6 +683,37 @@ def test_an_mjcf_motors_gear_scales_its_torque_limit(tmp_path):
     assert actuator.default_rotor_inertia() * 9 == pytest.approx(0.05)
 
 
+def test_an_mjcfs_servos_act_as_torque_motors(tmp_path, caplog):
+    """A <position> servo (gear 2, forcerange +-30), a <general> servo (affine bias, no
+    force limit) and a <general> torque motor (gain 4, ctrlrange +-2) on the three joints:
+    the controller commands each joint's torque, so each is a motor without a servo law,
+    its effort limit |gear| x forcerange (60 N m), none, and gain x ctrlrange (8 N m);
+    the servos are named in one warning, and DAC runs with them."""
+    path = tmp_path / "servos.xml"
+    path.write_text((ARMS / "arm3.xml").read_text().replace("</worldbody>", (
+        '</worldbody><actuator><position name="servo1" joint="joint1" kp="100" kv="10" '
+        'ctrlrange="-1 1" forcerange="-30 30" gear="2"/><general joint="joint2" '
+        'gainprm="50" biasprm="0 -50 -5" biastype="affine" ctrlrange="-2 2"/>'
+        '<general joint="joint3" gainprm="4" ctrlrange="-2 2"/></actuator>')))
+    arm = DescribedArm(description=str(path), base=ArmBase(mass=100.0),
+                       end_effector=EndEffectorFrame(frame="link3"))
+    with caplog.at_level(logging.WARNING):
+        plant = MakeRobotPlant(arm)
+    actuators = {plant.get_joint_actuator(i).joint().name(): plant.get_joint_actuator(i)
+                 for i in plant.GetJointActuatorIndices()}
+    assert [actuators[f"joint{k}"].effort_limit() for k in (1, 2, 3)] == \
+        pytest.approx([60.0, np.inf, 8.0])
+    assert not any(actuator.has_controller() for actuator in actuators.values())
+    servos = [r.getMessage() for r in caplog.records if "torque motors" in r.getMessage()]
+    assert len(servos) == 1 and "position 'servo1' on joint 'joint1'" in servos[0] \
+        and "general '(unnamed)' on joint 'joint2'" in servos[0] \
+        and "joint3" not in servos[0]
+    scenario = arm_scenario(arm)
+    scenario.phases.warmup, scenario.phases.linear = 0.2, 0.3
+    scenario.phases.nonlinear = scenario.phases.disturbance = 0.0
+    assert simulate(scenario, "dac").status == "ok"
+
+
 def test_an_mjcfs_compiler_angle_and_eulerseq_are_read_as_mujoco_reads_them(tmp_path):
     """<compiler angle="degree" eulerseq="ZYX"/> (fixed axes: R = R_x(c) R_y(b) R_z(a) for
     euler="a b c") with its ranges in degrees gives the arm of the same file in radians

@@ -199,6 +199,11 @@ def PopulateFromDescription(plant: MultibodyPlant,
         mjcf = MjcfFile(path) if path.suffix == ".xml" else None
         if mjcf is not None:
             converted = mjcf.drake_text
+            if mjcf.servos:
+                logging.getLogger(__name__).warning(
+                    "%s: %s act as torque motors: the controller commands each joint's "
+                    "torque (a servo's forcerange is its effort limit)", path,
+                    ", ".join(mjcf.servos))
         elif path.suffix == ".urdf":
             text = path.read_text(encoding="utf-8")
             refuse_xacro(path, text)

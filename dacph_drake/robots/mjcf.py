@@ -15,6 +15,11 @@ here, on a copy (the user's files are not touched):
   massless body welded to its parent adds nothing to the composite it belongs to; a
   joint that moves only massless bodies is refused later, naming the joint
   (dynamics.floating_model).
+- A servo on a joint (``<position>``, ``<velocity>``, ``<intvelocity>``, ``<damper>``,
+  ``<general>``): a ``<motor>`` of its gear, its force range the effort limit; the
+  controller commands the joint's torque itself (_ServosAsMotors).
+- A geom whose thin-shell inertia (``shellinertia``) would give its body's inertia,
+  and a vector attribute of the wrong count: refused, naming the element.
 
 Drake's parser does not model a joint's ``frictionloss`` (MuJoCo's dry friction), and
 takes a joint's ``armature`` only through a ``<motor>`` on it; both are read here,
@@ -24,7 +29,7 @@ the actuators the library adds (robots.description.PopulateFromDescription).
 
 Errors name the file (and line, where the XML parser gives one) and the element."""
 from pathlib import Path
-from typing import Dict, Iterator, Tuple
+from typing import Dict, Iterator, List, Tuple
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
@@ -36,6 +41,9 @@ from dacph_drake.robots.meshes import obj_of
 MESH_SUFFIXES = (".stl", ".obj", ".msh")
 # Includes nested deeper than this are a cycle.
 MAX_INCLUDE_DEPTH = 16
+# MuJoCo's actuators other than <motor> that act on a joint: servos (a force law of
+# the joint's own state and ctrl) and <general>, which Drake's parser ignores.
+SERVOS = ("position", "velocity", "intvelocity", "damper", "general")
 # The vector attributes MuJoCo reads with a fixed count of numbers (gear: 1 to 6).
 VECTOR_SIZES = {"pos": (3,), "quat": (4,), "euler": (3,), "axis": (3,),
                 "axisangle": (4,), "xyaxes": (6,), "zaxis": (3,), "range": (2,),
@@ -45,8 +53,9 @@ VECTOR_SIZES = {"pos": (3,), "quat": (4,), "euler": (3,), "axis": (3,),
 
 class MjcfFile:
     """One MJCF file, read once: ``drake_text``, the text Drake reads for it (module
-    docstring; None when the file needs no rewriting), and its joints' attributes as
-    MuJoCo resolves them (JointAttribute).
+    docstring; None when the file needs no rewriting), its joints' attributes as
+    MuJoCo resolves them (JointAttribute), and ``servos``, the actuators it drives as
+    torque motors (_ServosAsMotors: "kind 'name' on joint 'j'").
 
     Args:
         path: The MJCF file.
@@ -62,6 +71,8 @@ class MjcfFile:
         changed = _ExpandIncludes(self._root, path, path.parent, depth=0)
         _CheckVectors(self._root, path)
         _RefuseShellInertia(self._root, path)
+        self.servos, rewritten = _ServosAsMotors(self._root)
+        changed |= rewritten
         changed |= _ConvertMeshes(self._root, path)
         changed |= _DropMasslessInertials(self._root)
         self.drake_text = (ElementTree.tostring(self._root, encoding="unicode")
@@ -115,6 +126,49 @@ def _Resolved(root: ElementTree.Element, tag: str
             yield from visit_body(child, childclass)
     for world in root.findall("worldbody"):
         yield from visit_body(world, "main")
+
+
+def _ServosAsMotors(root: ElementTree.Element) -> Tuple[List[str], bool]:
+    """Replaces each servo on a joint (SERVOS) by a <motor> of its gear: the controller
+    commands the joint's torque (the paper's u), which the servo's own law would
+    replace. A servo's force limit (forcerange where forcelimited is "true", or "auto"
+    with a forcerange) becomes the motor's ctrlrange, so the effort limit |gear| x
+    forcerange (description._GearedEffortLimits); a <general> without bias (a torque
+    motor of gain gainprm[0]) keeps its ctrlrange with its gain in the gear. Returns
+    ("kind 'name' on joint 'j'" of each servo replaced (a <general> torque motor is not
+    one), whether any actuator was rewritten)."""
+    replaced, rewritten = [], False
+    for actuators in root.iter("actuator"):
+        for index, element in enumerate(list(actuators)):
+            joint = element.get("joint")
+            if element.tag not in SERVOS or joint is None:
+                continue
+            gear = float(element.get("gear", "1").split()[0])
+            motor = ElementTree.Element("motor", {"joint": joint})
+            if element.get("name"):
+                motor.set("name", element.get("name"))
+            torque = (element.tag == "general"
+                      and element.get("biastype", "none") == "none"
+                      and element.get("gaintype", "fixed") == "fixed")
+            if torque:
+                gear *= float(element.get("gainprm", "1").split()[0])
+                limits = element.get("ctrlrange") if element.get(
+                    "ctrllimited", "auto") != "false" else None
+            else:
+                replaced.append(f"{element.tag} {element.get('name', '(unnamed)')!r} on "
+                                f"joint {joint!r}")
+                limits = element.get("forcerange") if element.get(
+                    "forcelimited", "auto") != "false" else None
+            motor.set("gear", repr(gear))
+            if limits is not None:
+                motor.set("ctrlrange", limits)
+                motor.set("ctrllimited", "true")
+            else:
+                motor.set("ctrllimited", "false")
+            actuators.remove(element)
+            actuators.insert(index, motor)
+            rewritten = True
+    return replaced, rewritten
 
 
 def _RefuseShellInertia(root: ElementTree.Element, path: Path) -> None:
