@@ -233,13 +233,18 @@ def table(rows, unit: str = "rad") -> str:
 
 def run_arm(folder: Path, name: str, duration: float, with_verify: bool,
             task: str = "attitude", form: str = "urdf") -> dict:
-    """One arm in a fresh process (one thread for the numerical libraries)."""
-    path = scenario_file(folder, name, task, form)
+    """One arm of the zoo in a fresh process (run_file)."""
+    return run_file(scenario_file(folder, name, task, form), name, duration, with_verify)
+
+
+def run_file(path: Path, name: str, duration: float, with_verify: bool) -> dict:
+    """The arm of a scenario file in a fresh process (one thread for the numerical
+    libraries), in the file's folder."""
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
            "MKL_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-c", CHILD, str(path), str(duration),
                            "1" if with_verify else "0"], capture_output=True, text=True,
-                          cwd=folder, env=env)
+                          cwd=path.parent, env=env)
     lines = done.stdout.strip().splitlines()
     try:
         row = json.loads(lines[-1])
@@ -266,6 +271,9 @@ def main() -> None:
     parser.add_argument("--task", choices=("attitude", "position"), default="attitude",
                         help="the task every arm tracks (position: task: "
                              "!EndEffectorPosition; its error in m)")
+    parser.add_argument("--files", nargs="+", type=Path, default=None,
+                        help="run these scenario files instead (arms of your own; each "
+                             "named by its file's stem)")
     parser.add_argument("--format", choices=("urdf", "mjcf"), default="urdf",
                         help="the arms of our own as URDF or as MJCF (an include, a "
                              "default class, armature, frictionloss, inertia from "
@@ -275,8 +283,9 @@ def main() -> None:
         generated = family(args.family, args.seed, tuple(args.joints))
         OWN.update(generated)
         args.arms = list(generated)
-    arms = args.arms or (list(QUICK) if args.quick else [*SHIPPED, *OWN])
-    unknown = [a for a in arms if a not in SHIPPED and a not in OWN]
+    files = {path.stem: path.resolve() for path in args.files or []}
+    arms = list(files) or args.arms or (list(QUICK) if args.quick else [*SHIPPED, *OWN])
+    unknown = [a for a in arms if a not in SHIPPED and a not in OWN and a not in files]
     if unknown:
         parser.error(f"--arms: unknown {unknown}; allowed: {[*SHIPPED, *OWN]}")
     out = Path(args.out)
@@ -290,15 +299,16 @@ def main() -> None:
         if name in done:
             continue
         start = time.perf_counter()
-        row = run_arm((out / "files").resolve(), name,
-                      args.duration if args.quick else 0.0, not args.quick, args.task,
-                      args.format)
+        duration = args.duration if args.quick else 0.0
+        row = (run_file(files[name], name, duration, not args.quick) if name in files
+               else run_arm((out / "files").resolve(), name, duration, not args.quick,
+                            args.task, args.format))
         row["total_s"] = time.perf_counter() - start
         done[name] = row
         with rows_path.open("a") as f:
             f.write(json.dumps(row, default=float) + "\n")
         print(table([row], unit).splitlines()[-1], flush=True)
-    rows = [done[name] for name in [*SHIPPED, *OWN] if name in done]
+    rows = [done[name] for name in [*SHIPPED, *OWN, *files] if name in done]
     (out / "table.md").write_text(table(rows, unit) + "\n" + summary(rows, unit))
     print(table(rows, unit) + "\n" + summary(rows, unit))
 

@@ -684,15 +684,16 @@ def test_an_mjcf_motors_gear_scales_its_torque_limit(tmp_path):
 
 
 def test_an_mjcfs_servos_act_as_torque_motors(tmp_path, caplog):
-    """A <position> servo (gear 2, forcerange +-30), a <general> servo (affine bias, no
+    """A <position> servo (gear 2, forcerange +-30 from its class), a <general> servo (affine bias, no
     force limit) and a <general> torque motor (gain 4, ctrlrange +-2) on the three joints:
     the controller commands each joint's torque, so each is a motor without a servo law,
     its effort limit |gear| x forcerange (60 N m), none, and gain x ctrlrange (8 N m);
     the servos are named in one warning, and DAC runs with them."""
     path = tmp_path / "servos.xml"
     path.write_text((ARMS / "arm3.xml").read_text().replace("</worldbody>", (
-        '</worldbody><actuator><position name="servo1" joint="joint1" kp="100" kv="10" '
-        'ctrlrange="-1 1" forcerange="-30 30" gear="2"/><general joint="joint2" '
+        '</worldbody><default><default class="servo"><position forcerange="-30 30"/>'
+        '</default></default><actuator><position name="servo1" class="servo" '
+        'joint="joint1" kp="100" kv="10" ctrlrange="-1 1" gear="2"/><general joint="joint2" '
         'gainprm="50" biasprm="0 -50 -5" biastype="affine" ctrlrange="-2 2"/>'
         '<general joint="joint3" gainprm="4" ctrlrange="-2 2"/></actuator>')))
     arm = DescribedArm(description=str(path), base=ArmBase(mass=100.0),
@@ -752,7 +753,8 @@ def test_an_mjcfs_compiler_angle_and_eulerseq_are_read_as_mujoco_reads_them(tmp_
 
 def _mujoco_reference_files(tmp_path: Path) -> Dict[str, Path]:
     """MJCF arms of every kind the MJCF path rewrites or reads itself: plain; robosuite's
-    layout (include, meshdir, an STL mesh, a massless mount); <default> classes passed by
+    layout (include with root <mujocoinclude>, meshdir, an STL mesh, a massless mount);
+    <default> classes passed by
     childclass with frictionloss, armature, two links' inertia from their geoms and a
     shell geom on a body with an <inertial>; the compiler's degrees and fixed-axes euler
     sequence with inertiafromgeom="true" and a geom density."""
@@ -761,9 +763,13 @@ def _mujoco_reference_files(tmp_path: Path) -> Dict[str, Path]:
     robosuite = tmp_path / "robosuite"
     robosuite.mkdir()
     files["robosuite"] = _robosuite_style(robosuite)
-    # MuJoCo 3 no longer reads the legacy .msh: the shoulder as an STL there.
+    # MuJoCo 3 no longer reads the legacy .msh: the shoulder as an STL there; the
+    # included file with the older root <mujocoinclude>, which MuJoCo still reads.
     text = files["robosuite"].read_text().replace('file="link2.msh"', 'file="link1.stl"')
     files["robosuite"].write_text(text)
+    body = robosuite / "arm_body.xml"
+    body.write_text(body.read_text().replace("<mujoco>", "<mujocoinclude>").replace(
+        "</mujoco>", "</mujocoinclude>"))
     links = [SerialLink(4.0, 0.4, 0.5), SerialLink(3.0, 0.35), SerialLink(2.0, 0.3),
              SerialLink(1.0, 0.2, 0.1)]
     for file, content in serial_arm_mjcf("classes", links, 0.5, frictionloss=0.05,

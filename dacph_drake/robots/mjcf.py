@@ -3,8 +3,9 @@
 MuJoCo's compiler accepts what Drake's parser refuses or asserts on; each is rewritten
 here, on a copy (the user's files are not touched):
 
-- ``<include file>``: replaced by the included file's ``<mujoco>`` children, the path
-  relative to the main file's folder (MuJoCo's rule), else the including file's.
+- ``<include file>``: replaced by the included file's ``<mujoco>`` (or older
+  ``<mujocoinclude>``) children, the path relative to the main file's folder (MuJoCo's
+  rule), else the including file's.
 - Meshes (``<asset><mesh file>``): resolved as MuJoCo resolves them (``compiler
   meshdir``, else ``assetdir``, relative to the main file's folder; an absolute path as
   it is), then any that is not .obj (STL, MuJoCo's legacy .msh) converted to OBJ in the
@@ -98,12 +99,9 @@ class MjcfFile:
         return values
 
 
-def _Resolved(root: ElementTree.Element, tag: str
-              ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
-    """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them, and
-    its body: the element's own attribute, else its class's (the element's ``class``,
-    else the nearest enclosing body's ``childclass``, else "main"), classes inheriting
-    from the <default> that holds them."""
+def _Classes(root: ElementTree.Element, tag: str) -> Dict[str, Dict[str, str]]:
+    """Default class -> the attributes it gives a ``tag`` element, each class inheriting
+    from the <default> that holds it."""
     classes: Dict[str, Dict[str, str]] = {}
 
     def visit_default(default, inherited):
@@ -116,6 +114,15 @@ def _Resolved(root: ElementTree.Element, tag: str
             visit_default(child, attributes)
     for default in root.findall("default"):
         visit_default(default, {})
+    return classes
+
+
+def _Resolved(root: ElementTree.Element, tag: str
+              ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
+    """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them, and
+    its body: the element's own attribute, else its class's (the element's ``class``,
+    else the nearest enclosing body's ``childclass``, else "main"; _Classes)."""
+    classes = _Classes(root, tag)
 
     def visit_body(body, childclass):
         childclass = body.get("childclass", childclass)
@@ -138,26 +145,29 @@ def _ServosAsMotors(root: ElementTree.Element) -> Tuple[List[str], bool]:
     ("kind 'name' on joint 'j'" of each servo replaced (a <general> torque motor is not
     one), whether any actuator was rewritten)."""
     replaced, rewritten = [], False
+    classes = {tag: _Classes(root, tag) for tag in SERVOS}
     for actuators in root.iter("actuator"):
         for index, element in enumerate(list(actuators)):
-            joint = element.get("joint")
-            if element.tag not in SERVOS or joint is None:
+            if element.tag not in SERVOS or element.get("joint") is None:
                 continue
-            gear = float(element.get("gear", "1").split()[0])
+            attributes = {**classes[element.tag].get(element.get("class", "main"), {}),
+                          **element.attrib}
+            joint = attributes["joint"]
+            gear = float(attributes.get("gear", "1").split()[0])
             motor = ElementTree.Element("motor", {"joint": joint})
             if element.get("name"):
                 motor.set("name", element.get("name"))
             torque = (element.tag == "general"
-                      and element.get("biastype", "none") == "none"
-                      and element.get("gaintype", "fixed") == "fixed")
+                      and attributes.get("biastype", "none") == "none"
+                      and attributes.get("gaintype", "fixed") == "fixed")
             if torque:
-                gear *= float(element.get("gainprm", "1").split()[0])
-                limits = element.get("ctrlrange") if element.get(
+                gear *= float(attributes.get("gainprm", "1").split()[0])
+                limits = attributes.get("ctrlrange") if attributes.get(
                     "ctrllimited", "auto") != "false" else None
             else:
                 replaced.append(f"{element.tag} {element.get('name', '(unnamed)')!r} on "
                                 f"joint {joint!r}")
-                limits = element.get("forcerange") if element.get(
+                limits = attributes.get("forcerange") if attributes.get(
                     "forcelimited", "auto") != "false" else None
             motor.set("gear", repr(gear))
             if limits is not None:
@@ -206,7 +216,9 @@ def nonnegative_number(value: str, named: str) -> float:
     return number
 
 
-def _Parse(path: Path) -> ElementTree.Element:
+def _Parse(path: Path, included: bool = False) -> ElementTree.Element:
+    """The file's root element: <mujoco>, or for an included file also the older
+    <mujocoinclude> MuJoCo still reads."""
     try:
         root = ElementTree.parse(path).getroot()
     except ElementTree.ParseError as e:
@@ -214,9 +226,10 @@ def _Parse(path: Path) -> ElementTree.Element:
                           "an MJCF file") from e
     except OSError as e:
         raise ConfigError(f"{path}: cannot be read ({e.strerror})") from e
-    if root.tag != "mujoco":
+    roots = ("mujoco", "mujocoinclude") if included else ("mujoco",)
+    if root.tag not in roots:
         raise ConfigError(f"{path}: its root element is <{root.tag}>; allowed: an MJCF "
-                          "file, whose root is <mujoco>")
+                          f"file, whose root is {' or '.join(f'<{r}>' for r in roots)}")
     return root
 
 
@@ -244,7 +257,7 @@ def _ExpandIncludes(element: ElementTree.Element, path: Path, main: Path,
             raise ConfigError(f"{path}: <include file={name!r}>: no such file (looked "
                               f"in {main}); allowed: a path relative to the main "
                               "file's folder")
-        included = _Parse(found)
+        included = _Parse(found, included=True)
         _ExpandIncludes(included, found, main, depth + 1)
         element.remove(child)
         for offset, part in enumerate(list(included)):

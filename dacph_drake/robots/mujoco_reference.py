@@ -8,6 +8,7 @@ is H_mm whatever the base does), and the joints' damping, frictionloss and limit
 MuJoCo (pip install mujoco) is needed only here."""
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Dict, Optional
 import numpy as np
 
 from dacph_drake.robots.description import MakeRobotPlant
@@ -35,7 +36,8 @@ class MujocoComparison:
     limits: float
 
 
-def compare_with_mujoco(path: Path, end_effector: str, samples: int = 5, seed: int = 0
+def compare_with_mujoco(path: Path, end_effector: str, samples: int = 5, seed: int = 0,
+                        locked_joints: Optional[Dict[str, float]] = None
                         ) -> MujocoComparison:
     """The ground truth of the MJCF arm at ``path`` against MuJoCo's model of it.
 
@@ -44,13 +46,19 @@ def compare_with_mujoco(path: Path, end_effector: str, samples: int = 5, seed: i
         end_effector: A frame of it (robot.end_effector.frame).
         samples: How many joint angles to compare the mass matrices at, each uniform
             within the joints' limits and +-1.5 rad.
-        seed: Their seed."""
+        seed: Their seed.
+        locked_joints: Joints welded at a position (robot.locked_joints), held there in
+            MuJoCo's model too."""
     import mujoco
     reference = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(reference)
     plant = MakeRobotPlant(DescribedArm(
         description=str(path), base=ArmBase(mass=100.0),
-        end_effector=EndEffectorFrame(frame=end_effector)))
+        end_effector=EndEffectorFrame(frame=end_effector),
+        locked_joints=dict(locked_joints or {})))
+    held = {reference.jnt_qposadr[mujoco.mj_name2id(reference, mujoco.mjtObj.mjOBJ_JOINT,
+                                                    name)]: value
+            for name, value in (locked_joints or {}).items()}
     joints = [joint for joint in (plant.get_joint(i) for i in plant.GetJointIndices())
               if joint.num_velocities() == 1]
     dofs = [reference.jnt_dofadr[mujoco.mj_name2id(reference, mujoco.mjtObj.mjOBJ_JOINT,
@@ -64,6 +72,8 @@ def compare_with_mujoco(path: Path, end_effector: str, samples: int = 5, seed: i
         for joint, angle in zip(joints, q, strict=True):
             joint.set_angle(context, angle)
         data.qpos[:] = reference.qpos0
+        for address, value in held.items():
+            data.qpos[address] = value
         data.qpos[[reference.jnt_qposadr[reference.dof_jntid[d]] for d in dofs]] = q
         mujoco.mj_forward(reference, data)
         M = np.zeros((reference.nv, reference.nv))      # row k: M e_k (M is symmetric)
