@@ -715,6 +715,40 @@ def test_an_mjcfs_servos_act_as_torque_motors(tmp_path, caplog):
     assert simulate(scenario, "dac").status == "ok"
 
 
+@pytest.mark.parametrize("mode", ["legacy", "exact"])
+def test_a_mesh_whose_mujoco_inertia_is_not_its_exact_one_is_named(tmp_path, caplog, mode):
+    """Link 1's inertia from a mesh of two boxes apart (not star-shaped from its faces'
+    centroid): MuJoCo's default "legacy" mesh inertia counts each face's pyramid positive
+    (volume about 1.5x the exact here), Drake takes the exact one; the run names the mesh in a
+    warning, and MuJoCo's model differs. With <mesh inertia="exact"> both agree (1e-12)
+    and nothing is said."""
+    pytest.importorskip("mujoco")
+    import trimesh
+    from dacph_drake.robots.mujoco_reference import compare_with_mujoco
+    boxes = trimesh.util.concatenate([
+        trimesh.creation.box([0.05, 0.05, 0.3]).apply_translation([x, 0.0, 0.2])
+        for x in (-0.06, 0.06)])
+    boxes.export(tmp_path / "twin.stl")
+    inertia = "" if mode == "legacy" else ' inertia="exact"'
+    text = (ARMS / "arm3.xml").read_text().replace(
+        '<inertial pos="0 0 0.2" mass="3" diaginertia="0.04 0.04 0.002"/>', "").replace(
+        '<geom name="link1_geom" type="cylinder" pos="0 0 0.2" size="0.04 0.2"/>',
+        '<geom name="link1_geom" type="mesh" mesh="twin" mass="3"/>').replace(
+        "<worldbody>", f'<asset><mesh name="twin" file="twin.stl"{inertia}/></asset>'
+                       "<worldbody>")
+    path = tmp_path / "twin.xml"
+    path.write_text(text)
+    with caplog.at_level(logging.WARNING):
+        difference = compare_with_mujoco(path, "link3", samples=3)
+    named = [r.getMessage() for r in caplog.records if "mesh 'twin'" in r.getMessage()]
+    if mode == "legacy":
+        assert len(named) == 1 and "legacy: volume" in named[0]
+        assert difference.mass_matrix > 1e-4
+    else:
+        assert not named
+        assert difference.mass_matrix < 1e-12
+
+
 def test_an_mjcfs_compiler_angle_and_eulerseq_are_read_as_mujoco_reads_them(tmp_path):
     """<compiler angle="degree" eulerseq="ZYX"/> (fixed axes: R = R_x(c) R_y(b) R_z(a) for
     euler="a b c") with its ranges in degrees gives the arm of the same file in radians

@@ -199,6 +199,12 @@ def PopulateFromDescription(plant: MultibodyPlant,
         mjcf = MjcfFile(path) if path.suffix == ".xml" else None
         if mjcf is not None:
             converted = mjcf.drake_text
+            if mjcf.mesh_inertia_notes:
+                logging.getLogger(__name__).warning(
+                    "%s: MuJoCo takes the inertia of %s otherwise than from the mesh's "
+                    "exact volume, as Drake does: those bodies' inertias differ from "
+                    "MuJoCo's (<mesh inertia=\"exact\"> makes them agree)", path,
+                    ", ".join(mjcf.mesh_inertia_notes))
             if mjcf.servos:
                 logging.getLogger(__name__).warning(
                     "%s: %s act as torque motors: the controller commands each joint's "

@@ -55,8 +55,10 @@ VECTOR_SIZES = {"pos": (3,), "quat": (4,), "euler": (3,), "axis": (3,),
 class MjcfFile:
     """One MJCF file, read once: ``drake_text``, the text Drake reads for it (module
     docstring; None when the file needs no rewriting), its joints' attributes as
-    MuJoCo resolves them (JointAttribute), and ``servos``, the actuators it drives as
-    torque motors (_ServosAsMotors: "kind 'name' on joint 'j'").
+    MuJoCo resolves them (JointAttribute), ``servos``, the actuators it drives as
+    torque motors (_ServosAsMotors: "kind 'name' on joint 'j'"), and
+    ``mesh_inertia_notes``, the meshes whose inertia MuJoCo takes otherwise
+    (_MeshInertiaNotes).
 
     Args:
         path: The MJCF file.
@@ -75,6 +77,7 @@ class MjcfFile:
         self.servos, rewritten = _ServosAsMotors(self._root)
         changed |= rewritten
         changed |= _ConvertMeshes(self._root, path)
+        self.mesh_inertia_notes = _MeshInertiaNotes(self._root)
         changed |= _DropMasslessInertials(self._root)
         self.drake_text = (ElementTree.tostring(self._root, encoding="unicode")
                            if changed else None)
@@ -181,16 +184,25 @@ def _ServosAsMotors(root: ElementTree.Element) -> Tuple[List[str], bool]:
     return replaced, rewritten
 
 
+def _InertiaGeoms(root: ElementTree.Element
+                  ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
+    """The geoms whose inertia gives their body's (_Resolved's triples): all of a body
+    without an <inertial> (compiler inertiafromgeom "auto"), or of every body ("true")."""
+    from_geoms = "auto"
+    for compiler in root.iter("compiler"):
+        from_geoms = compiler.get("inertiafromgeom", from_geoms)
+    for geom, attributes, body in _Resolved(root, "geom"):
+        if from_geoms == "true" or (from_geoms == "auto"
+                                    and body.find("inertial") is None):
+            yield geom, attributes, body
+
+
 def _RefuseShellInertia(root: ElementTree.Element, path: Path) -> None:
     """Refuses a geom whose inertia MuJoCo takes as a thin shell (shellinertia) where the
-    geoms give the body's inertia (no <inertial>, or compiler inertiafromgeom="true"):
-    Drake's parser would take the solid's, silently another robot."""
-    compiler = root.find("compiler")
-    from_geoms = "auto" if compiler is None else compiler.get("inertiafromgeom", "auto")
-    for geom, attributes, body in _Resolved(root, "geom"):
-        uses_geoms = from_geoms == "true" or (from_geoms == "auto"
-                                              and body.find("inertial") is None)
-        if uses_geoms and attributes.get("shellinertia", "false") == "true":
+    geoms give the body's inertia (_InertiaGeoms): Drake's parser would take the solid's,
+    silently another robot."""
+    for geom, attributes, body in _InertiaGeoms(root):
+        if attributes.get("shellinertia", "false") == "true":
             raise ConfigError(
                 f"{path}: geom {geom.get('name', '(unnamed)')!r} of body "
                 f"{body.get('name', '(unnamed)')!r}: shellinertia='true' (MuJoCo's thin-"
@@ -328,6 +340,61 @@ def _CheckVectors(root: ElementTree.Element, path: Path) -> None:
                          else f"{sizes[0]} to {sizes[-1]}")
                 raise ConfigError(f"{path}: <{element.tag}{named}> {attribute}={value!r}; "
                                   f"allowed: {count} finite numbers")
+
+
+def _MeshInertiaNotes(root: ElementTree.Element) -> List[str]:
+    """The meshes whose inertia MuJoCo takes otherwise than Drake's parser, where it gives
+    their body's (_InertiaGeoms): MuJoCo's mesh ``inertia`` "legacy" (its default: each
+    face's pyramid from the faces' centroid counted positive) or "convex" (the hull),
+    Drake's the mesh's exact volume. They agree where the mesh is star-shaped from that
+    centroid (legacy) or convex; otherwise "mesh 'name' (legacy: volume V, exact V_e)"."""
+    import trimesh
+    meshes = {}
+    classes = _Classes(root, "mesh")
+    for asset in root.iter("asset"):
+        for mesh in asset.iter("mesh"):
+            if mesh.get("file"):
+                meshes[mesh.get("name")] = {**classes.get(mesh.get("class", "main"), {}),
+                                            **mesh.attrib}
+    notes = set()
+    for geom, attributes, body in _InertiaGeoms(root):
+        mesh = meshes.get(attributes.get("mesh")) if attributes.get("type") == "mesh" \
+            else None
+        mode = None if mesh is None else mesh.get("inertia", "legacy")
+        if mode not in ("legacy", "convex") or float(attributes.get(
+                "mass", attributes.get("density", "1000"))) <= 0:
+            continue
+        loaded = trimesh.load(mesh["file"], force="mesh", process=False)
+        vertices = np.asarray(loaded.vertices) * [float(x) for x in mesh.get(
+            "scale", "1 1 1").split()]
+        volume, exact = _MujocoVolumes(vertices, np.asarray(loaded.faces), mode)
+        if abs(volume - exact) > 1e-6 * abs(exact):
+            notes.add(f"mesh {attributes['mesh']!r} ({mode}: volume {volume:.4g} m^3, "
+                      f"exact {exact:.4g})")
+    return sorted(notes)
+
+
+def _MujocoVolumes(vertices: np.ndarray, faces: np.ndarray, mode: str
+                   ) -> Tuple[float, float]:
+    """(MuJoCo's volume of a mesh in inertia mode ``mode``, its exact volume): both from
+    pyramids on each face with apex at the faces' area-weighted centroid (MuJoCo's
+    ComputeVolume), legacy counting each positive, convex those of the hull."""
+    import trimesh
+
+    def pyramids(vertices, faces):
+        triangles = vertices[faces]
+        cross = np.cross(triangles[:, 1] - triangles[:, 0],
+                         triangles[:, 2] - triangles[:, 0])
+        area = 0.5 * np.linalg.norm(cross, axis=1)
+        center = triangles.mean(axis=1)
+        apex = (area[:, None] * center).sum(axis=0) / area.sum()
+        return np.einsum("ij,ij->i", center - apex, cross) / 6.0   # (c - a) . n area / 3
+    signed = pyramids(vertices, faces)
+    if mode == "convex":
+        hull = trimesh.Trimesh(vertices, faces, process=False).convex_hull
+        return float(pyramids(np.asarray(hull.vertices), np.asarray(hull.faces)).sum()), \
+            float(signed.sum())
+    return float(np.abs(signed).sum()), float(signed.sum())
 
 
 def _DropMasslessInertials(root: ElementTree.Element) -> bool:
