@@ -3,7 +3,8 @@ lines (run: .venv/bin/python scripts/zoo.py --out results/zoo).
 
 Every manipulator of example-robot-data (Panda, UR3/5/10, Kinova j2s6s200, xArm7,
 Unitree Z1, SO-100, SO-101), every arm of robosuite 1.5.2 (its MJCF robot.xml files:
-Panda, Sawyer, iiwa, Jaco, Kinova3, xArm7, UR5e) and arms of our own with extreme properties (heavy
+Panda, Sawyer, iiwa, Jaco, Kinova3, xArm7, UR5e), dm_control's Jaco, and arms of our
+own with extreme properties (heavy
 joint damping, a tiny wrist, a chain of 9 joints, a heavy tool, a light base:
 URDFs written by this script), each from a file naming only the description, the
 base's mass, the end-effector frame and the locked gripper joints. For each arm,
@@ -14,7 +15,7 @@ time, wall time, the derived integration step, and the warning lines the run
 printed. Rows go to OUT/rows.jsonl as they finish (a re-run skips the arms done);
 OUT/table.md is the docs' results page table.
 
---quick runs the arms named by --arms (default: the CI short version's three) for
+--files runs scenario files of your own instead. --quick runs the arms named by --arms (default: the CI short version's three) for
 --duration seconds without verify. --family N runs N random arms of our own
 (family: 3-9 joints, masses, lengths, damping, tools and bases drawn with --seed)
 instead.
@@ -52,6 +53,10 @@ ROBOSUITE = "package://robosuite/models/assets/robots"
 SHIPPED.update({f"robosuite_{arm}": (f"{ROBOSUITE}/{arm}/robot.xml", "right_hand", "")
                 for arm in ("panda", "sawyer", "iiwa", "jaco", "kinova3", "xarm7",
                             "ur5e")})
+# dm_control's Jaco (MJCF: mesh inertias in MuJoCo's legacy mode, armature 2-4 and
+# frictionloss 1-2 on every joint; pip install --no-deps dm_control).
+SHIPPED["dm_control_jaco"] = ("package://dm_control/third_party/kinova/jaco_arm.xml",
+                              "b_6", "")
 # Arms of our own (robots.serial_arm): (links as (mass [kg], length [m], damping
 # [N m s/rad]), tool mass [kg], base mass [kg]).
 OWN = {
