@@ -73,8 +73,8 @@ class LearnerLog:
     undetermined, restarts, physical]: the fitted model's weighted squared residual on
     the window; the gain rule's 1 + RMS residual / RMS tau_obs; the nominal RHS's (B0,
     D0) residual on the same samples; 1 while nothing is learned (training paused after
-    a change, identification.ChangeDetector; no row of the local model determined); 1
-    while some published quantity is learned, 0 while all are the prior's
+    a change, learning.identification.ChangeDetector; no row of the local model
+    determined); 1 while some published quantity is learned, 0 while all are the prior's
     (Learner.prior_fallback, a local model's undetermined rows; 0 in the learner-off
     ablation); the share of the n^2 + n quantities [B, diag D] published at the prior;
     the rows restarted this update (learning.local_bayes); physical: 1 while the

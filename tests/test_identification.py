@@ -4,8 +4,8 @@ keeps the prior where they do not, and a disturbance does not make B_hat collaps
 import numpy as np
 import pytest
 
-from dacph_drake.identification import (BandPassCascade, ChangeDetector, PortSample,
-                                        RhsIdentifier)
+from dacph_drake.learning.identification import (BandPassCascade, ChangeDetector,
+                                                 PortSample, RhsIdentifier)
 from dacph_drake.scenario import Learner
 
 H = 0.01                                     # the learner's sample period [s]
@@ -176,7 +176,7 @@ def test_inertia_coupling_scales_the_couplings_into_lighter_joints():
     times as far as the coupling the other way (Adam moves every raw output by
     about the learning rate); "uniform" is the unscaled network."""
     import torch
-    from dacph_drake.network import ExportedNetwork, RhsNetwork, coupling_factors
+    from dacph_drake.learning.network import ExportedNetwork, RhsNetwork, coupling_factors
     inertias = [2.0, 0.01]
     F = coupling_factors("inertia", inertias)
     np.testing.assert_allclose(F, [[1.0, 1.0], [0.005, 1.0]])
@@ -262,7 +262,7 @@ def test_one_identifier_fits_a_batch_as_independent_learners():
     only: three trials with different priors, seeds and windows, fitted together
     and replayed alone."""
     import torch
-    from dacph_drake.network import RhsNetwork
+    from dacph_drake.learning.network import RhsNetwork
     t = np.arange(0.0, 2.0, H)
     u = np.stack([np.sin(2 * np.pi * 3.1 * t), np.sin(2 * np.pi * 4.3 * t)], axis=1)
     qdot = np.stack([np.cos(2 * np.pi * 2.3 * t), np.sin(2 * np.pi * 5.1 * t)], axis=1)
@@ -314,7 +314,7 @@ def _window_loss(identifier, w, B, D, q, qdot, u, tau):
     """The regularized loss of RhsIdentifier's docstring, written out for one
     trial's torch network (B, D evaluated by it)."""
     import torch
-    from dacph_drake.network import port_torque
+    from dacph_drake.learning.network import port_torque
     settings, n = Learner(), 2
     residual = tau - port_torque(B, D, u, qdot)
     data = torch.sum(w * torch.sum(residual**2, -1))

@@ -9,7 +9,7 @@ import copy
 import numpy as np
 import pytest
 
-from dacph_drake.identification import BandPassCascade
+from dacph_drake.learning.identification import BandPassCascade
 from dacph_drake.kernels.bayes import fit_row, project_out, spd_inverse
 from dacph_drake.kernels.certificate import box_certificate, certified_gains
 from dacph_drake.learning.local_bayes import (LocalBayesChannels, LocalModel,

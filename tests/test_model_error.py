@@ -14,7 +14,7 @@ from dacph_drake.analysis.verify import verify_logs
 from dacph_drake.robots.description import MakeRobotPlant
 from dacph_drake.errors import ConfigError
 from dacph_drake.gain_rule import stays_stable_if_wrong
-from dacph_drake.identification import PortEvidence, PortSample, RhsIdentifier
+from dacph_drake.learning.identification import PortEvidence, PortSample, RhsIdentifier
 from dacph_drake.dynamics.inertial_parameters import (InertialParameters, identify_parameters,
                                              prior_scales)
 from dacph_drake.log_layout import RhsLog

@@ -5,7 +5,7 @@ from pydrake.systems.analysis import Simulator
 
 from dacph_drake.gain_rule import c_lower_bound, integral_gains, within_trust
 from dacph_drake.log_layout import RhsState
-from dacph_drake.network import ExportedNetwork, RhsNetwork
+from dacph_drake.learning.network import ExportedNetwork, RhsNetwork
 from dacph_drake.dynamics.plant import FixStateInputs, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario import Rhs, Scenario

@@ -166,7 +166,7 @@ def test_port_observer_sample_is_one_consistent_instant(model):
 
 
 def test_regression_filter_is_the_band_pass_cascade():
-    from dacph_drake.identification import BandPassCascade
+    from dacph_drake.learning.identification import BandPassCascade
     from dacph_drake.scenario import Learner
     from dacph_drake.systems.regression_filter import RegressionFilter
     settings, h = Learner(), 0.01

@@ -8,7 +8,8 @@ from typing import Optional, Sequence
 import numpy as np
 
 from dacph_drake.loop.threads import single_threaded
-from dacph_drake.controllers import NAMES as CONTROLLERS, REGISTRY, build_closed_loop
+from dacph_drake.controllers import (NAMES as CONTROLLERS, REFERENCE, REGISTRY,
+                                     build_closed_loop)
 # The built-in scenarios' names (scenario.BUILT_IN_SCENARIOS), without loading Drake.
 BUILT_IN_SCENARIO_NAMES = ("paper", "short", "satellite_6dof", "satellite_3dof")
 from dacph_drake.errors import ConfigError, require_nonnegative, require_positive
@@ -178,7 +179,7 @@ def _reproduce(args) -> int:
     print(f"reproduced {name} in {time.perf_counter() - start:.0f} s -> {args.out}")
     _print_table(summary)
     if args.animate:
-        print(_animate_run(args.out, "dac"))
+        print(_animate_run(args.out, REFERENCE))
     return 0 if all(r["status"] == "ok" for r in summary["runs"].values()) else 1
 
 
@@ -375,7 +376,7 @@ def _AddSimulateArguments(command) -> None:
     _AddLiveViewing(command)
 
 
-def _AddController(command, what: str, default: Optional[str] = "dac") -> None:
+def _AddController(command, what: str, default: Optional[str] = REFERENCE) -> None:
     command.add_argument(
         "--controller", choices=CONTROLLERS, default=default,
         help=f"{what} (default: {default or 'all'}); " + "; ".join(

@@ -124,14 +124,15 @@ LEARNER_ROWS = (
 
 
 def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
-    """{"dac": {...}, "model-based": {...}} -> the comparison's metrics, DAC's estimation
-    errors, and every controller's metrics as "CONTROLLER.NAME".
+    """{REFERENCE: {...}, BASELINE: {...}, ...} -> the comparison's metrics, the
+    reference's (DAC's) estimation errors, and every controller's metrics as
+    "CONTROLLER.NAME".
 
     Args:
-        metrics: Controller ("dac", "model-based" required) -> its run's metrics."""
-    out = dict(comparison(metrics["dac"], metrics["model-based"]))
-    out["estimation_error_B"] = metrics["dac"]["estimation_error_B"]
-    out["estimation_error_D"] = metrics["dac"]["estimation_error_D"]
+        metrics: Controller (REQUIRED ones at least) -> its run's metrics."""
+    out = dict(comparison(metrics[REFERENCE], metrics[BASELINE]))
+    out["estimation_error_B"] = metrics[REFERENCE]["estimation_error_B"]
+    out["estimation_error_D"] = metrics[REFERENCE]["estimation_error_D"]
     for controller, values in metrics.items():
         out.update({f"{controller}.{k}": v for k, v in values.items()})
     return out

@@ -52,9 +52,9 @@ REGISTRY = {
                               "model-based", "C1", "--"),
 }
 NAMES = tuple(REGISTRY)
-# The controller the tables compare the others with (the paper's DAC-pH), and the
-# paper's baseline.
-REFERENCE, BASELINE = "dac", "model-based"
+# The controller the tables compare the others with (the paper's DAC-pH), the same
+# with its learner off (the learning ablation), and the paper's baseline.
+REFERENCE, ABLATION, BASELINE = "dac", "dac-nominal", "model-based"
 
 
 def require_controller(name: str) -> Controller:

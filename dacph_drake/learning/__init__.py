@@ -68,7 +68,7 @@ def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
     if uses_local_bayes(settings):
         from dacph_drake.learning.local_bayes import LocalModel
         return LocalModel(len(trial.B0))
-    from dacph_drake.network import ExportedNetwork
+    from dacph_drake.learning.network import ExportedNetwork
     return ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
 
 

@@ -27,7 +27,7 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
-from dacph_drake.identification import BandPassCascade
+from dacph_drake.learning.identification import BandPassCascade
 from dacph_drake.kernels.bayes import fit_rows, row_design
 from dacph_drake.learning.protocol import (Channels, LearnerTrial, PortEstimate,
                                    PortLearner)

@@ -14,10 +14,10 @@ from typing import Sequence, Tuple
 
 import numpy as np
 
-from dacph_drake.identification import ChangeDetector, NewestRows, RhsIdentifier
+from dacph_drake.learning.identification import ChangeDetector, NewestRows, RhsIdentifier
 from dacph_drake.learning.protocol import Channels, LearnerTrial, PortLearner
 from dacph_drake.log_layout import LearnerLog
-from dacph_drake.network import ExportedNetwork, NetworkStack
+from dacph_drake.learning.network import ExportedNetwork, NetworkStack
 from dacph_drake.scenario import Learner
 
 

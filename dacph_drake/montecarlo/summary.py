@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dacph_drake.analysis.metrics import PHASES, comparison  # noqa: E402
+from dacph_drake.controllers import ABLATION, BASELINE, REFERENCE  # noqa: E402
 from dacph_drake.montecarlo.definition import SweepDefinition  # noqa: E402
 from dacph_drake.montecarlo.store import read_manifest, read_rows, sorted_rows  # noqa: E402
 
@@ -64,14 +65,14 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
         summary["controllers"][controller] = {
             "succeeded": len(ok), "success_rate": len(ok) / max(len(rows), 1),
             "metrics": {name: _quantiles([m[name] for m in ok]) for name in names}}
-    if "dac" in controllers:
+    if REFERENCE in controllers:
         summary["learning"] = learning_summary(rows)
-    if {"dac", "dac-nominal"} <= set(controllers):
+    if {REFERENCE, ABLATION} <= set(controllers):
         summary["learning_in_tracking"] = tracking_summary(rows)
-    if {"dac", "model-based"} <= set(controllers):
-        pairs = [comparison(r["runs"]["dac"]["metrics"], r["runs"]["model-based"]["metrics"])
-                 for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
-                 and r["runs"].get("model-based", {}).get("status") == "ok"]
+    if {REFERENCE, BASELINE} <= set(controllers):
+        pairs = [comparison(r["runs"][REFERENCE]["metrics"], r["runs"][BASELINE]["metrics"])
+                 for r in rows if r["runs"].get(REFERENCE, {}).get("status") == "ok"
+                 and r["runs"].get(BASELINE, {}).get("status") == "ok"]
         rng = np.random.default_rng(seed)
         for name in (pairs[0] if pairs else {}):
             summary["paired"][name] = _mean_interval([p[name] for p in pairs], rng)
@@ -86,10 +87,10 @@ def learning_summary(rows: List[Dict]) -> Dict:
 
     Args:
         rows: The trials' rows."""
-    ok = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"]
-    runs = [r["runs"]["dac"]["metrics"] for r in ok]
-    nominal = [(r["runs"]["dac"]["metrics"], r["runs"]["dac-nominal"]["metrics"])
-               for r in ok if r["runs"].get("dac-nominal", {}).get("status") == "ok"]
+    ok = [r for r in rows if r["runs"].get(REFERENCE, {}).get("status") == "ok"]
+    runs = [r["runs"][REFERENCE]["metrics"] for r in ok]
+    nominal = [(r["runs"][REFERENCE]["metrics"], r["runs"][ABLATION]["metrics"])
+               for r in ok if r["runs"].get(ABLATION, {}).get("status") == "ok"]
     out = {"trials": len(runs), "phases": {}}
     if not runs:
         return out
@@ -130,20 +131,20 @@ def tracking_summary(rows: List[Dict]) -> Dict:
     key = "tracking_error_rms_phases_2_3"
 
     def better(row) -> bool:
-        nominal = row["runs"]["dac-nominal"]
-        return nominal["status"] != "ok" or (row["runs"]["dac"]["metrics"][key]
+        nominal = row["runs"][ABLATION]
+        return nominal["status"] != "ok" or (row["runs"][REFERENCE]["metrics"][key]
                                              < nominal["metrics"][key])
 
     def share(trials):
         return float(np.mean([better(r) for r in trials])) if trials else None
 
-    finished = [r for r in rows if r["runs"].get("dac", {}).get("status") == "ok"
-                and "dac-nominal" in r["runs"]]
+    finished = [r for r in rows if r["runs"].get(REFERENCE, {}).get("status") == "ok"
+                and ABLATION in r["runs"]]
     large = [r for r in finished if "actuator_gain_log10" in r["sampled"] and np.max(
         np.abs(r["sampled"]["actuator_gain_log10"])) > np.log10(LARGE_ACTUATOR_ERROR)]
     weaker = [r for r in large if -np.min(r["sampled"]["actuator_gain_log10"])
               >= np.max(r["sampled"]["actuator_gain_log10"])]
-    return {"dac_not_finished": sum(r["runs"].get("dac", {}).get("status") not in
+    return {"dac_not_finished": sum(r["runs"].get(REFERENCE, {}).get("status") not in
                                     (None, "ok") for r in rows),
             "trials": len(finished), "dac_better": share(finished),
             "large_actuator_error_trials": len(large),
@@ -151,7 +152,7 @@ def tracking_summary(rows: List[Dict]) -> Dict:
             "weaker_trials": len(weaker), "dac_better_weaker": share(weaker),
             "stronger_trials": len(large) - len(weaker),
             "dac_better_stronger": share([r for r in large if r not in weaker]),
-            "dac_nominal_diverged": sum(r["runs"]["dac-nominal"]["status"] != "ok"
+            "dac_nominal_diverged": sum(r["runs"][ABLATION]["status"] != "ok"
                                         for r in finished)}
 
 

@@ -4,7 +4,7 @@ from typing import Sequence
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.identification import PortSample
+from dacph_drake.learning.identification import PortSample
 from dacph_drake.kernels.loop import observer_samples
 
 

@@ -4,7 +4,7 @@ from typing import Optional
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.identification import BandPassCascade, PortSample
+from dacph_drake.learning.identification import BandPassCascade, PortSample
 from dacph_drake.learning import Channels
 from dacph_drake.learning.network_learner import PortSampleChannels
 from dacph_drake.scenario import Learner
@@ -12,8 +12,9 @@ from dacph_drake.scenario import Learner
 
 class RegressionFilter(LeafSystem):
     """Every ``period`` it forms the learner's channels from input ``port_sample``, passes
-    them through identification.BandPassCascade (settings.band, settings.band_sections)
-    and holds [q, p, filtered channels] on output ``filtered_sample``. One linear filter
+    them through learning.identification.BandPassCascade (settings.band,
+    settings.band_sections) and holds [q, p, filtered channels] on output
+    ``filtered_sample``. One linear filter
     on every signal keeps the port relation tau = B u - D qdot + d while B(x), D(x) vary
     slowly, and removes d(t) outside the band; q and p, the features, pass unfiltered.
 

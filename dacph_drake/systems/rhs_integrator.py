@@ -8,7 +8,7 @@ from pydrake.systems.framework import Context, LeafSystem
 
 from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
                                    integral_gains, stays_stable_if_wrong, within_trust)
-from dacph_drake.identification import PortEvidence, PortSample
+from dacph_drake.learning.identification import PortEvidence, PortSample
 from dacph_drake.kernels.certificate import certified_gains
 from dacph_drake.kernels.loop import integrator_samples
 from dacph_drake.learning import Channels, PublishedModel

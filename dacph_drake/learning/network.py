@@ -8,17 +8,15 @@
 Trained in torch (float64); the fast loops evaluate a compiled, exported copy
 (ExportedNetwork), so torch never runs inside them. The output layers start at zero with
 biases vec(B0 / F) and softplus^-1(D0): the first estimate is the nominal RHS."""
-from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple, Union
+from typing import List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
 
 from dacph_drake.kernels.network import evaluate_networks
 from dacph_drake.dynamics import ReducedModel
+from dacph_drake.learning.protocol import PortEstimate
 from dacph_drake.scenario import LEARNER_COUPLINGS, Learner
-
-if TYPE_CHECKING:
-    from dacph_drake.learning.protocol import PortEstimate
 
 
 def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarray:
@@ -296,7 +294,7 @@ class NetworkStack:
         self.size = networks[0].size
 
     def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
-                 ) -> "PortEstimate":
+                 ) -> PortEstimate:
         """Every trial's estimate at its state (PublishedModel.Estimate), a
         learning.PortEstimate: the point, which is also its interval (no credible set).
 
@@ -305,7 +303,6 @@ class NetworkStack:
             t: The time [s] (unused).
             q: Each trial's joint angles (trials, n) [rad].
             p: Each trial's momenta (trials, n)."""
-        from dacph_drake.learning.protocol import PortEstimate
         B, D = self.Evaluate(published, q, p)
         return PortEstimate(B=B, D=D, B_set=None, B_interval=np.stack([B, B]),
                             D_interval=np.stack([D, D]))

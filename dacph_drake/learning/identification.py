@@ -11,7 +11,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 import torch
 
-from dacph_drake.network import RhsNetwork, StackedRhsNetworks, port_torque
+from dacph_drake.learning.network import RhsNetwork, StackedRhsNetworks, port_torque
 from dacph_drake.scenario import Learner
 
 
