@@ -63,7 +63,7 @@ def robots_of(scenarios: Sequence[Scenario]) -> List[Robot]:
 
 def validate_scenario(scenario: Scenario) -> None:
     """Checks every setting (the robot's constructor checks the seed, the robot and
-    its task: scenario_checks.validate_shared).
+    its task: scenario.checks.validate_shared).
 
     Args:
         scenario: The scenario.

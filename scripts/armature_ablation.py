@@ -32,7 +32,7 @@ if not model_armature:
     floating_model.FloatingBaseModel.kernel_tree = property(without_armature)
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario_files import load_scenario
+from dacph_drake.scenario.files import load_scenario
 scenario = load_scenario(path)
 result = simulate(scenario, controller)
 metrics = run_metrics(result.logs, scenario) if result.status == "ok" else {}

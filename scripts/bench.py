@@ -18,9 +18,9 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.kernels.arm import reduced_dynamics
 from dacph_drake.dynamics.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 from dacph_drake.loop.simulator import MakeSimulator
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,7 +144,7 @@ def bench_kernel_compilation():
     import tempfile
     code = ("import time; t = time.perf_counter(); "
             "from dacph_drake.loop.simulate import simulate; "
-            "from dacph_drake.built_in_scenarios import short_scenario; "
+            "from dacph_drake.scenario.built_in import short_scenario; "
             "simulate(short_scenario(), 'dac', duration=0.01); "
             "print(time.perf_counter() - t)")
     with tempfile.TemporaryDirectory() as cache:
@@ -193,7 +193,7 @@ def bench_spatial(duration: float, planar_dac: float):
     the DAC loop, each beside the planar DAC loop's ``planar_dac`` of the same run."""
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.scenario import Phases
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     for label, name, target in SPATIAL_ROBOTS_BENCHED:
         try:
             scenario = load_scenario(name)

@@ -24,7 +24,7 @@ import numpy as np
 from dacph_drake.analysis.metrics import PHASES, run_metrics
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Scenario
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 
 def harder_short_scenario() -> Scenario:

@@ -22,7 +22,7 @@ from dacph_drake.log_layout import RhsLog
 from dacph_drake.analysis.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 START = [[0.3, 1.0], [0.45, 0.85]]          # q0 of seed 0, 1
 KEPT_METRICS = ("tracking_error", "phase", "fault", "control_effort")   # in runs.jsonl
@@ -38,7 +38,7 @@ SPATIAL = {   # name -> (robot, the controller's factors per body, warm-up [s])
 
 def scenario_of(name: str, seed: int):
     if name in SPATIAL:
-        from dacph_drake.scenario_files import load_scenario
+        from dacph_drake.scenario.files import load_scenario
         robot, factors, warmup = SPATIAL[name]
         s = load_scenario(robot)
         s.seed, s.robot.nominal_inertia_scale = seed, factors

@@ -15,7 +15,7 @@ from dacph_drake.gain_rule import (WELL_DAMPED_LOOP_GAIN, c_lower_bound,
 from dacph_drake.dynamics.inertia_bound import search_inertia_bound
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
-from dacph_drake.arm_parameters import RobotParams, unequal_three_link_arm
+from dacph_drake.scenario.planar_arm import RobotParams, unequal_three_link_arm
 from dacph_drake.scenario import AttitudeGains, Scenario
 
 

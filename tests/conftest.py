@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from dacph_drake.arm_parameters import RobotParams, unequal_three_link_arm
+from dacph_drake.scenario.planar_arm import RobotParams, unequal_three_link_arm
 
 
 def three_link_robot() -> RobotParams:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
 
-from dacph_drake.arm_defaults import DEFAULT_STEP, arm_scenario
+from dacph_drake.scenario.sizing import DEFAULT_STEP, arm_scenario
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
@@ -29,7 +29,7 @@ from dacph_drake.robots.serial_arm import SerialLink, serial_arm_urdf
 from dacph_drake.robots.start_pose import (CLEARANCE_BOUND, SINGULAR_BOUND,
                                            rehearse, task_jacobian, within_limits)
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
-from dacph_drake.scenario_files import load_scenario
+from dacph_drake.scenario.files import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 needs_example_robot_data = pytest.mark.skipif(
@@ -597,7 +597,7 @@ def test_joint_friction_kept_acts_in_the_truth_and_conserves_momentum(tmp_path):
     (zero, plain), (keep, rubbed) = runs["zero"], runs["keep"]
     assert plain.status == rubbed.status == "ok"
     assert keep.simulator.max_step_size <= zero.simulator.max_step_size
-    from dacph_drake.arm_defaults import truth_step
+    from dacph_drake.scenario.sizing import truth_step
     model = robot_of(keep).model
     q = np.array([keep.q0])
     assert truth_step(model, q, keep.uncertainty, keep.periods.rhs, np.full(3, 5.0)) < \

@@ -196,7 +196,7 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
 ])
 def test_bad_assembly_settings_are_named(change, message):
     from dacph_drake.assembly import robot_of
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     scenario = satellite_3dof_scenario()
     for name, value in change.items():
         setattr(scenario.robot, name, value)
@@ -213,8 +213,8 @@ def test_a_scenario_file_runs_dac_on_the_mounted_arm(arm_file, tmp_path, capsys)
     from dacph_drake.app.cli import main
     from dacph_drake.loop.run_store import load_run
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
-    from dacph_drake.scenario_files import load_scenario, save_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
+    from dacph_drake.scenario.files import load_scenario, save_scenario
     scenario = satellite_3dof_scenario()
     scenario.robot.description, scenario.robot.base = str(arm_file), MOUNT
     save_scenario(scenario, tmp_path / "mounted.yaml")
@@ -240,7 +240,7 @@ def test_the_descriptions_joint_damping_is_part_of_the_lhs_model_or_zeroed(arm_f
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.dynamics.plant import trial_coordinates
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     damped = _joint2_as(arm_file, "damped.urdf", '<joint name="joint2" '
                         'type="continuous"><dynamics damping="0.03"/>')
     logged = {}
@@ -380,7 +380,7 @@ def test_each_parser_warning_prints_once(arm_file, caplog):
     once per process, however often the description is parsed (ground truth,
     controller's model, clearance potential, a sweep's trials)."""
     from dacph_drake.controllers import build_closed_loop
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     tagged = _joint2_as(arm_file, "tagged.urdf", '<joint name="joint2" '
                         'type="continuous"><safety_controller k_velocity="1"/>')
     scenario = satellite_3dof_scenario()
@@ -397,7 +397,7 @@ def test_joint_limits_stop_a_run_by_name(arm_file):
     a run that leaves them stops with the joint named (robot.joint_limits "stop"),
     a q0 outside them is refused; "ignore" runs on."""
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     limited = _joint2_as(arm_file, "limited.urdf",
                          '<joint name="joint2" type="revolute"><limit lower="-0.85" '
                          'upper="-0.75" effort="100" velocity="2"/>')
@@ -424,7 +424,7 @@ def test_effort_limits_saturate_the_command_and_are_reported(arm_file):
     joint 2 for far more than 0.2 N m."""
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     limited = _joint2_as(arm_file, "effort.urdf", '<joint name="joint2" '
                          'type="continuous"><limit effort="0.2" velocity="2"/>')
     scenario = satellite_3dof_scenario()

@@ -136,7 +136,7 @@ def test_a_rerun_replaces_every_output_of_the_run_it_replaces(tmp_path, capsys):
 @pytest.mark.parametrize("fmt", ["csv", "parquet"])
 def test_export_writes_a_table_pandas_reads(tmp_path, capsys, fmt):
     import pandas as pd
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     from dacph_drake.loop.simulate import simulate
     result = simulate(satellite_3dof_scenario(), "dac", duration=0.3,
                       out_dir=tmp_path / "run")

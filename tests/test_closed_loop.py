@@ -11,8 +11,8 @@ from dacph_drake.log_layout import LearnerLog, RhsLog
 from dacph_drake.analysis.metrics import comparison, run_metrics
 from dacph_drake.app.reproduce import CONTROLLERS
 from dacph_drake.loop.run_store import load_logs
-from dacph_drake.built_in_scenarios import short_scenario
-from dacph_drake.scenario_files import load_scenario
+from dacph_drake.scenario.built_in import short_scenario
+from dacph_drake.scenario.files import load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ import pytest
 from dacph_drake.app.cli import main
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario_files import load_scenario
+from dacph_drake.scenario.files import load_scenario
 
 ROBOTS = ["short", "satellite_3dof"]
 MODELS = Path(__file__).resolve().parents[1] / "dacph_drake" / "models"
@@ -253,8 +253,8 @@ def test_a_described_run_in_contact_stops_with_the_named_reason(monkeypatch, tmp
 
 @pytest.mark.parametrize("links", [4, 6])
 def test_larger_planar_arms_build_fast_and_run_dac_through_every_phase(tmp_path, links):
-    """A file naming only an n-link robot.truth (arm_defaults.sized_defaults
-    sizes the rest, arm_defaults.planar_arm_scenario) builds its DAC diagram in
+    """A file naming only an n-link robot.truth (scenario.sizing.sized_defaults
+    sizes the rest, scenario.sizing.planar_arm_scenario) builds its DAC diagram in
     seconds (the inertia bounds searched, not a 73^n grid) and runs DAC through the
     short scenario's four phases (scripts/bench_links.py tabulates 2 to 8 links):
     once the start's transient of phase 1 is over, tracking within 1e-3 rad
@@ -305,7 +305,7 @@ def test_a_run_driven_to_blow_up_stops_diverged_with_its_logs(tmp_path, robot, s
 
 def main_simulate(scenario, out: Path) -> int:
     """`dacph simulate` of a scenario object: saved to a file first."""
-    from dacph_drake.scenario_files import save_scenario
+    from dacph_drake.scenario.files import save_scenario
     path = out.parent / "scenario.yaml"
     save_scenario(scenario, path)
     return main(["simulate", str(path), "--out", str(out), "--duration", "2"])

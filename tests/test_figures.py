@@ -13,7 +13,7 @@ from dacph_drake.app.figures import COLUMNS, DAC_PANELS, envelope, make_panels
 from dacph_drake.log_layout import LhsLog, RhsLog
 from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.scenario import PlanarArm, Scenario, Uncertainty
-from dacph_drake.built_in_scenarios import paper_scenario
+from dacph_drake.scenario.built_in import paper_scenario
 
 PANELS = DAC_PANELS + END_EFFECTOR_ANGLE.panels
 
@@ -157,7 +157,7 @@ def test_the_entries_panel_draws_the_claims_the_metrics_report():
     from dacph_drake.analysis.metrics import physical_view
     from dacph_drake.app.figures import PORT_PANEL
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.built_in_scenarios import short_scenario
+    from dacph_drake.scenario.built_in import short_scenario
     scenario = short_scenario()
     run = simulate(scenario, "dac", duration=3.0)
     figures = make_panels({"dac": run.logs}, scenario)

@@ -10,7 +10,7 @@ from dacph_drake.kernels.potential import potential
 from dacph_drake.dynamics.plant import ArmCoordinates, MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.arm_parameters import LinkParams, RobotParams
+from dacph_drake.scenario.planar_arm import LinkParams, RobotParams
 from dacph_drake.scenario import Potential, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.dynamics.uncertainty import TrueRhsModel

@@ -17,7 +17,7 @@ from dacph_drake.learning.local_bayes import (LocalBayesChannels, LocalModel,
                                               prior_range, student_quantile)
 from dacph_drake.log_layout import RhsLog
 from dacph_drake.scenario import LocalBayes, Phases
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 
 def test_spd_inverse_is_numpys_and_refuses_an_indefinite_matrix(rng):
@@ -363,7 +363,7 @@ def test_a_kinematic_mismatch_is_reported_and_the_mass_is_the_measured_one():
     from pathlib import Path
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     exact = load_scenario(Path(__file__).resolve().parents[1] / "scenarios"
                           / "model_error.yaml")
     exact.phases = Phases(warmup=1.0, linear=4.0, nonlinear=1.0, disturbance=1.0)

@@ -5,7 +5,7 @@ import pytest
 from dacph_drake.log_layout import LearnerLog, RhsLog
 from dacph_drake.analysis.metrics import comparison, relative_error_rms, rms, run_metrics
 from dacph_drake.app.reproduce import metrics_table
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 
 def test_rms_of_known_signals():

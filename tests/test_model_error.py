@@ -24,7 +24,7 @@ from dacph_drake.dynamics.plant import ArmCoordinates, FixStateInputs, MakeArmPl
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault, Learner, Scenario
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.true_rhs import TrueRhs
 
@@ -259,7 +259,7 @@ def test_a_jump_is_adopted_only_if_the_loop_survives_the_evidence_being_wrong():
 
 def test_bad_spatial_model_error_settings_are_named():
     from dacph_drake.assembly import robot_of
-    from dacph_drake.built_in_scenarios import satellite_3dof_scenario
+    from dacph_drake.scenario.built_in import satellite_3dof_scenario
     scenario = satellite_3dof_scenario()
     scenario.q0 = [0.3, -0.8, 0.5]
     scenario.robot.nominal_inertia_scale = [1.0, 1.0]

@@ -1,6 +1,6 @@
 """An arm from its own description, as users have it (issue 24): a scenario file
 naming only the robot, its base, its end effector and q0 gets every other setting
-sized to the arm (arm_defaults); descriptions named by package:// URIs found the
+sized to the arm (scenario.sizing); descriptions named by package:// URIs found the
 ROS 2 way (the ament index of AMENT_PREFIX_PATH and of pip's cmeel prefix); a
 fixed-base file's weld to the world dropped when it is mounted; and the shipped
 Panda and UR5 scenarios (example-robot-data, the [robots] extra) run."""
@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dacph_drake.arm_defaults import DAMPING_RATE, arm_scenario
+from dacph_drake.scenario.sizing import DAMPING_RATE, arm_scenario
 from dacph_drake.robots.start_pose import rehearse
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.errors import ConfigError
 from dacph_drake.robots.description import MODELS, MakeRobotPlant
 from dacph_drake.scenario import ArmBase, DescribedArm
-from dacph_drake.scenario_files import load_scenario
+from dacph_drake.scenario.files import load_scenario
 
 MOUNT = ArmBase(mass=250.0, size=[1.0, 1.0, 1.0], mount=[0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,7 +56,8 @@ def test_a_file_naming_only_the_arm_gets_settings_sized_to_it(arm_alone, tmp_pat
                                                                monkeypatch, caplog):
     """A scenario file of robot (a package:// description found through
     AMENT_PREFIX_PATH, its world weld dropped with a note; its own end_effector
-    frame), base and q0 loads with every per-joint setting sized to the arm by arm_defaults' rule:
+    frame), base and q0 loads with every per-joint setting sized to the arm by
+    scenario.sizing's rule:
     D0 = DAMPING_RATE M_jj(q0), the linear group adding 0.5 D0 at the momentum
     p_j = max(M_jj w, the rehearsal's peak |p_j| past the warm-up) (the coupled
     inertia: never below the diagonal's scale), the disturbance's offsets 0.3

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from dacph_drake.app.reproduce import reproduce
-from dacph_drake.built_in_scenarios import paper_scenario
+from dacph_drake.scenario.built_in import paper_scenario
 
 
 @pytest.mark.long

@@ -5,7 +5,7 @@ import numpy as np
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.scenario import Potential
 
 

@@ -6,8 +6,9 @@ from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from dacph_drake.dynamics.plant import (AddFreeFloatingArm, END_EFFECTOR, MakeArmPlant,
                                link_name)
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
-from dacph_drake.arm_parameters import RobotParams
-from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
+from dacph_drake.scenario.planar_arm import RobotParams
+from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import FixedStepConfig
 
 
 @pytest.fixture
@@ -116,7 +117,7 @@ def test_searched_bounds_of_larger_arms_enclose_the_grid_and_every_sample(links,
     search's optimum at least as extreme as the grid's, within 5 %). The
     search's derivative dM/dq is the closed form's, checked against central
     differences."""
-    from dacph_drake.arm_parameters import LinkParams
+    from dacph_drake.scenario.planar_arm import LinkParams
     from dacph_drake.dynamics.reduced_model import GRID_JOINTS, grid_mass_matrix_bounds
     assert links > GRID_JOINTS
     model = ReducedOrderModel(MakeArmPlant(RobotParams(links=[

@@ -10,7 +10,7 @@ from dacph_drake.log_layout import AttitudeLog, LearnerLog, LhsLog, RhsLog
 
 def _short(robot: str):
     from dacph_drake.scenario import Phases
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     scenario = load_scenario({"planar": "short", "described": "satellite_3dof"}[robot])
     scenario.phases = Phases(warmup=0.1, linear=0.1, nonlinear=0.1, disturbance=0.1)
     return scenario

@@ -4,8 +4,8 @@ import dataclasses
 import pytest
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.arm_parameters import (BaseParams, LinkParams, RobotParams, load_robot,
-                               save_robot)
+from dacph_drake.scenario.planar_arm import (BaseParams, LinkParams, RobotParams,
+                                             load_robot, save_robot)
 
 
 def test_paper_robot_is_the_default_and_valid():
@@ -65,7 +65,7 @@ def test_rod_bound_is_tight():
     # At the bound the lamina tensor still satisfies the triangle inequality and
     # Drake accepts it; just above it the description is refused.
     from dacph_drake.dynamics.plant import MakeArmPlant
-    from dacph_drake.arm_parameters import link_inertia_bound
+    from dacph_drake.scenario.planar_arm import link_inertia_bound
     link = LinkParams(mass=1.0, length=0.3, com=0.1, width=0.02)
     link.inertia = link_inertia_bound(link)
     MakeArmPlant(RobotParams(links=[link]))

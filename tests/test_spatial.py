@@ -15,7 +15,8 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
+from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import FixedStepConfig
 
 
 @pytest.fixture(scope="module", params=list(SPATIAL_ROBOTS))
@@ -241,7 +242,7 @@ def test_planar_closed_form_equals_the_generic_model(links, rng):
     """For the planar arms, the compiled closed form (ReducedOrderModel) and the
     generic model from the plant agree on M, C' and the base velocity."""
     from conftest import three_link_robot
-    from dacph_drake.arm_parameters import RobotParams
+    from dacph_drake.scenario.planar_arm import RobotParams
     robot = RobotParams() if links == 2 else three_link_robot()
     plant = MakeArmPlant(robot)
     closed_form, generic = ReducedOrderModel(plant), FloatingBaseModel(plant)
@@ -263,7 +264,7 @@ def test_inertia_bound_search_finds_the_grids_minimum(links):
     from conftest import three_link_robot
     from dacph_drake.dynamics.inertia_bound import search_inertia_bound
     from dacph_drake.dynamics.reduced_model import grid_mass_matrix_bounds
-    from dacph_drake.arm_parameters import RobotParams
+    from dacph_drake.scenario.planar_arm import RobotParams
     plant = MakeArmPlant(RobotParams() if links == 2 else three_link_robot())
     grid, _ = grid_mass_matrix_bounds(ReducedOrderModel(plant))
     bound = search_inertia_bound(FloatingBaseModel(plant))

@@ -12,7 +12,7 @@ from dacph_drake.analysis.metrics import nominal_estimates, run_metrics
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import AttitudeGains, Phases
-from dacph_drake.scenario_files import load_scenario, save_scenario
+from dacph_drake.scenario.files import load_scenario, save_scenario
 
 
 def _short_3dof():

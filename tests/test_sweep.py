@@ -19,10 +19,10 @@ from dacph_drake.montecarlo.executors import InProcessExecutor, dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.montecarlo.store import ROWS, RowStore, read_rows, sorted_rows
 from dacph_drake.montecarlo.summary import write_summary
-from dacph_drake.arm_parameters import LinkParams, link_inertia_bound
+from dacph_drake.scenario.planar_arm import LinkParams, link_inertia_bound
 from dacph_drake.scenario import Phases
-from dacph_drake.built_in_scenarios import short_scenario
-from dacph_drake.scenario_files import load_scenario, save_scenario
+from dacph_drake.scenario.built_in import short_scenario
+from dacph_drake.scenario.files import load_scenario, save_scenario
 
 SWEEPS = Path(__file__).resolve().parents[1] / "sweeps"
 TRIALS = 4

@@ -69,7 +69,7 @@ def test_the_pose_rows_are_the_plants_kinematics(robot, rng):
 
 
 def _pose_scenario(phase: float):
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     from dacph_drake.tasks.end_effector_pose import EndEffectorPose
     scenario = load_scenario("satellite_6dof")
     scenario.task = EndEffectorPose(reference=scenario.task.reference,
@@ -87,7 +87,7 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
     from dacph_drake.analysis.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.log_layout import PoseLog
-    from dacph_drake.scenario_files import load_scenario, save_scenario
+    from dacph_drake.scenario.files import load_scenario, save_scenario
     scenario = _pose_scenario(1.0)
     save_scenario(scenario, tmp_path / "pose.yaml")
     assert "!EndEffectorPose" in (tmp_path / "pose.yaml").read_text()
@@ -114,7 +114,7 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
 def test_a_pose_task_needs_six_joints_and_a_regular_start():
     """On a 3-joint arm the pose task is refused naming the joint count."""
     from dacph_drake.assembly import robot_of
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     from dacph_drake.tasks.end_effector_pose import EndEffectorPose
     scenario = load_scenario("satellite_3dof")
     scenario.task = EndEffectorPose()
@@ -148,7 +148,7 @@ def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
     and `dacph report` take it, and its LHS system is in the diagram by its name."""
     from dacph_drake.controllers.dac import build_dac_diagram
     from dacph_drake.scenario import Scenario
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     from dacph_drake.tasks import registry
     field_ = Scenario.__dataclass_fields__["task"]
     monkeypatch.setattr(field_, "type", field_.type)         # undone after the test
@@ -197,7 +197,7 @@ def _position_scenario(tmp_path, links, phase: float, extra: str = ""):
     """A serial arm of ``links`` from a file naming the description, the base, the end
     effector and task: !EndEffectorPosition (its start chosen for the linear rows)."""
     from dacph_drake.robots.serial_arm import serial_arm_urdf
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     (tmp_path / "arm.urdf").write_text(serial_arm_urdf("arm", links))
     (tmp_path / "arm.yaml").write_text(
         "robot: !DescribedArm\n  description: arm.urdf\n  base: {mass: 200.0}\n"

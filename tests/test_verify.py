@@ -14,10 +14,10 @@ from dacph_drake.analysis.verify import verify_logs, verify_run
 from dacph_drake.app.cli import main
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Stress
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 H, LAMBDA_LHS, TD = 2.5e-4, 196.35, 2.0
 

@@ -22,7 +22,7 @@ DESCRIPTION = ("Data-Assisted Control in the port-Hamiltonian framework (DAC-pH)
 
 def _free_flight(args) -> int:
     from dacph_drake.app.free_flight import run_free_flight
-    from dacph_drake.arm_parameters import RobotParams, load_robot
+    from dacph_drake.scenario.planar_arm import RobotParams, load_robot
     require_positive("--duration", args.duration, "s")
     robot = load_robot(args.robot) if args.robot else RobotParams()
     n = robot.num_links
@@ -42,7 +42,7 @@ def _simulate(args) -> int:
     from pathlib import Path
     from dacph_drake.assembly import robot_of
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     scenario = load_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
@@ -134,7 +134,7 @@ def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.app.graph import render_diagram
     from dacph_drake.loop.files import prepare_out_dir
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     scenario = load_scenario(args.scenario)
     out = prepare_out_dir(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
@@ -171,7 +171,7 @@ def _animate_run(run_dir, controller: str, out=None):
 def _reproduce(args) -> int:
     import time
     from dacph_drake.app.reproduce import reproduce
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
     summary = reproduce(load_scenario(name), args.out, progress=not args.quiet,
@@ -185,7 +185,7 @@ def _reproduce(args) -> int:
 
 def _report(args) -> int:
     from dacph_drake.app.reproduce import REQUIRED, report
-    from dacph_drake.scenario_files import load_saved_scenario
+    from dacph_drake.scenario.files import load_saved_scenario
     summary = report(args.run_dir)
     if summary["table"]:
         _print_table(summary)
@@ -254,7 +254,7 @@ def _verify(args) -> int:
     from pathlib import Path
     from dacph_drake.analysis.verify import verify_run
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario_files import load_scenario
+    from dacph_drake.scenario.files import load_scenario
     target = Path(args.target)
     if target.is_dir():
         run_dir = target

@@ -12,8 +12,9 @@ from pydrake.systems.primitives import Sine
 
 from dacph_drake.dynamics.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
                                total_momentum)
-from dacph_drake.arm_parameters import RobotParams
-from dacph_drake.loop.simulator import FixedStepConfig, MakeSimulator
+from dacph_drake.scenario.planar_arm import RobotParams
+from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import FixedStepConfig
 
 
 class WorkMeter(LeafSystem):

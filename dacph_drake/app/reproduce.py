@@ -21,7 +21,7 @@ from dacph_drake.loop.files import prepare_out_dir
 from dacph_drake.loop.run_store import (load_logs, load_run_meta, require_run_files,
                                         require_run_of, versions)
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario_files import load_saved_scenario, save_scenario
+from dacph_drake.scenario.files import load_saved_scenario, save_scenario
 
 REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
 #                                        the other controllers' runs

@@ -17,7 +17,7 @@ from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, ModelInstanceIn
 from pydrake.systems.framework import Context, DiagramBuilder, System
 from pydrake.systems.primitives import Selector, SelectorParams
 
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 
 BASE_JOINT = "base_joint"
 END_EFFECTOR = "end_effector"

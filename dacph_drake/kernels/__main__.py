@@ -4,7 +4,7 @@ the DAC loop on the short scenario."""
 import time
 
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.built_in_scenarios import short_scenario
+from dacph_drake.scenario.built_in import short_scenario
 
 start = time.perf_counter()
 simulate(short_scenario(), "dac", duration=0.01)

@@ -346,7 +346,7 @@ def _torque_of_matrices(t, qdot, u, disturbance_model, B, D, tau):
 # [rad/s] The joint rate over which a description's Coulomb friction f reaches its full
 # size in the ground truth, f tanh(qdot / FRICTION_VELOCITY): MuJoCo's frictionloss is
 # a constraint that can stick; a smooth truth keeps the explicit integrator (its
-# stiffest slope f / FRICTION_VELOCITY is counted in the step, arm_defaults.truth_step).
+# stiffest slope f / FRICTION_VELOCITY is counted in the step, scenario.sizing.truth_step).
 FRICTION_VELOCITY = 0.1
 
 

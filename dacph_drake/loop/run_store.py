@@ -19,7 +19,7 @@ from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import read_json_record, replaced_atomically
 from dacph_drake.loop.signals import Signals
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario_files import load_saved_scenario, save_scenario, saved_forms
+from dacph_drake.scenario.files import load_saved_scenario, save_scenario, saved_forms
 
 
 @dataclass
@@ -91,7 +91,7 @@ def scenario_fingerprint(scenario: Scenario) -> str:
 
 def scenario_fingerprints(scenario: Scenario) -> List[str]:
     """A scenario's fingerprints in every layout a saved run may come from:
-    scenario_fingerprint's, then the older layouts' (scenario_files.saved_forms).
+    scenario_fingerprint's, then the older layouts' (scenario.files.saved_forms).
 
     Args:
         scenario: The scenario."""

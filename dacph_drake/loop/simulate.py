@@ -26,7 +26,7 @@ from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
 from dacph_drake.loop.closed_loop import ClosedLoop
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario_checks import scheduled_events
+from dacph_drake.scenario.checks import scheduled_events
 
 
 MONITOR_PERIOD = 0.01      # [s] of simulated time between checks of the plant state

@@ -30,10 +30,10 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load
 
 from dacph_drake.controllers import NAMES as CONTROLLERS
 from dacph_drake.errors import ConfigError, require_in_range
-from dacph_drake.arm_parameters import load_yaml_dataclass, read_yaml
+from dacph_drake.scenario.yaml_files import load_yaml_dataclass, read_yaml
 from dacph_drake.scenario import DescribedArm, PlanarArm, Scenario
-from dacph_drake.built_in_scenarios import BUILT_IN_SCENARIOS
-from dacph_drake.scenario_files import load_scenario, saved_forms
+from dacph_drake.scenario.built_in import BUILT_IN_SCENARIOS
+from dacph_drake.scenario.files import load_scenario, saved_forms
 
 # The ground-truth robot's distributions (planar arms only).
 ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",

@@ -17,7 +17,7 @@ from typing import Dict, List, Union
 from dacph_drake.errors import ConfigError
 from dacph_drake.loop.files import prepare_out_dir, read_json_record, replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
-from dacph_drake.scenario_files import save_scenario
+from dacph_drake.scenario.files import save_scenario
 
 ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 

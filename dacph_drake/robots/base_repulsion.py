@@ -11,7 +11,7 @@ from typing import Tuple
 
 import numpy as np
 
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.kernels.potential import min_clearance
 from dacph_drake.scenario import Potential
 

@@ -25,7 +25,7 @@ from dacph_drake.robots.robot import require_clear_start
 from dacph_drake.scenario import (EFFORT_LIMITS, JOINT_DAMPING, JOINT_FRICTION,
                                   JOINT_LIMITS,
                                   ClearancePotential, DescribedArm, Scenario)
-from dacph_drake.scenario_checks import require_length, validate_shared
+from dacph_drake.scenario.checks import require_length, validate_shared
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
 

@@ -27,7 +27,7 @@ from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_
 from dacph_drake.robots.meshes import urdf_with_obj_meshes
 from dacph_drake.robots.mjcf import MjcfFile, nonnegative_number
 from dacph_drake.dynamics.plant import BASE_JOINT, END_EFFECTOR, joint_name, link_name
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
@@ -136,7 +136,7 @@ def planar_arm_urdf(robot: RobotParams) -> str:
     """The URDF text of a planar arm: plant.AddFreeFloatingArm's bodies, joints and frames.
 
     Args:
-        robot: The arm (arm_parameters.RobotParams)."""
+        robot: The arm (scenario.planar_arm.RobotParams)."""
     def inertial(mass, com, ixx, iyy, izz):
         return (f'<inertial><origin xyz="{com!r} 0 0"/><mass value="{mass!r}"/>'
                 f'<inertia ixx="{ixx!r}" ixy="0" ixz="0" iyy="{iyy!r}" iyz="0" '

@@ -15,7 +15,7 @@ from dacph_drake.errors import ConfigError, require_in_range, require_positive
 from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
 from dacph_drake.robots.robot import require_clear_start
 from dacph_drake.scenario import PlanarArm, Scenario
-from dacph_drake.scenario_checks import validate_shared
+from dacph_drake.scenario.checks import validate_shared
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.true_rhs import TrueRhs
 

@@ -3,7 +3,7 @@
 A kinematic rehearsal (ReferenceRehearsal) follows the task's law from q0 without
 dynamics, qdot = D^+ (omega_d(t) - Lambda e), D the generalized Jacobian's angular rows
 (docs/equations.md E5-E9), the base turning as zero momentum implies. Its momenta
-p = M(q) qdot and their rates size the gains (arm_defaults): the coupled inertia
+p = M(q) qdot and their rates size the gains (scenario.sizing): the coupled inertia
 M_jk qdot_k, not M_jj alone, decides a joint's momentum; its excursion checks limits."""
 from dataclasses import dataclass
 from typing import Callable, List, Optional, Sequence, Tuple

@@ -9,7 +9,7 @@ from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.dynamics.uncertainty import TrueRhsModel
 from dacph_drake.kernels.loop import (NON_FINITE, STOPPED, pack_true_rhs, stack_packs,
                                       true_matrices_of_trials, true_torques)
-from dacph_drake.arm_parameters import RobotParams
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.dynamics.plant import MakeArmPlant, trial_coordinates
 from dacph_drake.scenario import Phases, Uncertainty
 

@@ -1,7 +1,7 @@
 """The scenario of an arm from its own description (scenario.DescribedArm), or of a
 planar arm of other than the paper's two links (scenario.PlanarArm), with every
 per-joint setting sized to the arm, so that a scenario naming only the robot (and
-q0) runs DAC (scenario files: scenario_files.load_scenario starts from it; Python:
+q0) runs DAC (scenario files: scenario.files.load_scenario starts from it; Python:
 arm_scenario, planar_arm_scenario).
 
 The rule. Scales per joint j, from the description at q0 and the task's reference:
@@ -52,13 +52,13 @@ from typing import TYPE_CHECKING, Optional, Sequence, Union
 import numpy as np
 
 from dacph_drake.errors import require_positive
-from dacph_drake.arm_parameters import RobotParams
-from dacph_drake.loop.simulator import FixedStepConfig
+from dacph_drake.scenario.planar_arm import RobotParams
+from dacph_drake.scenario.simulator import FixedStepConfig
 from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAngle,
                                   EndEffectorAttitude, Excitation, Phases, PlanarArm,
                                   Scenario, Uncertainty)
-from dacph_drake.built_in_scenarios import (SATELLITE_PHASES, described_arm_learner,
-                                            described_arm_periods, described_arm_rhs)
+from dacph_drake.scenario.built_in import (SATELLITE_PHASES, described_arm_learner,
+                                           described_arm_periods, described_arm_rhs)
 
 if TYPE_CHECKING:
     from dacph_drake.dynamics.floating_model import FloatingBaseModel
@@ -411,7 +411,7 @@ def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> Non
 
     Raises:
         ConfigError: Naming the first bad setting."""
-    from dacph_drake.scenario_checks import validate_start
+    from dacph_drake.scenario.checks import validate_start
     from dacph_drake.tasks.registry import TASKS
     if q0 is not None:
         validate_start(q0)

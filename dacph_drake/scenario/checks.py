@@ -8,7 +8,7 @@ import numpy as np
 from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.gain_rule import check_period_order
-from dacph_drake.loop.simulator import validate_simulator_config
+from dacph_drake.scenario.simulator import validate_simulator_config
 from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNER_COUPLINGS,
                                   LEARNER_MODELS, LEARNER_MODES, LEARNER_PRIOR_SCALES,
                                   ON_MISMATCH, TRUST_ANCHORS, LocalBayes, Phases,

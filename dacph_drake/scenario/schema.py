@@ -1,5 +1,5 @@
 """Scenario: every setting of a closed-loop run as typed data (YAML through
-pydrake.common.yaml; scenario_files reads it). Defaults: the paper's 1500 s scenario;
+pydrake.common.yaml; scenario.files reads it). Defaults: the paper's 1500 s scenario;
 the reasons behind them: the docs' page "Settings explained"."""
 from dataclasses import dataclass, field
 from typing import Dict, List, Union
@@ -8,8 +8,8 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
 
-from dacph_drake.arm_parameters import RobotParams
-from dacph_drake.loop.simulator import FixedStepConfig
+from dacph_drake.scenario.planar_arm import RobotParams
+from dacph_drake.scenario.simulator import FixedStepConfig
 
 TRUST_ANCHORS = ("in_use", "prior")                       # Rhs.trust_anchor
 INERTIA_ANCHORS = ("total_mass", "base_mass", "model")    # InertiaIdentification.anchor

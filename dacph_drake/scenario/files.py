@@ -14,18 +14,19 @@ from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.errors import ConfigError
-from dacph_drake.arm_parameters import RobotParams, load_yaml_dataclass, read_yaml
+from dacph_drake.scenario.planar_arm import RobotParams
+from dacph_drake.scenario.yaml_files import load_yaml_dataclass, read_yaml
 from dacph_drake.scenario import (AttitudeGains, AttitudeReference, ClearancePotential,
                                   DescribedArm, Disturbance, EndEffectorAngle,
                                   EndEffectorAttitude, Excitation,
                                   InertiaIdentification, Learner, LocalBayes, LhsGains,
                                   Periods, Phases, PlanarArm, Potential, Reference,
                                   Rhs, Scenario, Stress, Uncertainty)
-from dacph_drake.built_in_scenarios import (BUILT_IN_SCENARIOS, described_arm_learner,
-                                            described_arm_rhs, six_dof_disturbance,
-                                            six_dof_uncertainty)
-from dacph_drake.loop.simulator import FixedStepConfig
-from dacph_drake.arm_defaults import sized_defaults
+from dacph_drake.scenario.built_in import (BUILT_IN_SCENARIOS, described_arm_learner,
+                                           described_arm_rhs, six_dof_disturbance,
+                                           six_dof_uncertainty)
+from dacph_drake.scenario.simulator import FixedStepConfig
+from dacph_drake.scenario.sizing import sized_defaults
 from dacph_drake.assembly import validate_scenario
 
 # The YAML lines of settings added after planar runs were first saved, at their
@@ -404,7 +405,7 @@ def _load(path: Union[str, Path], saved_run: bool) -> Scenario:
 def _load_current_layout(path, saved_run: bool) -> Scenario:
     """A file of the current layout, read over its robot's defaults: Scenario's own
     for a planar arm; for an arm from its description, the settings sized to it
-    (arm_defaults.sized_defaults), so that a file naming only the robot
+    (scenario.sizing.sized_defaults), so that a file naming only the robot
     and q0 runs (a saved run's: the settings added since as they were)."""
     migrate = _migrate_saved_file if saved_run else _migrate_file
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
