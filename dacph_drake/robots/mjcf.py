@@ -29,6 +29,7 @@ ground truth's friction (robots.description.joint_friction) and the rotor inerti
 the actuators the library adds (robots.description.PopulateFromDescription).
 
 Errors name the file (and line, where the XML parser gives one) and the element."""
+import functools
 from pathlib import Path
 from typing import Dict, Iterator, List, Tuple
 import xml.etree.ElementTree as ElementTree
@@ -42,6 +43,8 @@ from dacph_drake.robots.meshes import obj_of
 MESH_SUFFIXES = (".stl", ".obj", ".msh")
 # Includes nested deeper than this are a cycle.
 MAX_INCLUDE_DEPTH = 16
+# An element of a body, its attributes as MuJoCo resolves them, and its body (_Resolved).
+_Resolution = Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]
 # MuJoCo's actuators other than <motor> that act on a joint: servos (a force law of
 # the joint's own state and ctrl) and <general>, which Drake's parser ignores.
 SERVOS = ("position", "velocity", "intvelocity", "damper", "general")
@@ -120,8 +123,7 @@ def _Classes(root: ElementTree.Element, tag: str) -> Dict[str, Dict[str, str]]:
     return classes
 
 
-def _Resolved(root: ElementTree.Element, tag: str
-              ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
+def _Resolved(root: ElementTree.Element, tag: str) -> Iterator[_Resolution]:
     """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them, and
     its body: the element's own attribute, else its class's (the element's ``class``,
     else the nearest enclosing body's ``childclass``, else "main"; _Classes)."""
@@ -184,8 +186,7 @@ def _ServosAsMotors(root: ElementTree.Element) -> Tuple[List[str], bool]:
     return replaced, rewritten
 
 
-def _InertiaGeoms(root: ElementTree.Element
-                  ) -> Iterator[Tuple[ElementTree.Element, Dict[str, str], ElementTree.Element]]:
+def _InertiaGeoms(root: ElementTree.Element) -> Iterator[_Resolution]:
     """The geoms whose inertia gives their body's (_Resolved's triples): all of a body
     without an <inertial> (compiler inertiafromgeom "auto"), or of every body ("true")."""
     from_geoms = "auto"
@@ -348,7 +349,6 @@ def _MeshInertiaNotes(root: ElementTree.Element) -> List[str]:
     face's pyramid from the faces' centroid counted positive) or "convex" (the hull),
     Drake's the mesh's exact volume. They agree where the mesh is star-shaped from that
     centroid (legacy) or convex; otherwise "mesh 'name' (legacy: volume V, exact V_e)"."""
-    import trimesh
     meshes = {}
     classes = _Classes(root, "mesh")
     for asset in root.iter("asset"):
@@ -364,22 +364,26 @@ def _MeshInertiaNotes(root: ElementTree.Element) -> List[str]:
         if mode not in ("legacy", "convex") or float(attributes.get(
                 "mass", attributes.get("density", "1000"))) <= 0:
             continue
-        loaded = trimesh.load(mesh["file"], force="mesh", process=False)
-        vertices = np.asarray(loaded.vertices) * [float(x) for x in mesh.get(
-            "scale", "1 1 1").split()]
-        volume, exact = _MujocoVolumes(vertices, np.asarray(loaded.faces), mode)
+        volume, exact = _MujocoVolumes(mesh["file"], Path(mesh["file"]).stat().st_mtime_ns,
+                                       mesh.get("scale", "1 1 1"), mode)
         if abs(volume - exact) > 1e-6 * abs(exact):
             notes.add(f"mesh {attributes['mesh']!r} ({mode}: volume {volume:.4g} m^3, "
                       f"exact {exact:.4g})")
     return sorted(notes)
 
 
-def _MujocoVolumes(vertices: np.ndarray, faces: np.ndarray, mode: str
-                   ) -> Tuple[float, float]:
-    """(MuJoCo's volume of a mesh in inertia mode ``mode``, its exact volume): both from
-    pyramids on each face with apex at the faces' area-weighted centroid (MuJoCo's
-    ComputeVolume), legacy counting each positive, convex those of the hull."""
+@functools.lru_cache(maxsize=None)
+def _MujocoVolumes(obj: str, modified: int, scale: str, mode: str) -> Tuple[float, float]:
+    """(MuJoCo's volume of a mesh in inertia mode ``mode``, its exact volume) of the OBJ
+    file ``obj`` (modified at ``modified`` ns: the cache's key) scaled by ``scale`` (the
+    <mesh> attribute): both from pyramids on each face with apex at the faces'
+    area-weighted centroid (MuJoCo's ComputeVolume), legacy counting each positive,
+    convex those of the hull. Cached: a description is parsed for the truth, the model
+    and the clearance queries alike."""
     import trimesh
+    loaded = trimesh.load(obj, force="mesh", process=False)
+    vertices = np.asarray(loaded.vertices) * [float(x) for x in scale.split()]
+    faces = np.asarray(loaded.faces)
 
     def pyramids(vertices, faces):
         triangles = vertices[faces]
