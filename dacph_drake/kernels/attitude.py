@@ -451,8 +451,24 @@ def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                    end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                    xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
     """The position task's reference joint rates from the position rows alone
-    (position_task_rows, whose arguments these are, with reference_rates' xi, xi_dot and
-    damping mu).
+    (position_task_rows).
+
+    Args:
+        base_subspace: S_b (6, nb).
+        parent: Each node's parent node, -1 for the base.
+        joint: The joint moving each node, -1 for a weld.
+        joint_below: True where joint k moves joint j's axis (n, n).
+        evaluation: The compiled model at the configuration.
+        qdot: The joint rates (n) [rad/s].
+        base_pose: The base's (qw, qx, qy, qz, x, y, z).
+        base_velocity: The base's (omega_W, v_W) (6).
+        t: The time [s].
+        end_effector: (node, R_CE).
+        position: desired_position's arguments (p_CE first).
+        xi: The secondary motion (n) [rad/s].
+        xi_dot: Its rate (n).
+        Lambda: [1/s].
+        damping: mu.
 
     Returns:
         (nu, nu_dot, e_p (3) [m], p_d (3) [m])."""
