@@ -4,7 +4,7 @@ from typing import Tuple, Union
 
 import numpy as np
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.scenario import Periods
 
 # With the observer's one-sample delay the discrete RHS loop per mode is
@@ -133,28 +133,6 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float
     ratio = paired.real / np.asarray(nominal, float)
     within = np.all((ratio >= 1.0 / trust_ratio) & (ratio <= trust_ratio), axis=-1)
     return bool(within) if within.ndim == 0 else within
-
-
-def check_period_order(periods: Periods) -> None:
-    """Refuses periods that break the time-scale separation: the RHS must be faster than
-    the LHS, the LHS no slower than the learner's sampling, nor the sampling than training.
-
-    Args:
-        periods: The scenario's periods.
-
-    Raises:
-        ConfigError: Naming the two periods out of order."""
-    order = [("rhs", periods.rhs), ("lhs", periods.lhs),
-             ("learner_sample", periods.learner_sample), ("learner", periods.learner)]
-    for (fast, h_fast), (slow, h_slow) in zip(order, order[1:]):
-        if not h_fast <= h_slow:
-            raise ConfigError(
-                f"periods.{fast} = {h_fast:g} s must not exceed periods.{slow} = "
-                f"{h_slow:g} s (time-scale separation: RHS faster than LHS faster "
-                "than the learner)")
-    if periods.lhs == periods.rhs:
-        raise ConfigError(f"periods.rhs = {periods.rhs:g} s must be shorter than "
-                          f"periods.lhs = {periods.lhs:g} s")
 
 
 def check_rhs_period(periods: Periods, c_nominal: float, c_largest: float,

@@ -30,9 +30,9 @@ if not model_armature:
         tree = original.fget(self)
         return tree[:-1] + (np.zeros_like(tree[-1]),)
     floating_model.FloatingBaseModel.kernel_tree = property(without_armature)
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 scenario = load_scenario(path)
 result = simulate(scenario, controller)
 metrics = run_metrics(result.logs, scenario) if result.status == "ok" else {}

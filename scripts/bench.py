@@ -14,14 +14,14 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.app.free_flight import run_free_flight
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.kernels.arm import reduced_dynamics
 from dacph_drake.dynamics.plant import AddFreeFloatingArm, MakeArmPlant, SetArmAtRest
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario.built_in import short_scenario
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -193,7 +193,7 @@ def bench_spatial(duration: float, planar_dac: float):
     the DAC loop, each beside the planar DAC loop's ``planar_dac`` of the same run."""
     from dacph_drake.controllers import build_closed_loop
     from dacph_drake.scenario import Phases
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     for label, name, target in SPATIAL_ROBOTS_BENCHED:
         try:
             scenario = load_scenario(name)

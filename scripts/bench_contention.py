@@ -22,7 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RUN = ("from dacph_drake.loop.simulate import simulate; "
-       "from dacph_drake.scenario.files import load_scenario; "
+       "from dacph_drake.assembly.scenario_files import load_scenario; "
        "simulate(load_scenario({path!r}), 'dac', duration={duration})")
 # The second process: a busy loop (one core), or numpy matrix products at the
 # library's default thread count (their BLAS threads spin on both cores).

@@ -22,7 +22,7 @@ CHILD = r"""
 import json, sys, time
 from dacph_drake.controllers import build_closed_loop
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 start = time.perf_counter()
 scenario = load_scenario(sys.argv[1])
 loaded = time.perf_counter() - start
@@ -30,7 +30,7 @@ start = time.perf_counter()
 build_closed_loop("dac", scenario)
 built = time.perf_counter() - start
 result = simulate(scenario, "dac")
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 metrics = run_metrics(result.logs, scenario)
 print(json.dumps({"load": loaded, "build": built, "status": result.status,
                   "reason": result.reason,

@@ -34,7 +34,7 @@ from dacph_drake.montecarlo.runner import run_sweep
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases
 from dacph_drake.scenario.built_in import short_scenario
-from dacph_drake.scenario.files import save_scenario
+from dacph_drake.assembly.scenario_files import save_scenario
 
 SWEEP = """\
 scenario: bench.yaml
@@ -80,7 +80,7 @@ SPATIAL_BATCH = """\
 import copy, resource, sys
 import numpy as np
 from dacph_drake.loop.simulate import simulate_batch
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 name, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 rng = np.random.default_rng(1)
 trials = []
@@ -100,7 +100,7 @@ import sys, time
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 from dacph_drake.dynamics.plant import AddFreeFloatingArm, SetArmAtRest
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.scenario.built_in import short_scenario
 duration = float(sys.argv[1])
 scenario = short_scenario()

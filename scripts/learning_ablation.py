@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dacph_drake.analysis.metrics import PHASES, run_metrics
+from dacph_drake.loop.metrics import PHASES, run_metrics
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario.built_in import short_scenario

@@ -48,7 +48,7 @@ def _planar_arm_file(n: int) -> str:
 
 
 def _load(text_or_name: str, folder: Path, name: str):
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     if "\n" not in text_or_name:
         return load_scenario(text_or_name if not text_or_name.endswith(".yaml")
                              else ROOT / "scenarios" / text_or_name)
@@ -147,7 +147,7 @@ def run_family(family: str, variant: str, trials: int, out: Path, workers: int,
     from dacph_drake.montecarlo.definition import load_sweep
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.montecarlo.store import read_rows, sorted_rows
-    from dacph_drake.scenario.files import save_scenario
+    from dacph_drake.assembly.scenario_files import save_scenario
     rows = []
     for k, (name, source, edit, share, distributions) in enumerate(FAMILIES[family]):
         folder = out / (label or variant) / family / name

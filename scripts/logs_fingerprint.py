@@ -16,7 +16,7 @@ from pathlib import Path
 from dacph_drake.scenario.built_in import short_scenario
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Scenario
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLERS = ("dac", "dac-nominal", "model-based")

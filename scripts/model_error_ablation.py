@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from dacph_drake.analysis.verify import verify_logs
+from dacph_drake.loop.verify import verify_logs
 from dacph_drake.log_layout import RhsLog
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import ActuatorFault
 from dacph_drake.scenario.built_in import short_scenario
@@ -38,7 +38,7 @@ SPATIAL = {   # name -> (robot, the controller's factors per body, warm-up [s])
 
 def scenario_of(name: str, seed: int):
     if name in SPATIAL:
-        from dacph_drake.scenario.files import load_scenario
+        from dacph_drake.assembly.scenario_files import load_scenario
         robot, factors, warmup = SPATIAL[name]
         s = load_scenario(robot)
         s.seed, s.robot.nominal_inertia_scale = seed, factors

@@ -27,7 +27,7 @@ def family(count: int, seed: int, bases=None):
     in turn with random starts near their q0 (+-0.3 rad), position references along
     random axes of 1-5 cm and periods of 5-12 s, initial offsets up to 3 cm and
     attitude amplitudes 0.1-0.5 rad."""
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     rng = np.random.default_rng(seed)
     bases = bases or [(Path(path).stem, load_scenario(path)) for path in SHIPPED]
     for k in range(count):
@@ -53,7 +53,7 @@ def zoo_arms(folder: Path, family_count: int, seed: int):
     ``task: !EndEffectorPose {}`` added (every other setting sized to the arm); arms
     of fewer than 6 joints are left out (the pose needs 6)."""
     import zoo
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     folder.mkdir(parents=True, exist_ok=True)
     names = list(zoo.SHIPPED) + list(zoo.OWN)
     if family_count:
@@ -73,11 +73,11 @@ def zoo_arms(folder: Path, family_count: int, seed: int):
 
 def evaluate(name: str, scenario, out: Path) -> dict:
     """One scenario's row."""
-    from dacph_drake.analysis.metrics import RunMetrics
-    from dacph_drake.analysis.verify import verify_logs
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.loop.metrics import RunMetrics
+    from dacph_drake.loop.verify import verify_logs
+    from dacph_drake.assembly.registry import robot_of
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario.files import save_scenario
+    from dacph_drake.assembly.scenario_files import save_scenario
     row = {"name": name, "runs": {}}
     if isinstance(scenario, Exception):
         row["refused"] = str(scenario)
@@ -185,7 +185,7 @@ def main() -> None:
     parser.add_argument("--zoo", action="store_true",
                         help="the zoo's arms (with --family N: N of its random arms)")
     args = parser.parse_args()
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows_file = out / "rows.jsonl"

@@ -20,4 +20,4 @@ fi
 .venv/bin/pip install -q torch==2.13.0
 .venv/bin/pip install -q -e ".[test,dask,parquet,pandas,robots,docs]"
 # Compile the numba kernels of the closed loop once, into their on-disk cache.
-.venv/bin/python -m dacph_drake.kernels
+.venv/bin/python -m dacph_drake.app.compile_kernels

@@ -11,9 +11,9 @@ import argparse
 import json
 from pathlib import Path
 
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 RUNS = [("dac", 0), ("dac", 1), ("dac-nominal", 0), ("dac-nominal", 1),
         ("model-based", 0)]

@@ -14,7 +14,7 @@ import numpy as np
 
 from dacph_drake.controllers import build_closed_loop
 from dacph_drake.learning.identification import PortSample
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 WINDOW = 200            # the newest samples fitted (2 s at the 10 ms sample period)
 

@@ -120,10 +120,10 @@ import json, sys, time, io, logging
 stream = io.StringIO()
 handler = logging.StreamHandler(stream)
 logging.getLogger().addHandler(handler)
-from dacph_drake.analysis.metrics import run_metrics
-from dacph_drake.analysis.verify import verify_logs
+from dacph_drake.loop.metrics import run_metrics
+from dacph_drake.loop.verify import verify_logs
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 path, duration, with_verify = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1"
 row = {}
 start = time.perf_counter()

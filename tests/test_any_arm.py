@@ -16,12 +16,13 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
 
-from dacph_drake.scenario.sizing import DEFAULT_STEP, arm_scenario
+from dacph_drake.robots.described import arm_scenario
+from dacph_drake.robots.sizing import DEFAULT_STEP
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.loop.threads import single_threaded
-from dacph_drake.assembly import robot_of
+from dacph_drake.assembly.registry import robot_of
 from dacph_drake.montecarlo.definition import apply_model_error_sample
 from dacph_drake.robots.described import link_base_clearance
 from dacph_drake.robots.description import MakeRobotPlant, ParsedDescription
@@ -29,7 +30,7 @@ from dacph_drake.robots.serial_arm import SerialLink, serial_arm_urdf
 from dacph_drake.robots.start_pose import (CLEARANCE_BOUND, SINGULAR_BOUND,
                                            rehearse, task_jacobian, within_limits)
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 needs_example_robot_data = pytest.mark.skipif(
@@ -568,7 +569,7 @@ def test_joint_friction_kept_acts_in_the_truth_and_conserves_momentum(tmp_path):
     for its slope; the default ("zero") leaves the truth as Drake's plant has it."""
     from dacph_drake.kernels.loop import FRICTION_VELOCITY, add_friction
     from dacph_drake.robots.description import joint_friction
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     qdot = np.array([0.0, 1e-9, 0.05, -3.0])
     D = np.zeros(4)
     add_friction(np.array([0.2, 0.2, 0.2, 0.0]), qdot, D)
@@ -597,7 +598,7 @@ def test_joint_friction_kept_acts_in_the_truth_and_conserves_momentum(tmp_path):
     (zero, plain), (keep, rubbed) = runs["zero"], runs["keep"]
     assert plain.status == rubbed.status == "ok"
     assert keep.simulator.max_step_size <= zero.simulator.max_step_size
-    from dacph_drake.scenario.sizing import truth_step
+    from dacph_drake.robots.sizing import truth_step
     model = robot_of(keep).model
     q = np.array([keep.q0])
     assert truth_step(model, q, keep.uncertainty, keep.periods.rhs, np.full(3, 5.0)) < \

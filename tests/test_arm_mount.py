@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.robots.description import (MODELS, AddRobotFromDescription,
                                             MakeRobotPlant, ParsedDescription)
 from dacph_drake.scenario import ArmBase, DescribedArm, EndEffectorFrame
@@ -195,7 +195,7 @@ def test_joints_that_are_not_the_arms_are_locked(arm_file, rng, caplog):
      r"robot.end_effector.offset has 2 entries; allowed: 3"),
 ])
 def test_bad_assembly_settings_are_named(change, message):
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     from dacph_drake.scenario.built_in import satellite_3dof_scenario
     scenario = satellite_3dof_scenario()
     for name, value in change.items():
@@ -214,7 +214,7 @@ def test_a_scenario_file_runs_dac_on_the_mounted_arm(arm_file, tmp_path, capsys)
     from dacph_drake.loop.run_store import load_run
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario.built_in import satellite_3dof_scenario
-    from dacph_drake.scenario.files import load_scenario, save_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario, save_scenario
     scenario = satellite_3dof_scenario()
     scenario.robot.description, scenario.robot.base = str(arm_file), MOUNT
     save_scenario(scenario, tmp_path / "mounted.yaml")
@@ -422,7 +422,7 @@ def test_effort_limits_saturate_the_command_and_are_reported(arm_file):
     (robot.effort_limits "saturate"), logged per joint (``saturated``) and reported
     (effort_saturated_share); "ignore" leaves u as sent. The 0.3 rad start asks
     joint 2 for far more than 0.2 N m."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario.built_in import satellite_3dof_scenario
     limited = _joint2_as(arm_file, "effort.urdf", '<joint name="joint2" '

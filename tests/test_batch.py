@@ -6,7 +6,7 @@ import copy
 import numpy as np
 import pytest
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate, simulate_batch
 from dacph_drake.scenario.built_in import short_scenario
@@ -82,7 +82,7 @@ def test_a_learning_trial_is_its_solo_run_through_every_phase():
 def test_the_trials_of_a_batch_share_what_shapes_the_diagram(tmp_path):
     """A trial whose periods differ from trial 0's is refused in one line naming
     the setting; so is a batch of described arms whose kinematic trees differ."""
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     trials = _trials(2)
     trials[1].periods.lhs = 2e-3
     with pytest.raises(ConfigError, match="trial 1's periods differs"):
@@ -106,7 +106,7 @@ def test_every_trial_of_a_spatial_batch_is_its_solo_run(controller):
     actuators; trial 1's made to run away) in one plant of cloned arms
     (plant.AddClonedArms): each trial's status, reason, final time and every log
     equal its solo run's (on the parsed plant) bit for bit."""
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     trials = []
     for i in range(3):
         scenario = load_scenario("satellite_3dof")

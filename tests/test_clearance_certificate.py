@@ -7,7 +7,7 @@ import pytest
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.robots import clearance_potential
 from dacph_drake.robots.description import ParsedDescription
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 
 @pytest.fixture(scope="module", params=["satellite_6dof", "satellite_3dof"])

@@ -82,7 +82,7 @@ def test_a_single_run_leaves_its_panels_and_metrics(tmp_path, capsys):
     """dacph simulate writes the run's panels (PNG) and metrics.json; report takes the
     directory alone; the metrics print under the scenario's phase names, with units."""
     import json
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.run_store import load_run
     out = tmp_path / "run"
     assert main(["simulate", "short", "--out", str(out), "--duration", "3"]) == 0

@@ -8,11 +8,11 @@ import pytest
 
 from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN
 from dacph_drake.log_layout import LearnerLog, RhsLog
-from dacph_drake.analysis.metrics import comparison, run_metrics
+from dacph_drake.loop.metrics import comparison, run_metrics
 from dacph_drake.app.reproduce import CONTROLLERS
 from dacph_drake.loop.run_store import load_logs
 from dacph_drake.scenario.built_in import short_scenario
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 
 @pytest.fixture(scope="module")

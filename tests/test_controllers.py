@@ -5,7 +5,7 @@ import pytest
 
 from dacph_drake import controllers
 from dacph_drake.app.cli import main
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 
 def test_every_command_offers_exactly_the_registered_controllers(capsys):
@@ -22,7 +22,7 @@ def test_every_command_offers_exactly_the_registered_controllers(capsys):
 
 
 def test_every_registered_controller_builds_a_closed_loop():
-    from dacph_drake.loop.closed_loop import ClosedLoop
+    from dacph_drake.controllers.closed_loop import ClosedLoop
     from dacph_drake.scenario.built_in import short_scenario
     for name in controllers.REGISTRY:
         loop = controllers.build_closed_loop(name, short_scenario())
@@ -39,7 +39,7 @@ def build_hold_still_diagram(scenario):
     """A new controller written against the port contract: u = -0.01 qdot (a joint
     damper), in a few lines."""
     from pydrake.systems.primitives import Gain
-    from dacph_drake.loop.closed_loop import assemble_closed_loop
+    from dacph_drake.controllers.closed_loop import assemble_closed_loop
 
     def add(loop, controller):
         damper = controller.builder.AddNamedSystem(
@@ -91,7 +91,7 @@ def _register(monkeypatch, name: str, entry) -> None:
 def _tiny(robot: str):
     """A planar or a described arm's scenario of 0.2 + 0.3 + 0.3 + 0.3 s."""
     from dacph_drake.scenario import Phases
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     scenario = load_scenario({"planar": "short", "described": "satellite_3dof"}[robot])
     scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
     return scenario
@@ -111,7 +111,7 @@ def test_a_new_controller_appears_in_every_command(robot, tmp_path, monkeypatch,
     from dacph_drake.montecarlo.runner import run_sweep
     from dacph_drake.montecarlo.summary import write_summary
     from dacph_drake.loop.run_store import load_logs
-    from dacph_drake.scenario.files import load_scenario, save_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario, save_scenario
     name = "dac-well-damped"
     _register(monkeypatch, name, controllers.Controller(
         "test_controllers:build_dac_well_damped_diagram",

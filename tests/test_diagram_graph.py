@@ -6,7 +6,7 @@ import pytest
 
 from dacph_drake.controllers import NAMES, build_closed_loop
 from dacph_drake.app.graph import diagram_graphviz
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 DIAGRAMS = Path(__file__).resolve().parents[1] / "diagrams"
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

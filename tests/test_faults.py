@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from dacph_drake.app.cli import main
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 ROBOTS = ["short", "satellite_3dof"]
 MODELS = Path(__file__).resolve().parents[1] / "dacph_drake" / "models"
@@ -273,7 +273,7 @@ def test_larger_planar_arms_build_fast_and_run_dac_through_every_phase(tmp_path,
     result = simulate(scenario, "dac")
     assert result.status == "ok", result.reason
     assert result.final_time == pytest.approx(scenario.duration)
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     metrics = run_metrics(result.logs, scenario)
     assert metrics["phase1.tracking_error_rms"] < 0.05
     assert all(metrics[f"phase{k}.tracking_error_rms"] < 1e-3 for k in (2, 3))
@@ -305,7 +305,7 @@ def test_a_run_driven_to_blow_up_stops_diverged_with_its_logs(tmp_path, robot, s
 
 def main_simulate(scenario, out: Path) -> int:
     """`dacph simulate` of a scenario object: saved to a file first."""
-    from dacph_drake.scenario.files import save_scenario
+    from dacph_drake.assembly.scenario_files import save_scenario
     path = out.parent / "scenario.yaml"
     save_scenario(scenario, path)
     return main(["simulate", str(path), "--out", str(out), "--duration", "2"])

@@ -154,7 +154,7 @@ def test_the_entries_panel_draws_the_claims_the_metrics_report():
     """Panel b draws what the metrics table reports (analysis.metrics.physical_view):
     the claimed entries, their 90 % interval as a band; panel g the port model the
     loop closes on against its own truth (I + E) B~, for a run that measured E."""
-    from dacph_drake.analysis.metrics import physical_view
+    from dacph_drake.loop.metrics import physical_view
     from dacph_drake.app.figures import PORT_PANEL
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.scenario.built_in import short_scenario

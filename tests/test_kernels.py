@@ -8,7 +8,7 @@ from dacph_drake.kernels.loop import (integrator_sample, pack_true_rhs, stack_pa
                                       true_matrices_of_trials, true_torque)
 from dacph_drake.kernels.potential import potential
 from dacph_drake.dynamics.plant import ArmCoordinates, MakeArmPlant
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario.planar_arm import LinkParams, RobotParams
 from dacph_drake.scenario import Potential, Scenario

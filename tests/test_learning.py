@@ -318,7 +318,7 @@ def test_learning_never_turns_a_finished_run_into_a_diverging_one():
     finishes every trial; DAC finishes every one too, and where the data do not
     determine B the prior stands (no phase's learned B or D worse than the
     prior's against the truth)."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
     trials = _compressed(6)
     nominal = simulate_batch(trials, "dac-nominal")
@@ -337,7 +337,7 @@ def test_the_intervals_hold_the_truth_on_a_batch():
     the 90 % intervals the run claims about the true B and D (the learner's, with
     the LHS model's inertia error) hold them at 85 % of the samples and entries at
     least, and for most of some phase they say more than the prior's error."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
     trials = _compressed(3, seed=1)
     for s, scale in zip(trials, ([1.6, 1.0], [1.0, 0.6], [0.6, 1.0])):
@@ -361,9 +361,9 @@ def test_a_kinematic_mismatch_is_reported_and_the_mass_is_the_measured_one():
     unexplained reports the kinematic mismatch, and the learned B is then counted
     as the prior against the truth; with the kinematics right, no mismatch."""
     from pathlib import Path
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     exact = load_scenario(Path(__file__).resolve().parents[1] / "scenarios"
                           / "model_error.yaml")
     exact.phases = Phases(warmup=1.0, linear=4.0, nonlinear=1.0, disturbance=1.0)
@@ -379,7 +379,7 @@ def test_a_kinematic_mismatch_is_reported_and_the_mass_is_the_measured_one():
     assert abs(m_off["identified_mass_error"]) <= 0.10
     assert m_off["kinematic_mismatch"] == 1.0 and m_exact["kinematic_mismatch"] == 0.0
     assert m_off["momentum_misfit"] > 10 * m_exact["momentum_misfit"]
-    from dacph_drake.analysis.metrics import nominal_estimates, physical_view
+    from dacph_drake.loop.metrics import nominal_estimates, physical_view
     from dacph_drake.log_layout import LearnerLog
     physical = results[1].logs["learner_log"][:, LearnerLog().physical]
     reported = np.flatnonzero(physical < 0.5)
@@ -395,7 +395,7 @@ def test_verify_refuses_an_adoption_outside_its_certificate(tmp_path):
     gain while the learner's interval is the prior's range, which that gain does not
     certify: verify fails the run on the credible-set check; the certified-set rule
     passes it."""
-    from dacph_drake.analysis.verify import verify_logs
+    from dacph_drake.loop.verify import verify_logs
     from dacph_drake.loop.simulate import simulate
     reports = {}
     for adoption in ("certified_set", "trust_band"):

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from dacph_drake.log_layout import LearnerLog, RhsLog
-from dacph_drake.analysis.metrics import comparison, relative_error_rms, rms, run_metrics
+from dacph_drake.loop.metrics import comparison, relative_error_rms, rms, run_metrics
 from dacph_drake.app.reproduce import metrics_table
 from dacph_drake.scenario.built_in import short_scenario
 

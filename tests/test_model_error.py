@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from dacph_drake.analysis.verify import verify_logs
+from dacph_drake.loop.verify import verify_logs
 from dacph_drake.robots.description import MakeRobotPlant
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.gain_rule import stays_stable_if_wrong
 from dacph_drake.learning.identification import PortEvidence, PortSample, RhsIdentifier
 from dacph_drake.dynamics.inertial_parameters import (InertialParameters, identify_parameters,
                                              prior_scales)
 from dacph_drake.log_layout import RhsLog
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 from dacph_drake.montecarlo.definition import load_sweep, sample_trial
 from dacph_drake.dynamics.plant import ArmCoordinates, FixStateInputs, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
@@ -258,7 +258,7 @@ def test_a_jump_is_adopted_only_if_the_loop_survives_the_evidence_being_wrong():
 
 
 def test_bad_spatial_model_error_settings_are_named():
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     from dacph_drake.scenario.built_in import satellite_3dof_scenario
     scenario = satellite_3dof_scenario()
     scenario.q0 = [0.3, -0.8, 0.5]
@@ -374,8 +374,8 @@ def test_the_run_measures_the_lhs_models_inertia_error(length_error, tolerance):
     reaches a tenth and more) and the measured sd holds it at the claims' 90 % level
     in every entry."""
     from statistics import NormalDist
-    from dacph_drake.analysis.metrics import realized_error_of
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.loop.metrics import realized_error_of
+    from dacph_drake.assembly.registry import robot_of
     scenario = short_scenario()
     for link in scenario.robot.nominal.links:
         link.length *= 1 + length_error

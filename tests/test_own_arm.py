@@ -11,13 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dacph_drake.scenario.sizing import DAMPING_RATE, arm_scenario
+from dacph_drake.robots.described import arm_scenario
+from dacph_drake.robots.sizing import DAMPING_RATE
 from dacph_drake.robots.start_pose import rehearse
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.robots.description import MODELS, MakeRobotPlant
 from dacph_drake.scenario import ArmBase, DescribedArm
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 
 MOUNT = ArmBase(mass=250.0, size=[1.0, 1.0, 1.0], mount=[0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
 ROOT = Path(__file__).resolve().parents[1]
@@ -134,7 +135,7 @@ def test_the_shipped_panda_scenario_runs_dac(tmp_path):
     below a tenth of its start (0.3 rad), the spatial momentum stays zero, no
     command saturates."""
     from dacph_drake.app.cli import main
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.run_store import load_run
     path = ROOT / "scenarios" / "panda.yaml"
     assert len(path.read_text().splitlines()) <= 20

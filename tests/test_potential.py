@@ -3,7 +3,7 @@ differences, and the projection that leaves alpha_dot alone."""
 import numpy as np
 
 from dacph_drake.dynamics.plant import MakeArmPlant
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
 from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.scenario import Potential

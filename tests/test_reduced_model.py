@@ -7,7 +7,7 @@ from dacph_drake.dynamics.plant import (AddFreeFloatingArm, END_EFFECTOR, MakeAr
                                link_name)
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
 from dacph_drake.scenario.planar_arm import RobotParams
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.scenario.simulator import FixedStepConfig
 
 

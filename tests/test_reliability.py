@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from dacph_drake.app.cli import main
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario.built_in import short_scenario
 from test_scenario import BAD_SCENARIO_FILES
@@ -106,7 +106,7 @@ def test_every_bad_scenario_file_exits_2_with_one_line(tmp_path, capsys, text, m
 
 
 def test_a_file_without_a_robot_section_says_so(tmp_path, caplog):
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     path = tmp_path / "s.yaml"
     path.write_text("seed: 3\n")
     with caplog.at_level("WARNING"):
@@ -158,7 +158,7 @@ def _interrupt_simulate(out, sig, extra=(), after=1.0, scenario="short"):
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_an_interrupted_run_saves_what_it_has(tmp_path, sig, scenario):
     from dacph_drake.loop.run_store import scenario_fingerprint
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     out = tmp_path / "run"
     assert _interrupt_simulate(out, sig, scenario=scenario) == 130
     meta = json.loads((out / "run_dac.json").read_text())
@@ -222,7 +222,7 @@ def test_report_refuses_runs_that_do_not_belong_together(tmp_path):
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_a_second_writer_of_the_same_run_is_refused(tmp_path, scenario):
     import fcntl
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     out = tmp_path / "run"
     out.mkdir()
     with open(out / ".run_dac.lock", "w") as held:            # a run in progress
@@ -238,7 +238,7 @@ def test_runs_of_two_robots_never_share_a_directory(tmp_path, capsys):
     into a directory of the older spatial layout (run.json, logs.npz) are refused
     before any simulated time, and the directory's runs stay readable."""
     from dacph_drake.loop.run_store import load_run
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     planar, described = tmp_path / "planar", tmp_path / "described"
     simulate(short_scenario(), "dac", duration=0.1, out_dir=planar)
     simulate(load_scenario("satellite_3dof"), "model-based", duration=0.1,
@@ -286,7 +286,7 @@ def test_malformed_files_get_one_line_naming_the_place(tmp_path, capsys, text, m
 
 
 def test_numbers_without_a_dot_still_load(tmp_path):
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     path = tmp_path / "s.yaml"
     path.write_text("learner: {eps: 1e-8}\n")
     assert load_scenario(path).learner.eps == 1e-8
@@ -330,7 +330,7 @@ def test_the_rhs_period_check_applies_to_the_integrator_only():
 def test_a_killed_run_keeps_its_last_checkpoint(tmp_path, scenario):
     """kill -9 cannot be caught: what survives is the last checkpoint, a readable
     directory whose run.json says the run had not finished."""
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     out = tmp_path / "run"
     assert _interrupt_simulate(out, signal.SIGKILL, ["--checkpoint", "0.5"],
                                after=4.0, scenario=scenario) == -signal.SIGKILL

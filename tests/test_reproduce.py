@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from dacph_drake.app.figures import DAC_PANELS
-from dacph_drake.analysis.metrics import run_metrics
+from dacph_drake.loop.metrics import run_metrics
 from dacph_drake.app.reproduce import CONTROLLERS, PAPER_ROWS, ablation_rows, flat_metrics
 from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.loop.run_store import load_logs
-from dacph_drake.scenario.files import load_scenario
+from dacph_drake.assembly.scenario_files import load_scenario
 from headless_chromium import run_chromium
 
 

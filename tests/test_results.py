@@ -10,7 +10,7 @@ from dacph_drake.log_layout import AttitudeLog, LearnerLog, LhsLog, RhsLog
 
 def _short(robot: str):
     from dacph_drake.scenario import Phases
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     scenario = load_scenario({"planar": "short", "described": "satellite_3dof"}[robot])
     scenario.phases = Phases(warmup=0.1, linear=0.1, nonlinear=0.1, disturbance=0.1)
     return scenario
@@ -63,7 +63,7 @@ def test_to_pandas_and_plot_name_their_columns(run):
 
 
 def test_metrics_are_typed_per_phase_with_units(run):
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     flat = run_metrics(run.logs, run.scenario)
     record = run.metrics
     assert record.flat.keys() == flat.keys()

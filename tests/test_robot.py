@@ -3,7 +3,7 @@ import dataclasses
 
 import pytest
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.scenario.planar_arm import (BaseParams, LinkParams, RobotParams,
                                              load_robot, save_robot)
 

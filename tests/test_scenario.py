@@ -4,13 +4,13 @@ from pathlib import Path
 import pytest
 
 from dacph_drake.controllers.dac import build_dac_diagram
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from pydrake.common.yaml import yaml_dump_typed
 
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario.built_in import BUILT_IN_SCENARIOS
-from dacph_drake.scenario.files import load_scenario, save_scenario, saved_forms
-from dacph_drake.assembly import validate_scenario
+from dacph_drake.assembly.scenario_files import load_scenario, save_scenario, saved_forms
+from dacph_drake.assembly.registry import validate_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -243,7 +243,7 @@ def test_files_written_before_a_setting_was_added_keep_their_meaning(tmp_path):
     on, and its fingerprinted text is the file as written
     (scenario.files.ADDED_TO_CURRENT_LAYOUT); the shipped file itself keeps it on. As
     an input file, the same text runs the setting at its current default."""
-    from dacph_drake.scenario.files import load_saved_scenario
+    from dacph_drake.assembly.scenario_files import load_saved_scenario
     shipped = (SCENARIOS / "satellite_3dof.yaml").read_text()
     assert "  prior_fallback: true\n" in shipped
     # The release before wrote neither that line nor excitation.joint_scale's.
@@ -268,7 +268,7 @@ def test_files_of_the_layout_before_robot_and_task_sections_load(tmp_path, caplo
     reads it."""
     import json
     from dacph_drake.app.reproduce import check_runs_belong_together
-    from dacph_drake.scenario.files import (PlanarLayoutV1, as_before_added,
+    from dacph_drake.assembly.scenario_files import (PlanarLayoutV1, as_before_added,
                                             load_saved_scenario)
     results = Path(__file__).resolve().parent / "data" / "paper_run_before_sections"
     with caplog.at_level("WARNING"):
@@ -377,7 +377,7 @@ def test_a_section_named_without_a_newer_setting_runs_it_at_its_default(tmp_path
     section does not take is refused; a file of an older layout loads at today's
     defaults with a note naming each setting whose default is not what its release
     ran."""
-    from dacph_drake.scenario.files import PlanarLayoutV1
+    from dacph_drake.assembly.scenario_files import PlanarLayoutV1
     path = tmp_path / "sections.yaml"
     path.write_text("rhs: {Td: 2.0}\nlearner: {window: 400}\ninertia: {start: 0.2}\n")
     named, bare = load_scenario(path), Scenario()
@@ -395,11 +395,11 @@ def test_a_section_named_without_a_newer_setting_runs_it_at_its_default(tmp_path
     records = []
     handler = logging.Handler()
     handler.emit = records.append
-    logging.getLogger("dacph_drake.scenario.files").addHandler(handler)
+    logging.getLogger("dacph_drake.assembly.scenario_files").addHandler(handler)
     try:
         loaded = load_scenario(path)
     finally:
-        logging.getLogger("dacph_drake.scenario.files").removeHandler(handler)
+        logging.getLogger("dacph_drake.assembly.scenario_files").removeHandler(handler)
     assert loaded.learner.model == "local_bayes" and loaded.rhs.adoption == "certified_set"
     notes = " ".join(record.getMessage() for record in records)
     assert "learner.model = 'local_bayes' (before it existed: 'network')" in notes
@@ -414,7 +414,7 @@ def test_a_run_saved_before_the_model_error_was_measured_keeps_its_meaning():
     today's inertia settings."""
     import json
     from dacph_drake.loop.run_store import require_run_of
-    from dacph_drake.scenario.files import load_saved_scenario
+    from dacph_drake.assembly.scenario_files import load_saved_scenario
     folder = Path(__file__).resolve().parent / "data" / "short_run_before_measured_error"
     meta = json.loads((folder / "run_dac.json").read_text())
     saved = load_saved_scenario(folder / "scenario.yaml")
@@ -429,7 +429,7 @@ def test_a_described_run_saved_before_joint_friction_keeps_its_meaning(tmp_path)
     that value is left out of the fingerprinted text (a run saved before keeps its
     fingerprint); "keep" changes the fingerprint."""
     import copy
-    from dacph_drake.scenario.files import (load_saved_scenario, saved_forms, save_scenario)
+    from dacph_drake.assembly.scenario_files import (load_saved_scenario, saved_forms, save_scenario)
     from dacph_drake.loop.run_store import scenario_fingerprint
     scenario = load_scenario("satellite_3dof")
     save_scenario(scenario, tmp_path / "scenario.yaml")

@@ -11,11 +11,11 @@ from pydrake.systems.primitives import Sine
 
 from dacph_drake.robots.description import (SPATIAL_ROBOTS, AddRobotFromDescription,
                                      MakeRobotPlant, ParsedDescription)
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.scenario.simulator import FixedStepConfig
 
 
@@ -286,7 +286,7 @@ def test_inertia_bound_of_a_spatial_arm_is_below_every_sample(spatial, rng):
 def test_attitude_error_is_the_rotation_vector_to_first_order(rng):
     from pydrake.common.eigen_geometry import AngleAxis
     from pydrake.math import RotationMatrix
-    from dacph_drake.tasks.attitude import attitude_error
+    from dacph_drake.dynamics.attitude import attitude_error
     R_d = RotationMatrix(RollPitchYaw(rng.uniform(-np.pi, np.pi, 3)))
     assert np.all(attitude_error(R_d, R_d) == 0.0)
     for angle in (1e-3, 0.5, 3.0):
@@ -301,7 +301,7 @@ def test_attitude_error_is_the_rotation_vector_to_first_order(rng):
 
 
 def test_damped_pseudo_inverse_keeps_the_null_space(rng):
-    from dacph_drake.tasks.attitude import damped_pseudo_inverse, reference_rates
+    from dacph_drake.dynamics.attitude import damped_pseudo_inverse, reference_rates
     D = rng.standard_normal((3, 6))
     xi = rng.standard_normal(6)
     exact = reference_rates(D, np.zeros(3), np.zeros(3), 1.0, xi, damping=0.0)
@@ -320,7 +320,7 @@ def test_the_attitude_law_tracks_a_3d_reference_on_the_six_dof_arm():
     exp(-Lambda t) while R_d(t) turns, down to 1e-3 of its start in 4 s."""
     from pydrake.common.eigen_geometry import AngleAxis
     from pydrake.math import RotationMatrix
-    from dacph_drake.tasks.attitude import attitude_error, reference_rates
+    from dacph_drake.dynamics.attitude import attitude_error, reference_rates
     model = FloatingBaseModel(MakeRobotPlant("satellite_6dof"))
     plant = model.plant
     context = plant.CreateDefaultContext()

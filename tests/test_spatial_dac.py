@@ -7,12 +7,12 @@ import pytest
 
 from dacph_drake.controllers import build_closed_loop
 from dacph_drake.controllers.dac import build_dac_diagram
-from dacph_drake.errors import ConfigError
-from dacph_drake.analysis.metrics import nominal_estimates, run_metrics
+from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.loop.metrics import nominal_estimates, run_metrics
 from dacph_drake.log_layout import LearnerLog
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import AttitudeGains, Phases
-from dacph_drake.scenario.files import load_scenario, save_scenario
+from dacph_drake.assembly.scenario_files import load_scenario, save_scenario
 
 
 def _short_3dof():
@@ -195,7 +195,7 @@ def test_six_dof_dac_meets_the_stated_bounds_and_verifies(tmp_path):
     region-of-attraction SOS): |e| below 1e-3 rad from 4 s on through every phase,
     at least 0.15 m between the arm and the base, momentum below 1e-7, and
     `dacph verify` passes."""
-    from dacph_drake.analysis.verify import verify_run
+    from dacph_drake.loop.verify import verify_run
     scenario = load_scenario("satellite_6dof")
     result = simulate(scenario, "dac", out_dir=tmp_path)
     t, error = result.logs["time"], result.logs["attitude_log"][:, 3]

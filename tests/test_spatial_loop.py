@@ -5,7 +5,7 @@ import pytest
 from pydrake.systems.analysis import SimulatorConfig
 
 from dacph_drake.controllers.model_based import build_model_based_diagram
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.loop.simulate import collect_logs
 from dacph_drake.scenario import AttitudeGains, ClearancePotential, Phases
@@ -159,7 +159,7 @@ def test_dacph_spatial_runs_saves_and_replays(tmp_path, capsys):
     metrics printed, the run saved, its scenario file loads back to the same
     settings; a bad name is named."""
     from dacph_drake.app.cli import main
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.run_store import load_run
     from dacph_drake.scenario.built_in import BUILT_IN_SCENARIOS
     out = tmp_path / "run"
@@ -184,7 +184,7 @@ def test_shipped_spatial_scenario_files_are_the_built_ins(name):
     from pathlib import Path
     from pydrake.common.yaml import yaml_dump_typed
     from dacph_drake.scenario.built_in import BUILT_IN_SCENARIOS
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     path = Path(__file__).resolve().parents[1] / "scenarios" / f"{name}.yaml"
     assert yaml_dump_typed(load_scenario(path)) == yaml_dump_typed(
         BUILT_IN_SCENARIOS[name]())
@@ -193,7 +193,7 @@ def test_shipped_spatial_scenario_files_are_the_built_ins(name):
 def test_live_meshcat_shows_a_spatial_run_without_changing_it():
     from dacph_drake.robots.viewers import DESIRED_TRIAD, MEASURED_TRIAD, QuietMeshcat
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     meshcat = QuietMeshcat()
     scenario = load_scenario("satellite_3dof")
     watched = simulate(scenario, "model-based", duration=0.3, meshcat=meshcat)

@@ -13,7 +13,7 @@ import pyarrow.parquet
 import pytest
 
 from dacph_drake.app.cli import main
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.montecarlo.definition import load_sweep
 from dacph_drake.montecarlo.executors import InProcessExecutor, dask_executor
 from dacph_drake.montecarlo.runner import run_sweep
@@ -22,7 +22,7 @@ from dacph_drake.montecarlo.summary import write_summary
 from dacph_drake.scenario.planar_arm import LinkParams, link_inertia_bound
 from dacph_drake.scenario import Phases
 from dacph_drake.scenario.built_in import short_scenario
-from dacph_drake.scenario.files import load_scenario, save_scenario
+from dacph_drake.assembly.scenario_files import load_scenario, save_scenario
 
 SWEEPS = Path(__file__).resolve().parents[1] / "sweeps"
 TRIALS = 4

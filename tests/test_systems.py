@@ -4,9 +4,9 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from dacph_drake.dynamics.plant import FixStateInputs, MakeArmPlant
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.tasks.reference import OrientationReference
+from dacph_drake.dynamics.reference import OrientationReference
 from dacph_drake.scenario import Disturbance, Scenario
 from dacph_drake.systems.disturbance import DisturbanceSource
 from dacph_drake.systems.lhs_controller import LhsController, LhsTrial
@@ -218,7 +218,7 @@ def test_port_observer_on_a_known_trajectory():
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, Sine
     from dacph_drake.dynamics.plant import STATE_SIGNALS, AddFreeFloatingArm, AddStateSplitter
-    from dacph_drake.loop.simulator import MakeSimulator
+    from dacph_drake.scenario.simulator import MakeSimulator
     scenario = Scenario()
     h = scenario.periods.rhs
     builder = DiagramBuilder()

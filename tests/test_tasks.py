@@ -10,7 +10,7 @@ import pytest
 
 from dacph_drake.app.cli import main
 from dacph_drake.dynamics.floating_model import FloatingBaseModel
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.kernels.attitude import position_rows, turned
 from dacph_drake.robots.description import SPATIAL_ROBOTS, MakeRobotPlant
 from dacph_drake.robots.serial_arm import SerialLink
@@ -69,7 +69,7 @@ def test_the_pose_rows_are_the_plants_kinematics(robot, rng):
 
 
 def _pose_scenario(phase: float):
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     from dacph_drake.tasks.end_effector_pose import EndEffectorPose
     scenario = load_scenario("satellite_6dof")
     scenario.task = EndEffectorPose(reference=scenario.task.reference,
@@ -84,10 +84,10 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
     round-trips through YAML, DAC runs every phase, the position error falls from
     its 2 cm start below 1 mm in phase 3 and is reported per phase in metres, and
     the task's panel draws it beside the attitude error."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate
     from dacph_drake.log_layout import PoseLog
-    from dacph_drake.scenario.files import load_scenario, save_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario, save_scenario
     scenario = _pose_scenario(1.0)
     save_scenario(scenario, tmp_path / "pose.yaml")
     assert "!EndEffectorPose" in (tmp_path / "pose.yaml").read_text()
@@ -104,7 +104,7 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
     panels = make_panels({"dac": run.logs, "model-based": baseline.logs}, scenario)
     axes = panels["e_pose_dac_vs_model_based"].axes
     assert "position error" in axes[1].get_ylabel() and len(axes) == 5
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     html = robot_of(scenario).WriteAnimation(run.logs, tmp_path / "pose.html")
     assert html.stat().st_size > 10_000
     import matplotlib.pyplot as plt
@@ -113,8 +113,8 @@ def test_the_pose_task_tracks_position_and_attitude_and_reports_both(tmp_path):
 
 def test_a_pose_task_needs_six_joints_and_a_regular_start():
     """On a 3-joint arm the pose task is refused naming the joint count."""
-    from dacph_drake.assembly import robot_of
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.registry import robot_of
+    from dacph_drake.assembly.scenario_files import load_scenario
     from dacph_drake.tasks.end_effector_pose import EndEffectorPose
     scenario = load_scenario("satellite_3dof")
     scenario.task = EndEffectorPose()
@@ -148,7 +148,7 @@ def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
     and `dacph report` take it, and its LHS system is in the diagram by its name."""
     from dacph_drake.controllers.dac import build_dac_diagram
     from dacph_drake.scenario import Scenario
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     from dacph_drake.tasks import registry
     field_ = Scenario.__dataclass_fields__["task"]
     monkeypatch.setattr(field_, "type", field_.type)         # undone after the test
@@ -186,7 +186,7 @@ def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
 def test_a_bad_position_reference_is_named(setting, value, message):
     """Each of the pose task's own settings, out of range, ends in one ConfigError
     naming it and what is allowed."""
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     scenario = _pose_scenario(1.0)
     setattr(scenario.task.position, setting, value)
     with pytest.raises(ConfigError, match=message):
@@ -197,7 +197,7 @@ def _position_scenario(tmp_path, links, phase: float, extra: str = ""):
     """A serial arm of ``links`` from a file naming the description, the base, the end
     effector and task: !EndEffectorPosition (its start chosen for the linear rows)."""
     from dacph_drake.robots.serial_arm import serial_arm_urdf
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     (tmp_path / "arm.urdf").write_text(serial_arm_urdf("arm", links))
     (tmp_path / "arm.yaml").write_text(
         "robot: !DescribedArm\n  description: arm.urdf\n  base: {mass: 200.0}\n"
@@ -263,7 +263,7 @@ def test_the_position_task_tracks_a_four_joint_arms_end_effector(tmp_path):
     the baseline run every phase (1.5 s each), the tracking error is |e_p| [m] (from
     the 2 cm initial offset), DAC's phase-3 error is below 1e-4 m and below the
     baseline's, the attitude is not reported, and the task's panel draws |e_p|."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.app.figures import make_panels
     from dacph_drake.log_layout import PoseLog
     from dacph_drake.loop.simulate import simulate
@@ -288,7 +288,7 @@ def test_the_position_task_tracks_a_four_joint_arms_end_effector(tmp_path):
 
 def test_a_position_task_needs_three_joints(tmp_path):
     """On a 2-joint arm the position task is refused naming the joint count."""
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     scenario = _position_scenario(tmp_path, FOUR[:2], 1.0, "q0: [0.3, 0.8]\n")
     with pytest.raises(ConfigError, match="at least 3 joints"):
         robot_of(scenario).RequireRunnableStart()

@@ -10,7 +10,7 @@ from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 from dacph_drake.analysis.lyapunov_envelope import check_lyapunov_envelope
 from dacph_drake.analysis.region_of_attraction import sliding_region_of_attraction
 from dacph_drake.analysis.rhs_loop import check_rhs_loop, rhs_loop_system
-from dacph_drake.analysis.verify import verify_logs, verify_run
+from dacph_drake.loop.verify import verify_logs, verify_run
 from dacph_drake.app.cli import main
 from dacph_drake.dynamics.plant import MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel

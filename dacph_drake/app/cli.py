@@ -12,7 +12,7 @@ from dacph_drake.controllers import (NAMES as CONTROLLERS, REFERENCE, REGISTRY,
                                      build_closed_loop)
 # The built-in scenarios' names (scenario.BUILT_IN_SCENARIOS), without loading Drake.
 BUILT_IN_SCENARIO_NAMES = ("paper", "short", "satellite_6dof", "satellite_3dof")
-from dacph_drake.errors import ConfigError, require_nonnegative, require_positive
+from dacph_drake.scenario.errors import ConfigError, require_nonnegative, require_positive
 
 DESCRIPTION = ("Data-Assisted Control in the port-Hamiltonian framework (DAC-pH) on "
                "free-floating manipulators: simulate, reproduce, report, verify and "
@@ -40,9 +40,9 @@ def _free_flight(args) -> int:
 
 def _simulate(args) -> int:
     from pathlib import Path
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     meshcat = _LiveViewing(args, scenario)
     result = simulate(scenario, args.controller, duration=args.duration,
@@ -57,7 +57,7 @@ def _simulate(args) -> int:
             _print_metrics(summary["metrics"][args.controller], scenario,
                            result.final_time)
         if "learner_log" in result.logs:
-            from dacph_drake.analysis.metrics import learning_report
+            from dacph_drake.loop.metrics import learning_report
             for text in learning_report(result.logs, scenario)["warnings"]:
                 print(f"dacph: warning: {text}", file=sys.stderr)
     if summary:
@@ -96,7 +96,7 @@ def _report_run(out, controller: str) -> dict:
 def _print_metrics(flat, scenario, final_time: float) -> None:
     """A run's metrics, over the run and then grouped by the scenario's phases (their
     names and times), each with its unit and its metrics.json key."""
-    from dacph_drake.analysis.metrics import PHASE_NAMES, RunMetrics
+    from dacph_drake.loop.metrics import PHASE_NAMES, RunMetrics
     record = RunMetrics.FromFlat(flat)
     p = scenario.phases
     spans = dict(zip(PHASE_NAMES, ((p.linear_start, p.nonlinear_start),
@@ -133,8 +133,8 @@ def _spatial(args) -> int:
 def _diagram(args) -> int:
     from pathlib import Path
     from dacph_drake.app.graph import render_diagram
-    from dacph_drake.loop.files import prepare_out_dir
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.atomic_files import prepare_out_dir
+    from dacph_drake.assembly.scenario_files import load_scenario
     scenario = load_scenario(args.scenario)
     out = prepare_out_dir(args.out) if args.out else Path.cwd()
     controllers = [args.controller] if args.controller else list(CONTROLLERS)
@@ -160,7 +160,7 @@ def _print_table(summary) -> None:
 
 def _animate_run(run_dir, controller: str, out=None):
     from pathlib import Path
-    from dacph_drake.assembly import robot_of
+    from dacph_drake.assembly.registry import robot_of
     from dacph_drake.loop.run_store import load_run
     logs, scenario, _ = load_run(run_dir, controller)
     out = (Path(out) if out else
@@ -171,7 +171,7 @@ def _animate_run(run_dir, controller: str, out=None):
 def _reproduce(args) -> int:
     import time
     from dacph_drake.app.reproduce import reproduce
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     name = args.scenario or ("short" if args.quick else "paper")
     start = time.perf_counter()
     summary = reproduce(load_scenario(name), args.out, progress=not args.quiet,
@@ -185,7 +185,7 @@ def _reproduce(args) -> int:
 
 def _report(args) -> int:
     from dacph_drake.app.reproduce import REQUIRED, report
-    from dacph_drake.scenario.files import load_saved_scenario
+    from dacph_drake.assembly.scenario_files import load_saved_scenario
     summary = report(args.run_dir)
     if summary["table"]:
         _print_table(summary)
@@ -215,7 +215,7 @@ def _export(args) -> int:
     """A saved run's logs as a table for pandas: one row per logged time, one column
     per named signal entry (RunResult.to_pandas)."""
     from pathlib import Path
-    from dacph_drake.loop.files import replaced_atomically
+    from dacph_drake.atomic_files import replaced_atomically
     from dacph_drake.loop.run_store import RunResult, load_run
     logs, scenario, meta = load_run(args.run_dir, args.controller)
     run = RunResult(args.controller, meta["status"], meta.get("reason", ""),
@@ -252,9 +252,9 @@ def _verify(args) -> int:
     """Verifies a run directory, or simulates the scenario's DAC loop into --out
     first; exit status 1 when a check fails."""
     from pathlib import Path
-    from dacph_drake.analysis.verify import verify_run
+    from dacph_drake.loop.verify import verify_run
     from dacph_drake.loop.simulate import simulate
-    from dacph_drake.scenario.files import load_scenario
+    from dacph_drake.assembly.scenario_files import load_scenario
     target = Path(args.target)
     if target.is_dir():
         run_dir = target

@@ -34,10 +34,10 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
 from dacph_drake.log_layout import LhsLog, PoseLog, RhsLog  # noqa: E402
-from dacph_drake.analysis.metrics import (nominal_estimates, physical_view,  # noqa: E402
+from dacph_drake.loop.metrics import (nominal_estimates, physical_view,  # noqa: E402
                                           port_truth, realized_error_of)
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
-from dacph_drake.assembly import robot_of, task_of  # noqa: E402
+from dacph_drake.assembly.registry import robot_of, task_of  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
 Logs = Dict[str, np.ndarray]

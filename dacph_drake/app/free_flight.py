@@ -13,7 +13,7 @@ from pydrake.systems.primitives import Sine
 from dacph_drake.dynamics.plant import (AddFreeFloatingArm, ArmCoordinates, SetArmAtRest,
                                total_momentum)
 from dacph_drake.scenario.planar_arm import RobotParams
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.scenario.simulator import FixedStepConfig
 
 

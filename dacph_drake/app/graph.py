@@ -5,7 +5,7 @@ import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING, List, Union
 
-from dacph_drake.loop.files import prepare_out_dir
+from dacph_drake.atomic_files import prepare_out_dir
 
 if TYPE_CHECKING:
     from pydrake.systems.framework import Diagram

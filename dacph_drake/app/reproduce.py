@@ -12,16 +12,16 @@ from typing import Dict, List, Optional, Sequence, Union
 
 from dacph_drake.controllers import (BASELINE, NAMES as CONTROLLERS,  # reproduce()
                                      REFERENCE)                         # runs them all
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.app.figures import plot_panels
-from dacph_drake.analysis.metrics import (PHASE_NAMES, PHASES, RunMetrics, comparison,
+from dacph_drake.loop.metrics import (PHASE_NAMES, PHASES, RunMetrics, comparison,
                                           run_metrics)
 from dacph_drake.loop.simulate import simulate
-from dacph_drake.loop.files import prepare_out_dir
+from dacph_drake.atomic_files import prepare_out_dir
 from dacph_drake.loop.run_store import (load_logs, load_run_meta, require_run_files,
                                         require_run_of, versions)
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario.files import load_saved_scenario, save_scenario
+from dacph_drake.assembly.scenario_files import load_saved_scenario, save_scenario
 
 REQUIRED = (REFERENCE, BASELINE)       # report() also reads directories without
 #                                        the other controllers' runs

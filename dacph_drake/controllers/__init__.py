@@ -14,10 +14,10 @@ import importlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from dacph_drake.errors import require_one_of
+from dacph_drake.scenario.errors import require_one_of
 
 if TYPE_CHECKING:
-    from dacph_drake.loop.closed_loop import ClosedLoop
+    from dacph_drake.controllers.closed_loop import ClosedLoop
     from dacph_drake.scenario import Scenario
 
 

@@ -5,7 +5,7 @@ from typing import Dict, Optional
 
 from pydrake.systems.framework import LeafSystem
 
-from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
+from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.learning import LearnerTrial, prior_set, published_model

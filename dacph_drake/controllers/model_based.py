@@ -3,7 +3,7 @@ silent): the robot's LHS controller with a constant chi (task.gains.chi_model_ba
 inversion u = B0^-1 (tau_c^r + D0 qdot); no integrator, no learning."""
 from pydrake.systems.primitives import ConstantVectorSource
 
-from dacph_drake.loop.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
+from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter

@@ -206,3 +206,14 @@ class FloatingBaseModel:
                                    self.tree.joint, X, S, A, node, p_W)
         R = self._BaseRotation(base_positions)
         return np.vstack([R @ J[:3], R @ J[3:]])
+
+
+def arm_joints(model: FloatingBaseModel) -> list:
+    """The plant's (pydrake) joints of an arm's joint angles q, in q's order.
+
+    Args:
+        model: The arm's model."""
+    plant = model.plant
+    joints = {plant.get_joint(j).position_start(): plant.get_joint(j)
+              for j in plant.GetJointIndices() if plant.get_joint(j).num_positions() == 1}
+    return [joints[int(i)] for i in model.coordinates.joint_q]

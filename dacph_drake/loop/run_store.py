@@ -14,12 +14,12 @@ from typing import IO, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from dacph_drake.assembly import task_of
-from dacph_drake.errors import ConfigError
-from dacph_drake.loop.files import read_json_record, replaced_atomically
+from dacph_drake.assembly.registry import task_of
+from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.atomic_files import read_json_record, replaced_atomically
 from dacph_drake.loop.signals import Signals
 from dacph_drake.scenario import Scenario
-from dacph_drake.scenario.files import load_saved_scenario, save_scenario, saved_forms
+from dacph_drake.assembly.scenario_files import load_saved_scenario, save_scenario, saved_forms
 
 
 @dataclass
@@ -71,7 +71,7 @@ class RunResult:
     @property
     def metrics(self) -> "analysis.metrics.RunMetrics":
         """The run's metrics by phase, with units (analysis.metrics.RunMetrics)."""
-        from dacph_drake.analysis.metrics import RunMetrics
+        from dacph_drake.loop.metrics import RunMetrics
         if self.scenario is None:
             raise ValueError("the run's scenario is not known; allowed: a result of "
                              "simulate(), or analysis.metrics.RunMetrics.Of(logs, "

@@ -16,15 +16,15 @@ from pydrake.systems.analysis import InitializeParams, Simulator
 from pydrake.systems.framework import Context
 
 from dacph_drake.controllers import build_closed_loop, require_controller
-from dacph_drake.errors import ConfigError, require_positive
+from dacph_drake.scenario.errors import ConfigError, require_positive
 from dacph_drake.loop.progress import progress_bar
 from dacph_drake.loop.threads import single_threaded
-from dacph_drake.loop.files import prepare_out_dir
+from dacph_drake.atomic_files import prepare_out_dir
 from dacph_drake.loop.run_store import (LockRun, ReleaseRun, RunResult,
                                         remove_outputs_of, require_one_scenario,
                                         save_run)
 from dacph_drake.dynamics.plant import ArmCoordinates, trial_coordinates
-from dacph_drake.loop.closed_loop import ClosedLoop
+from dacph_drake.controllers.closed_loop import ClosedLoop
 from dacph_drake.scenario import Scenario
 from dacph_drake.scenario.checks import scheduled_events
 

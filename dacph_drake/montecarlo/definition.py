@@ -12,7 +12,7 @@ link, or a scalar one (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``,
 error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per joint;
 ``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault. The base
 scenario may be any robot's; ``link_*`` and ``base_*`` (a planar arm's parameters)
-apply where the robot section takes them (``SAMPLED_SETTINGS``).
+apply where the robot section takes them (Robot.TRUTH_SAMPLES).
 
 A sampled scenario that fails ``Scenario.Validate()`` (e.g. a negative mass from a
 Gaussian) is recorded as a failed trial with the ConfigError's message (the documented
@@ -28,12 +28,13 @@ import numpy as np
 from pydrake.common import RandomGenerator, schema
 from pydrake.common.yaml import yaml_dump_typed, yaml_load
 
+from dacph_drake.assembly.registry import robot_kind
 from dacph_drake.controllers import NAMES as CONTROLLERS
-from dacph_drake.errors import ConfigError, require_in_range
+from dacph_drake.scenario.errors import ConfigError, require_in_range
 from dacph_drake.scenario.yaml_files import load_yaml_dataclass, read_yaml
-from dacph_drake.scenario import DescribedArm, PlanarArm, Scenario
+from dacph_drake.scenario import Scenario
 from dacph_drake.scenario.built_in import BUILT_IN_SCENARIOS
-from dacph_drake.scenario.files import load_scenario, saved_forms
+from dacph_drake.assembly.scenario_files import load_scenario, saved_forms
 
 # The ground-truth robot's distributions (planar arms only).
 ROBOT_DISTRIBUTIONS = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
@@ -206,7 +207,7 @@ def load_sweep(path: Union[str, Path]) -> SweepDefinition:
     scenario = _base_scenario(sweep.scenario, path.parent)
     for name in ROBOT_DISTRIBUTIONS:
         if (getattr(sweep.distributions, name) is not None
-                and name not in SAMPLED_SETTINGS.get(type(scenario.robot), ())):
+                and name not in robot_kind(scenario.robot).TRUTH_SAMPLES):
             raise ConfigError(
                 f"distributions.{name} with the scenario {sweep.scenario!r}, whose robot "
                 f"is a {type(scenario.robot).__name__}; allowed: the settings other "
@@ -400,59 +401,17 @@ def _sample_vector(value, n: int, generator: RandomGenerator) -> List[float]:
     return [float(distribution.Sample(generator)) for _ in range(n)]
 
 
-# The ground-truth distributions each robot section takes (ROBOT_DISTRIBUTIONS): a
-# description has no link parameters to sample.
-SAMPLED_SETTINGS = {PlanarArm: ("link_mass_scale", "link_length_scale",
-                                "link_inertia_scale", "base_mass_scale",
-                                "base_inertia_scale")}
-
-
-def apply_robot_sample(robot: Union[PlanarArm, DescribedArm], sampled: Dict[str, object]) -> None:
-    """Applies a trial's sampled ground truth to a planar robot section: per link mass
-    (and inertia), length (com, width; inertia by its square) and inertia factors,
-    the base's mass (and inertia) and inertia factors.
-
-    Args:
-        robot: The robot section (a described arm's is left as it is).
-        sampled: The trial's sampled settings by name."""
-    if not isinstance(robot, PlanarArm):
-        return
-    links = robot.truth.links
-    for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
-        link.mass *= f
-        link.inertia *= f
-    for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
-        link.length *= f
-        link.com *= f
-        link.width *= f
-        link.inertia *= f * f
-    for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
-        link.inertia *= f
-    f = sampled.get("base_mass_scale", 1.0)
-    robot.truth.base.mass *= f
-    robot.truth.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
-
-
-def apply_model_error_sample(robot: Union[PlanarArm, DescribedArm], links: Optional[Sequence[float]],
+def apply_model_error_sample(robot: object, links: Optional[Sequence[float]],
                              base: Optional[float]) -> None:
     """Applies a trial's controller model error: factors on the nominal links' (a
-    described arm's: the bodies its joints move) and the base's mass and inertia.
+    described arm's: the bodies its joints move) and the base's mass and inertia
+    (Robot.ApplyModelError).
 
     Args:
         robot: The robot section.
         links: One factor per link (joint), or None.
         base: The base's factor, or None."""
-    if isinstance(robot, DescribedArm):
-        if links is not None or base is not None:
-            from dacph_drake.robots.described import model_error_scale
-            robot.nominal_inertia_scale = model_error_scale(robot, links, base)
-        return
-    for link, f in zip(robot.nominal.links, links or []):
-        link.mass *= f
-        link.inertia *= f
-    if base is not None:
-        robot.nominal.base.mass *= base
-        robot.nominal.base.inertia *= base
+    robot_kind(robot).ApplyModelError(robot, links, base)
 
 
 def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scenario:
@@ -463,7 +422,7 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
         sampled: Setting -> its sampled value (TrialSample.sampled).
         seed: The trial's seed: scenario.seed = learner_seed if sampled, else ``seed``."""
     s = copy.deepcopy(base)
-    apply_robot_sample(s.robot, sampled)
+    robot_kind(s.robot).ApplyTruthSample(s.robot, sampled)
     u = s.uncertainty
     fB, fD = sampled.get("delta_B_scale", 1.0), sampled.get("delta_D_scale", 1.0)
     u.B_linear = [[fB * v for v in row] for row in u.B_linear]

@@ -7,7 +7,8 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Dict, Iterator, List, Optional, Union
 
-from dacph_drake.errors import require_in_range
+from dacph_drake.assembly.registry import robot_kind
+from dacph_drake.scenario.errors import require_in_range
 from dacph_drake.montecarlo.definition import SweepDefinition, sample_trial
 from dacph_drake.montecarlo.executors import (default_workers, local_process_pool,
                                               stop_local_pool)
@@ -66,23 +67,15 @@ def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: 
         store.close()
 
 
-# Trials per batch where the sweep does not say (measured by scripts/bench_sweep.py):
-# a planar arm's fastest per trial; a described arm's gains little beyond 16.
-DEFAULT_BATCH_SIZE = 64
-DESCRIBED_BATCH_SIZE = 16
-
-
 def batch_size_for(definition: SweepDefinition) -> int:
-    """A sweep's trials per diagram: its batch_size if it gives one (> 0), else
-    DEFAULT_BATCH_SIZE for a planar arm's sweep, DESCRIBED_BATCH_SIZE for a described one.
+    """A sweep's trials per diagram: its batch_size if it gives one (> 0), else its
+    robot kind's (Robot.BATCH_SIZE).
 
     Args:
         definition: The sweep."""
-    from dacph_drake.scenario import PlanarArm
     if definition.sweep.batch_size > 0:
         return definition.sweep.batch_size
-    return (DEFAULT_BATCH_SIZE if isinstance(definition.scenario.robot, PlanarArm)
-            else DESCRIBED_BATCH_SIZE)
+    return robot_kind(definition.scenario.robot).BATCH_SIZE
 
 
 def _task(definition: SweepDefinition, trial: int, out) -> Trial:

@@ -14,10 +14,10 @@ import time
 from pathlib import Path
 from typing import Dict, List, Union
 
-from dacph_drake.errors import ConfigError
-from dacph_drake.loop.files import prepare_out_dir, read_json_record, replaced_atomically
+from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.atomic_files import prepare_out_dir, read_json_record, replaced_atomically
 from dacph_drake.montecarlo.definition import SweepDefinition
-from dacph_drake.scenario.files import save_scenario
+from dacph_drake.assembly.scenario_files import save_scenario
 
 ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 

@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from dacph_drake.analysis.metrics import PHASES, comparison  # noqa: E402
+from dacph_drake.loop.metrics import PHASES, comparison  # noqa: E402
 from dacph_drake.controllers import ABLATION, BASELINE, REFERENCE  # noqa: E402
 from dacph_drake.montecarlo.definition import SweepDefinition  # noqa: E402
 from dacph_drake.montecarlo.store import read_manifest, read_rows, sorted_rows  # noqa: E402

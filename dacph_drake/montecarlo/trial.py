@@ -5,8 +5,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional
 
-from dacph_drake.errors import ConfigError
-from dacph_drake.assembly import validate_scenario
+from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.assembly.registry import validate_scenario
 from dacph_drake.scenario import Scenario
 
 
@@ -99,7 +99,7 @@ def _run_one(task: Trial, controller: str, runs: Dict) -> None:
 
 def _run_batch(tasks: List[Trial], controller: str, runs: Dict) -> None:
     """The batch's run of ``controller``: each trial's entry in ``runs``."""
-    from dacph_drake.analysis.metrics import run_metrics
+    from dacph_drake.loop.metrics import run_metrics
     from dacph_drake.loop.simulate import simulate_batch
     out_dirs = [Path(task.log_dir) / f"trial_{task.trial:05d}" if task.log_dir else None
                 for task in tasks]

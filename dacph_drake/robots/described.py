@@ -6,26 +6,35 @@ model evaluates in contexts of its own with its inertias scaled
 geometry."""
 import copy
 from pathlib import Path
-from typing import Callable, Dict, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from pydrake.geometry import Meshcat, SceneGraph
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 
-from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.floating_model import FloatingBaseModel, arm_joints
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import AddClonedArms
-from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
+from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
-from dacph_drake.robots.description import ParsedDescription
+from dacph_drake.robots.description import MakeRobotPlant, ParsedDescription
 from dacph_drake.robots.robot import require_clear_start
+from dacph_drake.robots.sizing import (MIN_AMPLITUDE, disturbance_scale, excitation_scale,
+                                      potential_margin, scale_couplings,
+                                      sized_disturbance, sized_uncertainty, truth_step)
+from dacph_drake.robots.start_pose import (ATTITUDE_ROWS, POSITION_ROWS, choose_start,
+                                           rehearse, task_jacobian, tracked)
 from dacph_drake.scenario import (EFFORT_LIMITS, JOINT_DAMPING, JOINT_FRICTION,
                                   JOINT_LIMITS,
-                                  ClearancePotential, DescribedArm, Scenario)
+                                  ClearancePotential, DescribedArm, EndEffectorAttitude,
+                                  Phases, Scenario)
+from dacph_drake.scenario.built_in import (SATELLITE_PHASES, described_arm_learner,
+                                           described_arm_periods, described_arm_rhs)
 from dacph_drake.scenario.checks import require_length, validate_shared
+from dacph_drake.scenario.simulator import FixedStepConfig
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.spatial_true_rhs import SpatialTrueRhs
 
@@ -82,17 +91,6 @@ def validate_bodies(arm: DescribedArm, bodies: Sequence[str]) -> None:
     require_nonnegative("robot.potential.gain", arm.potential.gain)
     require_positive("robot.potential.margin", arm.potential.margin, "m")
     require_nonnegative("robot.potential.eta", arm.potential.eta, "1/s")
-
-
-def arm_joints(model: FloatingBaseModel) -> list:
-    """The plant's (pydrake) joints of an arm's joint angles q, in q's order.
-
-    Args:
-        model: The arm's model."""
-    plant = model.plant
-    joints = {plant.get_joint(j).position_start(): plant.get_joint(j)
-              for j in plant.GetJointIndices() if plant.get_joint(j).num_positions() == 1}
-    return [joints[int(i)] for i in model.coordinates.joint_q]
 
 
 def model_error_scale(arm: "DescribedArm", links: Optional[Sequence[float]],
@@ -193,6 +191,51 @@ class DescribedRobot:
 
     Raises:
         ConfigError: The first invalid setting, or what the description may not have."""
+
+    # A sweep's trials per diagram (scripts/bench_sweep.py: little gain beyond 16); a
+    # description has no link parameters to sample.
+    BATCH_SIZE = 16
+    TRUTH_SAMPLES: Tuple[str, ...] = ()
+
+    @staticmethod
+    def SizedScenario(section: DescribedArm, q0: Optional[Sequence[float]],
+                      task: Optional[object], rows: Sequence[int]) -> Scenario:
+        """robots.robot.Robot.SizedScenario: arm_scenario."""
+        return arm_scenario(section, q0, task, rows)
+
+    @staticmethod
+    def ResolvePaths(section: DescribedArm, folder: Path) -> None:
+        """robots.robot.Robot.ResolvePaths: the description, package_paths and packages;
+        shipped names, package:// URIs and a path that exists only relative to the
+        working directory stay."""
+        def resolved(path: str) -> str:
+            beside = folder / path
+            if Path(path).is_absolute() or (Path(path).exists() and not beside.exists()):
+                return path
+            return str(beside)
+        if (not section.description.startswith("package://")
+                and Path(section.description).suffix.lower() in (".urdf", ".sdf", ".xml")):
+            section.description = resolved(section.description)
+        section.package_paths = [resolved(path) for path in section.package_paths]
+        section.packages = {name: resolved(path) for name, path in section.packages.items()}
+
+    @staticmethod
+    def JointNames(section: DescribedArm) -> List[str]:
+        """robots.robot.Robot.JointNames: the description's joint names."""
+        return [joint.name() for joint in arm_joints(FloatingBaseModel(
+            MakeRobotPlant(section)))]
+
+    @staticmethod
+    def ApplyTruthSample(section: DescribedArm, sampled: Dict[str, object]) -> None:
+        """robots.robot.Robot.ApplyTruthSample: nothing to sample."""
+
+    @staticmethod
+    def ApplyModelError(section: DescribedArm, links: Optional[Sequence[float]],
+                        base: Optional[float]) -> None:
+        """robots.robot.Robot.ApplyModelError: on the bodies the joints move
+        (model_error_scale)."""
+        if links is not None or base is not None:
+            section.nominal_inertia_scale = model_error_scale(section, links, base)
 
     def __init__(self, scenario: Scenario, task: "Task"):
         self.scenario, self.task = scenario, task
@@ -372,6 +415,96 @@ class DescribedRobot:
         """The ground truth's total mass [kg] (its bodies with mass)."""
         return float(sum(body.default_mass()
                          for body in InertialParameters(self.truth_plant).bodies))
+
+
+def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
+                 task: Optional[object] = None,
+                 rows: Sequence[int] = ATTITUDE_ROWS) -> Scenario:
+    """The scenario of an arm, its per-joint settings sized by the module's rule
+    (unsized where q0 has not one entry per joint: its validation names q0's length).
+
+    Args:
+        robot: The arm's robot section.
+        q0: The initial joint angles [rad] (default: robots.start_pose.choose_start).
+        task: The task it tracks (default EndEffectorAttitude()).
+        rows: The GJM's rows the task tracks (tasks.Task.jacobian_rows; default the
+            attitude's).
+
+    Raises:
+        ConfigError: Bad assembly settings, an unloadable description, no start found."""
+    validate_assembly(robot)
+    parsed = ParsedDescription(robot)
+    model = FloatingBaseModel(parsed.plant)
+    require_every_joint_moves_inertia(model, robot.description)
+    task = EndEffectorAttitude() if task is None else task
+    # The reference sizes the arm: its attitude's, or (a position task) its position's.
+    reference = getattr(task, "reference", None) or task.position
+    rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
+    clearance = link_base_clearance(parsed, model)     # one SceneGraph context
+    if q0 is None:
+        try:
+            q0 = choose_start(model, task, clearance,
+                              null_space_rate(parsed, model, robot.potential),
+                              rehearsal_time, rows)
+        except ValueError as e:
+            what = tracked(rows)
+            how = {"attitude": "turn about every axis",
+                   "position": "move in every direction"}.get(
+                what, "turn about every axis and move in every direction")
+            raise ConfigError(
+                f"robot.description {robot.description!r}: no start pose found for "
+                f"the end-effector {what} task ({e}); allowed: a q0 in the file, or "
+                f"an arm whose end effector can {how}") from e
+    q0 = np.asarray(q0, float)
+    robot = copy.deepcopy(robot)
+    if len(q0) == model.num_joints:
+        robot.potential.margin = potential_margin(robot.potential.margin,
+                                                  clearance(q0))
+    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
+                        phases=Phases(**SATELLITE_PHASES), rhs=described_arm_rhs(),
+                        periods=described_arm_periods(), learner=described_arm_learner())
+    if len(q0) != model.num_joints:
+        return scenario         # Validate names q0's length; nothing to size by
+    rate = 2 * np.pi * max(_reference_angle(model, q0, task), MIN_AMPLITUDE) \
+        / reference.period
+    M = model.MassMatrix(q0)
+    inertia = np.diag(M)
+    rehearsal = rehearse(model, q0, task, rehearsal_time)
+    # Past the warm-up: the uncertainty and the disturbance act from phase 1 on, when
+    # the start's error has decayed (the rehearsal also starts with a jump in p).
+    steady = rehearsal.time >= SATELLITE_PHASES["warmup"]
+    momentum = np.maximum(inertia * rate, np.max(np.abs(rehearsal.p[steady]), axis=0))
+    torque = np.maximum(inertia * rate * 2 * np.pi / reference.period,
+                        np.max(np.abs(rehearsal.p_rate[steady]), axis=0))
+    scenario.uncertainty = sized_uncertainty(inertia, momentum)
+    # The paper's q1^2 coupling at the angles the task reaches: at most its size at
+    # |q1| = 1 rad (the paper's arm stays within it). From a start at q1 = 2.9 rad
+    # (a UR5's chosen start) it would put 3.5 of joint 1's command into joint 2's
+    # torque, and the true RHS loop lost its margin (spectral radius 0.97 > 0.95).
+    reach = float(np.max(rehearsal.q[steady, 0] ** 2))
+    if reach > 1.0:
+        scenario.uncertainty.B_q1_squared = (
+            np.asarray(scenario.uncertainty.B_q1_squared) / reach).tolist()
+    scale_couplings(scenario.uncertainty, torque)
+    scenario.disturbance = sized_disturbance(torque)
+    scenario.disturbance.scale = disturbance_scale(
+        scenario.disturbance, M, rate * 2 * np.pi / reference.period)
+    scenario.excitation.joint_scale = excitation_scale(scenario.excitation, M)
+    scenario.simulator = FixedStepConfig(step=truth_step(
+        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs,
+        joint_friction(parsed, model)))
+    return scenario
+
+
+def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
+    """The reference's amplitude as a joint angle [rad]: the attitude's; a position's
+    [m] over the position rows' largest singular value at q0 [m/rad] (the longest
+    lever the joints move the end effector by)."""
+    if getattr(task, "reference", None) is not None:
+        return task.reference.amplitude
+    lever = np.linalg.svd(task_jacobian(model, q0, rows=POSITION_ROWS),
+                          compute_uv=False)[0]
+    return task.position.amplitude / max(lever, 1e-9)
 
 
 def link_base_clearance(parsed: ParsedDescription, model: FloatingBaseModel,

@@ -21,7 +21,7 @@ from pydrake.multibody.tree import (BodyIndex, FixedOffsetFrame, PrismaticJoint,
                                    RevoluteJoint, SpatialInertia)
 from pydrake.systems.framework import Context, DiagramBuilder
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.robots.description_quirks import (parser_warnings_once, refuse_xacro,
                                                    without_duplicate_materials)
 from dacph_drake.robots.meshes import urdf_with_obj_meshes

@@ -13,7 +13,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator, List, Tuple
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 _MATERIAL = re.compile(r'<material\s+name\s*=\s*"([^"]*)"\s*>(.*?)</material>', re.S)
 _LOCATION = re.compile(r"^(?:[^:\s]*<literal-string>[^:]*|[^:\s]+\.(?:urdf|sdf|xml)):"

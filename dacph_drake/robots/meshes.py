@@ -19,7 +19,7 @@ from typing import Optional, Union
 import numpy as np
 from pydrake.multibody.parsing import PackageMap
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 CACHE = Path(tempfile.gettempdir()) / "dacph_drake_meshes"
 _MESH = re.compile(r'(<mesh\s[^>]*filename\s*=\s*")([^"]+)(")')

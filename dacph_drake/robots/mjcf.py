@@ -36,7 +36,7 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.robots.meshes import obj_of
 
 # Mesh formats MuJoCo reads; .obj goes to Drake as it is.

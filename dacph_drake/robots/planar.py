@@ -1,6 +1,7 @@
 """The planar n-link arm (scenario.PlanarArm): the ground truth built directly
 (dynamics/plant.py), the controller's closed-form reduced model with its compiled
 kernels (reduced_model.ReducedOrderModel) and the kinematic base-repulsion clearance."""
+import copy
 from pathlib import Path
 from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
@@ -11,11 +12,14 @@ from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.dynamics.plant import AddFreeFloatingArms, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
-from dacph_drake.errors import ConfigError, require_in_range, require_positive
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.scenario.errors import ConfigError, require_in_range, require_positive
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.robots.robot import require_clear_start
-from dacph_drake.scenario import PlanarArm, Scenario
+from dacph_drake.robots.sizing import (LHS_DAMPING_RATE, MIN_AMPLITUDE, rhs_period,
+                                      sized_disturbance, sized_uncertainty)
+from dacph_drake.scenario import EndEffectorAngle, PlanarArm, Scenario
 from dacph_drake.scenario.checks import validate_shared
+from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.true_rhs import TrueRhs
 
@@ -52,6 +56,62 @@ class PlanarRobot:
 
     Raises:
         ConfigError: Naming the scenario's first invalid setting."""
+
+    # A sweep's trials per diagram (scripts/bench_sweep.py: a planar arm's fastest per
+    # trial), and the ground truth's sweep distributions it takes.
+    BATCH_SIZE = 64
+    TRUTH_SAMPLES = ("link_mass_scale", "link_length_scale", "link_inertia_scale",
+                     "base_mass_scale", "base_inertia_scale")
+
+    @staticmethod
+    def SizedScenario(section: PlanarArm, q0: Optional[Sequence[float]],
+                      task: Optional[EndEffectorAngle], rows: Sequence[int]
+                      ) -> Optional[Scenario]:
+        """robots.robot.Robot.SizedScenario: planar_arm_scenario; None for the paper's
+        arm (Scenario's defaults)."""
+        if section.truth == RobotParams():
+            return None
+        return planar_arm_scenario(section, q0, task)
+
+    @staticmethod
+    def ResolvePaths(section: PlanarArm, folder: Path) -> None:
+        """robots.robot.Robot.ResolvePaths: a planar arm names no file."""
+
+    @staticmethod
+    def JointNames(section: PlanarArm) -> None:
+        """robots.robot.Robot.JointNames: a planar arm's joints have no names."""
+        return None
+
+    @staticmethod
+    def ApplyTruthSample(section: PlanarArm, sampled: Dict[str, object]) -> None:
+        """robots.robot.Robot.ApplyTruthSample: per link mass (and inertia), length
+        (com, width; inertia by its square) and inertia factors, the base's mass (and
+        inertia) and inertia factors."""
+        links = section.truth.links
+        for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
+            link.mass *= f
+            link.inertia *= f
+        for link, f in zip(links, sampled.get("link_length_scale", [1.0] * len(links))):
+            link.length *= f
+            link.com *= f
+            link.width *= f
+            link.inertia *= f * f
+        for link, f in zip(links, sampled.get("link_inertia_scale", [1.0] * len(links))):
+            link.inertia *= f
+        f = sampled.get("base_mass_scale", 1.0)
+        section.truth.base.mass *= f
+        section.truth.base.inertia *= f * sampled.get("base_inertia_scale", 1.0)
+
+    @staticmethod
+    def ApplyModelError(section: PlanarArm, links: Optional[Sequence[float]],
+                        base: Optional[float]) -> None:
+        """robots.robot.Robot.ApplyModelError: on the nominal links and base."""
+        for link, f in zip(section.nominal.links, links or []):
+            link.mass *= f
+            link.inertia *= f
+        if base is not None:
+            section.nominal.base.mass *= base
+            section.nominal.base.inertia *= base
 
     def __init__(self, scenario: Scenario, task: "Task"):
         self.scenario, self.task = scenario, task
@@ -154,3 +214,47 @@ class PlanarRobot:
         truth = self.scenario.robot.truth
         return (truth.base.mass + sum(link.mass for link in truth.links),
                 float(truth.base.mass))
+
+
+def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
+                        task: Optional[EndEffectorAngle] = None) -> Scenario:
+    """The scenario of a planar arm of any number of links, sized by the module's
+    rule: its uncertainty and disturbance from the true arm's joint inertias at q0
+    and the reference's rates; without a task, the LHS damping K_d = Kd I at most
+    LHS_DAMPING_RATE inf_q lambda_min(M), so that the sampled LHS loop stays well
+    damped on an arm with light distal links; periods.rhs shortened where the gain
+    rule asks for it (rhs_period: c grows as Kd / inf lambda_min); the paper's phases,
+    periods, RHS and learner settings.
+
+    Args:
+        robot: The robot section (the defaults' nominal arm: a copy of its truth).
+        q0: The start (default: the paper's q1 = 0.3 rad, its elbow's 1 rad spread evenly).
+        task: The task (default EndEffectorAngle(): the paper's reference and gains)."""
+    n = robot.truth.num_links
+    robot = copy.deepcopy(robot)
+    robot.nominal = copy.deepcopy(robot.truth)
+    validate_planar_arm(robot)  # names a bad link before its plant is built
+    nominal = ReducedOrderModel(MakeArmPlant(robot.nominal))
+    if task is None:
+        task = EndEffectorAngle()
+        task.gains.Kd = min(task.gains.Kd,
+                            LHS_DAMPING_RATE * mass_matrix_bounds(nominal)[0])
+    q0 = np.asarray([0.3] + [1.0 / max(n - 1, 1)] * (n - 1) if q0 is None else q0,
+                    float)
+    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0])
+    if len(q0) != n:
+        return scenario         # Validate names q0's length; nothing to size by
+    reference = task.reference
+    amplitudes = np.maximum(np.asarray(reference.amplitudes, float), 0.0)
+    periods = np.asarray(reference.periods, float)
+    if not (len(periods) and np.all(periods > 0) and len(amplitudes) == len(periods)):
+        return scenario         # Validate names the reference's problem
+    if not np.any(amplitudes > 0):
+        amplitudes = np.full_like(periods, MIN_AMPLITUDE / len(periods))
+    rate = float(np.sum(2 * np.pi * amplitudes / periods))
+    acceleration = float(np.sum(amplitudes * (2 * np.pi / periods) ** 2))
+    inertia = np.diag(nominal.MassMatrix(q0))   # the defaults' nominal is the truth
+    scenario.uncertainty = sized_uncertainty(inertia, inertia * rate)
+    scenario.disturbance = sized_disturbance(inertia * acceleration)
+    scenario.periods.rhs = rhs_period(scenario, nominal)
+    return scenario

@@ -1,12 +1,12 @@
-"""The Robot protocol: what a closed loop's build needs of the arm it controls,
-whatever task it serves (tasks.Task); robots.planar and robots.described implement
-it, assembly.robot_of picks one."""
+"""The Robot protocol: what a scenario's load, a sweep and a closed loop's build need
+of the arm, whatever task it serves (tasks.Task); robots.planar and robots.described
+implement it, assembly.registry.ROBOTS maps each robot section to its kind."""
 from pathlib import Path
-from typing import Callable, Dict, Optional, Protocol, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple, Union
 
 import numpy as np
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 
 class Robot(Protocol):
@@ -17,11 +17,62 @@ class Robot(Protocol):
         task: The tasks.Task it serves.
         num_joints: n.
         model: The controller's reduced model (nominal inertias).
+        BATCH_SIZE: A sweep's trials per diagram where the sweep does not say.
+        TRUTH_SAMPLES: The sweep distributions of the ground truth the section takes
+            (montecarlo.definition.ROBOT_DISTRIBUTIONS).
     """
     scenario: object
     task: object
     num_joints: int
     model: object
+    BATCH_SIZE: int
+    TRUTH_SAMPLES: Tuple[str, ...]
+
+    @staticmethod
+    def SizedScenario(section: object, q0: Optional[Sequence[float]], task: Optional[object],
+                      rows: Sequence[int]) -> Optional["Scenario"]:
+        """The scenario a file naming this robot starts from, every per-joint setting
+        sized to the arm (robots.sizing); None: Scenario's defaults.
+
+        Args:
+            section: The file's robot section.
+            q0: The file's q0 [rad] (None where it leaves it out).
+            task: The file's task section (None where it leaves it out).
+            rows: The GJM's rows that task tracks (tasks.Task.jacobian_rows)."""
+
+    @staticmethod
+    def ResolvePaths(section: object, folder: Path) -> None:
+        """Makes the section's relative file paths relative to its scenario file's folder.
+
+        Args:
+            section: The robot section (changed in place).
+            folder: The scenario file's folder."""
+
+    @staticmethod
+    def JointNames(section: object) -> Optional[List[str]]:
+        """The names of the joints of q, in q's order (None: its joints have no names).
+
+        Args:
+            section: The robot section, its paths resolved."""
+
+    @staticmethod
+    def ApplyTruthSample(section: object, sampled: Dict[str, object]) -> None:
+        """Applies a sweep trial's sampled ground truth (TRUTH_SAMPLES) to the section.
+
+        Args:
+            section: The robot section (changed in place).
+            sampled: The trial's sampled settings by name."""
+
+    @staticmethod
+    def ApplyModelError(section: object, links: Optional[Sequence[float]],
+                        base: Optional[float]) -> None:
+        """Applies a sweep trial's controller model error: factors on the nominal
+        mass and inertia of each link (joint) and of the base.
+
+        Args:
+            section: The robot section (changed in place).
+            links: One factor per link (joint), or None.
+            base: The base's factor, or None."""
 
     @property
     def truth_plant(self) -> "MultibodyPlant":

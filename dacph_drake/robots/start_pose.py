@@ -13,10 +13,10 @@ from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RotationMatrix
 from pydrake.multibody.tree import Frame
 
-from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.floating_model import FloatingBaseModel, arm_joints
 from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import EndEffectorAttitude
-from dacph_drake.tasks.attitude import (attitude_error, damped_pseudo_inverse,
+from dacph_drake.dynamics.attitude import (attitude_error, damped_pseudo_inverse,
                                         reference_at, reference_start)
 
 # The smallest singular value of D (rad/s of the end effector per rad/s of the
@@ -297,7 +297,6 @@ def task_singularity(model: FloatingBaseModel, q0: Sequence[float],
         model: The arm's model.
         q0: The start [rad].
         rows: The task Jacobian's rows (task_jacobian)."""
-    from dacph_drake.robots.described import arm_joints
     D = task_jacobian(model, q0, rows=rows)
     _, sigma, Vt = np.linalg.svd(D)
     refused = singular_bounds(rows)[1]

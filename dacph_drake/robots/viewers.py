@@ -16,8 +16,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Context, DiagramBuilder
 
 from dacph_drake.robots.description import AddRobotFromDescription
-from dacph_drake.errors import ConfigError, require_positive
-from dacph_drake.loop.files import prepare_out_dir
+from dacph_drake.scenario.errors import ConfigError, require_positive
+from dacph_drake.atomic_files import prepare_out_dir
 from dacph_drake.log_layout import AttitudeLog, LhsLog
 from dacph_drake.dynamics.plant import (BASE_COLOR, END_EFFECTOR, LINK_COLORS,
                                AddFreeFloatingArm, ArmCoordinates)

@@ -5,14 +5,35 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
-from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
+from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
-from dacph_drake.gain_rule import check_period_order
 from dacph_drake.scenario.simulator import validate_simulator_config
 from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNER_COUPLINGS,
                                   LEARNER_MODELS, LEARNER_MODES, LEARNER_PRIOR_SCALES,
-                                  ON_MISMATCH, TRUST_ANCHORS, LocalBayes, Phases,
-                                  Scenario)
+                                  ON_MISMATCH, TRUST_ANCHORS, LocalBayes, Periods,
+                                  Phases, Scenario)
+
+
+def check_period_order(periods: Periods) -> None:
+    """Refuses periods that break the time-scale separation: the RHS must be faster than
+    the LHS, the LHS no slower than the learner's sampling, nor the sampling than training.
+
+    Args:
+        periods: The scenario's periods.
+
+    Raises:
+        ConfigError: Naming the two periods out of order."""
+    order = [("rhs", periods.rhs), ("lhs", periods.lhs),
+             ("learner_sample", periods.learner_sample), ("learner", periods.learner)]
+    for (fast, h_fast), (slow, h_slow) in zip(order, order[1:]):
+        if not h_fast <= h_slow:
+            raise ConfigError(
+                f"periods.{fast} = {h_fast:g} s must not exceed periods.{slow} = "
+                f"{h_slow:g} s (time-scale separation: RHS faster than LHS faster "
+                "than the learner)")
+    if periods.lhs == periods.rhs:
+        raise ConfigError(f"periods.rhs = {periods.rhs:g} s must be shorter than "
+                          f"periods.lhs = {periods.lhs:g} s")
 
 
 def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Sequence[str] = ()

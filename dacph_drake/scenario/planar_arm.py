@@ -7,7 +7,7 @@ from typing import List
 
 from pydrake.common.yaml import yaml_dump_typed
 
-from dacph_drake.errors import ConfigError, require_in_range, require_positive
+from dacph_drake.scenario.errors import ConfigError, require_in_range, require_positive
 from dacph_drake.scenario.yaml_files import load_yaml_dataclass
 
 

@@ -1,10 +1,12 @@
 """A scenario's ``simulator:`` section: Drake's SimulatorConfig, with the closed loop's
-default (FixedStepConfig), the schemes it accepts and their check."""
+default (FixedStepConfig), the schemes it accepts and their check, and the Simulator
+every diagram of the package runs in (MakeSimulator)."""
 import copyreg
 
-from pydrake.systems.analysis import SimulatorConfig
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
+from pydrake.systems.framework import Diagram
 
-from dacph_drake.errors import (ConfigError, require_in_range, require_nonnegative,
+from dacph_drake.scenario.errors import (ConfigError, require_in_range, require_nonnegative,
                                 require_one_of)
 
 # Explicit Runge-Kutta schemes: the closed loop's Python systems have no AutoDiff
@@ -70,3 +72,14 @@ def _reduce_simulator_config(config: SimulatorConfig):
 # A scenario travels to sweep workers by pickle; pydrake's SimulatorConfig has no
 # pickle support of its own, so it travels as its fields.
 copyreg.pickle(SimulatorConfig, _reduce_simulator_config)
+
+
+def MakeSimulator(diagram: Diagram, config: SimulatorConfig) -> Simulator:
+    """Makes a Simulator for a diagram with a configuration applied.
+
+    Args:
+        diagram: The diagram.
+        config: The simulator configuration (validate_simulator_config)."""
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(config, simulator)
+    return simulator

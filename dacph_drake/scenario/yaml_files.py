@@ -12,7 +12,7 @@ from typing import Any, Callable, List, Optional, Sequence, Type, TypeVar, Union
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 _Schema = TypeVar("_Schema")
 

@@ -13,8 +13,7 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel
 from dacph_drake.log_layout import AttitudeLog, PoseLog
 from dacph_drake.dynamics.plant import END_EFFECTOR
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Excitation
-from dacph_drake.robots.clearance_potential import BaseClearancePotential
-from dacph_drake.tasks.attitude import reference_at, reference_start
+from dacph_drake.dynamics.attitude import reference_at, reference_start
 
 XI_DOT_STEP = 1e-5              # [s] of xi's central difference along the motion
 # [m] beyond the potential's margin, the nearest link keeps xi = -eta grad U zero at
@@ -29,12 +28,13 @@ class AttitudeTrial:
     Attributes:
         model: The controller's model (its inertias set from input
             ``inertial_parameters`` with ``identify``).
-        potential: The clearance potential, or None.
+        potential: The clearance potential
+            (robots.clearance_potential.BaseClearancePotential), or None.
         q0: The initial joint angles [rad] (n): R_d(0) is the end effector's
             attitude there.
     """
     model: FloatingBaseModel
-    potential: Optional[BaseClearancePotential]
+    potential: Optional[object]
     q0: Sequence[float]
 
 

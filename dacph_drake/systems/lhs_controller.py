@@ -9,9 +9,9 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.kernels.loop import lhs_samples, pack_lhs, stack_packs
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel
-from dacph_drake.tasks.reference import OrientationReference
+from dacph_drake.dynamics.reference import OrientationReference
 from dacph_drake.scenario import Excitation, LhsGains
 
 

@@ -9,14 +9,14 @@ import numpy as np
 from dacph_drake.dynamics.inertial_parameters import InertialParameters
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
-from dacph_drake.errors import (ConfigError, require_in_range, require_nonnegative,
+from dacph_drake.scenario.errors import (ConfigError, require_in_range, require_nonnegative,
                                 require_positive)
 from dacph_drake.log_layout import LhsLog
-from dacph_drake.robots.base_repulsion import BaseRepulsionPotential
+from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.scenario import EndEffectorAngle, Excitation, Periods, PlanarArm
 from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
                                                 boundary_layer_per_chi)
-from dacph_drake.tasks.reference import OrientationReference
+from dacph_drake.dynamics.reference import OrientationReference
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.task import LhsSide, TaskSignals
 

@@ -7,7 +7,7 @@ from typing import Dict, Sequence, Tuple
 import numpy as np
 
 from dacph_drake.dynamics.plant import ArmCoordinates
-from dacph_drake.errors import (ConfigError, require_finite_numbers, require_in_range,
+from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.robots.start_pose import ATTITUDE_ROWS, task_singularity

@@ -14,7 +14,7 @@ from typing import Dict, List
 import numpy as np
 
 from dacph_drake.analysis.phases import phase_windows, rms
-from dacph_drake.errors import ConfigError, require_finite_numbers, require_positive
+from dacph_drake.scenario.errors import ConfigError, require_finite_numbers, require_positive
 from dacph_drake.log_layout import PoseLog
 from dacph_drake.scenario import AttitudeGains, AttitudeReference, Periods
 from dacph_drake.robots.robot import Robot

@@ -13,7 +13,7 @@ from typing import Dict
 
 import numpy as np
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.log_layout import PoseLog
 from dacph_drake.robots.robot import Robot
 from dacph_drake.robots.start_pose import POSITION_ROWS

@@ -10,7 +10,7 @@ from dacph_drake.analysis.phases import (PHASES, phase_windows,  # noqa: F401
 from dacph_drake.dynamics.model_error import realized_model_error
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.log_layout import LearnerLog, RhsLog
-from dacph_drake.assembly import robot_of
+from dacph_drake.assembly.registry import robot_of
 from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Scenario
 

@@ -16,13 +16,13 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
 from dacph_drake.dynamics.plant import AddStateSplitter, SetArmsAtRest
-from dacph_drake.assembly import robots_of
+from dacph_drake.assembly.registry import robots_of
 from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Excitation, Scenario
-from dacph_drake.loop.simulator import MakeSimulator
+from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
 
 

@@ -1,8 +1,7 @@
-"""The scenario of an arm from its own description (scenario.DescribedArm), or of a
-planar arm of other than the paper's two links (scenario.PlanarArm), with every
-per-joint setting sized to the arm, so that a scenario naming only the robot (and
-q0) runs DAC (scenario files: scenario.files.load_scenario starts from it; Python:
-arm_scenario, planar_arm_scenario).
+"""The rule that sizes every per-joint setting of a scenario to its arm, so that a
+scenario naming only the robot (and q0) runs DAC: each robot kind's SizedScenario
+(robots.described.arm_scenario, robots.planar.planar_arm_scenario) applies it, and a
+scenario file is read over its result (assembly.scenario_files.load_scenario).
 
 The rule. Scales per joint j, from the description at q0 and the task's reference:
 
@@ -46,23 +45,15 @@ described_arm_periods, described_arm_rhs, described_arm_learner). A planar arm's
 the paper's (Scenario's defaults); its reference alpha_d = sum_i a_i sin(2 pi t / T_i)
 gives w = sum_i 2 pi a_i / T_i and the peak acceleration sum_i a_i (2 pi / T_i)^2
 (tau_j = M_j times it), M_j from the true arm."""
-import copy
-from typing import TYPE_CHECKING, Optional, Sequence, Union
+from typing import Optional
 
 import numpy as np
 
-from dacph_drake.errors import require_positive
-from dacph_drake.scenario.planar_arm import RobotParams
-from dacph_drake.scenario.simulator import FixedStepConfig
-from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAngle,
-                                  EndEffectorAttitude, Excitation, Phases, PlanarArm,
-                                  Scenario, Uncertainty)
-from dacph_drake.scenario.built_in import (SATELLITE_PHASES, described_arm_learner,
-                                           described_arm_periods, described_arm_rhs)
-
-if TYPE_CHECKING:
-    from dacph_drake.dynamics.floating_model import FloatingBaseModel
-    from dacph_drake.dynamics.reduced_model import ReducedOrderModel
+from dacph_drake.dynamics.floating_model import FloatingBaseModel
+from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound
+from dacph_drake.kernels.loop import FRICTION_VELOCITY
+from dacph_drake.scenario import Disturbance, Excitation, Scenario, Uncertainty
 
 # [1/s] the planar LHS damping's largest rate Kd / inf_q lambda_min(M), 0.5 per 1 ms
 # LHS period (the paper's arm: 0.5 N m s / 0.0051 kg m^2 = 98 1/s). At 2 per period
@@ -70,99 +61,13 @@ if TYPE_CHECKING:
 LHS_DAMPING_RATE = 500.0
 DAMPING_RATE = 2.0              # [1/s] D0_j / M_j: a free joint's speed decays over 0.5 s
 MIN_AMPLITUDE = 0.1             # [rad] the amplitude the scales assume for a still reference
-DEFAULT_STEP = 2.5e-4           # [s] loop.simulator.FixedStepConfig's
+DEFAULT_STEP = 2.5e-4           # [s] scenario.simulator.FixedStepConfig's
 STEP_RATE_PRODUCT = 1.0         # h lambda of the fastest damping mode (RK2: stable to 2)
 # [rad] the most a joint moves under the learner's excitation (half the 1e-4 rad
 # tracking target; 2e-4 N m at 4.3 Hz move a 0.0067 kg m^2 wrist 4e-5 rad, a
 # 4e-5 kg m^2 one 7e-3 rad).
 EXCITATION_MOTION = 5e-5
 DISTURBANCE_ACCELERATION = 5.0  # the most d accelerates a joint, per reference's peak
-
-
-def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
-                 task: Optional[EndEffectorAttitude] = None) -> Scenario:
-    """The scenario of an arm, its per-joint settings sized by the module's rule
-    (unsized where q0 has not one entry per joint: its validation names q0's length).
-
-    Args:
-        robot: The arm's robot section.
-        q0: The initial joint angles [rad] (default: robots.start_pose.choose_start).
-        task: The task it tracks (default EndEffectorAttitude()).
-
-    Raises:
-        ConfigError: Bad assembly settings, an unloadable description, no start found."""
-    from dacph_drake.dynamics.floating_model import FloatingBaseModel
-    from dacph_drake.errors import ConfigError
-    from dacph_drake.robots.described import (joint_friction, link_base_clearance,
-                                              null_space_rate,
-                                              require_every_joint_moves_inertia)
-    from dacph_drake.robots.description import ParsedDescription
-    from dacph_drake.robots.described import validate_assembly
-    from dacph_drake.robots.start_pose import choose_start, rehearse, tracked
-    validate_assembly(robot)
-    parsed = ParsedDescription(robot)
-    model = FloatingBaseModel(parsed.plant)
-    require_every_joint_moves_inertia(model, robot.description)
-    from dacph_drake.tasks.registry import TASKS
-    task = EndEffectorAttitude() if task is None else task
-    rows = TASKS[type(task)].jacobian_rows
-    # The reference sizes the arm: its attitude's, or (a position task) its position's.
-    reference = getattr(task, "reference", None) or task.position
-    rehearsal_time = SATELLITE_PHASES["warmup"] + reference.period
-    clearance = link_base_clearance(parsed, model)     # one SceneGraph context
-    if q0 is None:
-        try:
-            q0 = choose_start(model, task, clearance,
-                              null_space_rate(parsed, model, robot.potential),
-                              rehearsal_time, rows)
-        except ValueError as e:
-            what = tracked(rows)
-            how = {"attitude": "turn about every axis",
-                   "position": "move in every direction"}.get(
-                what, "turn about every axis and move in every direction")
-            raise ConfigError(
-                f"robot.description {robot.description!r}: no start pose found for "
-                f"the end-effector {what} task ({e}); allowed: a q0 in the file, or "
-                f"an arm whose end effector can {how}") from e
-    q0 = np.asarray(q0, float)
-    robot = copy.deepcopy(robot)
-    if len(q0) == model.num_joints:
-        robot.potential.margin = potential_margin(robot.potential.margin,
-                                                  clearance(q0))
-    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0],
-                        phases=Phases(**SATELLITE_PHASES), rhs=described_arm_rhs(),
-                        periods=described_arm_periods(), learner=described_arm_learner())
-    if len(q0) != model.num_joints:
-        return scenario         # Validate names q0's length; nothing to size by
-    rate = 2 * np.pi * max(_reference_angle(model, q0, task), MIN_AMPLITUDE) \
-        / reference.period
-    M = model.MassMatrix(q0)
-    inertia = np.diag(M)
-    rehearsal = rehearse(model, q0, task, rehearsal_time)
-    # Past the warm-up: the uncertainty and the disturbance act from phase 1 on, when
-    # the start's error has decayed (the rehearsal also starts with a jump in p).
-    steady = rehearsal.time >= SATELLITE_PHASES["warmup"]
-    momentum = np.maximum(inertia * rate, np.max(np.abs(rehearsal.p[steady]), axis=0))
-    torque = np.maximum(inertia * rate * 2 * np.pi / reference.period,
-                        np.max(np.abs(rehearsal.p_rate[steady]), axis=0))
-    scenario.uncertainty = sized_uncertainty(inertia, momentum)
-    # The paper's q1^2 coupling at the angles the task reaches: at most its size at
-    # |q1| = 1 rad (the paper's arm stays within it). From a start at q1 = 2.9 rad
-    # (a UR5's chosen start) it would put 3.5 of joint 1's command into joint 2's
-    # torque, and the true RHS loop lost its margin (spectral radius 0.97 > 0.95).
-    reach = float(np.max(rehearsal.q[steady, 0] ** 2))
-    if reach > 1.0:
-        scenario.uncertainty.B_q1_squared = (
-            np.asarray(scenario.uncertainty.B_q1_squared) / reach).tolist()
-    scale_couplings(scenario.uncertainty, torque)
-    scenario.disturbance = sized_disturbance(torque)
-    scenario.disturbance.scale = disturbance_scale(
-        scenario.disturbance, M, rate * 2 * np.pi / reference.period)
-    scenario.excitation.joint_scale = excitation_scale(scenario.excitation, M)
-    scenario.simulator = FixedStepConfig(step=truth_step(
-        model, rehearsal.q, scenario.uncertainty, scenario.periods.rhs,
-        joint_friction(parsed, model)))
-    return scenario
 
 
 def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
@@ -233,7 +138,7 @@ def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
     return [] if np.all(scale >= 1.0) else [float(x) for x in scale]
 
 
-def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
+def truth_step(model: FloatingBaseModel, configurations: np.ndarray,
                uncertainty: Uncertainty, rhs_period: float,
                friction: Optional[np.ndarray] = None) -> float:
     """The ground truth's fixed RK2 step [s] for an arm's fastest damping mode.
@@ -243,7 +148,7 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
     mode, the largest generalized eigenvalue of (D, M(q)) with D the description's
     joint damping plus D0, D_offset and D_linear at the sized momentum and the joint
     friction's steepest slope f / FRICTION_VELOCITY (kernels.loop.add_friction), over
-    the configurations given. At most the default step (loop.simulator), and
+    the configurations given. At most the default step (scenario.simulator), and
     dividing the RHS period evenly (the discrete updates stop the integrator at
     every RHS sample anyway); at least 1e-7 s (simulator.max_step_size's lower
     bound).
@@ -254,7 +159,6 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
         uncertainty: The sized RHS (D0 and its offset).
         rhs_period: periods.rhs [s].
         friction: The joints' Coulomb friction f (n) [N m] (None: none)."""
-    from dacph_drake.kernels.loop import FRICTION_VELOCITY
     damping = model.joint_damping + 1.5 * np.asarray(uncertainty.D0, float)
     if friction is not None:
         damping = damping + np.asarray(friction, float) / FRICTION_VELOCITY
@@ -271,54 +175,7 @@ def truth_step(model: "FloatingBaseModel", configurations: np.ndarray,
     return max(rhs_period / int(np.ceil(rhs_period / step - 1e-9)), 1e-7)
 
 
-def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
-                        task: Optional[EndEffectorAngle] = None) -> Scenario:
-    """The scenario of a planar arm of any number of links, sized by the module's
-    rule: its uncertainty and disturbance from the true arm's joint inertias at q0
-    and the reference's rates; without a task, the LHS damping K_d = Kd I at most
-    LHS_DAMPING_RATE inf_q lambda_min(M), so that the sampled LHS loop stays well
-    damped on an arm with light distal links; periods.rhs shortened where the gain
-    rule asks for it (rhs_period: c grows as Kd / inf lambda_min); the paper's phases,
-    periods, RHS and learner settings.
-
-    Args:
-        robot: The robot section (the defaults' nominal arm: a copy of its truth).
-        q0: The start (default: the paper's q1 = 0.3 rad, its elbow's 1 rad spread evenly).
-        task: The task (default EndEffectorAngle(): the paper's reference and gains)."""
-    from dacph_drake.dynamics.plant import MakeArmPlant
-    from dacph_drake.robots.planar import validate_planar_arm
-    from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
-    n = robot.truth.num_links
-    robot = copy.deepcopy(robot)
-    robot.nominal = copy.deepcopy(robot.truth)
-    validate_planar_arm(robot)  # names a bad link before its plant is built
-    nominal = ReducedOrderModel(MakeArmPlant(robot.nominal))
-    if task is None:
-        task = EndEffectorAngle()
-        task.gains.Kd = min(task.gains.Kd,
-                            LHS_DAMPING_RATE * mass_matrix_bounds(nominal)[0])
-    q0 = np.asarray([0.3] + [1.0 / max(n - 1, 1)] * (n - 1) if q0 is None else q0,
-                    float)
-    scenario = Scenario(robot=robot, task=task, q0=[float(x) for x in q0])
-    if len(q0) != n:
-        return scenario         # Validate names q0's length; nothing to size by
-    reference = task.reference
-    amplitudes = np.maximum(np.asarray(reference.amplitudes, float), 0.0)
-    periods = np.asarray(reference.periods, float)
-    if not (len(periods) and np.all(periods > 0) and len(amplitudes) == len(periods)):
-        return scenario         # Validate names the reference's problem
-    if not np.any(amplitudes > 0):
-        amplitudes = np.full_like(periods, MIN_AMPLITUDE / len(periods))
-    rate = float(np.sum(2 * np.pi * amplitudes / periods))
-    acceleration = float(np.sum(amplitudes * (2 * np.pi / periods) ** 2))
-    inertia = np.diag(nominal.MassMatrix(q0))   # the defaults' nominal is the truth
-    scenario.uncertainty = sized_uncertainty(inertia, inertia * rate)
-    scenario.disturbance = sized_disturbance(inertia * acceleration)
-    scenario.periods.rhs = rhs_period(scenario, nominal)
-    return scenario
-
-
-def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
+def rhs_period(scenario: Scenario, nominal: ReducedOrderModel) -> float:
     """The scenario's periods.rhs [s], or a shorter one where the gain rule asks for it.
 
     The RHS loop's largest rate c = (1 + rhs.c_margin) c_min(rhs.beta_max) (eq. 48)
@@ -329,8 +186,6 @@ def rhs_period(scenario: Scenario, nominal: "ReducedOrderModel") -> float:
     Args:
         scenario: The scenario (its rhs settings, task.gains.Kd and periods).
         nominal: The controller's model of the arm (mass_matrix_bounds)."""
-    from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
-    from dacph_drake.gain_rule import WELL_DAMPED_LOOP_GAIN, c_lower_bound
     rhs, periods = scenario.rhs, scenario.periods
     largest = (1 + rhs.c_margin) * c_lower_bound(
         rhs.Td, scenario.task.gains.Kd, mass_matrix_bounds(nominal)[0], rhs.beta_max)
@@ -381,51 +236,3 @@ def sized_disturbance(torque: np.ndarray) -> Disturbance:
         lf_frequency=(0.05 + 0.01 * np.arange(n)).tolist(),
         hf_amplitude=0.05 * largest,
         hf_direction=(_alternating(n) * torque / largest).tolist())
-
-
-def sized_defaults(robot: Union[PlanarArm, DescribedArm], q0: Optional[Sequence[float]],
-                   task: Optional[object]) -> Optional[Scenario]:
-    """The scenario a file naming this robot starts from: every per-joint setting sized
-    to the arm (planar_arm_scenario or arm_scenario), so that a file naming only the
-    robot (and q0) runs; None for the paper's planar arm (Scenario's defaults).
-
-    Args:
-        robot: The file's robot section.
-        q0: The file's q0 [rad] (None where it leaves it out).
-        task: The file's task (None where it leaves it out)."""
-    validate_given(q0, task)
-    if isinstance(robot, DescribedArm):
-        return arm_scenario(robot, q0, task)
-    if robot.truth == RobotParams():
-        return None
-    return planar_arm_scenario(robot, q0, task)
-
-
-def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> None:
-    """Checks what a file gives that sizing uses (the start and the task's reference)
-    before any sizing, start-pose search or plant call reads it.
-
-    Args:
-        q0: The file's q0 [rad] (None where it leaves it out).
-        task: The file's task (None where it leaves it out).
-
-    Raises:
-        ConfigError: Naming the first bad setting."""
-    from dacph_drake.scenario.checks import validate_start
-    from dacph_drake.tasks.registry import TASKS
-    if q0 is not None:
-        validate_start(q0)
-    if task is not None and type(task) in TASKS:
-        TASKS[type(task)].Validate(task, described_arm_periods())
-
-
-def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
-    """The reference's amplitude as a joint angle [rad]: the attitude's; a position's
-    [m] over the position rows' largest singular value at q0 [m/rad] (the longest
-    lever the joints move the end effector by)."""
-    if getattr(task, "reference", None) is not None:
-        return task.reference.amplitude
-    from dacph_drake.robots.start_pose import POSITION_ROWS, task_jacobian
-    lever = np.linalg.svd(task_jacobian(model, q0, rows=POSITION_ROWS),
-                          compute_uv=False)[0]
-    return task.position.amplitude / max(lever, 1e-9)

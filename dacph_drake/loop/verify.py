@@ -34,9 +34,9 @@ from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
 from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
-from dacph_drake.errors import ConfigError  # noqa: E402
+from dacph_drake.scenario.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
-from dacph_drake.assembly import robot_of  # noqa: E402
+from dacph_drake.assembly.registry import robot_of  # noqa: E402
 from dacph_drake.loop.run_store import load_run  # noqa: E402
 from dacph_drake.scenario import Scenario  # noqa: E402
 
@@ -189,7 +189,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     estimates = {"rejected_samples": int(len(rejected)), "logged_samples": int(len(t)),
                  "first_rejection_time": float(t[rejected[0]]) if len(rejected) else None,
                  "dic_violations": int(np.sum(rhs[:, R.dic_ok] < 0.5))}
-    from dacph_drake.analysis.metrics import learning_report
+    from dacph_drake.loop.metrics import learning_report
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
               "controller": run_meta.get("controller", "dac"),
               "learning": learning_report(logs, scenario),

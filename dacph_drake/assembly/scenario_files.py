@@ -13,7 +13,7 @@ from typing import Dict, List, Optional, Tuple, Union
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import SimulatorConfig
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.scenario.planar_arm import RobotParams
 from dacph_drake.scenario.yaml_files import load_yaml_dataclass, read_yaml
 from dacph_drake.scenario import (AttitudeGains, AttitudeReference, ClearancePotential,
@@ -26,8 +26,7 @@ from dacph_drake.scenario.built_in import (BUILT_IN_SCENARIOS, described_arm_lea
                                            described_arm_rhs, six_dof_disturbance,
                                            six_dof_uncertainty)
 from dacph_drake.scenario.simulator import FixedStepConfig
-from dacph_drake.scenario.sizing import sized_defaults
-from dacph_drake.assembly import validate_scenario
+from dacph_drake.assembly.registry import robot_kind, sized_defaults, validate_scenario
 
 # The YAML lines of settings added after planar runs were first saved, at their
 # defaults, and the sections added since: left out of PlanarLayoutV1's saved forms
@@ -397,7 +396,8 @@ def _load(path: Union[str, Path], saved_run: bool) -> Scenario:
                           + (f"; did you mean {close[0]!r}?" if close else ""))
     scenario = load_older_layout(path, saved_run) or _load_current_layout(path,
                                                                           saved_run)
-    resolve_paths(scenario.robot, Path(path).resolve().parent)   # paths in the file
+    robot_kind(scenario.robot).ResolvePaths(scenario.robot,
+                                            Path(path).resolve().parent)  # paths in the file
     validate_scenario(scenario)
     return scenario
 
@@ -405,12 +405,13 @@ def _load(path: Union[str, Path], saved_run: bool) -> Scenario:
 def _load_current_layout(path, saved_run: bool) -> Scenario:
     """A file of the current layout, read over its robot's defaults: Scenario's own
     for a planar arm; for an arm from its description, the settings sized to it
-    (scenario.sizing.sized_defaults), so that a file naming only the robot
+    (assembly.registry.sized_defaults), so that a file naming only the robot
     and q0 runs (a saved run's: the settings added since as they were)."""
     migrate = _migrate_saved_file if saved_run else _migrate_file
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
                                    migrate=migrate)
-    resolve_paths(scenario.robot, Path(path).resolve().parent)   # before it is parsed
+    robot_kind(scenario.robot).ResolvePaths(scenario.robot,
+                                            Path(path).resolve().parent)  # before it is parsed
     raw = read_yaml(path)
     given = raw if isinstance(raw, dict) else {}
     defaults = sized_defaults(scenario.robot,
@@ -497,9 +498,6 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
 
     from pydrake.common.yaml import yaml_dump, yaml_load_typed
 
-    from dacph_drake.dynamics.floating_model import FloatingBaseModel
-    from dacph_drake.robots.described import arm_joints
-    from dacph_drake.robots.description import MakeRobotPlant
     mapping, robot = raw["q0"], raw.get("robot")
     if not (isinstance(robot, dict) and "description" in robot):
         raise ConfigError(f"{path}: q0 is given by joint name; allowed: by name only "
@@ -507,8 +505,8 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
                           "else a list with one angle per joint")
     arm = yaml_load_typed(schema=DescribedArm, data=yaml_dump(json.loads(json.dumps(
         robot))))                       # the loader's tagged mapping, as plain data
-    resolve_paths(arm, Path(path).resolve().parent)
-    names = [joint.name() for joint in arm_joints(FloatingBaseModel(MakeRobotPlant(arm)))]
+    robot_kind(arm).ResolvePaths(arm, Path(path).resolve().parent)
+    names = robot_kind(arm).JointNames(arm)
     for name in mapping:
         if name not in names:
             close = difflib.get_close_matches(str(name), names, n=1)
@@ -554,29 +552,6 @@ def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dic
         "scenario now embeds Drake's SimulatorConfig; save it again to update the file)", path,
         migrated["simulator"]["integration_scheme"])
     return migrated
-
-
-def resolve_paths(robot: Union[PlanarArm, DescribedArm], folder: Path) -> None:
-    """Makes a described arm's relative paths (description, package_paths, packages)
-    relative to its scenario file's folder; shipped names, package:// URIs and a
-    path that exists only relative to the working directory stay. A planar arm
-    names no file.
-
-    Args:
-        robot: The robot section.
-        folder: The folder of the scenario file."""
-    if not isinstance(robot, DescribedArm):
-        return
-    def resolved(path: str) -> str:
-        beside = folder / path
-        if Path(path).is_absolute() or (Path(path).exists() and not beside.exists()):
-            return path
-        return str(beside)
-    if (not robot.description.startswith("package://")
-            and Path(robot.description).suffix.lower() in (".urdf", ".sdf", ".xml")):
-        robot.description = resolved(robot.description)
-    robot.package_paths = [resolved(path) for path in robot.package_paths]
-    robot.packages = {name: resolved(path) for name, path in robot.packages.items()}
 
 
 def saved_forms(scenario: Scenario) -> List[str]:

@@ -6,7 +6,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Dict, Iterator, Sequence, Union
 
-from dacph_drake.errors import ConfigError
+from dacph_drake.scenario.errors import ConfigError
 
 
 def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
