@@ -1,25 +1,40 @@
-"""Column layout of the controllers' logs, shared by the systems that write them
-(LhsController, RhsIntegrator, RhsLearner, AttitudeController) and the metrics, figures
-and checks that read them."""
+"""The controllers' logs by named columns (Drake's namedview, with widths), laid out
+from (name, width) pairs rather than offsets, shared by the systems that write them
+and the metrics, figures and checks that read them; a task's log is its layout
+(tasks.task.Task.LogLayout)."""
 
 
-class LhsLog:
-    """The columns of the LHS controller's log,
-    lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)].
+class LogColumns:
+    """A log's columns in the row's order: a scalar's name gives its index, a vector's
+    (name, width) its slice; ``size`` is the row's length.
+
+    Args:
+        columns: Each column: a name (a scalar) or (name, width) (a vector)."""
+
+    def __init__(self, *columns):
+        start = 0
+        for column in columns:
+            name, width = (column, None) if isinstance(column, str) else column
+            setattr(self, name, start if width is None else slice(start, start + width))
+            start += 1 if width is None else width
+        self.size = start
+
+
+class LhsLog(LogColumns):
+    """lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]
+    (LhsController, planar robots).
 
     Args:
         n: The number of joints.
     """
 
     def __init__(self, n: int):
-        self.s = slice(0, n)
-        self.alpha_error, self.alpha_desired, self.lyapunov_V = n, n + 1, n + 2
-        self.size = n + 5
+        super().__init__(("s", n), "alpha_error", "alpha_desired",
+                         "lyapunov_V", "potential", "lambda_min")
 
 
-class RhsLog:
-    """The columns of the RHS integrator's log,
-    rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted,
+class RhsLog(LogColumns):
+    """rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted,
     certified, set_slowest, set_fastest]: trusted is 1 when this refresh adopted
     the learner's estimate; certified 1 while the estimate in use was adopted on its
     credible set's certificate (rhs.adoption certified_set), with that set's slowest
@@ -30,11 +45,9 @@ class RhsLog:
     """
 
     def __init__(self, n: int):
-        self.e_tau, self.e_norm, self.chi = slice(0, n), n, n + 1
-        self.K = slice(n + 2, 2 * n + 2)
-        (self.c, self.c_min, self.dic_ok, self.trusted, self.certified,
-         self.set_slowest, self.set_fastest) = range(2 * n + 2, 2 * n + 9)
-        self.size = 2 * n + 9
+        super().__init__(("e_tau", n), "e_norm", "chi", ("K", n), "c",
+                         "c_min", "dic_ok", "trusted", "certified",
+                         "set_slowest", "set_fastest")
 
 
 class RhsState:
@@ -68,7 +81,7 @@ class RhsState:
         self.model_logged = slice(n * n + n, n * n + 2 * n + 7)
 
 
-class LearnerLog:
+class LearnerLog(LogColumns):
     """learner_log = [loss, beta_hat, nominal loss, holding, network published,
     undetermined, restarts, physical]: the fitted model's weighted squared residual on
     the window; the gain rule's 1 + RMS residual / RMS tau_obs; the nominal RHS's (B0,
@@ -83,29 +96,27 @@ class LearnerLog:
     the port's as the model sees it, and the metrics count them as the prior."""
 
     def __init__(self):
-        (self.loss, self.beta_hat, self.nominal_loss, self.holding,
-         self.network_published, self.undetermined, self.restarts,
-         self.physical) = range(8)
-        self.size = 8
+        super().__init__("loss", "beta_hat", "nominal_loss", "holding",
+                         "network_published", "undetermined", "restarts",
+                         "physical")
 
 
-class AttitudeLog:
+ATTITUDE_COLUMNS = (("e", 3), "e_norm", "s_norm", "lyapunov_V",
+                    "clearance", ("desired", 4))
+
+
+class AttitudeLog(LogColumns):
     """attitude_log = [e (3), |e|, ||s||, V = s^T M s / 2, smallest link-base distance,
     R_d as a quaternion (w, x, y, z)] (AttitudeController, spatial robots)."""
 
     def __init__(self):
-        self.e = slice(0, 3)
-        self.e_norm, self.s_norm, self.lyapunov_V, self.clearance = 3, 4, 5, 6
-        self.desired = slice(7, 11)
-        self.size = 11
+        super().__init__(*ATTITUDE_COLUMNS)
 
 
-class PoseLog(AttitudeLog):
+class PoseLog(LogColumns):
     """pose_log = attitude_log's columns, then e_p = p_E - p_d (3), |e_p|, p_d (3), in
     m (the pose task's AttitudeController)."""
 
     def __init__(self):
-        super().__init__()
-        self.e_position, self.e_position_norm = slice(11, 14), 14
-        self.desired_position = slice(15, 18)
-        self.size = 18
+        super().__init__(*ATTITUDE_COLUMNS, ("e_position", 3), "e_position_norm",
+                         ("desired_position", 3))

@@ -70,7 +70,7 @@ def test_the_pose_rows_are_the_plants_kinematics(robot, rng):
 
 def _pose_scenario(phase: float):
     from dacph_drake.assembly.scenario_files import load_scenario
-    from dacph_drake.tasks.end_effector_pose import EndEffectorPose
+    from dacph_drake.scenario import EndEffectorPose
     scenario = load_scenario("satellite_6dof")
     scenario.task = EndEffectorPose(reference=scenario.task.reference,
                                     gains=scenario.task.gains)
@@ -115,7 +115,7 @@ def test_a_pose_task_needs_six_joints_and_a_regular_start():
     """On a 3-joint arm the pose task is refused naming the joint count."""
     from dacph_drake.assembly.registry import robot_of
     from dacph_drake.assembly.scenario_files import load_scenario
-    from dacph_drake.tasks.end_effector_pose import EndEffectorPose
+    from dacph_drake.scenario import EndEffectorPose
     scenario = load_scenario("satellite_3dof")
     scenario.task = EndEffectorPose()
     with pytest.raises(ConfigError, match="at least 6 joints"):
@@ -144,8 +144,9 @@ class HoldAngleTask(EndEffectorAngleTask):
 
 def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
     """tasks.registry.register(task) and nothing else: a scenario file with
-    ``task: !HoldAngle`` loads, `dacph simulate`, `dacph verify`, `dacph reproduce`
-    and `dacph report` take it, and its LHS system is in the diagram by its name."""
+    ``task: !HoldAngle`` loads, `dacph simulate`, `dacph verify`, `dacph reproduce`,
+    `dacph report` and a 2-trial sweep take it, and its LHS system is in the diagram
+    by its name."""
     from dacph_drake.controllers.dac import build_dac_diagram
     from dacph_drake.scenario import Scenario
     from dacph_drake.assembly.scenario_files import load_scenario
@@ -172,6 +173,15 @@ def test_a_new_task_is_one_module_and_one_registration(tmp_path, monkeypatch):
     assert main(["report", str(out)]) == 0
     alpha = np.load(out / "logs_dac.npz")["lhs_log"][:, 2 + 1]      # alpha_d, n = 2
     assert np.ptp(alpha) == 0.0                                      # held still
+    from dacph_drake.montecarlo.definition import load_sweep
+    from dacph_drake.montecarlo.executors import InProcessExecutor
+    from dacph_drake.montecarlo.runner import run_sweep
+    (tmp_path / "sweep.yaml").write_text(
+        "scenario: hold.yaml\ntrials: 2\ncontrollers: [dac]\ndistributions:\n"
+        "  delta_D_scale: !Uniform {min: 0.5, max: 1.5}\n")
+    rows = run_sweep(load_sweep(tmp_path / "sweep.yaml"), tmp_path / "sweep",
+                     InProcessExecutor(), 1)
+    assert [row["runs"]["dac"]["status"] for row in rows] == ["ok", "ok"]
 
 
 @pytest.mark.parametrize("setting, value, message", [

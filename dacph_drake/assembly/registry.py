@@ -1,19 +1,32 @@
 """The one place a scenario's typed sections meet their implementations: the robot
-section's Robot (robots.robot.Robot) and the task section's Task (tasks.TASKS),
-checked to be a pair that works together."""
+section's Robot (ROBOTS), the task section's Task (tasks.TASKS), checked to be a pair
+that works together, and the learner's (learning.LEARNERS)."""
 from typing import List, Optional, Sequence, Type
 
 from dacph_drake.scenario.errors import ConfigError, require_setting_types
+from dacph_drake.learning import learner_kind
 from dacph_drake.robots.described import DescribedRobot
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.robots.robot import Robot
-from dacph_drake.scenario import DescribedArm, EndEffectorAttitude, PlanarArm, Scenario
+from dacph_drake.scenario import (DescribedArm, EndEffectorAttitude, PlanarArm, Scenario,
+                                  add_section_type)
 from dacph_drake.scenario.built_in import described_arm_periods
 from dacph_drake.scenario.checks import validate_start
 from dacph_drake.tasks.registry import TASKS
 from dacph_drake.tasks.task import Task
 
 ROBOTS = {PlanarArm: PlanarRobot, DescribedArm: DescribedRobot}
+
+
+def register_robot(section: type, kind: Type[Robot]) -> None:
+    """Registers a robot kind: its section becomes a scenario's ``robot: !Section``.
+
+    Args:
+        section: The robot section's dataclass.
+        kind: Its Robot class (the tasks it serves: those whose ``robots`` name it
+            or a class it derives from)."""
+    ROBOTS[section] = kind
+    add_section_type("robot", section)
 
 
 def robot_kind(section: object) -> Type[Robot]:
@@ -37,10 +50,10 @@ def task_of(scenario: Scenario) -> Task:
 
 def _task_kind(robot: object, task: object) -> Task:
     """The Task of a task section that the robot section can serve (task_of)."""
-    kind = TASKS.get(type(task))
-    if kind is None or type(robot) not in kind.robots:
+    kind, robot_class = TASKS.get(type(task)), robot_kind(robot)
+    if kind is None or not issubclass(robot_class, kind.robots):
         allowed = ", ".join(f"!{t.section.__name__}" for t in TASKS.values()
-                            if type(robot) in t.robots)
+                            if issubclass(robot_class, t.robots))
         raise ConfigError(f"task: !{type(task).__name__} with robot: "
                           f"!{type(robot).__name__}; allowed: task: {allowed} (the tasks "
                           "this robot serves)")
@@ -56,6 +69,7 @@ def robot_of(scenario: Scenario) -> Robot:
     Raises:
         ConfigError: Naming the first invalid setting."""
     require_setting_types("", scenario)   # a Python user's sections, before any range
+    learner_kind(scenario.learner)        # a registered learner.model
     return ROBOTS[type(scenario.robot)](scenario, task_of(scenario))
 
 

@@ -8,7 +8,7 @@ from pydrake.systems.framework import LeafSystem
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                      assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.learning import LearnerTrial, prior_set, published_model
+from dacph_drake.learning import LearnerTrial, learner_kind, prior_set, published_model
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner
@@ -75,7 +75,7 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
     builder = controller.builder
-    regularized = settings.mode == "regularized"
+    regularized = learner_kind(settings).BandPassed(settings)
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         num_joints=model.num_joints, sample_period=periods.rhs,
         noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],

@@ -14,77 +14,85 @@ do not determine is published at the prior (B0, D0) with the prior's range.
 
 - PortLearner: what systems.learner.RhsLearner asks of a learner: the channels its
   regression filter forms (Channels), how its published vector is evaluated
-  (PublishedModel), its state in the Context, and Update.
-- learning.local_bayes.LocalBayesLearner (``learner.model: local_bayes``, the
-  default): a local Bayesian linear model per joint with calibrated intervals.
-- learning.network_learner.NetworkLearner (``learner.model: network``): the paper's
-  physics-informed network (network.RhsNetwork), a point estimate.
+  (PublishedModel), its state in the Context, and Update; its class says whether it
+  learns from band-passed samples (BandPassed), how a trial's vector is evaluated
+  (Published) and its prior's credible set (PriorSet).
+- LEARNERS, by ``learner.model``: "local_bayes" (learning.local_bayes.LocalBayesLearner,
+  the default), a local Bayesian linear model per joint with calibrated intervals;
+  "network" (learning.network_learner.NetworkLearner), the paper's physics-informed
+  network (network.RhsNetwork), a point estimate (``learner.mode`` "plain": the
+  paper's learner, whatever ``model`` says).
 
-make_port_learner chooses by ``learner.model``; every learner runs through the
-same diagram, metrics and ablation (scripts/learning_families.py)."""
-from typing import Optional, Sequence
+A new learner is one module with its PortLearner class and one register_learner
+line; every learner runs through the same diagram, metrics and ablation
+(scripts/learning_families.py)."""
+from typing import Dict, Optional, Sequence, Type
 
 import numpy as np
 
+from dacph_drake.learning.local_bayes import LocalBayesLearner
+from dacph_drake.learning.network_learner import NetworkLearner
 from dacph_drake.learning.protocol import (Channels, LearnerTrial, PortEstimate,  # noqa: F401
                                            PortLearner, PublishedModel)
 from dacph_drake.scenario import Learner
+from dacph_drake.scenario.errors import require_one_of
+
+LEARNERS: Dict[str, Type[PortLearner]] = {"local_bayes": LocalBayesLearner,
+                                          "network": NetworkLearner}
 
 
-def uses_local_bayes(settings: Learner) -> bool:
-    """Whether the settings name the local Bayesian learner (else the network): ``model``
-    "local_bayes" in regularized mode (``mode`` "plain" is the paper's plain learner, the
-    network, whatever ``model`` says).
+def register_learner(name: str, kind: Type[PortLearner]) -> None:
+    """Registers a learner: ``learner.model: name`` runs it.
 
     Args:
-        settings: The learner's settings."""
-    return settings.model == "local_bayes" and settings.mode == "regularized"
+        name: Its ``learner.model`` name.
+        kind: Its PortLearner class."""
+    LEARNERS[name] = kind
+
+
+def learner_kind(settings: Learner) -> Type[PortLearner]:
+    """The PortLearner class the settings name: LEARNERS[``model``], the network in
+    ``mode`` "plain" (the paper's plain learner).
+
+    Args:
+        settings: The learner's settings.
+
+    Raises:
+        ConfigError: ``model`` names no registered learner."""
+    require_one_of("learner.model", settings.model, tuple(LEARNERS))
+    return NetworkLearner if settings.mode == "plain" else LEARNERS[settings.model]
 
 
 def make_port_learner(settings: Learner, trials: Sequence[LearnerTrial],
                       period: float, sample_period: float) -> PortLearner:
-    """The PortLearner ``settings.model`` names, for a batch's trials.
+    """The PortLearner the settings name (learner_kind), for a batch's trials.
 
     Args:
         settings: The learner's settings (scenario.learner).
         trials: Each trial's LearnerTrial.
         period: The training period [s] (periods.learner).
         sample_period: The sampling period [s] (periods.learner_sample)."""
-    if uses_local_bayes(settings):
-        from dacph_drake.learning.local_bayes import LocalBayesLearner
-        return LocalBayesLearner(settings, trials, period, sample_period)
-    from dacph_drake.learning.network_learner import NetworkLearner
-    return NetworkLearner(settings, trials, period, sample_period)
+    return learner_kind(settings)(settings, trials, period, sample_period)
 
 
 def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
     """The evaluator (PublishedModel; its Stack evaluates a batch's) of one trial's
-    published vector, as make_port_learner's learner publishes it (the RHS integrator builds
-    its own from the same settings).
+    published vector, as make_port_learner's learner publishes it (the RHS integrator
+    builds its own from the same settings).
 
     Args:
         settings: The learner's settings.
         trial: The trial."""
-    if uses_local_bayes(settings):
-        from dacph_drake.learning.local_bayes import LocalModel
-        return LocalModel(len(trial.B0))
-    from dacph_drake.learning.network import ExportedNetwork
-    return ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
+    return learner_kind(settings).Published(settings, trial)
 
 
 def prior_set(settings: Learner, B0: Sequence[float], D0: Sequence[float]
               ) -> Optional[np.ndarray]:
     """The credible set [lower, upper] of B (2 x n x n) the learner publishes before it has
-    learned anything (the local Bayesian learner's prior range,
-    learning.local_bayes.prior_range), or None for a learner without a credible set.
+    learned anything, or None for a learner without a credible set.
 
     Args:
         settings: The learner's settings.
         B0: The prior's B0 (its diagonal, n).
         D0: The prior's D0 (its diagonal, n)."""
-    if not uses_local_bayes(settings):
-        return None
-    from dacph_drake.learning.local_bayes import prior_range
-    n = len(B0)
-    return prior_range(settings.bayes, B0, D0)[:, :n * n].reshape(2, n, n)
-
+    return learner_kind(settings).PriorSet(settings, B0, D0)

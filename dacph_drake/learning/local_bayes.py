@@ -297,6 +297,35 @@ class LocalBayesLearner(PortLearner):
         self._z_set = standard.inv_cdf(0.5 + self._bayes.certificate_level / 2)
         self._prior_vectors = np.array([self._PriorVector(prior) for prior in self._priors])
 
+    @staticmethod
+    def BandPassed(settings: Learner) -> bool:
+        """It learns from band-passed samples (a RegressionFilter before it).
+
+        Args:
+            settings: The learner's settings."""
+        return True
+
+    @staticmethod
+    def Published(settings: Learner, trial: LearnerTrial) -> LocalModel:
+        """The evaluator of a trial's published vector (learning.published_model).
+
+        Args:
+            settings: The learner's settings.
+            trial: The trial."""
+        return LocalModel(len(trial.B0))
+
+    @staticmethod
+    def PriorSet(settings: Learner, B0: Sequence[float], D0: Sequence[float]) -> np.ndarray:
+        """The prior's range of B (2 x n x n), the credible set before any learning
+        (prior_range).
+
+        Args:
+            settings: The learner's settings.
+            B0: The prior's B0 (its diagonal, n).
+            D0: The prior's D0 (its diagonal, n)."""
+        n = len(B0)
+        return prior_range(settings.bayes, B0, D0)[:, :n * n].reshape(2, n, n)
+
     def _MakePrior(self, trial: LearnerTrial) -> _Prior:
         """The prior of one trial's rows from B0, D0 and the bayes section."""
         n, bayes = self.n, self._bayes

@@ -54,13 +54,40 @@ class NetworkLearner(PortLearner):
         period: The training period [s].
         sample_period: The sampling period [s]."""
 
+    @staticmethod
+    def BandPassed(settings: Learner) -> bool:
+        """It learns from band-passed samples in regularized mode (raw in plain mode).
+
+        Args:
+            settings: The learner's settings."""
+        return settings.mode == "regularized"
+
+    @staticmethod
+    def Published(settings: Learner, trial: LearnerTrial) -> ExportedNetwork:
+        """The evaluator of a trial's published weights (learning.published_model).
+
+        Args:
+            settings: The learner's settings.
+            trial: The trial."""
+        return ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
+
+    @staticmethod
+    def PriorSet(settings: Learner, B0: Sequence[float], D0: Sequence[float]) -> None:
+        """None: a point estimate has no credible set.
+
+        Args:
+            settings: The learner's settings.
+            B0: The prior's B0 (its diagonal, n).
+            D0: The prior's D0 (its diagonal, n)."""
+        return None
+
     def __init__(self, settings: Learner, trials: Sequence[LearnerTrial], period: float,
                  sample_period: float):
         n = len(trials[0].B0)
         self._n, self._trials = n, len(trials)
         self._period = period
         self._settings = settings
-        self._regularized = settings.mode == "regularized"
+        self._regularized = self.BandPassed(settings)
         self._min_samples = max(2, int(round(settings.min_window / sample_period)))
         networks = [ExportedNetwork.ForLearner(settings, trial.model, trial.q0)
                     for trial in trials]

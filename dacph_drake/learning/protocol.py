@@ -86,6 +86,32 @@ class PortLearner(Protocol):
     model: PublishedModel
     state_size: int
 
+    @staticmethod
+    def BandPassed(settings: object) -> bool:
+        """Whether it learns from band-passed samples (a RegressionFilter before it).
+
+        Args:
+            settings: The learner's settings (scenario.Learner)."""
+
+    @staticmethod
+    def Published(settings: object, trial: "LearnerTrial") -> PublishedModel:
+        """The evaluator of one trial's published vector.
+
+        Args:
+            settings: The learner's settings.
+            trial: The trial."""
+
+    @staticmethod
+    def PriorSet(settings: object, B0: Sequence[float], D0: Sequence[float]
+                 ) -> Optional[np.ndarray]:
+        """The credible set [lower, upper] of B (2 x n x n) before any learning; None
+        for a learner without one.
+
+        Args:
+            settings: The learner's settings.
+            B0: The prior's B0 (its diagonal, n).
+            D0: The prior's D0 (its diagonal, n)."""
+
     def InitialState(self) -> np.ndarray:
         """Each trial's state at the start (trials, state_size)."""
 

@@ -7,13 +7,13 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from dacph_drake.log_layout import (AttitudeLog, LearnerLog, LhsLog, PoseLog, RhsLog)
+from dacph_drake.log_layout import LearnerLog, RhsLog
+from dacph_drake.tasks.registry import TASKS
 
-# The logs whose columns are named, and their layouts (n: the number of joints).
-LAYOUTS = {"lhs_log": LhsLog, "rhs_log": RhsLog, "learner_log": lambda n: LearnerLog(),
-           "attitude_log": lambda n: AttitudeLog(), "pose_log": lambda n: PoseLog(),
-           "position_log": lambda n: PoseLog()}
-# Names of the spatial task logs' columns, beside their layout's.
+# The controllers' logs whose columns are named, beside each task's (Task.LogLayout;
+# n: the number of joints).
+CONTROLLER_LAYOUTS = {"rhs_log": RhsLog, "learner_log": lambda n: LearnerLog()}
+# Names of the task logs' columns, beside their layout's.
 ALIASES = {"attitude_error": "e", "attitude_error_norm": "e_norm",
            "position_error": "e_position", "position_error_norm": "e_position_norm",
            "position_desired": "desired_position", "attitude_desired": "desired",
@@ -29,14 +29,16 @@ def signal_index(logs: Dict[str, np.ndarray]) -> Dict[str, Tuple[str, object]]:
     Returns:
         The index; a log without a layout is its own signal (column slice(None))."""
     n = logs["u"].shape[1] if "u" in logs else 0
+    layouts = {**CONTROLLER_LAYOUTS, **{task.log_name: task.LogLayout
+                                        for task in TASKS.values()}}
     index, seen = {}, {}
     for log, values in logs.items():
         if log == "time":
             continue
         index[log] = (log, slice(None))
-        if log not in LAYOUTS:
+        if log not in layouts:
             continue
-        layout = LAYOUTS[log](n)
+        layout = layouts[log](n)
         for name, column in vars(layout).items():
             if name == "size" or not isinstance(column, (int, slice)):
                 continue
@@ -45,7 +47,7 @@ def signal_index(logs: Dict[str, np.ndarray]) -> Dict[str, Tuple[str, object]]:
     for name, logs_with_it in seen.items():
         if len(logs_with_it) == 1 and name not in index:
             index[name] = index[f"{logs_with_it[0]}.{name}"]
-    for log in ("lhs_log", "attitude_log", "pose_log", "position_log"):
+    for log in dict.fromkeys(task.log_name for task in TASKS.values()):
         for alias, name in ALIASES.items():
             if f"{log}.{name}" in index and alias not in index:
                 index[alias] = index[f"{log}.{name}"]

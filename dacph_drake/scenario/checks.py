@@ -9,7 +9,7 @@ from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, re
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.scenario.simulator import validate_simulator_config
 from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNER_COUPLINGS,
-                                  LEARNER_MODELS, LEARNER_MODES, LEARNER_PRIOR_SCALES,
+                                  LEARNER_MODES, LEARNER_PRIOR_SCALES,
                                   ON_MISMATCH, TRUST_ANCHORS, LocalBayes, Periods,
                                   Phases, Scenario)
 
@@ -225,7 +225,6 @@ def validate_port_settings(scenario: Scenario, n: int) -> None:
     require_in_range("learner.min_window", L.min_window, 0.0,
                      L.window * periods.learner_sample,
                      "s (at most learner.window * periods.learner_sample)")
-    require_one_of("learner.model", L.model, LEARNER_MODELS)
     validate_local_bayes(L.bayes, L.window * periods.learner_sample)
     E = scenario.excitation
     require_nonnegative("excitation.amplitude", E.amplitude, "N m")

@@ -16,7 +16,6 @@ INERTIA_ANCHORS = ("total_mass", "base_mass", "model")    # InertiaIdentificatio
 ON_MISMATCH = ("identified", "nominal")                   # InertiaIdentification
 GAIN_RULES = ("paper", "well_damped")                     # Rhs.gain_rule
 ADOPTIONS = ("certified_set", "trust_band")               # Rhs.adoption
-LEARNER_MODELS = ("local_bayes", "network")               # Learner.model
 LEARNER_MODES = ("regularized", "plain")                  # Learner.mode
 LEARNER_COUPLINGS = ("uniform", "inertia")                # Learner.coupling
 LEARNER_PRIOR_SCALES = ("pooled", "per_input")            # Learner.prior_scale
@@ -388,7 +387,7 @@ class Learner:
         prior_fallback: Publish (B0, D0) while it fits better.
         coupling: One of LEARNER_COUPLINGS.
         prior_scale: One of LEARNER_PRIOR_SCALES.
-        model: One of LEARNER_MODELS.
+        model: A registered learner (learning.LEARNERS: local_bayes, network).
         bayes: LocalBayes."""
     mode: str = "regularized"
     hidden: List[int] = field(default_factory=lambda: [16, 8])
@@ -568,6 +567,45 @@ class EndEffectorAttitude:
     gains: AttitudeGains = field(default_factory=AttitudeGains)
 
 
+@dataclass
+class PositionReference:
+    """p_d(t) = p_E(q0) + initial_offset + axis amplitude sin(2 pi t / period), world.
+
+    Attributes:
+        axis: A non-zero 3-vector (world).
+        amplitude: [m], >= 0.
+        period: [s], > 0.
+        initial_offset: p_d(0) - p_E(q0) [m] (3)."""
+    axis: List[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
+    amplitude: float = 0.03
+    period: float = 8.0
+    initial_offset: List[float] = field(default_factory=lambda: [0.02, 0.0, 0.0])
+
+
+@dataclass
+class EndEffectorPose:
+    """task: !EndEffectorPose, the end effector's position and attitude.
+
+    Attributes:
+        reference: The attitude reference R_d(t).
+        position: The position reference p_d(t).
+        gains: The LHS gains (Lambda acts on both errors)."""
+    reference: AttitudeReference = field(default_factory=AttitudeReference)
+    position: PositionReference = field(default_factory=PositionReference)
+    gains: AttitudeGains = field(default_factory=AttitudeGains)
+
+
+@dataclass
+class EndEffectorPosition:
+    """task: !EndEffectorPosition, the end effector's position.
+
+    Attributes:
+        position: The position reference p_d(t).
+        gains: The LHS gains (Lambda acts on e_p)."""
+    position: PositionReference = field(default_factory=PositionReference)
+    gains: AttitudeGains = field(default_factory=AttitudeGains)
+
+
 @dataclass(eq=False)
 class Scenario:
     """Every setting of a closed-loop run; the run lasts as long as the phases.
@@ -588,8 +626,8 @@ class Scenario:
         simulator: Drake's settings for the truth (step: min(max_step, periods.rhs)).
         seed: The learner's and the observer noise's, in [0, 2^32 - 1]."""
     robot: Union[PlanarArm, DescribedArm] = field(default_factory=PlanarArm)
-    task: Union[EndEffectorAngle, EndEffectorAttitude] = field(
-        default_factory=EndEffectorAngle)
+    task: Union[EndEffectorAngle, EndEffectorAttitude, EndEffectorPose,
+                EndEffectorPosition] = field(default_factory=EndEffectorAngle)
     q0: List[float] = field(default_factory=lambda: [0.3, 1.0])
     phases: Phases = field(default_factory=Phases)
     inertia: InertiaIdentification = field(default_factory=InertiaIdentification)
@@ -616,3 +654,17 @@ class Scenario:
     def disturbance_start(self) -> float:
         return (self.disturbance.start if self.disturbance.start >= 0
                 else self.phases.disturbance_start)
+
+
+def add_section_type(name: str, section: type) -> None:
+    """Lets a scenario's ``name:`` setting take ``!Section``: a robot kind, task or
+    learner registered from outside the package, at its registration (the shipped
+    ones are written out in Scenario).
+
+    Args:
+        name: The setting (robot, task or learner).
+        section: The section's dataclass."""
+    field_ = Scenario.__dataclass_fields__[name]
+    kinds = getattr(field_.type, "__args__", (field_.type,))
+    if section not in kinds:
+        field_.type = Union[kinds + (section,)]

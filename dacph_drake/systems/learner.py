@@ -48,8 +48,8 @@ class RhsLearner(LeafSystem):
         self._learning = learning
         self.learner = make_port_learner(settings, trials, period, sample_period)
         self.model = self.learner.model
-        regularized = settings.mode == "regularized"
-        sample_size = (2 * n + self.learner.channels.size if regularized else 5 * n)
+        self._band_passed = type(self.learner).BandPassed(settings)
+        sample_size = (2 * n + self.learner.channels.size if self._band_passed else 5 * n)
         self._row_width = 1 + sample_size
         self._q = self.DeclareVectorInputPort("q", n * count)
         self._qdot = self.DeclareVectorInputPort("qdot", n * count)
@@ -125,8 +125,7 @@ class RhsLearner(LeafSystem):
     def _ModelChanges(self, context, discrete_state) -> np.ndarray:
         """Whether each trial's LHS model epoch changed since the last check (recorded)."""
         if (self._model_epoch is None or not self._model_epoch.HasValue(context)
-                or not (self._settings.mode == "regularized"
-                        and self._settings.model_change)):
+                or not (self._band_passed and self._settings.model_change)):
             return np.zeros(self._trials, bool)
         epoch = self._model_epoch.Eval(context)
         changed = epoch != context.get_discrete_state(self._last_epoch).get_value()

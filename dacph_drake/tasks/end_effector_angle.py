@@ -13,7 +13,8 @@ from dacph_drake.scenario.errors import (ConfigError, require_in_range, require_
                                 require_positive)
 from dacph_drake.log_layout import LhsLog
 from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
-from dacph_drake.scenario import EndEffectorAngle, Excitation, Periods, PlanarArm
+from dacph_drake.robots.planar import PlanarRobot
+from dacph_drake.scenario import EndEffectorAngle, Excitation, Periods
 from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
                                                 boundary_layer_per_chi)
 from dacph_drake.dynamics.reference import OrientationReference
@@ -23,9 +24,16 @@ from dacph_drake.tasks.task import LhsSide, TaskSignals
 
 class EndEffectorAngleTask:
     """tasks.task.Task of the planar end effector's angle."""
-    section, robots = EndEffectorAngle, (PlanarArm,)
+    section, robots = EndEffectorAngle, (PlanarRobot,)
     lhs_name, log_name = "lhs_controller", "lhs_log"
     panels = ("e_dac_vs_model_based", "f_inputs_and_states")
+
+    def LogLayout(self, n: int) -> LhsLog:
+        """tasks.task.Task.LogLayout: lhs_log's columns.
+
+        Args:
+            n: The number of joints."""
+        return LhsLog(n)
 
     def Validate(self, section: EndEffectorAngle, periods: Periods) -> None:
         """ConfigError naming the first invalid gain or reference setting.

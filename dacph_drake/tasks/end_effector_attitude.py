@@ -10,9 +10,10 @@ from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
 from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.robots.described import DescribedRobot
 from dacph_drake.robots.start_pose import ATTITUDE_ROWS, task_singularity
-from dacph_drake.scenario import (AttitudeGains, AttitudeReference, DescribedArm,
-                                  EndEffectorAttitude, Excitation, Periods)
+from dacph_drake.scenario import (AttitudeGains, AttitudeReference, EndEffectorAttitude,
+                                  Excitation, Periods)
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.task import LhsSide, TaskSignals
@@ -25,11 +26,17 @@ DIAGONAL_SAMPLES, DIAGONAL_MARGIN = 256, 0.1
 
 class EndEffectorAttitudeTask:
     """tasks.task.Task of a described arm's end-effector attitude."""
-    section, robots = EndEffectorAttitude, (DescribedArm,)
+    section, robots = EndEffectorAttitude, (DescribedRobot,)
     lhs_name, log_name = "attitude_controller", "attitude_log"
     panels = ("e_attitude_dac_vs_model_based", "f_inputs_and_joints")
-    log_layout = AttitudeLog
     jacobian_rows = ATTITUDE_ROWS   # the GJM's rows the task tracks (start_pose)
+
+    def LogLayout(self, n: int) -> AttitudeLog:
+        """tasks.task.Task.LogLayout: attitude_log's columns.
+
+        Args:
+            n: The number of joints."""
+        return AttitudeLog()
 
     def Validate(self, section: EndEffectorAttitude, periods: Periods) -> None:
         """ConfigError naming the first invalid gain or reference setting.

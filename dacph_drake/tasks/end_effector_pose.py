@@ -8,53 +8,30 @@ AttitudeController with the GJM's linear rows stacked under its angular ones
 e_p = p_E - p_d(t) in the world; the null space (n > 6) keeps the links off the base
 as in the attitude task. The sliding-mode law, its Lyapunov function V = s^T M s / 2
 and hence the certificate are the attitude task's (E26-E28 hold for any nu)."""
-from dataclasses import dataclass, field
-from typing import Dict, List
+from typing import Dict
 
 import numpy as np
 
 from dacph_drake.analysis.phases import phase_windows, rms
 from dacph_drake.scenario.errors import ConfigError, require_finite_numbers, require_positive
 from dacph_drake.log_layout import PoseLog
-from dacph_drake.scenario import AttitudeGains, AttitudeReference, Periods
+from dacph_drake.scenario import EndEffectorPose, Periods, PositionReference
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.end_effector_attitude import EndEffectorAttitudeTask
-
-@dataclass
-class PositionReference:
-    """p_d(t) = p_E(q0) + initial_offset + axis amplitude sin(2 pi t / period), world.
-
-    Attributes:
-        axis: A non-zero 3-vector (world).
-        amplitude: [m], >= 0.
-        period: [s], > 0.
-        initial_offset: p_d(0) - p_E(q0) [m] (3)."""
-    axis: List[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
-    amplitude: float = 0.03
-    period: float = 8.0
-    initial_offset: List[float] = field(default_factory=lambda: [0.02, 0.0, 0.0])
-
-
-@dataclass
-class EndEffectorPose:
-    """task: !EndEffectorPose, the end effector's position and attitude.
-
-    Attributes:
-        reference: The attitude reference R_d(t).
-        position: The position reference p_d(t).
-        gains: The LHS gains (Lambda acts on both errors)."""
-    reference: AttitudeReference = field(default_factory=AttitudeReference)
-    position: PositionReference = field(default_factory=PositionReference)
-    gains: AttitudeGains = field(default_factory=AttitudeGains)
-
 
 class EndEffectorPoseTask(EndEffectorAttitudeTask):
     """tasks.task.Task of a described arm's end-effector pose."""
     section = EndEffectorPose
     lhs_name, log_name = "pose_controller", "pose_log"
     panels = ("e_pose_dac_vs_model_based", "f_inputs_and_joints")
-    log_layout = PoseLog
     jacobian_rows = (0, 1, 2, 3, 4, 5)
+
+    def LogLayout(self, n: int) -> PoseLog:
+        """tasks.task.Task.LogLayout: pose_log's columns.
+
+        Args:
+            n: The number of joints."""
+        return PoseLog()
 
     def Validate(self, section: EndEffectorPose, periods: Periods) -> None:
         """The attitude task's checks, then the position reference's.

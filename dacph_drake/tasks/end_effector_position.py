@@ -8,7 +8,6 @@ its end effector about every axis, but it can place it; on a longer arm the end
 effector's attitude is left to the null space (the clearance potential's xi). The
 sliding-mode law, V = s^T M s / 2 and the certificate are the attitude task's (E26-E28
 hold for any nu); the tracking error the metrics and figures report is |e_p| [m]."""
-from dataclasses import dataclass, field
 from typing import Dict
 
 import numpy as np
@@ -17,20 +16,9 @@ from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.log_layout import PoseLog
 from dacph_drake.robots.robot import Robot
 from dacph_drake.robots.start_pose import POSITION_ROWS
-from dacph_drake.scenario import AttitudeGains, Periods
-from dacph_drake.tasks.end_effector_pose import EndEffectorPoseTask, PositionReference
+from dacph_drake.scenario import EndEffectorPosition, Periods
+from dacph_drake.tasks.end_effector_pose import EndEffectorPoseTask
 from dacph_drake.tasks.task import TaskSignals
-
-
-@dataclass
-class EndEffectorPosition:
-    """task: !EndEffectorPosition, the end effector's position.
-
-    Attributes:
-        position: The position reference p_d(t).
-        gains: The LHS gains (Lambda acts on e_p)."""
-    position: PositionReference = field(default_factory=PositionReference)
-    gains: AttitudeGains = field(default_factory=AttitudeGains)
 
 
 class EndEffectorPositionTask(EndEffectorPoseTask):
@@ -38,7 +26,6 @@ class EndEffectorPositionTask(EndEffectorPoseTask):
     section = EndEffectorPosition
     lhs_name, log_name = "position_controller", "position_log"
     panels = ("e_position_dac_vs_model_based", "f_inputs_and_joints")
-    log_layout = PoseLog
     jacobian_rows = POSITION_ROWS   # the GJM's linear rows (start_pose)
 
     def Validate(self, section: EndEffectorPosition, periods: Periods) -> None:

@@ -1,9 +1,7 @@
 """The tasks an LHS controller tracks, registered once (tasks.task.Task). To add a
 task, write its module (its section dataclass and its Task) and add it to TASKS;
 register() does the same from outside the package."""
-from typing import Union
-
-from dacph_drake.scenario import Scenario
+from dacph_drake.scenario import add_section_type
 from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.tasks.end_effector_attitude import END_EFFECTOR_ATTITUDE
 from dacph_drake.tasks.end_effector_pose import END_EFFECTOR_POSE
@@ -19,9 +17,7 @@ def register(task: Task) -> None:
     Args:
         task: The Task (its ``section`` the key)."""
     TASKS[task.section] = task
-    field = Scenario.__dataclass_fields__["task"]
-    if task.section not in field.type.__args__:
-        field.type = Union[field.type.__args__ + (task.section,)]
+    add_section_type("task", task.section)
 
 
 for _task in (END_EFFECTOR_ANGLE, END_EFFECTOR_ATTITUDE, END_EFFECTOR_POSE,

@@ -8,6 +8,7 @@ from typing import Dict, NamedTuple, Protocol, Sequence, Tuple
 
 import numpy as np
 
+from dacph_drake.log_layout import LogColumns
 from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Excitation, Periods
 
@@ -52,7 +53,8 @@ class Task(Protocol):
 
     Attributes:
         section: Its scenario section's dataclass (YAML tag ``!section``).
-        robots: The robot sections (scenario.PlanarArm, DescribedArm) it can serve.
+        robots: The robot kinds it can serve (robots.planar.PlanarRobot,
+            robots.described.DescribedRobot), their subclasses too.
         lhs_name: The LHS system's name.
         log_name: Its log output's name.
         panels: figures.make_panels' panels of this task.
@@ -62,6 +64,12 @@ class Task(Protocol):
     lhs_name: str
     log_name: str
     panels: Tuple[str, ...]
+
+    def LogLayout(self, n: int) -> LogColumns:
+        """The columns of the task's log (log_name) by name: its signals.
+
+        Args:
+            n: The number of joints."""
 
     def Validate(self, section: object, periods: Periods) -> None:
         """ConfigError naming the section's first invalid setting.
