@@ -10,8 +10,7 @@ from dacph_drake.scenario.errors import ConfigError
 
 
 def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
-    """Creates a run directory and checks it is writable, before any simulation; returns
-    it as a Path.
+    """Creates a run directory, checked writable before any run; returns its Path.
 
     Args:
         out_dir: The directory (created with its parents if missing).
@@ -35,9 +34,8 @@ def prepare_out_dir(out_dir: Union[str, Path]) -> Path:
 
 @contextmanager
 def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
-    """Replaces a file in one step (os.replace) with what a block writes, if it ends
-    without an exception; yields the temporary path to write, beside ``path``, its name
-    + ".<pid>.tmp" (writers in several processes never share one).
+    """Replaces ``path`` in one step (os.replace) with what the block writes, if it raises
+    nothing; yields the temporary path beside it (name + ".<pid>.tmp").
 
     Args:
         path: The file to replace."""
@@ -49,8 +47,7 @@ def replaced_atomically(path: Union[str, Path]) -> Iterator[Path]:
 
 def read_json_record(path: Union[str, Path], keys: Sequence[str], written_by: str
                      ) -> Dict:
-    """Reads a JSON object this project saved (run_CONTROLLER.json, a sweep's
-    manifest.json), naming the file when it is damaged.
+    """Reads a JSON object this project saved, naming the file when damaged.
 
     Args:
         path: The file.

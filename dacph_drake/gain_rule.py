@@ -29,13 +29,9 @@ def c_lower_bound(Td: float, Kd_max: float, lambda_min_M: float, beta_hat: float
 
 
 def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float) -> float:
-    """c_min [1/s] of eq. (48) for an LHS damping K_d = damping_rate M(q).
-
-    The paper's fastest LHS sliding rate 2 lambda_max(K_d) / inf_q lambda_min(M)
-    bounds dV/dt = -s^T K_d s against V = s^T M s / 2; with K_d = damping_rate M it
-    is exactly 2 damping_rate (dV/dt = -2 damping_rate V), so
-    c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5) whatever the arm's inertia: a
-    light wrist no longer asks for a fast RHS loop (scenario.AttitudeGains).
+    """c_min [1/s] of eq. (48) for an LHS damping K_d = damping_rate M(q): then
+    2 lambda_max(K_d) / inf_q lambda_min(M) is exactly 2 damping_rate, so
+    c > 2 Td^2 damping_rate (1 + ln(beta_hat) / 5) whatever the arm's inertia.
 
     Args:
         Td: The time-scale separation factor T_d.
@@ -47,17 +43,13 @@ def inertia_scaled_c_lower_bound(Td: float, damping_rate: float, beta_hat: float
 def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
                    ) -> Tuple[np.ndarray, np.ndarray, Union[bool, np.ndarray]]:
     """The decentralized integral gains k_p = c / Re(lambda_hat_p) and the DIC check:
-    (k, the paired eigenvalues, dic_ok), each trial's for a stack, where dic_ok says
-    det(B_hat) != 0 and Re(lambda_p) > 0 and k is nan where it fails.
-
-    The eigenvalue paired with channel p is the one nearest B_hat[p, p] (for the
-    near-diagonal B of a decentralized arm the modes are the channels), taken in
-    channel order from those not yet paired.
+    (k, the paired eigenvalues, dic_ok), per trial for a stack; dic_ok says det(B_hat) != 0
+    and Re(lambda_p) > 0 (else k is nan). Channel p is paired, in channel order, with the
+    free eigenvalue nearest B_hat[p, p].
 
     Args:
         B_hat: The estimated input matrix (n x n), or a stack (trials, n, n).
-        c: The decay rate [1/s] (per trial for a stack).
-    """
+        c: The decay rate [1/s] (per trial for a stack)."""
     n = B_hat.shape[-1]
     stack = np.reshape(B_hat, (-1, n, n))
     eigenvalues = np.linalg.eigvals(stack)
@@ -79,9 +71,8 @@ def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
-    """The discrete RHS loop's state matrix A (2n x 2n) (analysis.rhs_loop): with the
-    state (u_I, tau_obs), A = [[I, -h K], [B, 0]]; per decoupled mode its polynomial
-    is z^2 - z + h k_p lambda_p.
+    """The discrete RHS loop's matrix A = [[I, -h K], [B, 0]] (2n x 2n) on (u_I, tau_obs)
+    (analysis.rhs_loop); per mode its polynomial is z^2 - z + h k_p lambda_p.
 
     Args:
         B: The port's true input matrix (n x n).
@@ -94,12 +85,8 @@ def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
 def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
                           radius: float) -> bool:
     """Whether the loop's spectral radius stays within ``radius`` with a new estimate's
-    gains if the estimate in use is the truth.
-
-    The evidence that makes the integrator adopt an estimate far from the one in
-    use (RhsIntegrator) may be wrong (a filtered window that still holds a change's
-    transient): a jump that would destabilize the loop in that case is refused; one
-    that only slows it is not.
+    gains if the estimate in use is the truth: the evidence for a far jump (RhsIntegrator)
+    may be wrong, so a jump that would then destabilize the loop is refused.
 
     Args:
         B_in_use: The estimate in use, taken as the truth.
@@ -113,18 +100,13 @@ def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
 def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float
                  ) -> Union[bool, np.ndarray]:
     """The bounded-learning-error condition, made operational: whether every paired
-    eigenvalue of B_hat lies within a factor ``trust_ratio`` of the anchor's ``nominal``
-    (B0's, or the estimate in use's: Rhs.trust_anchor), 1 / trust_ratio <=
-    Re(lambda_hat_p) / lambda0_p <= trust_ratio (a bool, or one per trial for a stack).
+    eigenvalue of B_hat satisfies 1 / trust_ratio <= Re(lambda_hat_p) / lambda0_p <=
+    trust_ratio against the anchor (B0's, or the estimate in use's: Rhs.trust_anchor);
+    a bool, or one per trial for a stack.
 
-    The discrete RHS loop of mode p has the loop gain g_p = h k_p lambda~_p =
-    h c lambda~_p / Re(lambda_hat_p), stable for g_p < 1 and well damped for
-    g_p <= 1/4; a learned eigenvalue far below the true one makes g_p exceed 1.
-    Rejecting such estimates keeps g_p <= h c trust_ratio lambda~_p / lambda0_p.
-    Anchored at the estimate in use, one accepted refresh changes every mode's loop
-    gain by at most trust_ratio: a loop that ran on a right estimate stays certified
-    after any accepted step (analysis.rhs_loop), while an estimate that follows the
-    truth away from B0 is no longer refused.
+    Mode p's loop gain g_p = h c lambda~_p / Re(lambda_hat_p) must stay < 1 (stable) and
+    <= 1/4 (well damped); the check keeps g_p <= h c trust_ratio lambda~_p / lambda0_p, and
+    anchored at the estimate in use one accepted refresh changes it by at most trust_ratio.
 
     Args:
         paired: B_hat's paired eigenvalues (n), or a stack (trials, n).
@@ -137,8 +119,8 @@ def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float
 
 def check_rhs_period(periods: Periods, c_nominal: float, c_largest: float,
                      beta_max: float) -> None:
-    """Refuses an RHS period that cannot realize the integrator's largest decay rate: the
-    loop must stay well damped, g = h c <= 1/4 (WELL_DAMPED_LOOP_GAIN).
+    """Refuses an RHS period that cannot realize the integrator's largest decay rate with a
+    well-damped loop, g = h c <= 1/4 (WELL_DAMPED_LOOP_GAIN).
 
     Args:
         periods: The scenario's periods.

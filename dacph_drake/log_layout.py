@@ -9,7 +9,7 @@ class LogColumns:
     (name, width) its slice; ``size`` is the row's length.
 
     Args:
-        columns: Each column: a name (a scalar) or (name, width) (a vector)."""
+        *columns: Each column: a name (a scalar) or (name, width) (a vector)."""
 
     def __init__(self, *columns):
         start = 0

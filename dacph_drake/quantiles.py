@@ -2,8 +2,7 @@
 
 
 def student_quantile(z: float, dof: float) -> float:
-    """Student's t quantile with ``dof`` degrees of freedom at the normal quantile z
-    (the Cornish-Fisher expansion to third order in 1 / dof).
+    """Student's t quantile at normal quantile z (Cornish-Fisher, third order).
 
     Args:
         z: The standard normal quantile.

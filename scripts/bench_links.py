@@ -3,7 +3,7 @@
 For each n (--links, default 2 3 4 5 6 8), an arm of n equal links (1 kg, 0.5 m,
 0.02 kg m^2) and one of n tapering links (each link 0.8 times the mass and 0.85
 times the length of the one before), from a scenario naming only robot.truth and
-the short scenario's phases (scenario.sizing.sized_defaults sizes the rest), in a
+the short scenario's phases (assembly.registry.sized_defaults sizes the rest), in a
 fresh process each: the build time of the DAC diagram (its inertia bounds, the grid
 for two links and the search beyond, included), then the DAC run through all
 phases: its status, wall time per simulated second, and per phase the tracking

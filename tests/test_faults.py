@@ -253,8 +253,8 @@ def test_a_described_run_in_contact_stops_with_the_named_reason(monkeypatch, tmp
 
 @pytest.mark.parametrize("links", [4, 6])
 def test_larger_planar_arms_build_fast_and_run_dac_through_every_phase(tmp_path, links):
-    """A file naming only an n-link robot.truth (scenario.sizing.sized_defaults
-    sizes the rest, scenario.sizing.planar_arm_scenario) builds its DAC diagram in
+    """A file naming only an n-link robot.truth (assembly.registry.sized_defaults
+    sizes the rest, robots.planar.planar_arm_scenario) builds its DAC diagram in
     seconds (the inertia bounds searched, not a 73^n grid) and runs DAC through the
     short scenario's four phases (scripts/bench_links.py tabulates 2 to 8 links):
     once the start's transient of phase 1 is over, tracking within 1e-3 rad

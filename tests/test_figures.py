@@ -151,7 +151,7 @@ def test_warm_up_is_labelled_and_the_controllers_are_distinguishable(panels):
 
 
 def test_the_entries_panel_draws_the_claims_the_metrics_report():
-    """Panel b draws what the metrics table reports (analysis.metrics.physical_view):
+    """Panel b draws what the metrics table reports (loop.metrics.physical_view):
     the claimed entries, their 90 % interval as a band; panel g the port model the
     loop closes on against its own truth (I + E) B~, for a run that measured E."""
     from dacph_drake.loop.metrics import physical_view

@@ -1,6 +1,6 @@
 """An arm from its own description, as users have it (issue 24): a scenario file
 naming only the robot, its base, its end effector and q0 gets every other setting
-sized to the arm (scenario.sizing); descriptions named by package:// URIs found the
+sized to the arm (robots.sizing); descriptions named by package:// URIs found the
 ROS 2 way (the ament index of AMENT_PREFIX_PATH and of pip's cmeel prefix); a
 fixed-base file's weld to the world dropped when it is mounted; and the shipped
 Panda and UR5 scenarios (example-robot-data, the [robots] extra) run."""
@@ -58,7 +58,7 @@ def test_a_file_naming_only_the_arm_gets_settings_sized_to_it(arm_alone, tmp_pat
     """A scenario file of robot (a package:// description found through
     AMENT_PREFIX_PATH, its world weld dropped with a note; its own end_effector
     frame), base and q0 loads with every per-joint setting sized to the arm by
-    scenario.sizing's rule:
+    robots.sizing's rule:
     D0 = DAMPING_RATE M_jj(q0), the linear group adding 0.5 D0 at the momentum
     p_j = max(M_jj w, the rehearsal's peak |p_j| past the warm-up) (the coupled
     inertia: never below the diagonal's scale), the disturbance's offsets 0.3

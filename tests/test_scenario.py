@@ -241,7 +241,7 @@ def test_files_written_before_a_setting_was_added_keep_their_meaning(tmp_path):
     it (the shipped satellite_3dof without that line), saved with a run, is read with
     the fallback off, as it ran (load_saved_scenario), not with the sized default's
     on, and its fingerprinted text is the file as written
-    (scenario.files.ADDED_TO_CURRENT_LAYOUT); the shipped file itself keeps it on. As
+    (assembly.scenario_files.ADDED_TO_CURRENT_LAYOUT); the shipped file itself keeps it on. As
     an input file, the same text runs the setting at its current default."""
     from dacph_drake.assembly.scenario_files import load_saved_scenario
     shipped = (SCENARIOS / "satellite_3dof.yaml").read_text()

@@ -2,26 +2,22 @@
 Analysis"): V = s^T M(q) s / 2 along a run against the exponential envelope.
 
 With r_slow = 2 lambda_min(K_d) / sup lambda_max(M), r_fast = 2 lambda_max(K_d) /
-inf lambda_min(M) and the smooth robust term -chi tanh(s / epsilon) (per component
-s_i (1 - tanh(|s_i| / epsilon)) <= kappa epsilon, kappa = max_x x (1 - tanh x) = 0.2785),
-over each logged interval where ||e_tau|| <= chi at both ends:
+inf lambda_min(M) and the robust term -chi tanh(s / epsilon) (s_i (1 - tanh(|s_i| /
+epsilon)) <= kappa epsilon, kappa = max_x x (1 - tanh x) = 0.2785), over each logged
+interval where ||e_tau|| <= chi at both ends:
 
     upper:  Vdot <= -r_slow V + delta,          delta = n kappa chi epsilon
     lower:  Vdot >= -r_low V - e^2 / (2 lambda_max(K_d)),
             r_low = (3 lambda_max(K_d) + 2 chi / epsilon) / inf lambda_min(M)
 
-(the tanh slope and Young's inequality on s^T e_tau added to r_fast), integrated over
-[t_k, t_k+1] to V_k e^(-r dt) +- (delta / r)(1 - e^(-r dt)). The learner's excitation
-tau_pe, ||tau_pe|| <= a, adds by Young's inequality
-
-    upper:  Vdot <= -(r_slow / 2) V + delta + a^2 / (2 lambda_min(K_d))
-
-and ||e_tau|| + a in the lower bound. The spatial LHS (systems.attitude_controller:
-K_d = r M(q), chi tanh(w_i s_i), w_i = M_ii / phi, phi = epsilon + chi / b), with
-lambda = inf_q lambda_min(M) and m = sup_q max_i M_ii (M_ii >= lambda):
+integrated over [t_k, t_k+1] to V_k e^(-r dt) +- (delta / r)(1 - e^(-r dt)). An
+excitation ||tau_pe|| <= a makes the upper rate r_slow / 2, adds a^2 / (2 lambda_min(K_d))
+to delta and a to ||e_tau|| in the lower bound (Young). The spatial LHS (K_d = r M(q),
+chi tanh(w_i s_i), w_i = M_ii / phi, phi = epsilon + chi / b), lambda = inf_q
+lambda_min(M), m = sup_q max_i M_ii:
 
     upper:  Vdot <= -2 r V + n kappa chi phi / lambda  (excitation: -r V and
-            a^2 / (2 r lambda) by Young with k = r lambda)
+            a^2 / (2 r lambda))
     lower:  Vdot >= -(3 r + 2 (chi / phi) m / lambda) V - e^2 / (2 r lambda)"""
 from dataclasses import asdict, dataclass
 from typing import Tuple, Union
@@ -60,7 +56,7 @@ class EnvelopeConstants:
                            lambda_max_M: float, epsilon: float, n: int,
                            layer_per_chi: float = 0.0) -> "EnvelopeConstants":
         """The planar LHS's constants: K_d between Kd_min and Kd_max, tanh(s / phi),
-        phi = epsilon + layer_per_chi chi (lhs.boundary_rate).
+        phi = epsilon + layer_per_chi chi.
 
         Args:
             Kd_min: lambda_min(K_d).
@@ -81,7 +77,7 @@ class EnvelopeConstants:
                          max_diagonal_M: float, epsilon: float, boundary_rate: float,
                          n: int) -> "EnvelopeConstants":
         """The spatial LHS's constants: K_d = damping_rate M, tanh(M_ii s_i / phi),
-        phi = epsilon + chi / boundary_rate (the slack's layer is phi / lambda).
+        phi = epsilon + chi / boundary_rate.
 
         Args:
             damping_rate: The LHS's damping rate r [1/s].
@@ -105,8 +101,8 @@ class EnvelopeConstants:
         return self.layer_base + self.layer_per_chi * chi
 
     def TanhRate(self, chi: Union[float, np.ndarray]) -> Union[float, np.ndarray]:
-        """The lower bound's tanh rate [1/s] (chi's shape): 2 chi / epsilon / lambda
-        (planar), 2 (chi / phi) m / lambda (spatial).
+        """The lower bound's tanh rate [1/s]: 2 chi / epsilon / lambda (planar),
+        2 (chi / phi) m / lambda (spatial).
 
         Args:
             chi: The RHS bound chi (a scalar or an array)."""
@@ -194,8 +190,7 @@ def check_envelope(t: np.ndarray, V: np.ndarray, e_norm: np.ndarray, chi: np.nda
                    constants: EnvelopeConstants,
                    required_fraction: float = 0.99,
                    excitation_norm: float = 0.0) -> EnvelopeCheck:
-    """Checks V against the envelope: the fraction of the logged intervals with
-    ||e_tau|| <= chi on which V stays inside, and the worst relative violation.
+    """The share of intervals (||e_tau|| <= chi) with V inside, and the worst violation.
 
     Args:
         t: The logged times [s] (T).

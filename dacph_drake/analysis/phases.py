@@ -33,9 +33,7 @@ PHASES = ("phase1", "phase2", "phase3")
 
 
 def phase_windows(scenario: Scenario, t: np.ndarray) -> Dict[str, np.ndarray]:
-    """Phase name (PHASES) -> boolean mask over t of the three uncertainty phases: linear,
-    plus nonlinear, plus disturbance (the last from phases.disturbance_start to the end;
-    docs/equations.md).
+    """Phase name (PHASES) -> boolean mask over t (the last phase runs to the end).
 
     Args:
         scenario: The scenario (its phases).

@@ -1,25 +1,21 @@
 """Region-of-attraction certificates for the LHS sliding dynamics, by sums of squares
-(Drake's ``RegionOfAttraction`` with the open-source Clarabel solver).
+(Drake's ``RegionOfAttraction``, Clarabel).
 
-Planar model (its assumptions are part of the certificate): frozen configuration q,
-nu = 0 (the joint rates are s), exact RHS (e_tau = 0), tanh(x) replaced by x - x^3 / 3,
+Planar model (its assumptions are part of the certificate): frozen q, nu = 0, exact RHS
+(e_tau = 0), tanh(x) replaced by x - x^3 / 3,
 
     M(q) sdot = -C'(q, s) s - K_d s - chi (s / epsilon - (s / epsilon)^3 / 3),
-    C'(q, s) = sum_k s_k Gamma_k(q).
+    C'(q, s) = sum_k s_k Gamma_k(q);
 
-With V = s^T M(q) s / 2 the region {V(s) <= rho} contains the ball
-||s|| <= sqrt(2 rho / lambda_max(M(q))).
+{V <= rho}, V = s^T M(q) s / 2, contains ||s|| <= sqrt(2 rho / lambda_max(M(q))).
 
-A spatial arm's LHS (attitude_region_of_attraction: K_d = damping_rate M(q), robust term
-chi tanh(w_i s_i), w_i = M_ii / phi, too steep for a cubic Taylor polynomial) drops the
-robust term, which only lowers dV/dt (s_i tanh(w_i s_i) >= 0):
-M(q) sdot = -C'(q, s) s - damping_rate M s. With s = M^-1/2 w r, ||w|| = 1 (V = r^2 / 2),
+A spatial arm's LHS (K_d = damping_rate M(q)) drops chi tanh(w_i s_i) (too steep for
+a polynomial; it only lowers dV/dt). With s = M^-1/2 w r, ||w|| = 1 (V = r^2 / 2),
 
     dV/dt = -damping_rate r^2 - c(w) r^3,   c(w) = s^T C'(q, s) s at r = 1,
 
-so {V < rho}, rho = (damping_rate / gamma)^2 / 2, is certified by any
-gamma >= max_{|w|=1} c(w), bounded by a small SOS program on the sphere
-(cubic_maximum_on_sphere) instead of the full program in s, which grows steeply with n."""
+so {V < rho}, rho = (damping_rate / gamma)^2 / 2, holds for any gamma >= max_{|w|=1} c(w),
+bounded by a small SOS program on the sphere (cubic_maximum_on_sphere)."""
 import multiprocessing
 from dataclasses import asdict, dataclass
 
@@ -65,17 +61,15 @@ class RegionCertificate:
 
 @dataclass
 class MovingConfigurationCertificate:
-    """The spatial LHS's region of attraction with nothing frozen: every s.
-
-    C' is the Christoffel form of dM, so Mdot - 2 C' is skew-symmetric and along the
-    sliding dynamics (eq. E26, any nu; docs/equations.md E26-E28), for every s and q,
+    """The spatial LHS's region of attraction with nothing frozen: every s. With C' the
+    Christoffel form of dM, Mdot - 2 C' is skew, so along eq. E26 (any nu, q, s)
 
         M sdot = -C'(q, qdot) s - damping_rate M s - b s - chi tanh(w s) + e_tau,
         dV/dt = -2 damping_rate V - s^T b s - chi sum_i s_i tanh(w_i s_i)
-                <= -2 damping_rate V        (e_tau = 0).
+                <= -2 damping_rate V        (e_tau = 0),
 
-    What it rests on, C'(q, e_k) + C'(q, e_k)^T = dM/dq_k, is checked against central
-    differences (FD_STEP) at q0 and sampled configurations.
+    resting on C'(q, e_k) + C'(q, e_k)^T = dM/dq_k, checked by central differences
+    (FD_STEP) at q0 and sampled configurations.
 
     Attributes:
         configurations: How many configurations were checked.
@@ -96,8 +90,7 @@ class MovingConfigurationCertificate:
         return {"region": "every s", **asdict(self)}
 
     def Contains(self, s0_norm: float) -> bool:
-        """Whether s(0) is in the region (residual <= tolerance): every s is, when dM is M's
-        derivative.
+        """Whether s(0) is in the region: every s is when residual <= tolerance.
 
         Args:
             s0_norm: ||s(0)|| [rad/s] (any)."""
@@ -140,8 +133,7 @@ SPATIAL_ASSUMPTIONS = ("frozen configuration q; nu = 0; e_tau = 0; the robust te
 
 def attitude_region_of_attraction(model: FloatingBaseModel, q: np.ndarray,
                                   damping_rate: float) -> RegionCertificate:
-    """A spatial arm's LHS's certificate (K_d = damping_rate M(q)) for every chi: the
-    homogeneous one of the module docstring.
+    """A spatial arm's LHS's certificate for every chi (module docstring).
 
     Args:
         model: The arm's model (floating_model.FloatingBaseModel).
@@ -195,9 +187,9 @@ def moving_region_of_attraction(model: FloatingBaseModel, q0: np.ndarray,
 
 
 def cubic_maximum_on_sphere(T: np.ndarray) -> float:
-    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c: the least gamma
-    with gamma - c(w) = sigma(w) + lambda(w) (|w|^2 - 1), sigma SOS (degree 4), lambda of
-    degree 2 (Clarabel), raised by the solver's tolerance (1e-7 relative).
+    """An upper bound gamma of max_{|w| = 1} sum_abc T_abc w_a w_b w_c: the least gamma with
+    gamma - c(w) = sigma(w) + lambda(w) (|w|^2 - 1), sigma SOS (degree 4), lambda of degree
+    2, raised by the solver's tolerance (1e-7 relative).
 
     Args:
         T: The cubic form's coefficients (n x n x n).

@@ -1,14 +1,12 @@
-"""The discrete RHS loop as a Drake LinearSystem, and its stability certificate (paper
-eqs. 45-48, docs/equations.md E37-E38, E45-E48). The integrator u_I(k+1) = u_I(k) +
-h K e(k) acts on e(k) = tau_c^r - tau_obs(k); the port observer returns the port one
-sample late, tau_obs(k+1) = B u_I(k). With the state x = (u_I, tau_obs):
+"""The discrete RHS loop as a Drake LinearSystem, and its stability certificate (eqs.
+45-48, docs/equations.md E37-E38, E45-E48). u_I(k+1) = u_I(k) + h K e(k), e(k) =
+tau_c^r - tau_obs(k), tau_obs(k+1) = B u_I(k) (one sample late); with x = (u_I, tau_obs):
 
     x(k+1) = [[I, -h K], [B, 0]] x(k) + [[h K], [0]] tau_c^r
     e(k)   = [0, -I] x(k) + tau_c^r
 
-and per decoupled mode p the characteristic polynomial is z^2 - z + h k_p lambda_p. It is
-written in closed form: Drake's ``Linearize`` needs AutoDiff, which this package's Python
-LeafSystems lack (a test checks it against the RhsIntegrator's response)."""
+and per mode p the polynomial z^2 - z + h k_p lambda_p; written in closed form, as
+``Linearize`` needs AutoDiff, which the package's LeafSystems lack."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -20,8 +18,7 @@ from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:
-    """The closed discrete RHS loop as a discrete LinearSystem: input tau_c^r, output e_tau,
-    time_period h.
+    """The closed discrete RHS loop as a LinearSystem: tau_c^r in, e_tau out, period h.
 
     Args:
         B: The port's input matrix (n x n).
@@ -67,17 +64,15 @@ class RhsLoopCheck:
 
 def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: float,
                    Td: float) -> RhsLoopCheck:
-    """The RHS loop's certificate at one operating point (``ok``: every check passed):
-    spectral radius <= 1 - STABILITY_MARGIN and P > 0 from
-    RealDiscreteLyapunovEquation(A, I); DIC: det B != 0, Re(lambda_p) > 0; separation
-    sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS,
-    lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45).
+    """The RHS loop's certificate at one operating point: spectral radius <= 1 -
+    STABILITY_MARGIN and P > 0 from RealDiscreteLyapunovEquation(A, I); DIC; and
+    sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS (eq. 45).
 
     Args:
         B: The port's input matrix (n x n): the learner's B_hat or the truth's B~.
         K: The integrator's gains (n).
         period: The RHS period h [s].
-        lambda_lhs: The LHS rate lambda_LHS [1/s] (eq. 45).
+        lambda_lhs: The LHS rate lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) [1/s].
         Td: The time-scale separation factor T_d."""
     _, paired, dic_ok = integral_gains(B, 1.0)
     A = rhs_loop_system(B, K, period).A()

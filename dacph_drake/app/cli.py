@@ -73,9 +73,7 @@ def _simulate(args) -> int:
 
 
 def _report_run(out, controller: str) -> dict:
-    """The report (PNG panels, metrics.json) of a new run with the directory's runs
-    it belongs with: those of its duration (the others are named in a note); returns
-    its summary (app.reproduce.report)."""
+    """The report of a new run with the directory's runs of its duration; its summary."""
     from dacph_drake.app.reproduce import report, runs_in
     from dacph_drake.loop.run_store import load_run_meta
     duration = load_run_meta(out, controller)["duration"]
@@ -94,8 +92,7 @@ def _report_run(out, controller: str) -> dict:
 
 
 def _print_metrics(flat, scenario, final_time: float) -> None:
-    """A run's metrics, over the run and then grouped by the scenario's phases (their
-    names and times), each with its unit and its metrics.json key."""
+    """A run's metrics, then by phase, each with its unit and metrics.json key."""
     from dacph_drake.loop.metrics import PHASE_NAMES, RunMetrics
     record = RunMetrics.FromFlat(flat)
     p = scenario.phases
@@ -119,8 +116,7 @@ def _print_metrics(flat, scenario, final_time: float) -> None:
 
 
 def _spatial(args) -> int:
-    """The command before every robot ran through `dacph simulate`: the same run,
-    with a note."""
+    """The command before `dacph simulate` ran every robot: the same run, with a note."""
     if args.panels:
         raise ConfigError("--panels: dacph spatial is now dacph simulate; allowed: "
                           f"dacph reproduce {args.scenario} --out DIR (every controller, "
@@ -212,8 +208,7 @@ EXPORT_FORMATS = ("csv", "parquet")
 
 
 def _export(args) -> int:
-    """A saved run's logs as a table for pandas: one row per logged time, one column
-    per named signal entry (RunResult.to_pandas)."""
+    """A saved run's logs as a pandas table: a row per logged time (RunResult.to_pandas)."""
     from pathlib import Path
     from dacph_drake.atomic_files import replaced_atomically
     from dacph_drake.loop.run_store import RunResult, load_run
@@ -249,8 +244,7 @@ def _export(args) -> int:
 
 
 def _verify(args) -> int:
-    """Verifies a run directory, or simulates the scenario's DAC loop into --out
-    first; exit status 1 when a check fails."""
+    """Verifies a run directory (or first simulates DAC into --out); exit 1 on a failure."""
     from pathlib import Path
     from dacph_drake.loop.verify import verify_run
     from dacph_drake.loop.simulate import simulate
@@ -333,8 +327,7 @@ def _AddLiveViewing(command) -> None:
 
 
 def _LiveViewing(args, scenario):
-    """Applies --realtime-rate to the scenario; with --meshcat, a Meshcat whose URL is
-    printed (else None)."""
+    """Applies --realtime-rate; with --meshcat, a Meshcat (its URL printed), else None."""
     if args.realtime_rate is not None:
         require_nonnegative("--realtime-rate", args.realtime_rate)
         scenario.simulator.target_realtime_rate = args.realtime_rate
@@ -384,8 +377,7 @@ def _AddController(command, what: str, default: Optional[str] = REFERENCE) -> No
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse's parser, with the closest allowed value named after an invalid
-    choice."""
+    """argparse's parser, naming the closest allowed value after an invalid choice."""
 
     def error(self, message: str):
         import difflib
@@ -400,8 +392,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 class _Once(logging.Filter):
-    """Lets each distinct message through once (a description parsed for the
-    controller's model and for the ground truth repeats the parser's warnings)."""
+    """Lets each distinct message through once (a description is parsed twice)."""
 
     def __init__(self):
         super().__init__()
@@ -415,9 +406,8 @@ class _Once(logging.Filter):
 
 
 def _ShowNotes(quiet: bool) -> None:
-    """Logged notes and Drake's warnings (pydrake logs through Python's logging) on
-    stderr as "dacph: note: ...", each once; with --quiet, errors only. Where the root
-    logger already has handlers (an application embedding main), they stay as set."""
+    """Logged notes and Drake's warnings on stderr as "dacph: note: ...", each once; with
+    --quiet, errors only; an embedding application's handlers are left as set."""
     root = logging.getLogger()
     if root.handlers:
         return
@@ -564,8 +554,8 @@ def make_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """The ``dacph`` command line: parses ``argv``, runs the command and returns the exit
-    status (2 for bad input, with one line naming it; 130 when interrupted).
+    """The ``dacph`` command line: runs the command; returns the exit status (2 for bad
+    input, naming it; 130 when interrupted).
 
     Args:
         argv: The arguments after the program's name (default: sys.argv[1:])."""
@@ -590,10 +580,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def console_main() -> int:
-    """The ``dacph`` program: main, after which the process exits with its status
-    whatever comes: a Ctrl-C during the interpreter's exit (a sweep's pool being torn
-    down) is ignored rather than ending the process by the signal, since Python resets
-    its own SIGINT handler to the default one as it finalizes."""
+    """The ``dacph`` program: main, then exit with its status (a Ctrl-C at exit ignored)."""
     status = main()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     return status

@@ -1,6 +1,5 @@
-"""`python -m dacph_drake.app.compile_kernels`: compiles every kernel into numba's
-on-disk cache (about 15 s, once per checkout; scripts/setup.sh runs it), by simulating
-10 ms of the DAC loop on the short scenario."""
+"""`python -m dacph_drake.app.compile_kernels`: fills numba's on-disk cache by simulating
+10 ms of the DAC loop on the short scenario (scripts/setup.sh runs it)."""
 import time
 
 from dacph_drake.loop.simulate import simulate

@@ -1,27 +1,17 @@
-"""The paper's figures as six panels, from the logs of the runs of one scenario
-(a DAC run, the model-based baseline's, and any other registered controller's):
+"""The paper's figures as six panels, from the logs of one scenario's runs:
 
-(a) uncertainty (= the nominal prior's error) against the learned estimation error,
-    and the RHS control error (norms, log axes)
-(b) true, learned and nominal (prior) value of every entry of B~ and D~, one small
-    axis per entry (readable for any number of links)
+(a) uncertainty (the prior's error) against the learned estimation error, and the RHS
+    control error (norms, log axes)
+(b) true, learned and prior value of every entry of B~ and D~, one axis per entry
 (c) zoom on (b) shortly after the nonlinear terms switch on
 (d) RHS gains K, c against its lower bound c_min (eq. 48), chi
 (e) every run: |alpha~| and ||s|| (log axes), d(t)
 (f) control inputs (DAC, and the model-based input's difference from it) and states
 
-(a)-(d) are DAC's (or, without a DAC run, the first run's with a learner); (e) and
-(f) are the planar task's (tasks.task.Task.panels). A described arm's runs get
-(e) every run: the attitude error |e| (the pose task: and |e_p|), ||s||, the
-    smallest link-base distance, d(t)
-(f) control inputs u and joint angles and rates (f_inputs_and_joints).
-A single run is drawn by itself (its own inputs, no difference to a baseline).
-Each controller is drawn in its registered style (controllers.REGISTRY).
-
-Each panel is written as PNG and PDF. Warm-up and phases are shaded and labelled,
-every axis carries one unit, legends sit outside the data. A series with more
-samples than the figure has pixel columns is drawn as its min/max envelope per
-column, so fast ripple shows as the band it fills, not as overdrawn lines."""
+(a)-(d) are DAC's (else the first run with a learner); (e) and (f) are the task's
+(tasks.task.Task.panels): a described arm's (e) shows |e| (pose: and |e_p|), ||s||, the
+smallest link-base distance and d(t), its (f) u and the joints. Panels are PNG and PDF;
+a series with more samples than pixel columns is drawn as its min/max envelope."""
 from pathlib import Path
 from typing import Dict, List, Sequence, Tuple, Union
 
@@ -86,12 +76,8 @@ def _phase_handles(scenario: Scenario) -> List[Patch]:
 
 def envelope(t: np.ndarray, y: np.ndarray, xlim: Tuple[float, float],
              columns: int = COLUMNS) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The min/max envelope of y(t) inside xlim.
-
-    The samples themselves (low = high = y) when there are at most 2 ``columns`` of
-    them, else the min and max of y over each of ``columns`` equal time intervals,
-    at the interval's centre. NaNs (for example non-positive values masked for a
-    log axis) are left out of min/max.
+    """The min/max envelope of y(t) inside xlim over ``columns`` equal intervals, at their
+    centres (the samples themselves for at most 2 ``columns`` of them); NaNs left out.
 
     Args:
         t: The sample times [s] (T, increasing).
@@ -100,7 +86,7 @@ def envelope(t: np.ndarray, y: np.ndarray, xlim: Tuple[float, float],
         columns: The number of intervals (about one per pixel column).
 
     Returns:
-        (t, low, high), the intervals' centres [s] (or the samples' times) and y's
+        (t, low, high): the intervals' centres [s] (or the samples' times) and y's
             min and max over each."""
     inside = (t >= xlim[0]) & (t <= xlim[1])
     t, y = t[inside], y[inside]
@@ -116,8 +102,7 @@ def envelope(t: np.ndarray, y: np.ndarray, xlim: Tuple[float, float],
 
 
 def _trace(ax, t, y, xlim, log: bool = False, label=None, alpha=0.6, **style):
-    """Draws y(t) inside xlim as a line, or as its min/max envelope (two edge lines
-    and the band between them) when it has more samples than pixel columns."""
+    """Draws y(t) inside xlim as a line, or as its min/max band if over-sampled."""
     y = np.asarray(y, float)
     if log:
         y = np.where(y > 0, y, np.nan)
@@ -133,9 +118,7 @@ def _trace(ax, t, y, xlim, log: bool = False, label=None, alpha=0.6, **style):
 
 
 def _fit_log_axes(fig) -> None:
-    """Each log axis of ``fig`` spans its lines' positive data, at most LOG_DECADES
-    decades below their maximum (a lone exact zero-crossing sample would otherwise
-    stretch it over twenty decades; samples below are drawn to the bottom edge)."""
+    """Each log axis of ``fig`` spans its positive data, at most LOG_DECADES decades."""
     for ax in fig.axes:
         if ax.get_yscale() != "log" or not ax.lines:
             continue
@@ -168,7 +151,7 @@ def _legend_outside(ax, **kwargs) -> None:
 
 def _matrix_norms(logs: Logs, scenario: Scenario, n: int, B0, D0):
     """||B~ - B0||_F, ||D~ - D0||, ||B_hat - B~||_F, ||D_hat - D~|| over time, B_hat and
-    D_hat the claims about B~ and D~ (analysis.metrics.physical_view)."""
+    D_hat the claims about B~ and D~ (loop.metrics.physical_view)."""
     truth, estimate = logs["true_matrices"], physical_view(logs, scenario)[0]
     B0 = np.diag(B0).reshape(-1)
     return (np.linalg.norm(truth[:, :n * n] - B0, axis=1),
@@ -200,11 +183,9 @@ def _panel_a(dac: Logs, scenario: Scenario):
 
 
 def _entries(dac: Logs, scenario: Scenario, xlim=None, port: bool = False):
-    """One small axis per entry: B_rc in an n x n grid, D_kk in a row below. The claims
-    about the physical B~ and D~ (analysis.metrics.physical_view, what the metrics
-    report) with their credible interval as a band, the truth and the prior; with
-    ``port``, the port model the loop closes on (the published estimates) against its
-    own truth (I + E) B~, diag((I + E) D~), E the run's true LHS model error."""
+    """One small axis per entry (B_rc in an n x n grid, D_kk in a row below): the claims
+    about B~ and D~ with their credible band, the truth and the prior; with ``port``, the
+    published estimates against (I + E) B~, diag((I + E) D~)."""
     n = len(scenario.q0)
     t = dac["time"]
     xlim = xlim or (0.0, scenario.duration)
@@ -280,8 +261,7 @@ def _compared(runs: Dict[str, Logs]):
 
 
 def _primary(runs: Dict[str, Logs]) -> Logs:
-    """The run whose own signals (d(t), u, the states) a panel shows: DAC's where
-    it ran, else the first."""
+    """The run whose own signals (d(t), u, states) a panel shows: DAC's, else the first."""
     return runs.get(REFERENCE, next(iter(runs.values())))
 
 
@@ -316,9 +296,8 @@ def _panel_f(runs: Dict[str, Logs], scenario: Scenario):
 
 def _panel_inputs(runs: Dict[str, Logs], scenario: Scenario,
                   coordinates: ArmCoordinates, planar: bool = False):
-    """The primary run's inputs u, joint angles and rates; with the baseline's run
-    (controllers.BASELINE) beside DAC's, the baseline's input minus DAC's; a planar
-    arm's base angle theta_0 and reference alpha_d with its angles."""
+    """The primary run's inputs u, joint angles and rates; beside DAC's, the baseline's
+    input minus DAC's; a planar arm's theta_0 and alpha_d with its angles."""
     n = len(scenario.q0)
     dac = _primary(runs)
     name = next(c for c, logs in runs.items() if logs is dac)
@@ -357,9 +336,8 @@ def _panel_inputs(runs: Dict[str, Logs], scenario: Scenario,
 
 
 def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
-    """(e) of a described arm: |e| (the pose task: and |e_p|; the position task: |e_p|
-    alone) and ||s|| of every run, the smallest link-base distance against the
-    potential's margin, d(t)."""
+    """(e) of a described arm: |e| and/or |e_p| and ||s|| of every run, the smallest
+    link-base distance against the potential's margin, d(t)."""
     n, layout = len(scenario.q0), PoseLog()
     errors = {"attitude_log": ("attitude",), "pose_log": ("attitude", "position"),
               "position_log": ("position",)}[log_name]
@@ -391,10 +369,7 @@ def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
 
 
 def zoom_window(scenario: Scenario) -> Tuple[float, float]:
-    """(c)'s window around the switch-on of the nonlinear terms.
-
-    From shortly before the nonlinear terms switch on to a twelfth of phase 2 after
-    (40 s of the paper's 480 s phase).
+    """(c)'s window: just before the nonlinear terms switch on to 1/12 of phase 2 after.
 
     Args:
         scenario: The scenario (its phases).
@@ -418,15 +393,12 @@ TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f
 
 
 def make_panels(runs: Dict[str, Logs], scenario: Scenario) -> Dict[str, object]:
-    """The panels as matplotlib figures, by name.
-
-    DAC_PANELS of the learning run (DAC's, else the first run with an RHS loop and
-    estimates; none without one), its PORT_PANEL where it measured the LHS model's
-    error, and the robot's task panels comparing every run in ``runs``.
+    """The panels as matplotlib figures: DAC_PANELS of the learning run (DAC's, else the
+    first with an RHS loop), PORT_PANEL where it measured the LHS model's error, and the
+    task's panels comparing every run.
 
     Args:
-        runs: Controller -> the logs of its run (any registered controllers; one run
-            alone is drawn by itself).
+        runs: Controller -> the logs of its run (one run alone is drawn by itself).
         scenario: The scenario the runs ran.
 
     Returns:

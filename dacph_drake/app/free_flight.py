@@ -1,6 +1,5 @@
-"""A passive free-flight check of the ground truth: smooth torques a_k cos(w_k t)
-drive the arm; the total momentum must stay at zero and the kinetic energy must equal
-the work done by the torques."""
+"""A passive free-flight check of the ground truth: under torques a_k cos(w_k t) the total
+momentum must stay zero and the kinetic energy equal the torques' work."""
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -18,13 +17,10 @@ from dacph_drake.scenario.simulator import FixedStepConfig
 
 
 class WorkMeter(LeafSystem):
-    """Continuous state W with dW/dt = tau^T qdot: the work done by the joint torques.
-
-    Inputs ``tau`` (the plant's actuation) and ``state`` (the plant's).
+    """Continuous state W, dW/dt = tau^T qdot (inputs ``tau`` and ``state``, the plant's).
 
     Args:
-        plant: The free-floating arm (finalized).
-    """
+        plant: The free-floating arm (finalized)."""
 
     def __init__(self, plant: MultibodyPlant):
         super().__init__()
@@ -52,8 +48,7 @@ class FreeFlightResult:
         max_momentum: max over samples of |(h_A_z, h_L_x, h_L_y)|_inf.
         kinetic_energy: The kinetic energy at the end [J].
         work: The work done by the torques [J].
-        min_clearance: The smallest signed distance between non-adjacent bodies [m].
-    """
+        min_clearance: The smallest signed distance between non-adjacent bodies [m]."""
     max_momentum: float     # max over samples of |(h_A_z, h_L_x, h_L_y)|_inf
     kinetic_energy: float   # [J] at the end
     work: float             # [J] done by the torques

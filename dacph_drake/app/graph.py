@@ -14,8 +14,7 @@ _ID = re.compile(r"(digraph _|clusters|cluster|\bs)(\d+)")
 
 
 def diagram_graphviz(diagram: "Diagram", max_depth: int = 2) -> str:
-    """Drake's Graphviz source of ``diagram``, the same text for equal diagrams: its
-    process-specific system ids renumbered in order of appearance, its edges sorted.
+    """Drake's Graphviz source of ``diagram``, ids renumbered and edges sorted.
 
     Args:
         diagram: The diagram.

@@ -1,7 +1,5 @@
-"""Reproducing the paper: DAC, its learning ablation (dac-nominal) and the
-model-based baseline on one scenario, the six panels of the paper's figures, the metrics
-table with the paper's values beside this project's, and the ablation table of
-learning per phase."""
+"""Reproducing the paper: DAC, dac-nominal and the model-based baseline on one scenario,
+the six panels, the metrics table beside the paper's values and the ablation table."""
 import json
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
@@ -36,8 +34,7 @@ class TableRow:
         label: The row's label.
         unit: The value's unit ("%", "-", "samples" or a physical unit).
         paper: The paper's value, where it reports one.
-        target: "<= x" / ">= x": the acceptance bound ("": none).
-    """
+        target: "<= x" / ">= x": the acceptance bound ("": none)."""
     key: str            # a key of the metrics dictionaries
     label: str
     unit: str
@@ -90,9 +87,8 @@ class AblationRow:
 
 
 def ablation_rows(metrics: Dict[str, Dict[str, float]]) -> List[AblationRow]:
-    """The ablation table's rows for the controllers that ran, in the registry's order:
-    every controller's tracking error; for every controller with an RHS loop (a chi)
-    its e_tau, DAC's over it, and its chi; then the learner's rows of DAC.
+    """The ablation table's rows for the controllers that ran: each one's tracking error;
+    with an RHS loop its e_tau, DAC's over it, and chi; then DAC's learner rows.
 
     Args:
         metrics: Controller -> its run's metrics (run_metrics), for those that ran."""
@@ -124,9 +120,7 @@ LEARNER_ROWS = (
 
 
 def flat_metrics(metrics: Dict[str, Dict[str, float]]) -> Dict[str, float]:
-    """{REFERENCE: {...}, BASELINE: {...}, ...} -> the comparison's metrics, the
-    reference's (DAC's) estimation errors, and every controller's metrics as
-    "CONTROLLER.NAME".
+    """The comparison's metrics, DAC's estimation errors, all as "CONTROLLER.NAME".
 
     Args:
         metrics: Controller (REQUIRED ones at least) -> its run's metrics."""
@@ -149,8 +143,7 @@ def metrics_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
 
 
 def ablation_table(metrics: Dict[str, Dict[str, float]]) -> List[Dict]:
-    """The ablation_rows whose controllers ran (metric, key, over, unit, phases: one value
-    per phase); the errors are time-RMS relative errors (metrics.learning_metrics).
+    """The ablation_rows whose controllers ran (metric, key, over, unit, phases).
 
     Args:
         metrics: Controller -> its run's metrics (run_metrics)."""
@@ -225,8 +218,7 @@ def table_markdown(rows: List[Dict], title: str) -> str:
 
 def check_runs_belong_together(run_dir: Path, scenario: Scenario,
                                runs: Dict[str, Dict]) -> None:
-    """Requires that the runs of a directory belong together (runs saved before run.json
-    recorded the scenario's fingerprint and the duration are not checked).
+    """Requires that a directory's runs share the scenario and duration (if recorded).
 
     Args:
         run_dir: The run directory (for the messages).
@@ -245,8 +237,7 @@ def check_runs_belong_together(run_dir: Path, scenario: Scenario,
 
 
 def runs_in(run_dir: Union[str, Path]) -> List[str]:
-    """The registered controllers with a run in a directory (its logs_CONTROLLER.npz or
-    run_CONTROLLER.json), in the registry's order.
+    """The registered controllers with a run in a directory, in the registry's order.
 
     Args:
         run_dir: The run directory."""
@@ -257,10 +248,8 @@ def runs_in(run_dir: Union[str, Path]) -> List[str]:
 def report(run_dir: Union[str, Path], controllers: Optional[List[str]] = None,
            formats: Sequence[str] = ("png", "pdf")) -> Dict:
     """Writes the panels and tables of a directory's runs (figures/, metrics.md,
-    ablation.md, metrics.json); returns the summary written to metrics.json (scenario,
-    duration, runs, table, ablation, metrics, figures, versions). With DAC's and the
-    baseline's runs, the table sets them beside the paper's numbers; a run alone
-    gets its own panels and its metrics per phase.
+    ablation.md, metrics.json); returns metrics.json's summary. DAC's and the baseline's
+    runs are set beside the paper's numbers; a run alone gets its per-phase metrics.
 
     Args:
         run_dir: The runs' directory (saved by dacph simulate or reproduce).
@@ -329,8 +318,7 @@ def _simulate_into(scenario: Scenario, controller: str, out: Path) -> str:
 
 def reproduce(scenario: Scenario, out_dir: Union[str, Path], progress: bool = True,
               jobs: int = 1) -> Dict:
-    """Runs the CONTROLLERS on ``scenario``, then writes the panels and the tables;
-    returns the report's summary (report).
+    """Runs the CONTROLLERS on ``scenario`` and writes the report; returns its summary.
 
     Args:
         scenario: The scenario.

@@ -1,20 +1,17 @@
-"""The reduced models of free-floating arms at zero momentum (the planar closed form,
-any plant's by AutoDiff), their inertial parameters and bounds, and the port's true
-RHS model; ReducedModel is what the systems of the loop need of any of them."""
+"""The reduced models of free-floating arms at zero momentum, their inertial parameters and
+bounds, and the port's true RHS model; ReducedModel is what the loop's systems need."""
 from typing import Protocol, Tuple
 
 import numpy as np
 
 
 class ReducedModel(Protocol):
-    """The controller's reduced model of a free-floating arm at zero momentum:
-    reduced_model.ReducedOrderModel for planar arms, floating_model.FloatingBaseModel for
-    described ones; M(q) qdot = p is the port's momentum.
+    """The controller's reduced model (ReducedOrderModel for planar arms, FloatingBaseModel
+    for described ones); M(q) qdot = p is the port's momentum.
 
     Attributes:
         num_joints: The number of the arm's joints n.
-        joint_damping: The description's joint damping b (n) [N m s/rad], part of
-            the LHS model (zero for the planar arms)."""
+        joint_damping: The joint damping b (n) [N m s/rad], in the LHS model (planar: 0)."""
     num_joints: int
     joint_damping: np.ndarray
 
@@ -33,8 +30,7 @@ class ReducedModel(Protocol):
 
     def MassMatrixAndDerivatives(self, q: np.ndarray
                                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """(M, dM), dM[k] = dM/dq_k (n x n x n): M(q) and its derivatives by the joint
-        angles.
+        """(M, dM), dM[k] = dM/dq_k (n x n x n).
 
         Args:
             q: The joint angles (n) [rad]."""

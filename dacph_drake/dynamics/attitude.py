@@ -1,11 +1,9 @@
-"""The end-effector attitude task of a spatial arm (the LHS's task in 3D; planar arms
-track the scalar alpha): attitude error on SO(3), the 3 x n task Jacobian from the
-GJM's angular rows, and the damped pseudo-inverse law for the reference joint rates
+"""The end-effector attitude task of a spatial arm: attitude error on SO(3), the 3 x n task
+Jacobian (the GJM's angular rows) and the damped pseudo-inverse law
 
     nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,    D^+ = D^T (D D^T + mu^2 I)^-1,
 
-mu the damping that keeps nu bounded near singular configurations (mu = 0: the
-Moore-Penrose pseudo-inverse of a full-rank D)."""
+mu keeping nu bounded near singular configurations."""
 from typing import Tuple
 
 import numpy as np
@@ -16,14 +14,9 @@ from dacph_drake.scenario import AttitudeReference
 
 
 def attitude_error(R_WE: RotationMatrix, R_WD: RotationMatrix) -> np.ndarray:
-    """The attitude error e = 2 sgn(eta) epsilon.
-
-    (eta, epsilon) is the quaternion of the world-frame error rotation
-    R_WE R_WD^T: |e| = 2 sin(theta / 2) for an error of angle theta about the axis
-    epsilon / |epsilon|, so e equals the rotation vector theta k to first order;
-    the sign picks the shorter way round (either quaternion of the double cover
-    gives the same e). With omega_E = omega_d - Lambda e, e decays as
-    exp(-Lambda t) to first order.
+    """The attitude error e = 2 sgn(eta) epsilon, (eta, epsilon) the quaternion of
+    R_WE R_WD^T: |e| = 2 sin(theta / 2), e the rotation vector theta k to first order, the
+    shorter way round; with omega_E = omega_d - Lambda e, e decays as exp(-Lambda t).
 
     Args:
         R_WE: The end effector's orientation in the world.
@@ -41,8 +34,7 @@ def damped_pseudo_inverse(D: np.ndarray, damping: float) -> np.ndarray:
 
     Args:
         D: The task Jacobian (m x n).
-        damping: The damping mu (0: the Moore-Penrose pseudo-inverse of a
-            full-rank D).
+        damping: The damping mu (0: the Moore-Penrose pseudo-inverse of a full-rank D).
 
     Returns:
         D^+ (n x m)."""
@@ -54,15 +46,12 @@ def reference_rates(D: np.ndarray, omega_d: np.ndarray, e: np.ndarray,
                     Lambda: float, xi: np.ndarray, damping: float) -> np.ndarray:
     """The reference joint rates nu = D^+ (omega_d - Lambda e) + (I - D^+ D) xi.
 
-    The task rate in the range of D^+, the secondary motion xi in its null space.
-
     Args:
         D: The task Jacobian (3 x n), the GJM's angular rows.
         omega_d: The desired angular velocity (3) [rad/s].
         e: The attitude error (3) (attitude_error).
         Lambda: The attitude error's gain [1/s].
-        xi: The secondary motion (n) [rad/s] (for example the potential field's
-            descent).
+        xi: The secondary motion (n) [rad/s], e.g. the potential field's descent.
         damping: The pseudo-inverse's damping mu (damped_pseudo_inverse).
 
     Returns:

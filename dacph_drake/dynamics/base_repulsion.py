@@ -1,12 +1,10 @@
-"""Null-space artificial potential field U(q) (Khatib 1985, docs/equations.md E24).
+"""Null-space artificial potential field U(q) (Khatib 1985, docs/equations.md E24):
 
 U(q) = sum_points f(rho_j(q); k_b, rho_b) + sum_{k>=2} f(pi - |q_k|; k_f, rho_f),
 f(rho; k, rho0) = k / 2 (1 / rho - 1 / rho0)^2 for rho < rho0, else 0 (FIRAS),
 
-rho_j the clearance from the base square of the j-th sample point along the links, less
-the link's half width (fixed-base kinematics, nominal robot): the first term keeps links
-off the base, the second keeps each elbow from folding. U does not depend on the base pose.
-"""
+rho_j the j-th link point's clearance from the base square less the link's half width:
+the first term keeps links off the base, the second each elbow from folding."""
 from typing import Tuple
 
 import numpy as np
@@ -32,8 +30,7 @@ class BaseRepulsionPotential:
 
     Args:
         robot: The arm (the controller's nominal arm).
-        settings: The potential's gains and margins.
-    """
+        settings: The potential's gains and margins."""
     def __init__(self, robot: RobotParams, settings: Potential):
         self._n = robot.num_links
         self._half_size = robot.base.size / 2
@@ -126,8 +123,7 @@ class BaseRepulsionPotential:
         return U, grad, grad_dot
 
     def MinClearance(self, q: np.ndarray) -> float:
-        """The smallest clearance [m] of the sample points from the base (negative: a
-        point inside it; compiled kernel).
+        """The sample points' smallest clearance [m] from the base (< 0: inside).
 
         Args:
             q: The joint angles (n) [rad]."""

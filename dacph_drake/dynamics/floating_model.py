@@ -3,11 +3,9 @@ description file), from the plant itself (docs/equations.md E5-E9). At zero mome
 
     M(q) qddot + C'(q, qdot) qdot = tau,        M = H_mm - H_mb H_bb^-1 H_bm,
 
-with C' the Christoffel form of dM/dq, the base velocity v_b = -H_bb^-1 H_bm qdot and the
-generalized Jacobian (GJM) J_bar = J_m - J_b H_bb^-1 H_bm. M and C' do not depend on the
-base pose; v_b and J_bar are in the world frame at the base pose given. H and dH/dq come
-from the kinematic tree by a compiled kernel (kernels/spatial.py). Planar arms keep the
-closed-form ReducedOrderModel on the fast path; it is tested against this model."""
+C' the Christoffel form of dM/dq, v_b = -H_bb^-1 H_bm qdot and the GJM
+J_bar = J_m - J_b H_bb^-1 H_bm (world frame). H and dH/dq come from the kinematic tree by
+a compiled kernel (kernels/spatial.py)."""
 from typing import Optional, Tuple
 
 import numpy as np
@@ -23,8 +21,7 @@ from dacph_drake.kernels import spatial
 
 
 class FloatingBaseModel:
-    """Reduced model of a finalized free-floating plant (a free base and revolute joints),
-    evaluated with the inertias of a scratch context.
+    """Reduced model of a finalized free-floating plant (a free base and revolute joints).
 
     Args:
         plant: The finalized free-floating plant."""
@@ -54,7 +51,7 @@ class FloatingBaseModel:
         """Evaluates with the bodies' inertias pi from now on (the plant is not changed).
 
         Args:
-            pi: The inertial parameters (InertialParameters layout), e.g. an estimate."""
+            pi: The inertial parameters (InertialParameters layout)."""
         pi = np.asarray(pi, float)
         if pi.tobytes() == self._inertial_parameters.tobytes():
             return
@@ -86,8 +83,7 @@ class FloatingBaseModel:
         return (*self.tree.KernelArrays(), *self._inertias)
 
     def Evaluate(self, q: np.ndarray, derivatives: bool = True) -> tuple:
-        """The reduced model and its kinematics at the base's identity pose:
-        (M, dM, A = H_bb^-1 H_bm, dA = dA/dq, X (body poses), S (joint motion subspaces)).
+        """(M, dM, A = H_bb^-1 H_bm, dA/dq, poses X, subspaces S), the base at identity.
 
         Args:
             q: The joint angles (n) [rad].
@@ -113,8 +109,8 @@ class FloatingBaseModel:
         return M, dM
 
     def Coriolis(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """C'(q, qdot) (n x n) in Christoffel form, C'_ij = sum_k Gamma_ijk qdot_k with
-        Gamma_ijk = (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) / 2 (Mdot - 2 C' is skew).
+        """C'(q, qdot) (n x n), C'_ij = sum_k Gamma_ijk qdot_k, Gamma_ijk = (dM_ij/dq_k +
+        dM_ik/dq_j - dM_jk/dq_i) / 2 (Mdot - 2 C' is skew).
 
         Args:
             q: The joint angles (n) [rad].
@@ -132,7 +128,7 @@ class FloatingBaseModel:
         return M, spatial.christoffel(dM, np.asarray(qdot, float))
 
     def Momentum(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """p = M(q) qdot (n), the port's momentum at zero total momentum.
+        """p = M(q) qdot (n), the port's momentum.
 
         Args:
             q: The joint angles (n) [rad].
@@ -151,8 +147,7 @@ class FloatingBaseModel:
 
     def BaseVelocity(self, q: np.ndarray, qdot: np.ndarray,
                      base_positions: Optional[np.ndarray] = None) -> np.ndarray:
-        """The base joint's velocities v_b = -H_bb^-1 H_bm qdot implied by zero momentum (a
-        free base's omega_W, v_W; a planar base's vx, vy, omega).
+        """v_b = -H_bb^-1 H_bm qdot (free: omega_W, v_W; planar: vx, vy, omega).
 
         Args:
             q: The joint angles (n) [rad].
@@ -175,8 +170,7 @@ class FloatingBaseModel:
         return self._BaseRotation(base_positions) @ evaluation[4][node, :3, :3] @ X_CF[:3, :3]
 
     def FrameNode(self, frame: Frame) -> Tuple[int, np.ndarray]:
-        """Where a plant frame sits in the kinematic tree (cached): (node, X_CF), its body's
-        node and its pose in that body (4 x 4).
+        """(node, X_CF (4 x 4)): a plant frame's node and its pose in that body (cached).
 
         Args:
             frame: A frame of the plant."""
@@ -189,8 +183,7 @@ class FloatingBaseModel:
                             p_FoP_F: np.ndarray = np.zeros(3),
                             base_positions: Optional[np.ndarray] = None,
                             evaluation: Optional[tuple] = None) -> np.ndarray:
-        """The generalized Jacobian J_bar (6 x n) of a point P fixed in a frame:
-        [omega; v] of P in the world (Drake's order) = J_bar qdot at zero momentum.
+        """The GJM J_bar (6 x n) of a point P of a frame: [omega; v] of P = J_bar qdot.
 
         Args:
             q: The joint angles (n) [rad].

@@ -1,12 +1,8 @@
-"""inf_q lambda_min(M(q)), the inertia bound of the RHS gain rule (eq. 48), and
-sup_q lambda_max(M(q)) (the Lyapunov envelope's), searched for arms with many joints,
-where a grid over [-pi, pi)^n (73^n mass matrices) costs too much.
-
-Multi-start descent on lambda_min(M(q)), with an Armijo line search on the torus of joint
-angles; where lambda_min is simple, d lambda_min / d q_k = v^T (dM/dq_k) v (v its unit
-eigenvector). A local search can miss the global minimum, so the bound is the smallest
-minimum found times (1 - safety_margin), and the result counts the starts within 0.1 %
-of it. lambda_max likewise, by descent on -lambda_max, times (1 + safety_margin)."""
+"""inf_q lambda_min(M(q)) (the gain rule's, eq. 48) and sup_q lambda_max(M(q)) (the
+Lyapunov envelope's), searched where a grid over [-pi, pi)^n costs too much: multi-start
+descent with an Armijo line search on the torus, d lambda_min / d q_k = v^T (dM/dq_k) v
+(v its unit eigenvector); the bound is the smallest minimum found times
+(1 - safety_margin) (lambda_max: the largest times (1 + safety_margin))."""
 import hashlib
 import time
 from dataclasses import dataclass
@@ -44,8 +40,7 @@ _CACHE = {}
 def search_inertia_bound(model: ReducedModel, starts: int = 24,
                          safety_margin: float = 0.05, seed: int = 0,
                          iterations: int = 200) -> InertiaBound:
-    """The gain rule's inf_q lambda_min(M) of a model's arm, searched (cached per robot):
-    the bound and how it was found.
+    """inf_q lambda_min(M), searched (cached per robot), and how it was found.
 
     Args:
         model: The arm's reduced model.
@@ -62,8 +57,7 @@ def search_inertia_bound(model: ReducedModel, starts: int = 24,
 def search_mass_matrix_bounds(model: ReducedModel, starts: int = 24,
                               safety_margin: float = 0.05, seed: int = 0,
                               iterations: int = 200) -> Tuple[float, float]:
-    """(inf_q lambda_min(M), sup_q lambda_max(M)) [kg m^2] of a model's arm, searched and
-    cached.
+    """(inf_q lambda_min(M), sup_q lambda_max(M)) [kg m^2], searched and cached.
 
     Args:
         model: The arm's reduced model.

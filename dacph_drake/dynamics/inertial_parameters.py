@@ -1,18 +1,16 @@
 """The inertial parameters of a free-floating robot's bodies, and what is linear in them:
 the mass matrix and the momentum. Body k has ten, in its frame B about its origin Bo,
 
-    pi_k = [m, h_x, h_y, h_z, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz],      h = m p_BoBcm.
+    pi_k = [m, h_x, h_y, h_z, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz],      h = m p_BoBcm,
 
-In the world (R = R_WB, o = p_WoBo) its spatial inertia about Bo is
-M_k = [[R I R^T, S(R h)], [S(R h)^T, m 1]] (Drake's [omega; v] order), so that
-H(q) = sum_k J_k^T M_k J_k, and the momentum about the world origin
+its spatial inertia M_k = [[R I R^T, S(R h)], [S(R h)^T, m 1]] in the world (Drake's
+[omega; v]), H(q) = sum_k J_k^T M_k J_k, and the momentum about the world origin
 
     P = sum_k m v_k + omega_k x (R h)
     L = sum_k R I R^T omega_k + (R h) x v_k + o x P_k
 
-is [L; P] = Y(x) pi (MomentumRegressor). In free flight from rest Y(x) pi~ = 0: the
-measured rates determine the true parameters up to one common factor, with no actuator
-model (Yoshida and Abiko, AIAA GNC 2002; systems/inertial_identifier.py)."""
+is [L; P] = Y(x) pi. In free flight from rest Y(x) pi~ = 0: the rates determine the
+parameters up to a common factor, without an actuator model (Yoshida and Abiko, 2002)."""
 from typing import List, Optional
 
 import numpy as np
@@ -45,8 +43,7 @@ def _inertia_regressor(w: np.ndarray) -> np.ndarray:
 
 
 class InertialParameters:
-    """The parameter layout of a finalized plant's bodies with mass (not the world), in body
-    index order, and the maps above on the plant's contexts (their kinematics only).
+    """The parameter layout of a finalized plant's bodies with mass, and the maps above.
 
     Args:
         plant: The finalized plant."""
@@ -82,9 +79,7 @@ class InertialParameters:
         return pi
 
     def SpatialInertias(self, pi: np.ndarray) -> List[SpatialInertia]:
-        """One Drake SpatialInertia per body, about its origin in its frame, unchecked: an
-        identified pi may break the triangle inequality in directions the motion does not
-        inform (M is checked instead).
+        """One Drake SpatialInertia per body about its origin, unchecked.
 
         Args:
             pi: The bodies' parameters (size)."""
@@ -100,8 +95,7 @@ class InertialParameters:
 
 
     def Nodes(self, tree: KinematicTree) -> np.ndarray:
-        """Each body's node in a kinematic tree (where kernels.identification puts it), in
-        layout order.
+        """Each body's node in a kinematic tree, in layout order.
 
         Args:
             tree: The plant's kinematic_tree.KinematicTree."""
@@ -110,9 +104,7 @@ class InertialParameters:
 
     def IntoTreeInertias(self, pi: np.ndarray, nodes: np.ndarray, mass: np.ndarray,
                          moment: np.ndarray, inertia: np.ndarray) -> None:
-        """Writes pi into a kinematic tree's inertia arrays (KinematicTree.Inertias' first
-        three, changed in place): what Apply then KinematicTree.Inertias give, without
-        Drake's objects (the LHS model takes each new estimate this way).
+        """Writes pi into a kinematic tree's inertia arrays, in place.
 
         Args:
             pi: The bodies' parameters (size).
@@ -159,9 +151,8 @@ class InertialParameters:
         return Y
 
     def MassMatrixBasis(self, context: Context) -> np.ndarray:
-        """The mass matrix's basis H_j (size x nv x nv), H(q) = sum_j pi_j H_j: with
-        a = R^T J_w, b = R^T J_v, H_m = b^T b, H_h_i = a^T S(e_i) b + its transpose,
-        H_I_xx = a_x^T a_x, H_I_xy = a_x^T a_y + a_y^T a_x, and so on.
+        """The basis H_j (size x nv x nv) of H(q) = sum_j pi_j H_j: a = R^T J_w,
+        b = R^T J_v, H_m = b^T b, H_h_i = a^T S(e_i) b + transpose, H_I_xx = a_x^T a_x...
 
         Args:
             context: A context of the plant (its positions)."""
@@ -186,9 +177,8 @@ class InertialParameters:
 
 
 def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
-    """A scale for each parameter of the prior pi0 (parameters.size), per body: m, m r for
-    the first moments, m r^2 for the inertias (r = sqrt(I_max / m)), so a relative error
-    counts alike in each.
+    """Each prior parameter's scale per body: m, m r for the first moments, m r^2 for the
+    inertias (r = sqrt(I_max / m)), so a relative error counts alike in each.
 
     Args:
         parameters: The parameter layout.
@@ -206,16 +196,14 @@ def prior_scales(parameters: InertialParameters, pi0: np.ndarray) -> np.ndarray:
 def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                         prior_weight: float, anchor: Optional[np.ndarray] = None,
                         anchor_value: Optional[np.ndarray] = None) -> np.ndarray:
-    """The inertial parameters pi (size, or a stack; pi0 where r is not > 0: no information)
-    the momentum samples identify, regularized by the prior:
+    """The inertial parameters pi (size, or a stack; pi0 where r is not > 0) the momentum
+    samples identify, regularized by the prior:
 
         argmin_pi  pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0)  subject to  c^T pi = v
 
     with A = sum_k Y_k^T Y_k, S the prior's scales, r = prior_weight trace(S A S) / size:
-    the data set every direction they inform more than prior_weight times the average, the
-    rest stays at the prior, and the constraint fixes the common scale that momentum data
-    cannot (the prior's, c = S^-2 pi0, v = c^T pi0; or a measured mass, MassAnchor).
-    Stacked arguments solve one problem per trial.
+    directions informed less than prior_weight times the average stay at the prior; the
+    constraint fixes the common scale (c = S^-2 pi0, v = c^T pi0; or a measured mass).
 
     Args:
         information: A = sum_k Y_k^T Y_k (size x size), or a stack (trials, size, size).
@@ -254,9 +242,7 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
 def identify_draws(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                    prior_weight: float, anchor: np.ndarray, anchor_values: np.ndarray
                    ) -> np.ndarray:
-    """identify_parameters for draws that share their trial's information, scales and
-    anchor and differ in their prior and anchored mass only: one KKT matrix per trial,
-    factored once for all its draws' right-hand sides (trials, draws, size).
+    """identify_parameters for draws sharing A, S, c: one KKT factorization per trial.
 
     Args:
         information: Each trial's A (trials, size, size).
@@ -282,8 +268,7 @@ def identify_draws(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
 
 def mass_anchor(parameters: InertialParameters, bodies: Optional[List[int]] = None
                 ) -> np.ndarray:
-    """The vector c (parameters.size) with c^T pi the mass of some bodies
-    (identify_parameters' anchor).
+    """c (parameters.size), c^T pi the mass of some bodies (identify_parameters' anchor).
 
     Args:
         parameters: The parameter layout.
@@ -296,10 +281,8 @@ def mass_anchor(parameters: InertialParameters, bodies: Optional[List[int]] = No
 
 def momentum_misfit(information: np.ndarray, pi: np.ndarray, size_of_body: int = PER_BODY
                     ) -> np.ndarray:
-    """The momentum the parameters leave unexplained (a scalar, or one per trial), relative
-    to the bodies' own, sqrt(pi^T A pi / sum_b pi_b^T A_bb pi_b): round-off when the
-    controller's kinematics are right; of the order of a link-length error when no pi
-    explains the samples.
+    """The momentum the parameters leave unexplained relative to the bodies' own,
+    sqrt(pi^T A pi / sum_b pi_b^T A_bb pi_b): round-off when the kinematics are right.
 
     Args:
         information: A = sum_k Y_k^T Y_k (size x size), or a stack.

@@ -1,13 +1,7 @@
-"""A free-floating plant's kinematic tree as plain arrays, for the compiled spatial kernels
-(kernels/spatial.py): parents before children, node 0 the base (on a free joint or, for
-the planar arms, a planar one), each body on its inboard joint, revolute or a weld:
-
-    X_WC = X_WP X_PF Rot(axis, q_j) X_MC.
-
-Joints are numbered in actuator order (ArmCoordinates), the reduced model's q. The
-inertias change with the controller's parameters, so they are not part of the tree; nor
-are the actuators' reflected inertias rho^2 I_r (an MJCF joint's armature, a URDF's
-transmission), which Drake adds to H's diagonal on their joints (Inertias)."""
+"""A free-floating plant's kinematic tree as plain arrays for kernels/spatial.py: parents
+before children, node 0 the base (free or planar joint), each body on its inboard joint
+(revolute or a weld), X_WC = X_WP X_PF Rot(axis, q_j) X_MC; joints in actuator order.
+Inertias and reflected inertias rho^2 I_r are not part of the tree (Inertias)."""
 from dataclasses import dataclass
 from typing import Tuple
 
@@ -141,9 +135,8 @@ class KinematicTree:
 
     def Inertias(self, context: Context
                  ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The bodies' inertias, as the plant holds them in a context, in each body's frame,
-        and the joints' reflected inertias: (mass (nodes,), m c (nodes, 3), inertia about
-        the origin (nodes, 3, 3), reflected rho^2 I_r (n,) [kg m^2]).
+        """(mass (nodes,), m c (nodes, 3), inertia about the origin (nodes, 3, 3), reflected
+        rho^2 I_r (n,) [kg m^2]) as the plant holds them in a context, in each body's frame.
 
         Args:
             context: A context of the plant."""
@@ -160,8 +153,7 @@ class KinematicTree:
         return mass, moment, inertia, reflected
 
     def Node(self, frame: Frame) -> Tuple[int, np.ndarray]:
-        """Where a plant frame sits in the tree: (node, X_CF (4 x 4)), its body's node and
-        its pose in that body.
+        """(node, X_CF (4 x 4)): a plant frame's body's node and its pose in that body.
 
         Args:
             frame: A frame of the plant."""

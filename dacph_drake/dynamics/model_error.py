@@ -1,26 +1,13 @@
 """The LHS model's inertia error E, measured rather than assumed.
 
 The port observer builds tau_obs from the LHS model M_hat, so the learner sees
-(I + E) B~ and (I + E) D~ with E = M_hat M~^-1 - I (M~ the true reduced mass matrix,
-docs/equations.md): port data alone cannot tell a gain from an inertia. What a run can
-say about E comes from the momentum data the inertial identifier fits and from what the
-user states about robot.nominal (scenario.InertiaIdentification):
-
-- ``anchor_tolerance``: the measured mass that fixes the common scale momentum data
-  leave free, known to this relative sd;
-- ``nominal_tolerance``: robot.nominal's inertial parameters known to this relative sd
-  (it matters only along the directions the data do not inform);
-- ``kinematic_tolerance``: the components of every joint placement (X_PF's
-  translation) known to this relative sd.
-
-ModelErrorEnsemble draws ``error_draws`` plausible models per trial from these
-statements, fits each to the same momentum data as the identifier (each with its own
-kinematics, its own prior and its own anchor), and takes E's sd per entry as the RMS
-over the draws of M_hat M_k^-1 - I at the current q, times Student's factor for that
-many draws. Every draw that explains the data as well as the identified model is a
-model the data cannot rule out, so their spread is what the data leave of E (with exact
-kinematics, about the anchor's tolerance; with a few per cent of kinematic tolerance,
-tens of per cent, since the identification then bends the inertias to fit)."""
+(I + E) B~ and (I + E) D~ with E = M_hat M~^-1 - I: port data cannot tell a gain from an
+inertia. E is measured from the momentum data and the user's statements
+(scenario.InertiaIdentification): ``anchor_tolerance`` (the measured mass's relative sd),
+``nominal_tolerance`` (robot.nominal's parameters') and ``kinematic_tolerance`` (the
+joint placements'). ModelErrorEnsemble draws plausible models from these, fits each to
+the same data, and takes E's sd per entry as the RMS over the draws (models the data
+cannot rule out) of M_hat M_k^-1 - I at the current q, times Student's factor."""
 from statistics import NormalDist
 from typing import Optional, Sequence
 
@@ -37,9 +24,8 @@ _LEVEL = 0.9
 
 
 def stated_model_error(settings: InertiaIdentification, identified: bool) -> float:
-    """E's relative sd from the statements alone, for a run without the ensemble's
-    measurement: the nominal's inertial and kinematic tolerances (in quadrature) when
-    nothing is identified; 0 when the identifier's ensemble measured it.
+    """E's relative sd from the statements alone (a run without the ensemble): the nominal's
+    inertial and kinematic tolerances in quadrature when nothing is identified, else 0.
 
     Args:
         settings: The identification's settings (scenario.inertia).
@@ -50,14 +36,11 @@ def stated_model_error(settings: InertiaIdentification, identified: bool) -> flo
 
 
 class ModelErrorEnsemble:
-    """``settings.error_draws`` plausible controller models per trial and E's sd.
-
-    Draw k of trial i has its prior pi0 (1 + nominal_tolerance N(0, 1)) per parameter
-    (in the prior's scales), its anchor's mass (1 + anchor_tolerance N(0, 1)) and its
-    joint placements' components t (1 + kinematic_tolerance N(0, 1)), from a generator
-    seeded by the trial's seed (a batch's trial draws what it draws alone). With exact
-    kinematics every draw fits the identifier's own information (one accumulation);
-    otherwise each draw accumulates its own (AddInformation).
+    """``settings.error_draws`` plausible controller models per trial and E's sd. Draw k has
+    its prior pi0 (1 + nominal_tolerance N(0, 1)) per parameter, its anchor's mass
+    (1 + anchor_tolerance N(0, 1)) and its joint placements t (1 + kinematic_tolerance
+    N(0, 1)), seeded by the trial's seed; with exact kinematics every draw uses the
+    identifier's information, otherwise each accumulates its own (AddInformation).
 
     Args:
         plants: Each trial's controller plant.
@@ -103,8 +86,7 @@ class ModelErrorEnsemble:
 
     def AddInformation(self, base_pose: np.ndarray, base_velocity: np.ndarray,
                        q: np.ndarray, qdot: np.ndarray, information: np.ndarray) -> None:
-        """information[i K + k] += vec(Y^T Y) of draw k of trial i at trial i's measured
-        state (in place; with kinematic_tolerance > 0 only).
+        """information[i K + k] += vec(Y^T Y) of draw k of trial i, in place.
 
         Args:
             base_pose: Each trial's base pose (trials, base positions).
@@ -118,13 +100,12 @@ class ModelErrorEnsemble:
 
     def ErrorSd(self, information: np.ndarray, M_hat: np.ndarray, q: np.ndarray
                 ) -> np.ndarray:
-        """E's sd per entry (trials, n, n) at q: the RMS over each trial's usable draws
-        (positive-definite M_k) of M_hat M_k^-1 - I, times Student's factor;
-        nominal_tolerance where no draw is usable.
+        """E's sd per entry (trials, n, n) at q: the RMS of M_hat M_k^-1 - I over the PD
+        draws times Student's factor; nominal_tolerance where there is none.
 
         Args:
-            information: The draws' information (members, p, p), or with exact
-                kinematics the trials' own (trials, p, p).
+            information: The draws' information (members, p, p), or with exact kinematics
+                the trials' own (trials, p, p).
             M_hat: Each trial's identified M(q) (trials, n, n).
             q: Each trial's joint angles (trials, n) [rad]."""
         K, (count, n) = self.draws, q.shape
@@ -153,8 +134,7 @@ class ModelErrorEnsemble:
 
 def realized_model_error(model_plant: MultibodyPlant, truth_plant: MultibodyPlant,
                          pis: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """E = M_hat M~^-1 - I at each sample (T, n, n), which only a simulation knows:
-    M_hat the model's plant at the parameters pis, M~ the truth's at its own.
+    """E = M_hat M~^-1 - I at each sample (T, n, n), which only a simulation knows.
 
     Args:
         model_plant: The controller's plant (its kinematics).

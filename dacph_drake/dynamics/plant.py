@@ -1,9 +1,7 @@
-"""The ground-truth free-floating arm as a Drake MultibodyPlant (docs/equations.md E6-E11).
-
+"""The ground-truth free-floating arm as a Drake MultibodyPlant (docs/equations.md E6-E11):
 ``base`` on the PlanarJoint ``base_joint`` (x, y, theta0); ``link1``..``linkn`` on
-RevoluteJoints ``q1``..``qn`` about +z, driven by ``tau1``..``taun``; frame ``end_effector``
-at the last link's tip; zero gravity. Continuous time by default: it conserves momentum
-far better than Drake's semi-implicit discrete plant, at no extra steps."""
+RevoluteJoints ``q1``..``qn`` about +z, driven by ``tau1``..``taun``; frame
+``end_effector`` at the last link's tip; zero gravity; continuous time by default."""
 from dataclasses import dataclass
 from typing import List, Optional, Sequence, Tuple
 
@@ -62,8 +60,7 @@ class ArmCoordinates:
     @staticmethod
     def FromPlant(plant: MultibodyPlant, instance: Optional[ModelInstanceIndex] = None
                   ) -> "ArmCoordinates":
-        """The layout of a finalized free-floating plant, indices into the whole plant's q
-        and v: the base is its one joint on the world, the arm its actuated joints.
+        """The layout of a finalized free-floating plant (base on the world, actuated arm).
 
         Args:
             plant: The finalized free-floating plant.
@@ -123,8 +120,7 @@ class ArmCoordinates:
         return positions
 
     def StateIndices(self) -> np.ndarray:
-        """Indices into x = [positions, velocities] of [theta0, base velocity (3), q, qdot],
-        for compiled kernels that read the state whole (kernels.loop.true_torque)."""
+        """Indices into x of [theta0, base velocity (3), q, qdot] (kernels.loop)."""
         nq = self.plant_positions
         return np.concatenate([self.base_q[2:3], nq + self.base_v, self.joint_q,
                                nq + self.joint_v]).astype(np.int64)
@@ -184,8 +180,7 @@ STATE_SIGNALS = ("base_pose", "q", "base_velocity", "qdot")    # AddStateSplitte
 
 
 def FixStateInputs(system: System, context: Context, x: np.ndarray) -> None:
-    """Fixes a planar arm's state inputs of a system tested alone (no plant, no splitter):
-    ``state`` to x, STATE_SIGNALS to its parts.
+    """Fixes ``state`` and STATE_SIGNALS of a planar arm's system tested alone.
 
     Args:
         system: The system.
@@ -200,9 +195,8 @@ def FixStateInputs(system: System, context: Context, x: np.ndarray) -> None:
 
 
 def AddStateSplitter(builder: DiagramBuilder, plant: MultibodyPlant) -> Selector:
-    """Adds and returns the Selector "state_splitter" (C++, no Python call per evaluation)
-    giving the plant state as ``base_pose``, ``q``, ``base_velocity`` (world frame) and
-    ``qdot``, each the trials' stacked in trial order; only ArmCoordinates knows the layout.
+    """Adds and returns the Selector "state_splitter" (C++) giving ``base_pose``, ``q``,
+    ``base_velocity`` (world frame) and ``qdot``, each the trials' stacked in trial order.
 
     Args:
         builder: The builder it is added to.
@@ -241,11 +235,8 @@ def AddFreeFloatingArm(builder: DiagramBuilder, robot: RobotParams,
 
 def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
                         time_step: float = 0.0) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds the finalized plant of a batch, one arm per trial (model instance
-    TRIAL_INSTANCE.format(i); one arm: the default instance), side by side: without contact
-    each evolves exactly as in a plant of its own; returns (plant, scene_graph). Visual
-    geometry only: the potential field keeps the arm off its base, and a run stops at zero
-    clearance (run._Simulate).
+    """Adds a batch's finalized plant, one arm per trial (TRIAL_INSTANCE.format(i); one
+    arm: the default instance), visual geometry only; returns (plant, scene_graph).
 
     Args:
         builder: The builder the plant is added to.
@@ -264,8 +255,7 @@ def AddFreeFloatingArms(builder: DiagramBuilder, robots: Sequence[RobotParams],
 def AddClonedArms(builder: DiagramBuilder, sources: Sequence[MultibodyPlant]
                   ) -> "tuple[MultibodyPlant, SceneGraph]":
     """Adds the finalized continuous plant of a batch, one copy of a source arm per trial
-    (TRIAL_INSTANCE.format(i): its inertias, joints, actuators, free base; no geometry);
-    returns (plant, scene_graph).
+    (inertias, joints, actuators, free base; no geometry); returns (plant, scene_graph).
 
     Args:
         builder: The builder the plant is added to.
@@ -374,8 +364,7 @@ def _RegisterGeometry(plant: MultibodyPlant, robot: RobotParams, bodies: List) -
 
 
 def total_momentum(plant: MultibodyPlant, context: Context) -> np.ndarray:
-    """The planar system's total momentum [h_A_z, h_L_x, h_L_y] about the world origin
-    (paper: h_A, h_L; the other spatial components are zero in the plane).
+    """The planar system's total momentum [h_A_z, h_L_x, h_L_y] about the world origin.
 
     Args:
         plant: The plant.
@@ -385,8 +374,7 @@ def total_momentum(plant: MultibodyPlant, context: Context) -> np.ndarray:
 
 
 def joint_damping(plant: MultibodyPlant, joint_v: np.ndarray) -> np.ndarray:
-    """The joints' damping [N m s/rad], the description's (Drake applies it in the plant's
-    dynamics).
+    """The joints' damping [N m s/rad] from the description (Drake applies it in the plant).
 
     Args:
         plant: The plant.

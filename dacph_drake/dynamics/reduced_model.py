@@ -1,14 +1,12 @@
-"""Reduced-order port-Hamiltonian model of a planar free-floating arm (the paper's section
-"Modeling", docs/equations.md E7-E20). At zero momentum, with the base unactuated,
+"""Reduced-order port-Hamiltonian model of a planar free-floating arm (section "Modeling",
+docs/equations.md E7-E20). At zero momentum, with the base unactuated,
 
     qdot0 = -H_bb^-1 H_bm qdot                         (paper: qdot0 = -H_q0^-1 H_q qdot)
     M(q) = H_mm - H_bm^T H_bb^-1 H_bm                  (paper: M(q), reduced mass matrix)
 
-with H the full mass matrix of the controller's own MultibodyPlant, velocities ordered
-(vx, vy, omega0, qdot); M does not depend on the base pose. Derivatives are exact: each
-entry of H is a sum of 1, cos(s_r), sin(s_r) over the consecutive joint-angle sums
-s_r = q_a + ... + q_b, fitted once to CalcMassMatrix and checked to round-off (and against
-AutoDiffXd), so H and dH/dq are closed-form, with no finite differences."""
+with H the full mass matrix, velocities (vx, vy, omega0, qdot). Each entry of H is a sum
+of 1, cos(s_r), sin(s_r) over the joint-angle sums s_r = q_a + ... + q_b, fitted to
+CalcMassMatrix to round-off, so H and dH/dq are exact and closed-form."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,9 +92,8 @@ class ReducedOrderModel:
         return self._coefficients, self._ranges
 
     def CoefficientBasis(self, parameters: InertialParameters) -> np.ndarray:
-        """The trigonometric coefficients as linear in the inertial parameters pi:
-        coefficients(pi) = tensordot(pi, basis, 1), exact (H and the fit are linear in pi),
-        basis of shape (parameters.size, N*N, 1 + 2R).
+        """The trigonometric coefficients, linear in pi: coefficients(pi) = tensordot(pi,
+        basis, 1), basis (parameters.size, N*N, 1 + 2R).
 
         Args:
             parameters: The InertialParameters of this model's plant."""
@@ -190,8 +187,7 @@ class ReducedOrderModel:
 
     def MassMatrixAndDerivatives(self, q: np.ndarray
                                  ) -> "tuple[np.ndarray, np.ndarray]":
-        """(M, dM) with dM[k] = dM/dq_k (n x n x n): M(q) and its derivatives by the joint
-        angles (Evaluate's, at rest).
+        """(M, dM) with dM[k] = dM/dq_k (n x n x n).
 
         Args:
             q: The joint angles (n) [rad]."""
@@ -199,8 +195,7 @@ class ReducedOrderModel:
         return dynamics.M, dynamics.dM
 
     def Evaluate(self, q: np.ndarray, qdot: np.ndarray) -> ReducedDynamics:
-        """The reduced model at (q, qdot): M, Mdot, dM/dq, C', dH/dq, D, dD/dq and the base
-        velocity map.
+        """The reduced model at (q, qdot) (ReducedDynamics).
 
         Args:
             q: The joint angles (n) [rad].
@@ -227,8 +222,7 @@ class ReducedOrderModel:
                                base_velocity_map=-A)
 
     def BaseVelocity(self, q_full: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """The base velocity qdot0 = -H_bb^-1 H_bm qdot implied by zero momentum,
-        (vx, vy, omega0) in the world frame.
+        """qdot0 = -H_bb^-1 H_bm qdot at zero momentum: (vx, vy, omega0), world.
 
         Args:
             q_full: The plant's positions (base pose included).
@@ -238,8 +232,7 @@ class ReducedOrderModel:
 
     def GeneralizedJacobian(self, q_full: np.ndarray, frame: Frame,
                             p_FoP_F: np.ndarray = np.zeros(3)) -> np.ndarray:
-        """Generalized Jacobian J_bar (6 x n) = J_k - H_k H_q0^-1 H_q of a point P:
-        [omega; v] of P in the world (Drake's order) = J_bar qdot.
+        """J_bar (6 x n) = J_k - H_k H_q0^-1 H_q of a point P: [omega; v] = J_bar qdot.
 
         Args:
             q_full: The plant's positions (base pose included).
@@ -268,8 +261,7 @@ class ReducedOrderModel:
                 for body in self._link_bodies]
 
     def EndEffectorAngle(self, q_full: np.ndarray) -> float:
-        """alpha = theta0 + q1 + ... + qn, the end effector's unwrapped absolute angle in
-        the plane [rad].
+        """alpha = theta0 + q1 + ... + qn, the end effector's unwrapped angle [rad].
 
         Args:
             q_full: The plant's positions."""
@@ -303,9 +295,7 @@ GRID_JOINTS = 2
 
 def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                        ) -> "tuple[float, float]":
-    """The paper's (lambda_min_min(M), lambda_max_max(M)) =
-    (inf_q lambda_min(M), sup_q lambda_max(M)): over a grid up to GRID_JOINTS joints, else
-    searched; cached per robot (its fitted coefficients determine M(q)).
+    """(inf_q lambda_min(M), sup_q lambda_max(M)): by grid up to GRID_JOINTS, else searched.
 
     Args:
         model: The arm's reduced model.
@@ -322,8 +312,7 @@ def mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
 
 def grid_mass_matrix_bounds(model: ReducedOrderModel, samples_per_joint: int = 73
                             ) -> "tuple[float, float]":
-    """The extreme eigenvalues (min lambda_min(M), max lambda_max(M)) of M(q) over
-    samples_per_joint^n joint angles in [-pi, pi)^n (a sample of the true inf and sup).
+    """(min lambda_min(M), max lambda_max(M)) over a grid of [-pi, pi)^n.
 
     Args:
         model: The arm's reduced model.

@@ -1,6 +1,5 @@
-"""Desired end-effector orientation alpha_d(t) (not given in the paper; a reading of
-docs/equations.md where the paper is silent):
-alpha_d(t) = alpha(0) + sum_i a_i sin(2 pi t / T_i), smooth and persistently exciting."""
+"""Desired end-effector orientation alpha_d(t) = alpha(0) + sum_i a_i sin(2 pi t / T_i),
+smooth and persistently exciting (the paper gives none; docs/equations.md)."""
 import numpy as np
 
 from dacph_drake.scenario import Reference
@@ -11,8 +10,7 @@ class OrientationReference:
 
     Args:
         reference: The reference's amplitudes a_i and periods T_i.
-        alpha0: alpha(0) [rad].
-    """
+        alpha0: alpha(0) [rad]."""
     def __init__(self, reference: Reference, alpha0: float):
         self._a = np.asarray(reference.amplitudes, float)
         self._w = 2 * np.pi / np.asarray(reference.periods, float)

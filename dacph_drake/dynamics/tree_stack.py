@@ -1,6 +1,5 @@
-"""A batch's controller plants as the compiled identification kernels read them
-(kernels/identification.py): one kinematic topology, each member's fixed transforms and
-fixed inertias stacked along a first axis."""
+"""A batch's controller plants as kernels/identification.py reads them: one topology, each
+member's fixed transforms and inertias stacked along a first axis."""
 from typing import Sequence
 
 import numpy as np

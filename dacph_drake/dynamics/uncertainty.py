@@ -7,8 +7,7 @@ from dacph_drake.scenario import Phases, Uncertainty
 
 
 def actuator_arguments(uncertainty: Uncertainty, n: int) -> np.ndarray:
-    """The actuators' gains as the kernels read them (kernels.loop.actuator_gains):
-    [B_scale (n), then (time, joint index from 0, gain) per fault].
+    """kernels.loop.actuator_gains' [B_scale (n), (time, joint, gain) per fault].
 
     Args:
         uncertainty: The trial's true RHS (its B_scale and faults).
@@ -20,10 +19,8 @@ def actuator_arguments(uncertainty: Uncertainty, n: int) -> np.ndarray:
 
 
 class TrueRhsModel:
-    """The ground truth's RHS matrices B~(q, p, t) = diag(g(t)) (B0 + Delta B) and
-    D~(p, t) = D0 + Delta D, with the linear terms on from phases.linear_start, the
-    nonlinear terms from phases.nonlinear_start and the actuators' gains g(t)
-    (uncertainty.B_scale and the faults whose time has come) from t = 0.
+    """B~(q, p, t) = diag(g(t)) (B0 + Delta B), D~(p, t) = D0 + Delta D: linear terms from
+    phases.linear_start, nonlinear ones from phases.nonlinear_start, gains g(t) from t = 0.
 
     Args:
         uncertainty: The trial's true RHS.
@@ -51,8 +48,7 @@ class TrueRhsModel:
                 float(self._linear_start), float(self._nonlinear_start), self._actuator)
 
     def ActuatorGains(self, t: float) -> np.ndarray:
-        """The actuators' gains g(t) (n), B_scale times the gains of the faults whose time
-        has come.
+        """g(t) (n): B_scale times the gains of the faults whose time has come.
 
         Args:
             t: The time [s]."""

@@ -55,13 +55,12 @@ def dot(a: np.ndarray, b: np.ndarray) -> float:
 @njit(cache=True)
 def mass_matrix_and_derivatives(q: np.ndarray, coefficients: np.ndarray,
                                 ranges: np.ndarray) -> np.ndarray:
-    """[H, dH/dq_1, ..., dH/dq_n] (1 + n, N, N): the full mass matrix H = C psi(q) and
-    dH/dq_k = C dpsi/dq_k, the base pose at zero.
+    """[H, dH/dq_1, ..., dH/dq_n] (1 + n, N, N): H = C psi(q), dH/dq_k = C dpsi/dq_k.
 
     Args:
         q: The joint angles (n) [rad].
-        coefficients: C (N^2, 1 + 2 R), N = n + 3: row i N + j holds H_ij's coefficients of
-            psi (velocities vx, vy, omega0, qdot; H in kg, kg m, kg m^2).
+        coefficients: C (N^2, 1 + 2 R), N = n + 3: row i N + j holds H_ij's coefficients
+            (velocities vx, vy, omega0, qdot).
         ranges: (R, n), 1 where joint k is in range r, s_r = ranges[r] . q, R = n(n+1)/2."""
     n = q.shape[0]
     R = ranges.shape[0]
@@ -173,8 +172,7 @@ def reduced_dynamics(q: np.ndarray, qdot: np.ndarray, coefficients: np.ndarray,
 def joint_momentum(theta0: float, base_velocity: np.ndarray, q: np.ndarray,
                    qdot: np.ndarray, coefficients: np.ndarray, ranges: np.ndarray
                    ) -> np.ndarray:
-    """p (n), the joint rows of H(q_full) v of a planar arm: p = H(q)[3:] T v, T turning the
-    base's velocity into its own frame (at zero momentum, M(q) qdot).
+    """p (n) = H(q)[3:] T v of a planar arm, T turning the base's velocity into its frame.
 
     Args:
         theta0: The base angle [rad].

@@ -1,10 +1,7 @@
-"""The AttitudeController's task, compiled (systems/attitude_controller.py states
-the law): the reference R_d(t) (scenario.AttitudeReference.At), the attitude error
-and the reference joint rates (tasks/attitude.py) with their exact rate along the
-motion, at a configuration the compiled reduced model (kernels/spatial.py) was
-evaluated at; and the base's attitude turned along the motion (the secondary
-motion's central difference). tests/test_kernels.py checks the rates against the
-central difference of the rates themselves along the motion."""
+"""The AttitudeController's task, compiled (systems/attitude_controller.py states the
+law): the reference R_d(t), the attitude error and the reference joint rates with
+their exact rate along the motion, at a configuration of the compiled reduced model
+(kernels/spatial.py); and the base's attitude turned along the motion."""
 from typing import Tuple
 
 import numpy as np
@@ -74,8 +71,7 @@ def turned(quaternion: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
         rotation_vector: The turn, axis times angle (3) [rad], in the world frame.
 
     Returns:
-        The turned attitude's quaternion (w, x, y, z), sign as
-            rotation_quaternion gives it."""
+        The turned attitude's quaternion (w, x, y, z), w >= 0."""
     angle = np.sqrt(np.sum(rotation_vector * rotation_vector))
     R = quaternion_rotation(quaternion)
     if angle > 0:
@@ -90,7 +86,7 @@ def reference_rates(D: np.ndarray, D_dot: np.ndarray, r: np.ndarray, r_dot: np.n
     """The reference joint rates nu and their rate.
 
     nu = D^+ r + (I - D^+ D) xi, D^+ = D^T G^-1, G = D D^T + mu^2 I
-    (tasks.attitude.reference_rates with r = omega_d - Lambda e), and its rate
+    (dynamics.attitude.reference_rates with r = omega_d - Lambda e), and its rate
 
         nu_dot = dD^+ (r - D xi) + D^+ (r_dot - D_dot xi - D xi_dot) + xi_dot,
         dD^+ = D_dot^T G^-1 - D^T G^-1 (D_dot D^T + D D_dot^T) G^-1.
@@ -136,8 +132,7 @@ def desired_attitude(R_d0: np.ndarray, axis: np.ndarray, amplitude: float, omega
         t: The time [s].
 
     Returns:
-        (R_d(t) (3 x 3), omega_d(t) (3) [rad/s], omega_d_dot(t) (3) [rad/s^2]),
-            the rates in the world frame."""
+        (R_d(t) (3 x 3), omega_d(t) [rad/s], omega_d_dot(t) [rad/s^2]), world frame."""
     phi = amplitude * np.sin(omega * t)
     phi_dot = amplitude * omega * np.cos(omega * t)
     phi_ddot = -omega * omega * phi
@@ -152,8 +147,7 @@ def desired_position(position: np.ndarray, t: float
 
     Args:
         position: [p_CE (3), p_d0 (3), unit axis (3, world), amplitude [m],
-            omega [rad/s], 1 for the position rows alone else 0] (one array: a tuple
-            of arrays costs numba's dispatch).
+            omega [rad/s], 1 for the position rows alone else 0].
         t: The time [s].
 
     Returns:
@@ -168,12 +162,9 @@ def desired_position(position: np.ndarray, t: float
 def twist_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                    joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
                    node: int, rows: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """G = S_m - S_b A, the twist of a node's body about the base origin per qdot at
-    zero momentum (the base at the identity), its rate along the motion and the
-    joints' own twist of the body.
-
-    G_dot's columns are crm(w_j) S_j - S_b dA qdot, w_j the twist of the joints
-    above j.
+    """G = S_m - S_b A, the twist of a node's body about the base origin per qdot at zero
+    momentum (base at the identity), its rate G_dot (columns crm(w_j) S_j - S_b dA qdot,
+    w_j the twist of the joints above j) and the joints' own twist of the body.
 
     Args:
         base_subspace: S_b (6, nb).
@@ -233,13 +224,10 @@ def position_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
                   quaternion: np.ndarray, base_position: np.ndarray,
                   base_velocity: np.ndarray, node: int, p_CE: np.ndarray
                   ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The end effector's position p_E, its velocity v_E and the linear rows of the
-    GJM with their exact rate along the motion (world frame).
-
-    With G the twist of E's body per qdot (twist_jacobian) and p E's position (the
-    base at the identity): J = G_lin + G_ang x p, J_dot = G_lin_dot + G_ang_dot x p
-    + G_ang x p_dot, p_dot the joints' velocity of E; then D = R_WB J,
-    D_dot = [omega_b]x D + R_WB J_dot and v_E = v_b + omega_b x (R_WB p) + R_WB p_dot.
+    """The end effector's position p_E, velocity v_E and the GJM's linear rows with their
+    exact rate (world frame): J = G_lin + G_ang x p, J_dot = G_lin_dot + G_ang_dot x p
+    + G_ang x p_dot (G from twist_jacobian); D = R_WB J, D_dot = [omega_b]x D + R_WB J_dot,
+    v_E = v_b + omega_b x (R_WB p) + R_WB p_dot.
 
     Args:
         base_subspace: S_b (6, nb).
@@ -324,11 +312,7 @@ def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                reference: tuple, end_effector: tuple, xi: np.ndarray,
                xi_dot: np.ndarray, Lambda: float, damping: float
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The reference joint rates, their exact rate and the attitude error.
-
-    At a configuration whose compiled model ``evaluation`` is given; nu_dot is the
-    exact rate along the motion (joints at qdot, the base turning at
-    ``omega_base``, the reference at t):
+    """The reference joint rates nu, their exact rate nu_dot and the attitude error e:
 
         D = R_WB D_B,  D_B = sum over the end effector's joints of a_j e_j^T - S_b A
         D_dot = [omega_b]x D + R_WB (sum_j (w_j x a_j) e_j^T - S_b A_dot),
@@ -336,24 +320,20 @@ def task_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
         e_dot = eta omega_err + omega_err x epsilon,  omega_err = omega_E - R_err omega_d
 
     (a_j joint j's axis in the base frame, (eta, epsilon) the quaternion of
-    R_err = R_WE R_d^T, omega_E = omega_b + R_WB sum_j a_j qdot_j the end
-    effector's angular velocity).
+    R_err = R_WE R_d^T, omega_E = omega_b + R_WB sum_j a_j qdot_j).
 
     Args:
-        base_subspace: S_b, the base velocities' motion subspace (6, nb)
-            (KinematicTree.base_subspace).
-        parent: Each node's parent node (nodes,), -1 for the base (node 0).
-        joint: The joint moving each node (nodes,) (0..n-1), -1 for a weld.
+        base_subspace: S_b (6, nb) (KinematicTree.base_subspace).
+        parent: Each node's parent node, -1 for the base (node 0).
+        joint: The joint moving each node (0..n-1), -1 for a weld.
         joint_below: True where joint k moves joint j's axis, j != k (n, n).
-        evaluation: The compiled model at the configuration
-            (FloatingBaseModel.Evaluate with derivatives: M, dM, A, dA, X, S).
+        evaluation: FloatingBaseModel.Evaluate with derivatives (M, dM, A, dA, X, S).
         qdot: The joint rates (n) [rad/s].
         quaternion: The base's attitude (w, x, y, z).
         omega_base: The base's angular velocity omega_b (3) [rad/s], world frame.
         t: The time [s].
         reference: (R_d0, unit axis, amplitude, 2 pi / period) (desired_attitude).
-        end_effector: (node, R_CE): the end effector's node and its frame's
-            rotation in the node's body.
+        end_effector: (node, R_CE): its node and its frame's rotation in the node's body.
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate (n) [rad/s^2].
         Lambda: The task error's gain Lambda [1/s].
@@ -374,9 +354,8 @@ def pose_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
                reference: tuple, end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
-    """The pose task's reference joint rates: the attitude rows (attitude_rows) and
-    the position rows (position_rows) stacked, r = [omega_d - Lambda e;
-    v_d - Lambda e_p], e_p = p_E - p_d(t).
+    """The pose task's reference joint rates: attitude_rows and position_rows stacked,
+    r = [omega_d - Lambda e; v_d - Lambda e_p], e_p = p_E - p_d(t).
 
     Args:
         base_subspace: S_b (6, nb).
@@ -415,9 +394,8 @@ def position_task_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.
                        joint_below: np.ndarray, evaluation: tuple, qdot: np.ndarray,
                        base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
                        end_effector: tuple, position: np.ndarray, Lambda: float) -> tuple:
-    """The position rows of a task (position_rows) with their reference, as attitude_rows
-    gives the attitude's: r_p = v_d - Lambda e_p, e_p = p_E - p_d(t), and its rate
-    r_p_dot = a_d - Lambda (v_E - v_d).
+    """The position rows (position_rows) with their reference: r_p = v_d - Lambda e_p,
+    e_p = p_E - p_d(t), r_p_dot = a_d - Lambda (v_E - v_d).
 
     Args:
         base_subspace: S_b (6, nb).
@@ -434,8 +412,7 @@ def position_task_rows(base_subspace: np.ndarray, parent: np.ndarray, joint: np.
         Lambda: [1/s].
 
     Returns:
-        (D_p (3 x n) [m], D_p_dot, r_p [m/s], r_p_dot [m/s^2], e_p (3) [m],
-        p_d (3) [m])."""
+        (D_p (3 x n) [m], D_p_dot, r_p [m/s], r_p_dot [m/s^2], e_p [m], p_d [m])."""
     p_E, v_E, D_p, D_p_dot = position_rows(
         base_subspace, parent, joint, joint_below, evaluation, qdot, base_pose[:4],
         base_pose[4:], base_velocity, end_effector[0], position[:3])
@@ -450,8 +427,7 @@ def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                    base_pose: np.ndarray, base_velocity: np.ndarray, t: float,
                    end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                    xi_dot: np.ndarray, Lambda: float, damping: float) -> tuple:
-    """The position task's reference joint rates from the position rows alone
-    (position_task_rows).
+    """The position task's reference joint rates from position_task_rows alone.
 
     Args:
         base_subspace: S_b (6, nb).
@@ -481,9 +457,8 @@ def position_rates(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
 
 @njit(cache=True)
 def coupling_ratio(M: np.ndarray) -> float:
-    """rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1: how much lighter the
-    lightest coupled motion is than the joints' own inertias M_ii say (1 for a
-    diagonal M), by power iteration on the normalized inverse.
+    """rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1 (1 for a diagonal M): how much
+    lighter the lightest coupled motion is than M_ii say, by power iteration.
 
     Args:
         M: The reduced mass matrix (n x n), symmetric positive definite.
@@ -514,10 +489,8 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.
                     end_effector: tuple, position: np.ndarray, xi: np.ndarray,
                     xi_dot: np.ndarray, gains: np.ndarray, chi: float,
                     excitation: np.ndarray) -> tuple:
-    """One AttitudeController update (its docstring states the law).
-
-    From the compiled model at q (kernels.spatial.reduced_model with derivatives):
-    nu, nu_dot and e there (task_rates; pose_rates for the pose task).
+    """One AttitudeController update (its docstring states the law), from the compiled
+    model at q: nu, nu_dot and e from task_rates (pose_rates for the pose task).
 
     Args:
         tree: The model's kernel arguments (FloatingBaseModel.kernel_tree).
@@ -528,18 +501,13 @@ def attitude_update(tree: tuple, q: np.ndarray, qdot: np.ndarray, base_pose: np.
         t: The time [s].
         reference: (R_d0, unit axis, amplitude, 2 pi / period) (desired_attitude).
         end_effector: (node, R_CE) (task_rates).
-        position: desired_position's arguments for the pose task; an amplitude < 0:
-            the attitude task.
+        position: desired_position's arguments; an amplitude < 0: the attitude task.
         xi: The secondary motion (n) [rad/s].
         xi_dot: Its rate along the motion (n) [rad/s^2].
-        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate,
-            rho_allowed, b_1, ..., b_n), b the description's joint damping
-            [N m s/rad] and rho_allowed the largest coupling rho the boundary
-            layer takes at its nominal thickness (AttitudeController).
-        chi: The robust term's gain chi (input ``chi``: in DAC the RHS loop's
-            bound on ||e_tau||) [N m].
-        excitation: (a_1, ..., a_n, 2 pi f_1, ..., 2 pi f_n) of tau_pe (the
-            amplitudes [N m], scenario.Excitation.Amplitudes).
+        gains: (Lambda, task_damping, damping_rate, epsilon, boundary_rate, rho_allowed,
+            b_1, ..., b_n), b the joint damping [N m s/rad] (AttitudeController).
+        chi: The robust term's gain chi (in DAC the RHS loop's bound on ||e_tau||) [N m].
+        excitation: (a_1, ..., a_n, 2 pi f_1, ..., 2 pi f_n) of tau_pe, a [N m].
 
     Returns:
         (tau, M, C', [e, |e|, ||s||, V], the quaternion of R_d, [e_p, |e_p|, p_d]

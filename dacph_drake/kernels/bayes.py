@@ -3,19 +3,16 @@ row of the port relation on its window of band-passed samples,
 
     y_k = a_k^T theta + psi_k^T eta + r_k,     theta ~ N(theta_0, diag(s^2)),
 
-solved in the prior's standardized coordinates (theta = theta_0 + s o phi), so that the
-precision A'^T W A' / sigma^2 + I is well conditioned whatever the columns' scales. The
-residual variance sigma^2 is inflated by the residual's correlation time (band-passed, it
-is far from white) and by the fit's degrees of freedom, so that a short window after a
-restart is not mistaken for a well determined one."""
+solved in the prior's standardized coordinates (theta = theta_0 + s o phi) for
+conditioning. sigma^2 is inflated by the residual's correlation time and the fit's
+degrees of freedom, so a short window is not mistaken for a well determined one."""
 import numpy as np
 from numba import njit
 
 
 @njit(cache=True)
 def spd_inverse(A: np.ndarray, out: np.ndarray) -> bool:
-    """Writes the inverse of a symmetric positive definite matrix into ``out``, by Cholesky;
-    False when A is not positive definite (out is then undefined).
+    """Writes A^-1 into ``out`` by Cholesky; False when A is not positive definite.
 
     Args:
         A: The matrix (m x m); only its lower triangle is read.
@@ -102,9 +99,8 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
             prior_sd: np.ndarray, lags: int, min_tau: float, floor: float, newest: int,
             nuisance: float, min_dof: float, mean: np.ndarray, variance: np.ndarray,
             statistics: np.ndarray, detectable: float = 0.0) -> bool:
-    """One row's posterior on its window (module docstring); whether the window determines
-    the fit: (sum w - nuisance - tr hat) / tau >= min_dof (if not, mean and variance are the
-    prior's).
+    """One row's posterior on its window; whether the window determines it:
+    (sum w - nuisance - tr hat) / tau >= min_dof (if not, the prior's mean and variance).
 
     Args:
         A: The regressors (K samples x P columns), the nuisance projected out.
@@ -114,19 +110,17 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
         prior_sd: s (P), each > 0.
         lags: The longest lag of the correlation-time estimate [samples].
         min_tau: The least correlation time: 1 / (2 f h) for a band f [Hz] sampled at h [s].
-        floor: The observer's relative accuracy, which no independent-sample variance has:
-            each coefficient's variance gains (floor RMS_w(r) / RMS_w(A_c))^2.
-        newest: How many of the last samples are new since the last fit (the change test's).
+        floor: The observer's relative accuracy: each coefficient's variance gains
+            (floor RMS_w(r) / RMS_w(A_c))^2.
+        newest: How many of the last samples are new since the last fit.
         nuisance: The weighted dof the projected nuisance spent (project_out).
         min_dof: The residual dof (in independent samples) a determined fit needs.
         mean: The posterior mean (P), written.
         variance: The posterior variances (P), written.
-        statistics: Written: [sigma^2, residual dof, effective parameters, change statistic
-            (new samples' RMS prediction error / its sd), newest relative residual, tau].
-        detectable: The relative residual below which a change of the port goes
-            undetected (the change test's floor), over the intervals' quantile: each
-            coefficient's variance gains (detectable RMS_w(y) / RMS_w(A_c))^2, the
-            largest step of it that the change test cannot see."""
+        statistics: Written: [sigma^2, residual dof, effective parameters, change statistic,
+            newest relative residual, tau].
+        detectable: The relative residual below which the change test misses a change: each
+            coefficient's variance gains (detectable RMS_w(y) / RMS_w(A_c))^2."""
     K, P = A.shape
     scaled = A * prior_sd.reshape(1, P)
     offset = y - _matvec(A, prior_mean)
@@ -245,11 +239,9 @@ def fit_row(A: np.ndarray, y: np.ndarray, w: np.ndarray, prior_mean: np.ndarray,
 
 @njit(cache=True)
 def project_out(basis: np.ndarray, w: np.ndarray, A: np.ndarray, y: np.ndarray) -> float:
-    """Projects the span of ``basis`` out of A's columns and y, W-orthogonally (modified
-    Gram-Schmidt; a direction below 1e-9 of its column's norm is skipped); returns the
-    weighted dof spent, sum_s sum_k w_k^2 q_sk^2 (q_s W-orthonormal). The band-pass's free
-    response from its state at the window's start lies in that span: with a flat prior on
-    it, the regression on the projected data is exact.
+    """Projects the span of ``basis`` (the band-pass's free response) out of A's columns and
+    y, W-orthogonally (modified Gram-Schmidt, skipping directions below 1e-9); returns the
+    weighted dof spent, sum_s sum_k w_k^2 q_sk^2.
 
     Args:
         basis: The nuisance columns (K x S).
@@ -282,10 +274,9 @@ def project_out(basis: np.ndarray, w: np.ndarray, A: np.ndarray, y: np.ndarray) 
 @njit(cache=True)
 def row_design(rows: np.ndarray, i: int, n: int, t_now: float, p_now: float
                ) -> np.ndarray:
-    """Row i's regressors A (K x 3 (n + 1)) of the local model theta_ij(x) = theta_ij +
-    drift_ij (t - t_now) + slope_ij (p_i - p_now) / p_scale, per entry [const, drift,
-    slope] (channels as in LocalBayesChannels): B_ij (j < n): [U0_j, Ut_j - t_now U0_j,
-    Up_ij - p_now U0_j]; D_i: -[V0_i, Vt_i - t_now V0_i, Vp_i - p_now V0_i].
+    """Row i's regressors A (K x 3 (n + 1)) of theta_ij(x) = theta_ij + drift_ij (t - t_now)
+    + slope_ij (p_i - p_now) / p_scale, per entry [const, drift, slope]: B_ij: [U0_j, Ut_j -
+    t_now U0_j, Up_ij - p_now U0_j]; D_i: -[V0_i, Vt_i - t_now V0_i, Vp_i - p_now V0_i].
 
     Args:
         rows: The window's samples (K x (2n + channels)): [q, p / p_scale, channels].

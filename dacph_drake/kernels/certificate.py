@@ -1,14 +1,12 @@
-"""The discrete RHS loop's certificate on a credible set of B (gain_rule.CertifiedGains).
-
-Per decoupled mode the characteristic polynomial is z^2 - z + mu, mu an eigenvalue of h K B;
-with K = c diag(1 / Re lambda_hat_p) and B in the box [lower, upper], Gershgorin puts mu in
+"""The discrete RHS loop's certificate on a credible set of B. Per mode the polynomial is
+z^2 - z + mu, mu an eigenvalue of h K B; with K = c diag(1 / Re lambda_hat_p) and B in
+the box [lower, upper], Gershgorin puts mu in
 
     S_p = {mu : dist(mu, h c [lower_pp, upper_pp] / lambda_p) <= h c R_p / lambda_p},
     R_p = sum_{j != p} max(|lower_pj|, |upper_pj|).
 
-Certified at c: every S_p has Re(mu) / h >= Td lambda_LHS (eq. 45) and every root within the
-spectral radius bound (the largest root modulus is subharmonic in mu, so its maximum over
-S_p is on the boundary, sampled at BOUNDARY_POINTS points)."""
+Certified at c: every S_p has Re(mu) / h >= Td lambda_LHS (eq. 45) and every root within
+the radius bound (at BOUNDARY_POINTS on S_p's boundary: |z| is subharmonic in mu)."""
 import numpy as np
 from numba import njit
 
@@ -83,10 +81,9 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
                     floor: np.ndarray, c_target: np.ndarray, c_floor: np.ndarray,
                     rate: np.ndarray, period: float, c_cap: float, radius_bound: float,
                     out: np.ndarray, gains: np.ndarray) -> None:
-    """Every trial's certified decay rate c and gains k_p = c / lambda_p on its credible
-    set: c is c_target moved into the certified interval within [max(c_floor, rate /
-    slowest), c_cap]; k_p is raised to ``floor`` where the set certifies that too
-    (box_certificate), so learning never runs a mode slower than the safe loop without it.
+    """Every trial's certified rate c (c_target moved into the certified interval within
+    [max(c_floor, rate / slowest), c_cap]) and gains k_p = c / lambda_p, raised to ``floor``
+    where the set certifies it (box_certificate).
 
     Args:
         lower: Each trial's set's lower bounds (trials, n, n).
@@ -143,9 +140,8 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
 @njit(cache=True)
 def box_certificate(lower: np.ndarray, upper: np.ndarray, gains: np.ndarray,
                     period: float) -> np.ndarray:
-    """[slowest decay rate min_p k_p (lower_pp - R_p) [1/s], largest root modulus]: the
-    loop's certificate with given gains on a box of B, by Gershgorin on h K B, K =
-    diag(gains), disc p centred in h k_p [lower_pp, upper_pp] with radius h k_p R_p.
+    """[min_p k_p (lower_pp - R_p) [1/s], largest root modulus] with given gains on a box of
+    B: Gershgorin discs of h K B centred in h k_p [lower_pp, upper_pp], radius h k_p R_p.
 
     Args:
         lower: The box's lower bounds (n, n).

@@ -1,12 +1,6 @@
-"""The inertial identifier's compiled body (systems/inertial_identifier.py) for every trial
-of a batch: the information Y^T Y of the momentum regressor ([L about O; P] = Y(x) pi,
-inertial_parameters.MomentumRegressor) and the reduced mass matrix M(q) of given pi.
-
-The trials' trees share one topology (parent, joint, below, joint_below, base_subspace)
-and stack their fixed transforms and axes along a first axis. Body C's twist about
-the base's origin is V = (omega_B; v_B) + sum_j S_j qdot_j (spatial.body_twist_into),
-its origin's velocity v_C = V_lin + V_ang x p_BC; in the world omega = R_WB V_ang,
-v = R_WB v_C."""
+"""The inertial identifier's compiled body for a batch: the information Y^T Y of the
+momentum regressor ([L about O; P] = Y(x) pi) and the reduced mass matrix M(q) of given
+pi. The trials share one topology and stack their fixed transforms along a first axis."""
 import numpy as np
 from numba import njit
 
@@ -22,8 +16,7 @@ def momentum_regressor(base_subspace: np.ndarray, parent: np.ndarray, joint: np.
                        below: np.ndarray, nodes: np.ndarray, base_pose: np.ndarray,
                        base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
                        ) -> np.ndarray:
-    """The momentum regressor Y (6 x 10 bodies) at the state: [L about the world origin; P]
-    = Y pi (InertialParameters.MomentumRegressor, compiled).
+    """Y (6 x 10 bodies) at the state: [L about the world origin; P] = Y pi.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -149,9 +142,7 @@ def reduced_mass_matrices(base_subspace: np.ndarray, parent: np.ndarray,
                           reflecteds: np.ndarray, nodes: np.ndarray, pis: np.ndarray,
                           q: np.ndarray
                           ) -> np.ndarray:
-    """M(q_i) = H_mm - H_bm^T H_bb^-1 H_bm (trials, n, n) of every trial i, its
-    parameter-carrying bodies at pis[i] (spatial.reduced_model); non-finite where H_bb is
-    not positive definite.
+    """M(q_i) (trials, n, n), bodies at pis[i]; non-finite where H_bb is not PD.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).

@@ -13,13 +13,13 @@ from dacph_drake.kernels.spatial import joint_momentum
 
 @njit(cache=True)
 def disturbance(t: float, model: np.ndarray) -> np.ndarray:
-    """d(t) [N m] (n) = scale (offset + amplitude sin(omega t + quadrature) +
-    hf sin(hf_omega t)), zero before start (DisturbanceSource).
+    """d(t) [N m] (n) = scale (offset + amplitude sin(omega t + quadrature) + hf
+    sin(hf_omega t)), zero before start (DisturbanceSource).
 
     Args:
         t: The time [s].
-        model: [start [s], scale, hf_omega [rad/s], offset [N m], amplitude [N m],
-            omega [rad/s], quadrature [rad], hf [N m]] (the last five n each; 3 + 5 n)."""
+        model: [start [s], scale, hf_omega [rad/s], offset, amplitude [N m], omega [rad/s],
+            quadrature [rad], hf [N m]] (the last five n each; 3 + 5 n)."""
     n = (model.shape[0] - 3) // 5
     d = np.zeros(n)
     _add_disturbance(t, model, d)
@@ -62,8 +62,7 @@ def true_matrices(t: float, q: np.ndarray, p: np.ndarray, B0: np.ndarray,
                   linear_start: float, nonlinear_start: float, actuator: np.ndarray
                   ) -> Tuple[np.ndarray, np.ndarray]:
     """(B~ (n x n), diag D~ [N m s] (n)) at (t, q, p): B~ = diag(g(t)) (B0 + Delta B),
-    D~ = D0 + Delta D (uncertainty.TrueRhsModel; the arguments after (t, q, p) are its
-    kernel_arguments).
+    D~ = D0 + Delta D (uncertainty.TrueRhsModel.kernel_arguments after (t, q, p)).
 
     Args:
         t: The time [s].
@@ -127,8 +126,7 @@ def pack_true_rhs(coefficients: Union[np.ndarray, Sequence[float]],
                   ranges: Union[np.ndarray, Sequence[float]],
                   uncertainty: Sequence[Union[np.ndarray, float]]) -> np.ndarray:
     """true_torque's constant arguments as one array [vec(coefficients), vec(ranges), the
-    uncertainty's arguments, raveled]: numba's dispatch cost grows with the number of array
-    arguments.
+    uncertainty's arguments, raveled] (fewer arguments: cheaper numba dispatch).
 
     Args:
         coefficients: The mass matrix's trigonometric coefficients (N^2 x (1 + 2 R),
@@ -160,8 +158,7 @@ def true_torque(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
 
 @njit(cache=True)
 def torque_scratch(n: int) -> Tuple[np.ndarray, ...]:
-    """Uninitialized work arrays (q, qdot, p (n), cos, sin (R = n (n + 1) / 2), B (n x n),
-    D (n)) of _true_torque_into for n joints (one set per batch call).
+    """Uninitialized work arrays of _true_torque_into for n joints (one set per batch call).
 
     Args:
         n: The number of joints."""
@@ -200,8 +197,7 @@ def _trial_state_into(x, indices, packed, scratch):
 def true_matrices_of_trials(t: float, x: np.ndarray, indices: np.ndarray,
                             packs: np.ndarray, offsets: np.ndarray, n: int
                             ) -> np.ndarray:
-    """[vec(B~) (row-major), diag(D~)] of every trial of a batch at its state, stacked
-    (trials (n n + n)).
+    """[vec(B~) (row-major), diag(D~)] of every trial, stacked (trials (n n + n)).
 
     Args:
         t: The time [s].
@@ -227,8 +223,7 @@ def true_matrices_of_trials(t: float, x: np.ndarray, indices: np.ndarray,
 
 
 def stack_packs(packs: Sequence[np.ndarray]) -> "tuple[np.ndarray, np.ndarray]":
-    """(A batch's per-trial packed arguments concatenated, each one's offset in it (int64,
-    trials + 1)).
+    """(Packed arguments concatenated, each one's offset (int64, trials + 1)).
 
     Args:
         packs: Each trial's packed arguments (pack_true_rhs, pack_lhs; any lengths)."""
@@ -264,8 +259,7 @@ def _verdict(running, state, rates, more_rates, tau, bound):
 def true_torques(t: float, x: np.ndarray, indices: np.ndarray, u: np.ndarray,
                  disturbance_models: np.ndarray, packs: np.ndarray, offsets: np.ndarray,
                  running: np.ndarray, bound: float, verdicts: np.ndarray) -> np.ndarray:
-    """The trials' tau [N m] (trials n): true_torque of every trial of a batch; zero unless
-    the trial's verdict is RUNNING.
+    """The trials' tau [N m] (trials n) by true_torque; zero unless a trial is RUNNING.
 
     Args:
         t: The time [s].
@@ -346,15 +340,14 @@ def _torque_of_matrices(t, qdot, u, disturbance_model, B, D, tau):
 # [rad/s] The joint rate over which a description's Coulomb friction f reaches its full
 # size in the ground truth, f tanh(qdot / FRICTION_VELOCITY): MuJoCo's frictionloss is
 # a constraint that can stick; a smooth truth keeps the explicit integrator (its
-# stiffest slope f / FRICTION_VELOCITY is counted in the step, scenario.sizing.truth_step).
+# stiffest slope f / FRICTION_VELOCITY is counted in the step, robots.sizing.truth_step).
 FRICTION_VELOCITY = 0.1
 
 
 @njit(cache=True)
 def add_friction(friction: np.ndarray, qdot: np.ndarray, D: np.ndarray) -> None:
     """Adds each joint's Coulomb friction f tanh(qdot / FRICTION_VELOCITY) to D~ as its
-    secant damping f tanh(qdot / v) / qdot (f / v at rest), so that D~ qdot is the torque
-    the joint loses (in place).
+    secant damping f tanh(qdot / v) / qdot (f / v at rest), in place.
 
     Args:
         friction: Each joint's f [N m] (n).
@@ -395,9 +388,8 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
                          limits: np.ndarray, disturbance_models: np.ndarray,
                          packs: np.ndarray, offsets: np.ndarray, running: np.ndarray,
                          bound: float, verdicts: np.ndarray) -> np.ndarray:
-    """The trials' tau [N m] (trials n) = B~ u_c - D~ qdot + d(t) of a batch of spatial arms
-    (SpatialTrueRhs), as true_torques: u_c = u clipped to +-limits, p from each trial's tree
-    (joint_momentum), D~ with the joints' Coulomb friction (add_friction).
+    """true_torques of spatial arms (SpatialTrueRhs): tau = B~ u_c - D~ qdot + d(t), u_c =
+    u clipped to +-limits, p from each tree, D~ with friction (add_friction).
 
     Args:
         t: The time [s].
@@ -414,7 +406,7 @@ def spatial_true_torques(t: float, x: np.ndarray, indices: np.ndarray,
         moments: Each trial's first moments m c [kg m] (trials x nodes x 3).
         inertias: Each trial's rotational inertias about the body origins [kg m^2].
         reflecteds: Each trial's joints' reflected inertias (trials, n) [kg m^2].
-        frictions: Each trial's joints' Coulomb friction (trials, n) [N m] (add_friction).
+        frictions: Each trial's joints' Coulomb friction (trials, n) [N m].
         u: The trials' commands [N m] (trials n).
         limits: The actuators' effort limits [N m] (trials x n).
         disturbance_models: The trials' d(t) parameters (disturbance; trials (3 + 5 n)).
@@ -453,8 +445,7 @@ def pack_lhs(ranges: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
              fraction: np.ndarray, radius: np.ndarray, potential_gains: np.ndarray,
              reference: np.ndarray, gains: np.ndarray, excitation: np.ndarray
              ) -> np.ndarray:
-    """The constant arguments of lhs_sample as one array [points, reference terms, then the
-    arguments raveled in order] (see pack_true_rhs).
+    """lhs_sample's constant arguments as one array (see pack_true_rhs).
 
     Args:
         ranges: The mass matrix's angle combinations (R x n).
@@ -476,8 +467,7 @@ def pack_lhs(ranges: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
 @njit(cache=True)
 def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: float,
                coefficients: np.ndarray, packed: np.ndarray) -> np.ndarray:
-    """lhs_control with its constant arguments unpacked from ``packed``: [tau_c^r (n),
-    log (n + 4), vec(M), vec(C')] (2 n + 4 + 2 n^2).
+    """lhs_control unpacking ``packed``: [tau_c^r (n), log (n + 4), vec(M), vec(C')].
 
     Args:
         t: The time [s].
@@ -521,8 +511,7 @@ def lhs_sample(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: fl
 def lhs_samples(t: float, theta0s: np.ndarray, q: np.ndarray, qdot: np.ndarray,
                 chi: np.ndarray, coefficients: np.ndarray, packs: np.ndarray,
                 offsets: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """lhs_sample of every trial of a batch in one call: (tau_c^r [N m], logs (n + 4 each),
-    [vec(M), vec(C')]), each stacked by trial.
+    """lhs_sample of every trial of a batch: (tau_c^r, logs, [vec(M), vec(C')]) by trial.
 
     Args:
         t: The time [s].
@@ -554,9 +543,8 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
                 potential_gains: np.ndarray, reference: np.ndarray, gains: np.ndarray,
                 excitation: np.ndarray
                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(tau_c^r [N m] (n), log [s, alpha~, alpha_d, V, U] (n + 4), M (n x n), C' (n x n)):
-    the LHS control law (LhsController) at time t, base angle theta0, joints (q, qdot); the
-    robust term's boundary layer is phi = epsilon + layer_per_chi chi.
+    """(tau_c^r [N m] (n), log [s, alpha~, alpha_d, V, U] (n + 4), M, C' (n x n)): the LHS
+    law (LhsController) with the boundary layer phi = epsilon + layer_per_chi chi.
 
     Args:
         t: The time [s].
@@ -635,9 +623,8 @@ def lhs_control(t: float, theta0: float, q: np.ndarray, qdot: np.ndarray, chi: f
 def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
                     model: np.ndarray, u: np.ndarray, noise: np.ndarray,
                     constants: np.ndarray) -> np.ndarray:
-    """A port-observer sample [tau_obs (n), qdot(k) (n), port_sample (5 n)] (PortObserver):
-    tau_obs = M qddot + C' qdot_mid + b qdot_mid + noise, qddot = (qdot(k) - qdot(k-1)) / h,
-    qdot_mid = (qdot(k) + qdot(k-1)) / 2; port_sample = [q, p = M qdot_mid, r],
+    """A PortObserver sample [tau_obs (n), qdot(k) (n), port_sample (5 n)] (tau_obs and
+    qdot_mid as PortObserver states them): port_sample = [q, p = M qdot_mid, r],
     r <- r + a ([qdot_mid, u, tau_obs] - r).
 
     Args:
@@ -672,8 +659,7 @@ def observer_sample(q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
 def observer_samples(trials: int, q: np.ndarray, qdot: np.ndarray, memory: np.ndarray,
                      model: np.ndarray, u: np.ndarray, noise: np.ndarray,
                      constants: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """observer_sample of each of ``trials`` trials in one call: (tau_obs [N m], memories
-    [qdot(k), port_sample]), each stacked by trial.
+    """observer_sample of each trial: (tau_obs [N m], [qdot(k), port_sample]).
 
     Args:
         trials: The number of trials.
@@ -702,8 +688,7 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
                        tau_request: np.ndarray, tau_observed: np.ndarray,
                        qdot: np.ndarray, constants: np.ndarray
                        ) -> Tuple[np.ndarray, np.ndarray]:
-    """integrator_sample of each of ``trials`` trials in one call: (fast groups, u [N m]),
-    each stacked by trial.
+    """integrator_sample of each trial: (fast groups, u [N m]), stacked by trial.
 
     Args:
         trials: The number of trials.
@@ -731,12 +716,7 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
 def integrator_sample(fast: np.ndarray, gains: np.ndarray, tau_request: np.ndarray,
                       tau_observed: np.ndarray, qdot: np.ndarray, constants: np.ndarray
                       ) -> np.ndarray:
-    """One RHS integrator sample (RhsIntegrator) at joint rates qdot, returning
-    [fast after it (3 n + 2), u (n)]:
-
-        e_tau = tau_c^r(k-1) - tau_obs(k),   u_I <- u_I + h K e_tau,
-        u = B_hat^-1 (tau_c^r + D_hat qdot) + u_I,
-        chi = max(||e_tau||, chi e^(-h / chi_window), chi_floor).
+    """One RhsIntegrator sample (its law), returning [fast after it (3 n + 2), u (n)].
 
     Args:
         fast: [u_I (n), e_tau (n), ||e_tau||, chi, tau_c^r(k-1) (n)] (RhsState's fast part).

@@ -34,8 +34,7 @@ def _body(weights, offset, hidden, x, work):
 def evaluate_networks(hidden: np.ndarray, momentum_scale: float, weights: np.ndarray,
                       q: np.ndarray, p: np.ndarray, coupling: np.ndarray
                       ) -> Tuple[np.ndarray, np.ndarray]:
-    """Every trial's (B_hat (trials, n, n), D_hat (trials, n)): trial i's network at
-    weights[i], state (q[i], p[i]).
+    """Every trial's (B_hat (trials, n, n), D_hat (trials, n)) at weights[i], (q[i], p[i]).
 
     Args:
         hidden: The MLPs' hidden layer widths (layers,), int64 (both MLPs alike).

@@ -68,8 +68,7 @@ def _box_distance(P0, P1, half, g):
 @njit(cache=True)
 def min_clearance(q: np.ndarray, geometry: np.ndarray, link_of: np.ndarray,
                   fraction: np.ndarray, radius: np.ndarray) -> float:
-    """The sample points' smallest clearance min_j rho_j [m], rho_j = distance_j - radius[j]
-    from the base (negative: a point inside the base).
+    """min_j rho_j [m], rho_j = distance_j - radius[j] from the base (negative: inside it).
 
     Args:
         q: The joint angles (n) [rad].

@@ -1,10 +1,7 @@
 """The reduced model of a spatial free-floating arm, compiled (dynamics.floating_model
-computes it with Drake's AutoDiff): a tree of revolute joints and welds on a free base
-(KinematicTree) at the base's identity pose (M and C' do not depend on it).
-
-Spatial vectors are (angular; linear) about the world origin O in world axes. With
-S_j = (a_j; p_j x a_j) joint j's motion subspace, S_b the base's, I_i body i's spatial
-inertia about O and Ic_j the composite inertia of the bodies joint j moves,
+documents it): a tree of revolute joints and welds on a free base at its identity pose.
+Spatial vectors are (angular; linear) about the world origin O; S_j = (a_j; p_j x a_j),
+S_b the base's, I_i body i's spatial inertia, Ic_j the composite joint j moves:
 
     H_bb = S_b^T (sum_i I_i) S_b,  H_bj = S_b^T Ic_j S_j,
     H_jl = S_j^T Ic_l S_l (l at or below j; 0 on separate branches),
@@ -44,7 +41,7 @@ def _skew(v):
 def forward_kinematics(parent: np.ndarray, joint: np.ndarray, X_PF: np.ndarray,
                        axis: np.ndarray, X_MC: np.ndarray, q: np.ndarray
                        ) -> Tuple[np.ndarray, np.ndarray]:
-    """(X_WC (nodes, 4, 4), S (n, 6)): every body's pose and every joint's motion subspace
+    """(X_WC (nodes, 4, 4), S (n, 6)): the bodies' poses and joints' motion subspaces
     S_j = (a_j; p_j x a_j) about O in world axes, the base at the identity.
 
     Args:
@@ -175,9 +172,8 @@ def mass_matrix_and_derivatives(base_subspace: np.ndarray, parent: np.ndarray,
                                 reflected: np.ndarray, q: np.ndarray, derivatives: bool
                                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
                                            np.ndarray]:
-    """(H (nb + n)^2 in (base; joints) order, dH[k] = dH/dq_k, X, S (forward_kinematics)):
-    the plant's mass matrix at the base's identity pose, and its derivatives; the joints'
-    reflected inertias on H's joint diagonal, as Drake adds them.
+    """(H (nb + n)^2 in (base; joints) order, dH[k] = dH/dq_k, X, S) at the base's identity
+    pose, the reflected inertias on H's joint diagonal as Drake adds them.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -309,9 +305,8 @@ def reduced_model(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarr
                   below: np.ndarray, joint_below: np.ndarray, mass: np.ndarray,
                   moment: np.ndarray, inertia: np.ndarray, reflected: np.ndarray,
                   q: np.ndarray, derivatives: bool = True) -> tuple:
-    """(M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S): the reduced
-    model and what the Jacobians and their rates need;
-    dA_k = dA/dq_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A).
+    """(M (n, n), dM (n, n, n), A = H_bb^-1 H_bm (nb, n), dA (n, nb, n), X, S),
+    dA_k = H_bb^-1 (dH_bm/dq_k - dH_bb/dq_k A).
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -381,8 +376,7 @@ def christoffel(dM: np.ndarray, qdot: np.ndarray) -> np.ndarray:
 def point_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndarray,
                    X: np.ndarray, S: np.ndarray, A: np.ndarray, node: int,
                    p_W: np.ndarray) -> np.ndarray:
-    """The generalized Jacobian J_bar (6, n) of a body's point: (omega; v) = J_bar qdot at
-    zero momentum.
+    """The GJM J_bar (6, n) of a body's point: (omega; v) = J_bar qdot at zero momentum.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).
@@ -413,9 +407,8 @@ def point_jacobian(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
 def base_pose_and_twist(base_subspace: np.ndarray, base_pose: np.ndarray,
                         base_velocity: np.ndarray
                         ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The base's pose and twist in its own axes, (R_WB (3, 3), p_WB (3) [m],
-    omega_B (3) [rad/s], v_B (3) [m/s]), from its joint's coordinates (the quaternion
-    normalized, as Drake's RotationMatrix does).
+    """(R_WB (3, 3), p_WB (3) [m], omega_B (3) [rad/s], v_B (3) [m/s]): the base's pose and
+    twist in its own axes (the quaternion normalized).
 
     Args:
         base_subspace: S_b (6, nb): nb = 3 for a planar base, 6 for a free one.
@@ -454,8 +447,8 @@ def base_pose_and_twist(base_subspace: np.ndarray, base_pose: np.ndarray,
 def body_twist_into(V: np.ndarray, omega_B: np.ndarray, v_B: np.ndarray,
                     S: np.ndarray, qdot: np.ndarray, below: np.ndarray,
                     node: int) -> None:
-    """V = (omega; v_O) of a body: the base's (omega_B; v_B) plus S_k qdot_k of every joint
-    k moving it, about the base's origin in its axes.
+    """V = (omega; v_O) of a body about the base's origin in its axes: (omega_B; v_B) plus
+    S_k qdot_k of every joint k moving it.
 
     Args:
         V: The output (6), overwritten.
@@ -480,15 +473,13 @@ def joint_momentum(base_subspace: np.ndarray, parent: np.ndarray, joint: np.ndar
                    inertia: np.ndarray, reflected: np.ndarray, base_pose: np.ndarray,
                    base_velocity: np.ndarray, q: np.ndarray, qdot: np.ndarray
                    ) -> np.ndarray:
-    """p (n), the joint rows of H(q) v, about the base's origin in its axes (so independent
-    of the base's pose):
+    """p (n), the joint rows of H(q) v, about the base's origin in its axes:
 
         p_j = S_j . sum_{bodies C joint j moves} h_C,   h_C = (L_C; P_C),
         V_C = (omega; v_O) = (omega_B; v_B) + sum_{joints k moving C} S_k qdot_k,
         P_C = m (v_O + omega x c),  L_C = R I_c R^T omega + c x P_C,
 
-    c the body's centre of mass, I_c its inertia about it in body axes, R its orientation;
-    plus each joint's reflected inertia times its rate (H's diagonal, as Drake's).
+    c the centre of mass, I_c the inertia about it; plus the reflected inertias' rates.
 
     Args:
         base_subspace: S_b, the base velocities' motion subspace (6, nb; nb = 6 or 3).

@@ -31,11 +31,8 @@ def nominal_estimates(scenario: Scenario) -> np.ndarray:
 
 
 def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarray:
-    """k(t): the identified bodies' total mass over the true robot's.
-
-    The total mass of the identified bodies (the logged ``inertial_parameters``,
-    InertialIdentifier) over the true robot's, the common factor momentum data
-    leave to the prior (1 without an identifier).
+    """k(t): the identified bodies' total mass over the true robot's, the common factor
+    momentum data leave to the prior (1 without an identifier).
 
     Args:
         logs: The run's logs (RunResult.logs).
@@ -51,25 +48,17 @@ def identified_scale(logs: Dict[str, np.ndarray], total_mass: float) -> np.ndarr
 
 def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
                   ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The learned estimates as claims about the physical B~, D~, with their
-    intervals.
-
-    The logged ``estimates`` with the learner's ``estimate_bounds`` (a point for
-    a learner without intervals) widened by the LHS model's inertia error E
-    (learning.local_bayes.physical_claims, with learner.bayes' margin and
-    credible_level whatever the learner): E's sd as the run measured it (the
-    ``model_error`` log, model_error_sd); where the learner's log says the
-    observed port is not in physical units (LearnerLog.physical: a kinematic
-    mismatch reported by the inertial identifier), the prior (B0, D0) with the
-    prior's range (learning.local_bayes.prior_range).
+    """The learned estimates as claims about the physical B~, D~, with their intervals: the
+    logged ``estimates`` and ``estimate_bounds`` widened by the LHS model's inertia error E
+    (learning.local_bayes.physical_claims; E's sd from model_error_sd); the prior and its
+    range where LearnerLog.physical says the port is not in physical units.
 
     Args:
         logs: The run's logs.
         scenario: The scenario it ran.
 
     Returns:
-        (estimate, lower, upper), each [vec(B), diag(D)] per sample
-        (T x (n^2 + n))."""
+        (estimate, lower, upper), each [vec(B), diag(D)] per sample (T x (n^2 + n))."""
     from dacph_drake.learning.local_bayes import physical_claims, prior_range
     n = len(scenario.q0)
     k = n * n + n
@@ -89,11 +78,8 @@ def physical_view(logs: Dict[str, np.ndarray], scenario: Scenario
 
 
 def model_error_sd(logs: Dict[str, np.ndarray], scenario: Scenario) -> np.ndarray:
-    """E's sd per entry at every logged sample (T, n, n): the run's measurement (the
-    ``model_error`` log of the inertial identifier); for a run without it, what the
-    scenario states (dynamics.model_error.stated_model_error: the nominal's tolerances
-    when nothing was identified; 0 for a run saved before E was measured, whose claims
-    then allow learner.bayes.model_error alone, as they did).
+    """E's sd per entry at every logged sample (T, n, n): the ``model_error`` log, else
+    dynamics.model_error.stated_model_error (0 for a run saved before E was measured).
 
     Args:
         logs: The run's logs.
@@ -109,26 +95,19 @@ def model_error_sd(logs: Dict[str, np.ndarray], scenario: Scenario) -> np.ndarra
 def learning_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                      mask: np.ndarray, total_mass: float,
                      realized_error: Optional[np.ndarray] = None) -> Dict[str, float]:
-    """Learning's own value over the samples ``mask``.
-
-    The time-RMS relative errors ||X_hat - X~|| / ||X~|| of the run's claims about
-    B and D (physical_view) and of the nominal prior (B0, D0), their ratio (below 1:
-    learning beats the prior), the claimed intervals (interval_metrics),
-    the share of samples whose B_hat the RHS integrator rejected (DIC or trust
-    band), and the share where the learner's beta_hat exceeded rhs.beta_max, so
-    that the gain rule ran on beta_max instead (RhsIntegrator). With an inertial
-    identifier in the loop, also the identified scale k (identified_scale, mean)
-    and the ratios of the published estimates (the port as the model sees it)
-    against k B~, k D~ (``*_error_ratio_scaled``, the prior's error against the
-    same).
+    """Learning's own value over the samples ``mask``: the time-RMS relative errors
+    ||X_hat - X~|| / ||X~|| of the claims about B and D (physical_view) and of the prior,
+    their ratio (below 1: learning beats the prior), interval_metrics, the share of B_hat
+    the RHS integrator rejected, and the share with beta_hat > rhs.beta_max. With an
+    inertial identifier also the identified scale k (mean) and ``*_error_ratio_scaled``
+    against k B~, k D~.
 
     Args:
         logs: The run's logs (RunResult.logs).
         scenario: The scenario it ran.
         mask: The samples to average over (boolean, T).
         total_mass: The ground truth's total mass [kg].
-        realized_error: The run's true E at every sample (T, n, n)
-            (realized_model_error; simulation only), for model_error_metrics.
+        realized_error: The run's true E (T, n, n), simulation only (model_error_metrics).
 
     Returns:
         Metric name -> value."""
@@ -187,8 +166,7 @@ def port_truth(true_matrices: np.ndarray, realized_error: np.ndarray) -> np.ndar
 
 
 def realized_error_of(logs: Dict[str, np.ndarray], robot: Robot) -> np.ndarray:
-    """The run's true E per sample (dynamics.model_error.realized_model_error): the
-    identified parameters where an identifier ran, else the model's own.
+    """The run's true E per sample (realized_model_error), with the identified parameters.
 
     Args:
         logs: The run's logs.
@@ -204,14 +182,11 @@ def realized_error_of(logs: Dict[str, np.ndarray], robot: Robot) -> np.ndarray:
 
 def model_error_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
                         mask: np.ndarray, realized_error: np.ndarray) -> Dict[str, float]:
-    """What the run measured of the LHS model's inertia error E against the E it had
-    (a simulation knows it), over the samples ``mask``: ``model_error_sd``, the median
-    of E's largest measured sd (model_error_sd, with learner.bayes.model_error);
-    ``model_error_realized``, the median of the true E's largest entry;
-    ``model_error_coverage``, the share of (sample, entry) pairs whose true E_ij lies
-    within the claims' z sd (to 1e-6); and ``X_port_error_ratio`` (X in B, D), the
-    port model the loop closes on against its own truth, (I + E) B~ and
-    diag((I + E) D~), over the prior's error against the same.
+    """The measured LHS model inertia error E against the true one over ``mask``:
+    ``model_error_sd`` (median of E's largest measured sd), ``model_error_realized``
+    (median of the true E's largest entry), ``model_error_coverage`` (share of true E_ij
+    within the claims' z sd) and ``X_port_error_ratio`` (X in B, D: the port model's error
+    against (I + E) B~, diag((I + E) D~), over the prior's).
 
     Args:
         logs: The run's logs.
@@ -248,16 +223,10 @@ def model_error_metrics(logs: Dict[str, np.ndarray], scenario: Scenario,
 def interval_metrics(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
                      truth: np.ndarray, prior: np.ndarray, n: int, mask: np.ndarray
                      ) -> Dict[str, float]:
-    """How the claimed intervals about B~ and D~ (physical_view) hold the truth
-    over the samples ``mask``.
-
-    For X in (B, D): ``X_coverage``, the share of (sample, entry) pairs whose true
-    entry lies in its interval; ``X_interval``, the time-RMS of the intervals'
-    Frobenius half-width relative to ||X_hat||, comparable with ``X_error``;
-    ``X_interval_ratio``, the median over the samples of the half-width over the
-    prior's error (Frobenius; below 1: for most of the phase the interval says
-    more than the prior's error); and ``undetermined_share``, the share of the
-    quantities claimed at the prior.
+    """How the claimed intervals about B~ and D~ hold the truth over ``mask``, for X in (B,
+    D): ``X_coverage`` (share of entries inside), ``X_interval`` (time-RMS Frobenius
+    half-width over ||X_hat||), ``X_interval_ratio`` (median half-width over the prior's
+    error), and ``undetermined_share`` (share claimed at the prior).
 
     Args:
         view: physical_view's (estimate, lower, upper), all samples.
@@ -291,8 +260,7 @@ def interval_metrics(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
 
 def relative_half_width(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
                         mask: np.ndarray, columns: slice) -> float:
-    """The time-RMS over ``mask`` of the claimed intervals' Frobenius half-width
-    relative to the claimed estimate's norm.
+    """The time-RMS over ``mask`` of the intervals' Frobenius half-width over ||estimate||.
 
     Args:
         view: The claimed (estimate, lower, upper) (physical_view).
@@ -307,27 +275,19 @@ def relative_half_width(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
 
 
 def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
-    """What a user of a real robot sees of the learning, without the truth: per
-    phase the learned model's residual on the port data against the prior's
-    (``residual_ratio`` = sqrt of the median, over the samples where the learner
-    determined something, of its loss over its nominal loss; below 1: the learned
-    model explains the port better), the share
-    of quantities left undetermined (published at the prior), the reported
-    intervals' relative width and the LHS model error's measured sd
-    (``model_error_sd``, the median of its largest entry); and warnings: a phase
-    where the learned model did not beat the prior, one where nothing was
-    determined, a reported kinematic mismatch (the learned B and D are then the port
-    as the model sees it).
+    """What a real robot's user sees of the learning, without the truth, per phase:
+    ``residual_ratio`` (sqrt of the median of the learner's loss over its nominal loss where
+    it determined something; below 1: the learned model explains the port better),
+    ``undetermined_share``, ``interval`` and ``model_error_sd``; and warnings for a phase
+    not beating the prior, one where nothing was determined, a kinematic mismatch.
 
     Args:
-        logs: A DAC run's logs (learner_log; estimate_bounds where the learner
-            reports intervals).
+        logs: A DAC run's logs (learner_log; estimate_bounds where reported).
         scenario: The scenario it ran.
 
     Returns:
         {"phases": {phase: {residual_ratio, undetermined_share, interval,
-        model_error_sd}},
-        "warnings": [str]}."""
+        model_error_sd}}, "warnings": [str]}."""
     t, learner = logs["time"], logs["learner_log"]
     layout = LearnerLog()
     view = physical_view(logs, scenario)
@@ -365,16 +325,10 @@ def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
 
 
 def run_metrics(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict[str, float]:
-    """Computes a run's metrics.
-
-    Metrics are over phases 1-3 (t >= end of warm-up) unless named otherwise:
-    "phaseK.NAME" over phase K only (K = 1 linear, 2 + nonlinear, 3 + disturbance):
-    tracking_error_rms, e_tau_rms, for the DAC loops chi_rms and learning_metrics;
-    "faultK.NAME" for the K-th actuator fault (uncertainty.faults): the RMS tracking
-    error over the FAULT_WINDOW seconds before and after it, and their ratio. The
-    tracking error and the task's own metrics are the robot's
-    (robots.Robot.TaskSignals, TaskMetrics: a planar arm's alpha~ in rad, a
-    described arm's attitude error |e| in rad).
+    """A run's metrics, over phases 1-3 (t >= end of warm-up) unless named "phaseK.NAME"
+    (phase K only: 1 linear, 2 + nonlinear, 3 + disturbance) or "faultK.NAME" (the RMS
+    tracking error FAULT_WINDOW s before and after the K-th actuator fault, and their
+    ratio). The tracking error is the robot's (robots.Robot.TaskSignals, TaskMetrics).
 
     Args:
         logs: The run's logs (RunResult.logs).
@@ -451,10 +405,8 @@ def _RunMetrics(logs, scenario, robot) -> Dict[str, float]:
 
 
 def comparison(dac: Dict[str, float], model_based: Dict[str, float]) -> Dict[str, float]:
-    """The paper's headline numbers.
-
-    Tracking-error reduction 1 - e_DAC / e_MB and control-effort increase
-    effort_DAC / effort_MB - 1.
+    """The paper's headline numbers: tracking-error reduction 1 - e_DAC / e_MB and
+    control-effort increase effort_DAC / effort_MB - 1.
 
     Args:
         dac: The DAC run's metrics (run_metrics).
@@ -489,14 +441,12 @@ UNITS = {"tracking_error_rms": "rad", "tracking_error_max": "rad",
 
 @dataclass
 class RunMetrics:
-    """A run's metrics as a typed record: over the run, per phase under the
-    scenario's phase names, with units (run_metrics' flat names: ``flat``).
+    """A run's metrics as a typed record, per phase, with units (flat names: ``flat``).
 
     Attributes:
         run: Metric -> value over phases 1-3 (and the fault windows).
         phases: Phase (linear, nonlinear, disturbance) -> metric -> value.
-        units: Metric -> unit ("" for ratios, shares and counts).
-    """
+        units: Metric -> unit ("" for ratios, shares and counts)."""
     run: Dict[str, float]
     phases: Dict[str, Dict[str, float]]
     units: Dict[str, str]

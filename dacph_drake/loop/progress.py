@@ -1,6 +1,5 @@
-"""Progress bars: tqdm (a widget in Jupyter, a bar with rate and ETA on a terminal).
-When stderr is neither a terminal nor a notebook (a log file, CI), the bar is
-redrawn at most once a minute, so logs stay a bounded number of lines."""
+"""Progress bars: tqdm (a widget in Jupyter, a bar with rate and ETA on a terminal); in a
+log file or CI, redrawn at most once a minute."""
 import sys
 
 from tqdm.auto import tqdm

@@ -1,7 +1,6 @@
 """The run layout: a run directory holds scenario.yaml and, per controller,
-logs_CONTROLLER.npz and run_CONTROLLER.json (status, reason, times, seed, the
-scenario's fingerprint, versions), all runs of one scenario, whatever the robot;
-one writer per run (LockRun); every file replaced atomically."""
+logs_CONTROLLER.npz and run_CONTROLLER.json (status, reason, times, seed, the scenario's
+fingerprint, versions); one writer per run (LockRun); files replaced atomically."""
 import fcntl
 import hashlib
 import json
@@ -35,8 +34,7 @@ class RunResult:
         logs: Signal name -> samples (T x k), with "time".
         peak_memory_mib: This process's peak memory so far [MiB] (ru_maxrss).
         duration: The duration asked for [s].
-        scenario: The trial's scenario (None: not known, e.g. a file's logs).
-    """
+        scenario: The trial's scenario (None: not known, e.g. a file's logs)."""
     controller: str
     status: str
     reason: str
@@ -69,20 +67,19 @@ class RunResult:
         return self.signals.plot(*names, ax=ax, logy=logy)
 
     @property
-    def metrics(self) -> "analysis.metrics.RunMetrics":
-        """The run's metrics by phase, with units (analysis.metrics.RunMetrics)."""
+    def metrics(self) -> "loop.metrics.RunMetrics":
+        """The run's metrics by phase, with units (loop.metrics.RunMetrics)."""
         from dacph_drake.loop.metrics import RunMetrics
         if self.scenario is None:
             raise ValueError("the run's scenario is not known; allowed: a result of "
-                             "simulate(), or analysis.metrics.RunMetrics.Of(logs, "
+                             "simulate(), or loop.metrics.RunMetrics.Of(logs, "
                              "scenario)")
         return RunMetrics.Of(self.logs, self.scenario)
 
 
 def scenario_fingerprint(scenario: Scenario) -> str:
-    """A hash (16 hexadecimal digits) of every setting of a scenario (its YAML form);
-    run.json records it, so that report() can refuse runs of different scenarios in
-    one directory.
+    """A hash (16 hexadecimal digits) of a scenario's YAML form, recorded in run.json so
+    that report() can refuse runs of different scenarios in one directory.
 
     Args:
         scenario: The scenario."""
@@ -90,8 +87,7 @@ def scenario_fingerprint(scenario: Scenario) -> str:
 
 
 def scenario_fingerprints(scenario: Scenario) -> List[str]:
-    """A scenario's fingerprints in every layout a saved run may come from:
-    scenario_fingerprint's, then the older layouts' (scenario.files.saved_forms).
+    """scenario_fingerprint's, then older layouts' (assembly.scenario_files.saved_forms).
 
     Args:
         scenario: The scenario."""
@@ -116,9 +112,8 @@ def versions() -> Dict[str, str]:
 
 
 def LockRun(out: Path, controller: str) -> IO:
-    """Takes the exclusive lock of a controller's run in a directory; returns the open
-    lock file. The lock is flock's on out/.run_CONTROLLER.lock, which the kernel
-    releases when its holder exits, however it exits; ReleaseRun removes the file again.
+    """Takes the exclusive lock (flock on out/.run_CONTROLLER.lock, released by the kernel
+    however its holder exits) of a controller's run; returns the open lock file.
 
     Args:
         out: The run directory.
@@ -144,10 +139,7 @@ def LockRun(out: Path, controller: str) -> IO:
 
 
 def ReleaseRun(lock: IO) -> None:
-    """Removes a run's lock file (LockRun) and releases the lock.
-
-    The file is removed while the lock is held, so that a writer that opened it
-    meanwhile finds it gone once it gets the lock, and opens the path anew.
+    """Removes a run's lock file (LockRun), while still held, and releases the lock.
 
     Args:
         lock: LockRun's open lock file."""
@@ -182,8 +174,7 @@ def require_run_files(run_dir: Union[str, Path], controllers: Sequence[str]) -> 
 
 def save_run(result: RunResult, scenario: Scenario, out_dir: Union[str, Path],
              compress: bool = True) -> Path:
-    """Saves a run: logs_C.npz, scenario.yaml and run_C.json, each replaced atomically
-    (a reader or a crash never sees half a file); returns out_dir as a Path.
+    """Saves logs_C.npz, scenario.yaml and run_C.json atomically; returns out_dir as a Path.
 
     Args:
         result: The run.
@@ -217,10 +208,8 @@ VERIFICATION_OUTPUTS = ("verification.json", "verification.md", "verification.pn
 
 
 def remove_outputs_of(out: Path, controller: str) -> List[str]:
-    """Removes the files derived from a controller's earlier run in a directory, which
-    a new run replaces: the report (REPORT_OUTPUTS, rewritten from the runs by
-    ``dacph simulate`` and ``dacph report``), animation_CONTROLLER.html, and
-    verify's report where it verified that controller. Returns the names removed.
+    """Removes the files a controller's new run makes stale: the report (REPORT_OUTPUTS),
+    animation_CONTROLLER.html and verify's report of that controller; returns their names.
 
     Args:
         out: The run directory.
@@ -248,8 +237,7 @@ def remove_outputs_of(out: Path, controller: str) -> List[str]:
 
 
 def require_one_scenario(out: Path, scenario: Scenario, controller: str) -> None:
-    """Refuses, before the run, a directory where a new run would sit beside another
-    scenario's (which report() refuses).
+    """Refuses, before the run, a directory holding another scenario's run.
 
     Args:
         out: The run directory.
@@ -282,16 +270,14 @@ RUN_STATUSES = ("ok", "diverged", "interrupted", "incomplete")   # RunResult.sta
 
 def load_run(run_dir: Union[str, Path], controller: str
              ) -> Tuple[Dict[str, np.ndarray], Scenario, Dict]:
-    """Loads a saved run, checked against the directory's scenario.yaml: (logs,
-    scenario, run_C.json's contents).
+    """A saved run checked against scenario.yaml: (logs, scenario, run_C.json).
 
     Args:
         run_dir: The run directory.
         controller: The run's controller.
 
     Raises:
-        ConfigError: Naming a missing or damaged file, or a run made from another
-            scenario than scenario.yaml (an edited file, or files copied in)."""
+        ConfigError: Naming a missing or damaged file, or a run of another scenario."""
     run_dir = require_run_files(run_dir, [controller])
     scenario = load_saved_scenario(run_dir / "scenario.yaml")
     meta = load_run_meta(run_dir, controller)
@@ -301,8 +287,7 @@ def load_run(run_dir: Union[str, Path], controller: str
 
 def require_run_of(scenario: Scenario, meta: Dict, run_dir: Union[str, Path],
                    controller: str) -> None:
-    """Requires that a saved run was made from ``scenario`` (its recorded fingerprint;
-    runs saved before run.json recorded it are not checked).
+    """Requires that a saved run was made from ``scenario`` (by its recorded fingerprint).
 
     Args:
         scenario: The directory's scenario (its scenario.yaml).
@@ -328,8 +313,8 @@ def load_logs(run_dir: Union[str, Path], controller: str,
     Args:
         run_dir: The run directory.
         controller: The run's controller.
-        scenario: Its scenario: the logs must then hold the signals every run of its
-            task logs (time, state, u, tau and the task's log), one sample per time.
+        scenario: Its scenario: the logs must then hold its task's signals (time, state,
+            u, tau, the task's log), one sample per time.
 
     Raises:
         ConfigError: Naming the file when it is damaged or lacks a signal."""
@@ -361,8 +346,8 @@ def load_run_meta(run_dir: Union[str, Path], controller: str) -> Dict:
         controller: The run's controller.
 
     Raises:
-        ConfigError: Naming the file when it is damaged (a status not in RUN_STATUSES,
-            a final time that is not a number)."""
+        ConfigError: Naming the file when it is damaged (an unknown status, a non-numeric
+            final time)."""
     path = Path(run_dir) / f"run_{controller}.json"
     meta = read_json_record(path, ("status", "final_time"), "dacph simulate")
     final_time = meta["final_time"]

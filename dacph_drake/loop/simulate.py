@@ -1,6 +1,5 @@
-"""Simulating a closed loop of any robot (controllers.REGISTRY): initial state,
-divergence monitor, progress bar, SIGINT/SIGTERM, checkpoints and the saved run
-(loop.run_store)."""
+"""Simulating a closed loop of any robot: initial state, divergence monitor, progress
+bar, SIGINT/SIGTERM, checkpoints and the saved run (loop.run_store)."""
 import gc
 import logging
 import resource
@@ -45,24 +44,21 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
              interruptible: bool = False, checkpoint_seconds: Optional[float] = None,
              meshcat: Optional[Meshcat] = None) -> RunResult:
     """Builds a controller's closed loop for a scenario and simulates it; returns the run's
-    RunResult (status "ok", "diverged" or "interrupted").
-
-    A run whose state turns non-finite or whose rates exceed RUNAWAY_RATE (true_rhs)
-    stops with a reason and still saves what it has. Every saved file is replaced
-    atomically.
+    RunResult (status "ok", "diverged" or "interrupted"). A run whose state turns
+    non-finite or whose rates exceed RUNAWAY_RATE stops with a reason and saves what it has.
 
     Args:
         scenario: The scenario (robot, task, uncertainty, phases, settings).
         controller: A name of controllers.REGISTRY ("dac", "dac-nominal", "model-based").
         duration: Simulated time [s]; default: the scenario's phases.
         out_dir: Where to save logs_C.npz, scenario.yaml, run_C.json (None: not saved);
-            checked and locked first, refused beside another scenario's runs; the
-            files made from its earlier runs are removed (run_store.remove_outputs_of).
+            locked first, refused beside another scenario's runs; stale outputs removed
+            (run_store.remove_outputs_of).
         progress: Show a progress bar.
         interruptible: SIGINT and SIGTERM stop the run as "interrupted", its logs saved
-            (the CLI's single runs; sweeps leave it off to redo the trial on resume).
+            (sweeps leave it off to redo the trial on resume).
         checkpoint_seconds: With ``out_dir``, save the logs every this many wall seconds
-            with status "incomplete" (a crash or kill -9 loses at most that much).
+            with status "incomplete".
         meshcat: A Meshcat drawing the ground truth as it simulates (robots.Robot.LiveView,
             paced by scenario.simulator.target_realtime_rate); results are unchanged.
 
@@ -111,18 +107,14 @@ def simulate(scenario: Scenario, controller: str = "dac", duration: Optional[flo
 def simulate_batch(scenarios: Sequence[Scenario], controller: str = "dac",
                    duration: Optional[float] = None,
                    out_dirs: Optional[Sequence] = None) -> List[RunResult]:
-    """Simulates a batch of trials in one diagram, controllers.build_closed_loop(controller,
-    *scenarios); returns each trial's RunResult, in trial order: its solo simulate's
-    (logs bit for bit, tests/test_batch.py).
+    """Simulates a batch of trials in one diagram (controllers.build_closed_loop); returns
+    each trial's RunResult in trial order, its solo simulate's bit for bit.
 
-    A trial that diverges, collides or leaves its limits stops alone with its reason
-    and final time while the others run on: a non-finite or runaway state or torque is
-    caught at the integrator stage it appears at (its torque is zero from then on:
-    TrueRhsSystem), and the trial is brought to rest at the next check (every
-    MONITOR_PERIOD of simulated time). A trial whose state blows up before that check
-    fails the step of the whole batch in Drake's integrator: the batch goes back to the
-    last check, stops that trial there and takes the step again (advance_in_chunks'
-    recover; the others stay bit for bit their solo runs).
+    A trial that diverges, collides or leaves its limits stops alone: its torque is zero
+    from the integrator stage where it turned unsound (TrueRhsSystem) and it is brought to
+    rest at the next check (every MONITOR_PERIOD). If its state fails a whole batch step
+    first, the batch goes back to the last check, stops it there and retakes the step
+    (advance_in_chunks' recover).
 
     Args:
         scenarios: The trials (differing in robot, q0, uncertainty, disturbance, seed only).
@@ -174,9 +166,7 @@ def _Simulate(scenarios: List[Scenario], controller: str, duration: float,
               progress: bool, interruptible: bool, checkpoint=None,
               meshcat=None) -> List[RunResult]:
     """The run of a batch (one trial: a single run), each trial's result;
-    ``checkpoint`` = (wall seconds, save) calls save with the partial result of a
-    single run that often; ``meshcat`` gets a LiveView. One thread for the
-    numerical libraries throughout (loop.threads)."""
+    ``checkpoint`` = (wall seconds, save); ``meshcat`` gets a LiveView."""
     try:
         with single_threaded():
             return _SimulateLoop(scenarios, controller, duration, progress,
@@ -204,10 +194,8 @@ def _SimulateLoop(scenarios, controller, duration, progress, interruptible, chec
     stops = [None] * len(watched)        # (reason, time) of each stopped trial
 
     def check(t: float):
-        """Stops the trials that must stop at time t (_TrialStop) or went unsound
-        at an integrator stage before it (a non-finite value or a runaway rate:
-        TrueRhsSystem.Unsound; their torque is zero since, a NaN never reached
-        the plant); the reason to stop the run, once no trial runs."""
+        """Stops trials that must stop at t (_TrialStop) or went unsound before it
+        (TrueRhsSystem.Unsound); the reason to stop the run, once none runs."""
         x = plant_context.get_continuous_state_vector().CopyToVector()
         unsound = truth.Unsound()
         for i, (coordinates, clearance, limits) in enumerate(watched):
@@ -234,8 +222,7 @@ def _SimulateLoop(scenarios, controller, duration, progress, interruptible, chec
     interrupted = False
 
     def results(status: str, reason: str) -> List[RunResult]:
-        """Each trial's result: a stopped trial's own reason and time, the run's
-        status and reason for the others."""
+        """Each trial's result: a stopped trial's reason and time, else the run's."""
         logs, wall = collect_logs(loop, context), time.perf_counter() - start
         memory = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         out = []
@@ -307,11 +294,8 @@ def _SimulateLoop(scenarios, controller, duration, progress, interruptible, chec
 
 
 def _Interruption(error: BaseException) -> Optional[KeyboardInterrupt]:
-    """The KeyboardInterrupt (SIGINT, or SIGTERM's _Terminated) behind ``error``:
-    itself, or the cause of the error a callback's caller made of it (numba's
-    dispatcher turns one raised inside a compiled kernel's call into a
-    SystemError, pybind11 one raised inside a Drake callback into its own
-    error); None if there is none."""
+    """The KeyboardInterrupt behind ``error`` (itself, or the cause of numba's or
+    pybind11's error made of it), or None."""
     while error is not None:
         if isinstance(error, KeyboardInterrupt):
             return error
@@ -320,8 +304,7 @@ def _Interruption(error: BaseException) -> Optional[KeyboardInterrupt]:
 
 
 def _Freeze(plant, plant_context, coordinates: ArmCoordinates, q0) -> None:
-    """A stopped trial of a batch at rest: its velocities zero, its positions at
-    q0 if they are not finite (with its torque zero it then stays there)."""
+    """A stopped trial at rest: velocities zero, non-finite positions at q0."""
     x = plant_context.get_continuous_state_vector().CopyToVector()
     nq = plant.num_positions()
     positions, velocities = x[:nq], x[nq:]
@@ -338,10 +321,8 @@ def advance_in_chunks(simulator: Simulator, duration: float,
                       check: Callable[[float], Optional[str]],
                       after_chunk: Callable[[bool], None],
                       recover: Optional[Callable[[Context], bool]] = None) -> str:
-    """Advances a simulator in steps of MONITOR_PERIOD of simulated time; returns why the
-    run stopped early (a RuntimeError of the simulation, such as a failed callback, or a
-    failed Drake assertion, such as a state gone non-finite in the plant's integrator,
-    included), or "" when it reached ``duration``.
+    """Advances a simulator in steps of MONITOR_PERIOD; returns why the run stopped early
+    (a RuntimeError or failed Drake assertion), or "" at ``duration``.
 
     Args:
         simulator: The Drake Simulator.
@@ -349,8 +330,8 @@ def advance_in_chunks(simulator: Simulator, duration: float,
         check: ``check(t)`` after each step: the reason to stop, or None.
         after_chunk: ``after_chunk(last)`` after each step (last: the final one).
         recover: For a batch: ``recover(snapshot)`` after a failed step (snapshot: the last
-            step's end); True when it restored it and stopped the trials that made the
-            step fail, so that it is taken again (None: a failed step ends the run)."""
+            step's end); True when it restored it and stopped the trials at fault, so the
+            step is taken again (None: a failed step ends the run)."""
     context = simulator.get_context()
     snapshot = context.Clone() if recover is not None else None
     chunks = max(1, int(np.ceil(duration / MONITOR_PERIOD - 1e-9)))
@@ -372,8 +353,7 @@ def advance_in_chunks(simulator: Simulator, duration: float,
 
 
 def _FailedStep(simulator: Simulator, t: float) -> str:
-    """Advances the simulator to t: "" or why it failed (a RuntimeError of the
-    simulation, or a failed Drake assertion, which pydrake raises as SystemExit)."""
+    """Advances the simulator to t: "" or why it failed (RuntimeError or SystemExit)."""
     try:
         simulator.AdvanceTo(t)
     except RuntimeError as e:
@@ -389,8 +369,7 @@ def _FailedStep(simulator: Simulator, t: float) -> str:
 
 
 def _CutLogs(loop: ClosedLoop, context: Context, t: float) -> None:
-    """Drops every logger's samples from time t on (a batch's failed step, taken
-    again from t: the simulator's initialization at t publishes t's anew)."""
+    """Drops every logger's samples from t on (a failed batch step is retaken)."""
     for logger in loop.loggers.values():
         log = logger.FindMutableLog(context)
         times, data = log.sample_times().copy(), log.data().copy()
@@ -400,9 +379,8 @@ def _CutLogs(loop: ClosedLoop, context: Context, t: float) -> None:
 
 
 def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
-    """Every logger's samples of a closed loop, signal name -> samples (T x k), with
-    "time"; cut to the samples all loggers hold: a run stopped inside the loggers'
-    publish at one instant (SIGINT, a failed callback) has some one sample ahead.
+    """Every logger's samples of a closed loop, signal name -> samples (T x k), with "time",
+    cut to the samples all loggers hold (a run stopped mid-publish has some one ahead).
 
     Args:
         loop: The closed_loop.ClosedLoop.
@@ -420,9 +398,8 @@ def collect_logs(loop: ClosedLoop, context: Context) -> Dict[str, np.ndarray]:
 
 def trial_logs(loop: ClosedLoop, logs: Dict[str, np.ndarray], coordinates: ArmCoordinates,
                trial: int, final_time: float) -> Dict[str, np.ndarray]:
-    """One trial's part of a batch's logs (collect_logs): its plant state in the layout
-    of a plant of its own (its Robot's model's plant: [positions, velocities]) and its
-    share of every stacked signal.
+    """One trial's part of a batch's logs: its plant state laid out as its own plant's
+    ([positions, velocities]) and its share of every stacked signal.
 
     Args:
         loop: The batch's closed_loop.ClosedLoop.

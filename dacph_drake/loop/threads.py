@@ -1,12 +1,8 @@
-"""One thread for the numerical libraries while a closed loop runs.
-
-The loop multiplies matrices of a few rows thousands of times a second: BLAS and
-OpenMP thread pools gain nothing there, and with another process on the machine
-their spinning threads made an 8 s Panda DAC run take 22-30 s instead of 4.4 s
-(docs/results/performance.md). Sweep workers get one thread from their
-environment (montecarlo.executors); single runs and the API get it here, at run
-time, whatever the caller's environment says, and give the caller's settings
-back afterwards."""
+"""One thread for the numerical libraries while a closed loop runs: on matrices of a few
+rows, BLAS and OpenMP pools gain nothing and their spinning threads slow the loop
+several times beside another process. Sweep workers get one thread from their
+environment (montecarlo.executors); single runs and the API get it here, and the
+caller's settings are restored afterwards."""
 import sys
 from contextlib import contextmanager
 from typing import Iterator

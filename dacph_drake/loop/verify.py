@@ -1,23 +1,12 @@
-"""``dacph verify``: the paper's Lyapunov claims checked on a DAC run.
+"""``dacph verify``: the paper's Lyapunov claims checked on a DAC run; ``ok`` is False
+when any fails.
 
-1. LHS: V = s^T M s / 2 inside its exponential envelope wherever ||e_tau|| <= chi
-   (lyapunov_envelope).
-2. RHS: at every learner update, the discrete RHS loop with the learner's B_hat, the
-   gains K, the RHS period and the observer's delay (rhs_loop): spectral radius with
-   margin, P > 0 from RealDiscreteLyapunovEquation, DIC, time-scale separation;
-   estimates the integrator rejected are counted, not checked. The same loop with the
-   ground truth's B~ is checked at every logged sample (a learner wrong but
-   self-consistent, B_hat K = c I, fails it). With a learner's credible intervals
-   (learner.model local_bayes), every B of the interval's box is checked where an
-   estimate was adopted (kernels.certificate.box_certificate); an estimate adopted
-   outside its certificate (rhs.adoption trust_band) fails the run.
-3. A region-of-attraction certificate of the sliding dynamics (region_of_attraction)
-   contains s(0): by sums of squares at q0 for a planar arm, everywhere by the skew
-   symmetry of Mdot - 2 C' (checked) for a spatial arm.
-
-The report is Markdown and JSON with plots; ``ok`` is False when any check fails.
-What the checks need of the LHS comes from the robot (robots.Robot.VerifyLhs).
-"""
+1. LHS: V = s^T M s / 2 inside its envelope wherever ||e_tau|| <= chi (lyapunov_envelope).
+2. RHS (rhs_loop): at every learner update, the discrete loop with B_hat, K, h and the
+   observer's delay (spectral radius with margin, P > 0, DIC, time-scale separation),
+   and with the truth's B~ at every logged sample; with credible intervals, every B of
+   the box where an estimate was adopted (kernels.certificate.box_certificate).
+3. A region-of-attraction certificate contains s(0) (region_of_attraction)."""
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,8 +39,7 @@ class LoopSeries:
         margin: Each check's margin 1 - spectral radius.
         separation: Each check's sigma_RHS / lambda_LHS.
         failures: The failed checks, as "t = ...: reason".
-        failure_times: The failed checks' times [s].
-    """
+        failure_times: The failed checks' times [s]."""
     time: List[float] = field(default_factory=list)
     margin: List[float] = field(default_factory=list)
     separation: List[float] = field(default_factory=list)
@@ -102,10 +90,9 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
 
 
 def _refresh_reads(t: np.ndarray, period: float) -> np.ndarray:
-    """For each logged sample, the sample whose learner output its gains were set with: a
-    sample logs the state before the discrete updates of its own instant, so its gains
-    come from the integrator's last refresh strictly before it (every ``period`` [s]),
-    which read the learner's output as logged at that refresh's instant."""
+    """For each logged sample, the sample whose learner output its gains were set with: the
+    integrator's last refresh strictly before it (every ``period`` [s]), as a sample logs
+    the state before its own instant's discrete updates."""
     refresh = (np.ceil(t / period - 1e-9) - 1.0) * period
     return np.clip(np.searchsorted(t, refresh - 1e-9), 0, len(t) - 1)
 
@@ -207,8 +194,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
 def verify_run(run_dir: Union[str, Path], out_dir: Optional[Union[str, Path]] = None,
                controller: str = "dac",
                region_budget: float = REGION_BUDGET) -> Dict:
-    """Verifies a saved run against its Lyapunov claims (verify_logs); returns the report
-    (its "ok" entry: every check passed).
+    """Verifies a saved run against its Lyapunov claims (verify_logs); returns the report.
 
     Args:
         run_dir: A run directory written by ``dacph simulate`` or ``dacph reproduce``.
@@ -281,8 +267,7 @@ _UNITS = {"rate_slow": "1/s", "rate_fast": "1/s", "rate_low": "1/s", "final_time
 
 
 def _Item(key: str, value) -> str:
-    """One line of verification.md: floats to 4 significant digits, with units; an
-    empty or absent value (no failure, nothing evaluated) as "none"."""
+    """One line of verification.md: 4 significant digits with units; nothing as "none"."""
     if value is None or value == "" or (isinstance(value, float) and value != value):
         return f"- {key}: none"
     if isinstance(value, float):

@@ -1,23 +1,13 @@
-"""The sweep file: a base scenario, the distributions to sample (Drake's own schema
-types, ``pydrake.common.schema``), the number of trials, the controllers run on each
-sample; and the sampling of one trial from (sweep seed, trial id) only.
+"""The sweep file: a base scenario, the distributions to sample (``pydrake.common.schema``),
+the number of trials, the controllers run on each sample; and the sampling of one trial
+from (sweep seed, trial id) only.
 
-Every sampled setting is optional (absent: the base scenario's value). ``*_scale``
-multiplies the base scenario's value; ``q0`` and ``learner_seed`` replace it. Per-link
-and per-joint settings take a vector distribution (``!UniformVector {min: [..], max:
-[..]}``, ``!GaussianVector``, ``!DeterministicVector``, a plain list), one entry per
-link, or a scalar one (``!Uniform``, ``!Gaussian``, ``!UniformDiscrete``,
-``!Deterministic``) drawn independently for each link. The controllers keep
-``nominal_robot`` unless ``nominal_*`` settings perturb it (the controller's model
-error); ``actuator_gain_log10`` scales the true actuators' gains by 10^x per joint;
-``fault_time``, ``fault_joint``, ``fault_gain`` add one actuator fault. The base
-scenario may be any robot's; ``link_*`` and ``base_*`` (a planar arm's parameters)
-apply where the robot section takes them (Robot.TRUTH_SAMPLES).
-
-A sampled scenario that fails ``Scenario.Validate()`` (e.g. a negative mass from a
-Gaussian) is recorded as a failed trial with the ConfigError's message (the documented
-way to make a trial fail).
-"""
+Every sampled setting is optional (absent: the base's value). ``*_scale`` multiplies the
+base's value; ``q0`` and ``learner_seed`` replace it. Per-link settings take a vector
+distribution (one entry per link) or a scalar one (drawn independently per link).
+``nominal_*`` perturb the controllers' model; ``fault_*`` add one actuator fault;
+``link_*`` and ``base_*`` apply where the robot takes them (Robot.TRUTH_SAMPLES). A
+sample failing ``Scenario.Validate()`` is a failed trial with the ConfigError's message."""
 import copy
 import hashlib
 from dataclasses import dataclass, field, fields, is_dataclass
@@ -70,8 +60,8 @@ class Distributions:
         disturbance_frequency_scale: All of d's frequencies.
         q0: The initial joint angles [rad], one per joint (replaces q0).
         learner_seed: The scenario's seed, integers >= 0 (None: the trial's, trial_seed).
-        nominal_link_mass_scale: The controller's model error, per link: nominal_robot's
-            link mass and inertia (a described arm: robot.nominal_inertia_scale).
+        nominal_link_mass_scale: nominal_robot's link mass and inertia, per link (a
+            described arm: robot.nominal_inertia_scale).
         nominal_base_mass_scale: The controller's model error on the base mass and inertia.
         actuator_gain_log10: x_j per joint: B~'s row j times 10^x_j (uncertainty.B_scale).
         fault_time: From it [s], fault_joint gives fault_gain times its torque (all/none).
@@ -145,14 +135,11 @@ class SweepDefinition:
     text: str                   # the sweep file as written
 
     def fingerprint(self) -> str:
-        """The sha256 hex digest of the normalized sweep and base scenario: two
-        definitions with the same fingerprint sample and run the same trials."""
+        """sha256 hex digest of the normalized sweep and scenario (same: same trials)."""
         return self.fingerprints()[0]
 
     def fingerprints(self) -> List[str]:
-        """The fingerprints a saved sweep of these settings may have: fingerprint() and
-        those in the older scenario layouts (scenario.saved_forms). batch_size is not
-        part of them: it changes no trial's row."""
+        """fingerprint() and the older scenario layouts' (batch_size not included)."""
         sweep = "".join(line for line in yaml_dump_typed(self.sweep).splitlines(True)
                         if not line.startswith("batch_size:"))
         return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
@@ -231,8 +218,7 @@ def _base_scenario(name: str, folder: Path) -> Scenario:
 
 
 def _check_keys(data, schema_type, where: str) -> None:
-    """Unknown keys, named with the allowed ones (yaml_load_typed only names the
-    unknown key)."""
+    """Unknown keys, named with the allowed ones."""
     if not isinstance(data, dict):
         return
     allowed = {f.name: f.type for f in fields(schema_type)}
@@ -354,9 +340,8 @@ def _numbers_of(value) -> List[float]:
 
 
 def trial_seed(sweep_seed: int, trial: int) -> int:
-    """The seed of one trial, in [0, 2^32 - 1], from (sweep seed, trial id) only (numpy's
-    SeedSequence); it seeds the sample and, unless learner_seed is sampled, the
-    learner's initialization and the observer's noise.
+    """A trial's seed in [0, 2^32 - 1] from (sweep seed, trial id) only (SeedSequence):
+    of the sample and, unless learner_seed is sampled, of the learner and the noise.
 
     Args:
         sweep_seed: The sweep's seed.
@@ -365,8 +350,7 @@ def trial_seed(sweep_seed: int, trial: int) -> int:
 
 
 def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
-    """Samples one trial's scenario: the base scenario with every distribution sampled,
-    in the order of the Distributions fields, from a generator seeded by trial_seed.
+    """One trial's scenario, sampled in Distributions' order from trial_seed's generator.
 
     Args:
         definition: The sweep.
@@ -403,9 +387,7 @@ def _sample_vector(value, n: int, generator: RandomGenerator) -> List[float]:
 
 def apply_model_error_sample(robot: object, links: Optional[Sequence[float]],
                              base: Optional[float]) -> None:
-    """Applies a trial's controller model error: factors on the nominal links' (a
-    described arm's: the bodies its joints move) and the base's mass and inertia
-    (Robot.ApplyModelError).
+    """Applies a trial's controller model error (Robot.ApplyModelError).
 
     Args:
         robot: The robot section.

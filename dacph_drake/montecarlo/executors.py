@@ -1,6 +1,5 @@
-"""Where trials run: any ``concurrent.futures.Executor``. Provided here: a local
-process pool (the default), this process (debugging, tests), and a Dask cluster
-(optional extra: ``pip install 'dacph-drake[dask]'``)."""
+"""Where trials run: any ``concurrent.futures.Executor``; here a local process pool (the
+default), this process, and a Dask cluster (extra ``dacph-drake[dask]``)."""
 import ctypes
 import multiprocessing
 import os
@@ -19,8 +18,7 @@ class InProcessExecutor(Executor):
     """Runs each submitted call at once, in this process."""
 
     def submit(self, fn: Callable, /, *args: object, **kwargs: object) -> Future:
-        """Runs a call now, in this process; returns its finished Future (its result or
-        its exception).
+        """Runs a call now; returns its finished Future.
 
         Args:
             fn: The function.
@@ -35,8 +33,7 @@ class InProcessExecutor(Executor):
 
 
 def local_process_pool(workers: int) -> ProcessPoolExecutor:
-    """Makes a process pool for a sweep: fresh ('spawn') single-threaded workers, no
-    forked copy of torch or Drake threads, each ending with this process.
+    """A process pool of fresh ('spawn') single-threaded workers ending with this process.
 
     Args:
         workers: The number of worker processes."""
@@ -59,8 +56,7 @@ def stop_local_pool(pool: ProcessPoolExecutor) -> None:
 
 
 def _prepare_worker(parent: int) -> None:
-    """One thread per numeric library; on Linux, SIGKILL this worker when its parent
-    dies (even by kill -9)."""
+    """One thread per library; on Linux, SIGKILL this worker when its parent dies."""
     for name in THREAD_VARIABLES:
         os.environ[name] = "1"
     if sys.platform.startswith("linux"):
@@ -82,9 +78,8 @@ CONNECT_TIMEOUT = 10.0
 @contextmanager
 def dask_executor(address: str, workers: Optional[int] = None,
                   timeout: float = CONNECT_TIMEOUT) -> Iterator[Tuple[Executor, int]]:
-    """Opens a Dask executor for a sweep, yielding (the executor, the number of worker
-    slots); each worker must have one thread (torch's random state and thread settings
-    are per process).
+    """Opens a Dask executor, yielding (executor, worker slots); each worker must have one
+    thread (torch's state and thread settings are per process).
 
     Args:
         address: The scheduler's address, or "local" for a new single-threaded LocalCluster.

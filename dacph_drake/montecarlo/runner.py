@@ -1,6 +1,5 @@
-"""Running a sweep: sample the trials not yet in the output directory, hand them to
-an executor (at most one per worker slot in flight), persist each row as it
-arrives, show progress with an ETA."""
+"""Running a sweep: the trials not yet saved, handed to an executor (one batch per worker
+slot in flight), each row persisted as it arrives, with progress and ETA."""
 import sys
 from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -20,14 +19,9 @@ from dacph_drake.loop.progress import progress_bar
 def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: Optional[Executor] = None,
               slots: Optional[int] = None, progress: bool = False,
               batch_size: Optional[int] = None) -> List[Dict]:
-    """Runs the trials of a sweep missing from its directory; returns every trial's row,
-    by trial id.
-
-    Each batch is one diagram per controller (trial.run_trials) and one task. If a local
-    pool's worker dies, its trials run again one at a time in a fresh process, and a
-    trial that kills that one too is recorded as failed (likewise a Dask KilledWorker).
-    Rows are saved per finished batch; a trial's row is the same whichever executor,
-    worker count, batch or order ran it (except its wall times).
+    """Runs the trials missing from a sweep's directory; returns every trial's row by id. A
+    trial whose worker dies runs again alone in a fresh process, and is recorded failed if
+    it kills that too. A row's values, wall times aside, do not depend on how it ran.
 
     Args:
         definition: The loaded sweep (definition.load_sweep).
@@ -68,8 +62,7 @@ def run_sweep(definition: SweepDefinition, out_dir: Union[str, Path], executor: 
 
 
 def batch_size_for(definition: SweepDefinition) -> int:
-    """A sweep's trials per diagram: its batch_size if it gives one (> 0), else its
-    robot kind's (Robot.BATCH_SIZE).
+    """The sweep's batch_size if > 0, else its robot kind's (Robot.BATCH_SIZE).
 
     Args:
         definition: The sweep."""
@@ -164,8 +157,7 @@ def _salvage(in_flight: Dict, record) -> List[List[Trial]]:
 
 
 class _Progress:
-    """The sweep's bar: trials done / total, failed, rate and ETA (from this
-    session's trials)."""
+    """The sweep's bar: trials done / total, failed, rate and ETA."""
 
     def __init__(self, total: int, done: int, enabled: bool):
         if enabled and done:

@@ -1,11 +1,6 @@
-"""A sweep's output directory, which is also its resume state:
-
-    rows.jsonl     one JSON row per finished trial, appended and fsync'ed by the parent
-    sweep.yaml, scenario.yaml  the sweep file as written and its base scenario
-    manifest.json  the definition's fingerprint and, per session, start, executor, versions
-
-A truncated last line (a kill -9) is dropped on reopening, so that trial runs again; an
-exclusive lock on rows.jsonl keeps a second sweep out."""
+"""A sweep's output directory, also its resume state: rows.jsonl (one fsync'ed row per
+finished trial), sweep.yaml and scenario.yaml, manifest.json (fingerprint and sessions). A
+truncated last line is dropped on reopening; a lock keeps a second sweep out."""
 import fcntl
 import json
 import os
@@ -23,8 +18,7 @@ ROWS, MANIFEST = "rows.jsonl", "manifest.json"
 
 
 def read_rows(out_dir: Union[str, Path]) -> Dict[int, Dict]:
-    """Trial id -> row of every complete line of a sweep's rows (a truncated last line
-    ignored).
+    """Trial id -> row of every complete line of a sweep's rows.
 
     Args:
         out_dir: The sweep's directory (its rows.jsonl).
@@ -76,8 +70,7 @@ def read_manifest(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
 
 
 def _require_no_run(out: Path) -> None:
-    """Refuses a directory holding a run (dacph simulate's or reproduce's) but no
-    sweep: a new sweep would write its scenario.yaml over the run's."""
+    """Refuses a directory with a run but no sweep (its scenario.yaml would go)."""
     if (out / MANIFEST).exists():
         return
     run = sorted(p.name for p in out.iterdir()

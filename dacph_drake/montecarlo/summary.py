@@ -23,9 +23,8 @@ SENSITIVITY_METRIC = "tracking_error_rms"
 
 
 def flat_row(row: Dict) -> Dict:
-    """A row as one level of columns (column -> value): trial, seed, status, reason,
-    wall_time, sampled.NAME[k], CONTROLLER.status/reason/final_time/wall_time and
-    CONTROLLER.METRIC.
+    """A row as one level of columns: trial, seed, status, reason, wall_time,
+    sampled.NAME[k], CONTROLLER.status/reason/final_time/wall_time and CONTROLLER.METRIC.
 
     Args:
         row: A trial's row (rows.jsonl)."""
@@ -44,9 +43,8 @@ def flat_row(row: Dict) -> Dict:
 
 
 def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
-    """Summarizes a sweep's rows (summary.json, with "learning" and "learning_in_tracking"):
-    success rates, quantiles of each metric over the successful runs, and the paired DAC
-    vs model-based comparison (metrics.comparison) where both succeeded, with a 95 %
+    """Summarizes a sweep's rows (summary.json): success rates, quantiles of each metric
+    over the successful runs, and the paired DAC vs model-based comparison with a 95 %
     bootstrap interval of the mean.
 
     Args:
@@ -80,10 +78,8 @@ def summarize(rows: List[Dict], controllers: List[str], seed: int) -> Dict:
 
 
 def learning_summary(rows: List[Dict]) -> Dict:
-    """Summarizes how well DAC learned: the number of trials and, per phase, how often
-    learned B and D beat the prior (error ratio <= 1), the ratios' median and 95 %
-    quantile, the share of B_hat rejected, and the median RMS e_tau with / without
-    learning (dac-nominal).
+    """Per phase: how often learned B, D beat the prior, the ratios' median and 95 %
+    quantile, the share of B_hat rejected, median RMS e_tau with and without learning.
 
     Args:
         rows: The trials' rows."""
@@ -120,11 +116,9 @@ LARGE_ACTUATOR_ERROR = 2.0
 
 
 def tracking_summary(rows: List[Dict]) -> Dict:
-    """Summarizes how often learning made DAC track better than dac-nominal (RMS
-    tracking error over phases 2-3, after phase 1's shared start-up transient; a diverged
-    dac-nominal run counts as worse): in all finished trials and in those with an actuator
-    off by more than LARGE_ACTUATOR_ERROR, split into weaker and stronger (counts and
-    shares; None where no trial falls in the group).
+    """How often DAC tracked better than dac-nominal over phases 2-3 (a diverged dac-nominal
+    counts as worse), in all trials and with an actuator off by more than
+    LARGE_ACTUATOR_ERROR, weaker and stronger (None for an empty group).
 
     Args:
         rows: The trials' rows."""
@@ -252,8 +246,7 @@ def _learning_rows(learning: Dict, scaled: str) -> List[str]:
 
 
 def write_summary(out_dir: Union[str, Path], definition: SweepDefinition) -> Dict:
-    """Writes summary.json, summary.md, rows.parquet and figures/ from OUT/rows.jsonl;
-    returns the summary with "parquet" (where the table went) and "figures" (paths in OUT).
+    """Writes summary.json, summary.md, rows.parquet and figures/; returns the summary.
 
     Args:
         out_dir: The sweep's directory OUT.
@@ -275,8 +268,7 @@ def write_summary(out_dir: Union[str, Path], definition: SweepDefinition) -> Dic
 
 
 def write_parquet(flat: List[Dict], path: Path) -> str:
-    """Writes the flat rows to a Parquet file (pyarrow); returns its name, or why it was
-    not written.
+    """Writes the flat rows to Parquet; returns its name, or why it was not written.
 
     Args:
         flat: The flat rows (flat_row).
@@ -292,9 +284,7 @@ def write_parquet(flat: List[Dict], path: Path) -> str:
 
 
 def plot_sweep(flat: List[Dict], controllers: List[str], folder: Path) -> List[Path]:
-    """Plots distributions.png (each metric per controller) and sensitivity.png
-    (SENSITIVITY_METRIC against each sampled parameter, failed trials marked); returns
-    the figures' paths.
+    """Plots distributions.png and sensitivity.png; returns their paths.
 
     Args:
         flat: The flat rows (flat_row).

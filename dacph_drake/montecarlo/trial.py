@@ -20,8 +20,7 @@ class Trial:
         scenario: Its sampled scenario.
         sampled: The sampled values, by distribution name.
         controllers: The controllers to run.
-        log_dir: Save each run's logs under log_dir/trial_NNNNN (None: not saved).
-    """
+        log_dir: Save each run's logs under log_dir/trial_NNNNN (None: not saved)."""
     trial: int
     seed: int
     scenario: Scenario
@@ -39,21 +38,17 @@ def run_trial(task: Trial) -> Dict:
 
 
 def run_trials(tasks: List[Trial]) -> List[Dict]:
-    """Runs each controller on a batch of trials, one diagram per controller.
-
-    Each trial's run is its solo run (loop.simulate.simulate_batch). A trial's own
-    failure never raises: an invalid sampled scenario (ConfigError) is recorded for
-    it alone, a divergence stops it alone, and a batch whose run raises is run
-    again trial by trial, so that an exception is recorded with its reason for the
-    trial that raised it.
+    """Runs each controller on a batch of trials, one diagram per controller, each trial's
+    run its solo run. A trial's failure never raises: it is recorded for it alone (a batch
+    that raises is rerun trial by trial).
 
     Args:
         tasks: The batch's trials.
 
     Returns:
-        Each trial's row: trial, seed, sampled, status ("ok" or "failed"), reason,
-            wall_time in s (its share of the batch's) and runs (per controller: status
-            "ok", "diverged" or "error", reason, final_time, wall_time, metrics)."""
+        Each trial's row: trial, seed, sampled, status ("ok"/"failed"), reason, wall_time
+            [s] and runs (per controller: status, reason, final_time, wall_time,
+            metrics)."""
     import torch
     torch.set_num_threads(1)        # one thread per worker, whatever the executor
     start = time.perf_counter()
@@ -87,8 +82,7 @@ def run_trials(tasks: List[Trial]) -> List[Dict]:
 
 
 def _run_one(task: Trial, controller: str, runs: Dict) -> None:
-    """One trial's run of ``controller`` alone, an exception recorded as its
-    failure."""
+    """One trial's run of ``controller`` alone, an exception recorded as its failure."""
     try:
         _run_batch([task], controller, runs)
     except Exception as e:   # noqa: BLE001 -- recorded as the run's failure

@@ -1,14 +1,12 @@
-"""The null-space potential of a spatial arm: keeps every link off the base, from
-SceneGraph's signed distances between the description's collision geometries:
+"""The null-space potential of a spatial arm, keeping every link off the base, from
+SceneGraph's signed distances between collision geometries:
 
     U(q) = gain / 2 sum_k max(0, margin - phi_k(q))^2,
     grad U = -gain sum_k max(0, margin - phi_k) grad phi_k,
     grad phi_k = (J_bar_A(p_A) - J_bar_B(p_B))_v^T nhat_BA,
 
-phi_k the signed distance between link k and the base, p_A, p_B its witness points,
-nhat_BA the normal from base to link, J_bar the generalized Jacobians' translational
-rows (zero momentum). Links jointed to the base (or to a body welded to it) are not
-measured against it: their joint sits on its surface."""
+phi_k link k's signed distance to the base, p_A, p_B its witness points, nhat_BA the
+normal from base to link; links jointed to the base are not measured against it."""
 from dataclasses import dataclass
 from typing import Optional
 
@@ -28,8 +26,7 @@ class Clearance:
     Attributes:
         U: The potential [gain * m^2].
         gradient: dU/dq (n).
-        min_distance: The smallest link-base signed distance [m] (inf beyond the query).
-    """
+        min_distance: The smallest link-base signed distance [m] (inf beyond the query)."""
     U: float                # [J-like units of gain * m^2]
     gradient: np.ndarray    # dU/dq
     min_distance: float     # smallest link-base signed distance [m] (inf beyond query)
@@ -43,8 +40,7 @@ class BaseClearancePotential:
         model: The controller's model of the same description, for the Jacobians.
         gain: The potential's gain.
         margin: The distance below which a link-base pair is repelled [m].
-        query_distance: Evaluate's default query distance [m] (at least ``margin``).
-    """
+        query_distance: Evaluate's default query distance [m] (at least ``margin``)."""
 
     def __init__(self, *, parsed: ParsedDescription, model: FloatingBaseModel,
                  gain: float, margin: float, query_distance: float = 1.0):
@@ -83,10 +79,9 @@ class BaseClearancePotential:
 
     def Evaluate(self, q: np.ndarray, base_pose: np.ndarray,
                  query_distance: Optional[float] = None) -> Clearance:
-        """U, its gradient and the nearest link-base distance at q (a Clearance).
-
-        No query where every link is certainly beyond the query distance (_Beyond); a
-        query looks CERTIFY further, so that later calls can be answered from it.
+        """U, its gradient and the nearest link-base distance at q (a Clearance); no query
+        where every link is certainly beyond the query distance (_Beyond), and a query looks
+        CERTIFY further so that later calls can be answered from it.
 
         Args:
             q: The joint angles (n) [rad].

@@ -200,14 +200,24 @@ class DescribedRobot:
     @staticmethod
     def SizedScenario(section: DescribedArm, q0: Optional[Sequence[float]],
                       task: Optional[object], rows: Sequence[int]) -> Scenario:
-        """robots.robot.Robot.SizedScenario: arm_scenario."""
+        """robots.robot.Robot.SizedScenario: arm_scenario.
+
+        Args:
+            section: The file's robot section.
+            q0: The file's q0 [rad] (None where it leaves it out).
+            task: The file's task section (None where it leaves it out).
+            rows: The GJM's rows that task tracks."""
         return arm_scenario(section, q0, task, rows)
 
     @staticmethod
     def ResolvePaths(section: DescribedArm, folder: Path) -> None:
         """robots.robot.Robot.ResolvePaths: the description, package_paths and packages;
         shipped names, package:// URIs and a path that exists only relative to the
-        working directory stay."""
+        working directory stay.
+
+        Args:
+            section: The robot section (changed in place).
+            folder: The scenario file's folder."""
         def resolved(path: str) -> str:
             beside = folder / path
             if Path(path).is_absolute() or (Path(path).exists() and not beside.exists()):
@@ -221,19 +231,31 @@ class DescribedRobot:
 
     @staticmethod
     def JointNames(section: DescribedArm) -> List[str]:
-        """robots.robot.Robot.JointNames: the description's joint names."""
+        """robots.robot.Robot.JointNames: the description's joint names.
+
+        Args:
+            section: The robot section, its paths resolved."""
         return [joint.name() for joint in arm_joints(FloatingBaseModel(
             MakeRobotPlant(section)))]
 
     @staticmethod
     def ApplyTruthSample(section: DescribedArm, sampled: Dict[str, object]) -> None:
-        """robots.robot.Robot.ApplyTruthSample: nothing to sample."""
+        """robots.robot.Robot.ApplyTruthSample: nothing to sample.
+
+        Args:
+            section: The robot section.
+            sampled: The trial's sampled settings by name."""
 
     @staticmethod
     def ApplyModelError(section: DescribedArm, links: Optional[Sequence[float]],
                         base: Optional[float]) -> None:
         """robots.robot.Robot.ApplyModelError: on the bodies the joints move
-        (model_error_scale)."""
+        (model_error_scale).
+
+        Args:
+            section: The robot section (changed in place).
+            links: One factor per joint, or None.
+            base: The base's factor, or None."""
         if links is not None or base is not None:
             section.nominal_inertia_scale = model_error_scale(section, links, base)
 

@@ -1,7 +1,6 @@
-"""Free-floating manipulators from robot description files (URDF, SDF) with Drake's
-Parser: the root body becomes a free 6-DOF base (quaternion floating joint, nq = nv + 1),
-every revolute joint of the arm is actuated, gravity is zero. The project ships its own
-descriptions (SPATIAL_ROBOTS): Drake's bundled models are fetched from the internet."""
+"""Free-floating manipulators from robot description files with Drake's Parser: the root
+body a free 6-DOF base, every revolute joint actuated, zero gravity; the project ships
+its own descriptions (SPATIAL_ROBOTS)."""
 import difflib
 import logging
 import os
@@ -34,8 +33,7 @@ MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
 class _EachWarningOnce(logging.Filter):
-    """Passes each distinct message once per process: a run parses its description
-    several times, which would repeat every parser warning."""
+    """Passes each distinct message once per process."""
 
     def __init__(self):
         super().__init__()
@@ -96,8 +94,7 @@ def robot_description(name_or_path: Union[str, Path],
 
 
 def _AddPythonPackage(package_map: PackageMap, name: str) -> None:
-    """Adds an installed Python package's folder as package ``name`` (robosuite ships its
-    MJCF arms inside its Python package), found without importing it."""
+    """Adds an installed Python package's folder (e.g. robosuite's) as package ``name``."""
     import importlib.util
     try:
         spec = importlib.util.find_spec(name)
@@ -109,9 +106,8 @@ def _AddPythonPackage(package_map: PackageMap, name: str) -> None:
 
 
 def package_map_of(arm: DescribedArm, package_map: PackageMap) -> PackageMap:
-    """Adds the packages a described arm's package:// URIs may name to ``package_map`` and
-    returns it: robot.packages, robot.package_paths, ROS_PACKAGE_PATH, the ament index on
-    AMENT_PREFIX_PATH and pip's cmeel.prefix; the first place that names a package wins.
+    """Adds the packages an arm's package:// URIs may name to ``package_map``, returned
+    (robot.packages, package_paths, ROS_PACKAGE_PATH, ament, cmeel; the first wins).
 
     Args:
         arm: The scenario's robot section.
@@ -174,14 +170,12 @@ def PopulateFromDescription(plant: MultibodyPlant,
                             name_or_path: Union[str, Path, DescribedArm, RobotParams]
                             ) -> Dict[str, float]:
     """Parses a description into a plant: gravity off, each unactuated revolute joint
-    actuated (URDF effort limit if "saturate"), a moving joint of another kind refused.
-    Returns the description's joint Coulomb friction, which the plant does not hold
+    actuated, another moving joint refused. Returns the joints' Coulomb friction
     (joint_friction; none with robot.joint_friction "zero").
 
     Args:
         plant: The plant (not finalized; left so).
-        name_or_path: A shipped name, a .urdf/.sdf path, a scenario.DescribedArm (mounted,
-            end effector added, URIs resolved, locked joints welded) or a RobotParams.
+        name_or_path: A shipped name, a .urdf/.sdf path, a DescribedArm or a RobotParams.
 
     Raises:
         ConfigError: Naming what in the description or robot section is not allowed."""
@@ -300,10 +294,8 @@ def _MountOnBase(plant: MultibodyPlant, instances, base: ArmBase) -> None:
 
 
 def _GearedEffortLimits(plant: MultibodyPlant) -> None:
-    """An MJCF <motor>'s torque is gear x ctrl, its ctrlrange a limit on ctrl; Drake's
-    parser keeps the gear (for the reflected inertia) and takes ctrlrange as the effort
-    limit of u, which it applies as the joint torque. The loop's u is that torque, so its
-    limit is |gear| x ctrlrange (robosuite's motors: gear 1, unchanged)."""
+    """An MJCF <motor>'s torque is gear x ctrl and Drake takes ctrlrange as u's effort
+    limit, so the torque's limit is |gear| x ctrlrange."""
     for index in plant.GetJointActuatorIndices():
         actuator = plant.get_joint_actuator(index)
         gear, limit = abs(actuator.default_gear_ratio()), actuator.effort_limit()
@@ -330,9 +322,8 @@ def _DropWorldAnchors(plant: MultibodyPlant, instances) -> None:
 
 
 def joint_friction(path: Path) -> Dict[str, float]:
-    """Joint name -> the description's Coulomb friction [N m] (joints with a positive
-    one), which Drake's parsers do not model: a URDF's <dynamics friction>, an SDF's
-    <axis><dynamics><friction>, an MJCF's frictionloss (robots.mjcf.MjcfFile.JointAttribute).
+    """Joint name -> the description's Coulomb friction [N m] where positive, which Drake's
+    parsers do not model (URDF <dynamics friction>, SDF <friction>, MJCF frictionloss).
 
     Args:
         path: The description file.
@@ -437,10 +428,9 @@ def _AddEndEffector(plant: MultibodyPlant, end_effector: EndEffectorFrame, path)
 
 
 class ParsedDescription:
-    """A description parsed once into a finalized continuous ``plant`` and its own
-    ``scene_graph``, for a whole closed loop: AddTo adds them as the ground truth, the
-    controller's model and the clearance potential use contexts of their own. The
-    proximity role is taken off the SceneGraph's model: the truth computes no contact.
+    """A description parsed once into a finalized continuous ``plant`` and its
+    ``scene_graph`` (no proximity role: the truth computes no contact); the truth, the model
+    and the clearance potential use contexts of their own.
 
     Args:
         name_or_path: The description, as PopulateFromDescription reads it.
@@ -467,8 +457,7 @@ class ParsedDescription:
         self._added = False
 
     def AddTo(self, builder: DiagramBuilder) -> "tuple[MultibodyPlant, SceneGraph]":
-        """Adds the plant and its SceneGraph, connected, to a diagram (once: a second call
-        raises RuntimeError); returns (plant, scene_graph).
+        """Adds the plant and SceneGraph to a diagram (once): (plant, scene_graph).
 
         Args:
             builder: The diagram's builder."""
@@ -488,9 +477,8 @@ class ParsedDescription:
         return plant, scene_graph
 
     def ClearanceContexts(self) -> Tuple[Context, Context]:
-        """(plant context, SceneGraph context), of the two alone, in which to query the
-        collision geometry: its proximity role given back, with Finalize's collision
-        filters. Set positions, UpdatePoses, then query."""
+        """(plant context, SceneGraph context) for collision queries (proximity role given
+        back): set positions, UpdatePoses, then query."""
         plant, context = self.plant, self.scene_graph.CreateDefaultContext()
         for geometry, properties in self._proximity.items():
             self.scene_graph.AssignRole(context, plant.get_source_id(), geometry,
@@ -525,8 +513,7 @@ class ParsedDescription:
 def AddRobotFromDescription(builder: DiagramBuilder,
                             name_or_path: Union[str, Path, DescribedArm, RobotParams]
                             ) -> "tuple[MultibodyPlant, SceneGraph]":
-    """Adds a description's finalized continuous plant and its SceneGraph to a diagram;
-    returns (plant, scene_graph).
+    """Adds a description's plant and SceneGraph to a diagram: (plant, scene_graph).
 
     Args:
         builder: The diagram's builder.

@@ -1,11 +1,7 @@
 """Descriptions as their makers ship them: what Drake's parser refuses or repeats, made
-into one line per kind naming the user's file.
-
-- A material name defined more than once (Drake refuses it): the first definition is
-  kept; a later one is read as a reference to it, or renamed NAME__K where it differs.
-- A xacro macro file is refused with the command that expands it.
-- Drake's parser warnings are logged once per kind and file, with the first line and the
-  count."""
+into one line per kind naming the user's file: a material defined twice (the first
+kept, a later one a reference or renamed NAME__K), a xacro file (refused with the
+command that expands it), parser warnings (logged once per kind and file)."""
 import logging
 import re
 from collections import OrderedDict
@@ -45,8 +41,7 @@ def refuse_xacro(path: Path, text: str) -> None:
 
 
 def without_duplicate_materials(text: str, path: Path) -> Tuple[str, bool]:
-    """(text, changed): a URDF's text with each material name defined once (module
-    docstring), every line at its number, and whether it changed.
+    """(text, changed): a URDF with each material name defined once, lines in place.
 
     Args:
         text: The URDF's text.
@@ -79,8 +74,7 @@ def without_duplicate_materials(text: str, path: Path) -> Tuple[str, bool]:
 
 @contextmanager
 def parser_warnings_once(path: Path) -> Iterator[None]:
-    """Logs Drake's parser warnings during a parse once per kind (module docstring), on
-    exit.
+    """Logs Drake's parser warnings during a parse once per kind, on exit.
 
     Args:
         path: The description's path (named in each line)."""

@@ -1,14 +1,9 @@
 """Meshes as robot packages ship them, for Drake's SceneGraph, whose collision meshes must
-be .obj, .vtk or .gltf (it takes their convex hull), while ROS packages give STL and
-Collada .dae and MuJoCo's STL and its legacy .msh. Every STL mesh a URDF names, and every
-.dae mesh of a <collision>, is converted triangle for triangle to an OBJ in a cache folder
-(named by content hash), so the hull is the original's (robots.mjcf converts an MJCF's
-meshes the same way). STL is read by trimesh. A .dae's triangles are its geometries'
-placed by the <visual_scene>'s nodes (matrix, translate, rotate, scale, in document
-order), in metres; <up_axis> is not applied, as ROS's tools draw meshes in their link's
-frame (read here: pycollada, trimesh's Collada reader, refuses the sources without an
-accessor that exporters write). Visual .dae and other meshes stay as they are (relative
-paths made absolute file:// URIs)."""
+be .obj, .vtk or .gltf: every STL a URDF names, and every .dae of a <collision>, is
+converted triangle for triangle to a cached OBJ (by content hash), so the hull is the
+original's. A .dae's triangles are placed by the <visual_scene>'s nodes in document
+order, in metres (<up_axis> not applied, as ROS's tools do). Other meshes stay as they
+are (paths made absolute file:// URIs)."""
 import hashlib
 import io
 import re
@@ -28,8 +23,7 @@ _COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
 
 def urdf_with_obj_meshes(path: Path, package_map: PackageMap,
                          text: Optional[str] = None) -> Optional[str]:
-    """A URDF's text with its meshes converted as the module docstring's rule says, or
-    None when it is the file's own and names no mesh to convert.
+    """A URDF's text with its meshes converted, or None when there is nothing to change.
 
     Args:
         path: The URDF file.
@@ -74,8 +68,7 @@ def _Resolve(name: str, path: Path, package_map) -> Path:
 
 
 def obj_of(mesh: Path) -> Path:
-    """The cached OBJ of an STL, .dae or MuJoCo .msh file (ConfigError naming a missing
-    or bad one).
+    """The cached OBJ of an STL, .dae or MuJoCo .msh file (ConfigError naming a bad one).
 
     Args:
         mesh: The mesh file."""
@@ -98,8 +91,7 @@ def obj_of(mesh: Path) -> Path:
 
 
 def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
-    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII, in the
-    file's order (trimesh).
+    """The triangles (k, 3 vertices, xyz) of an STL file's bytes, binary or ASCII (trimesh).
 
     Args:
         data: The file's bytes.
@@ -122,9 +114,8 @@ def stl_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
 
 
 def msh_triangles(data: bytes, name: Union[str, Path]) -> np.ndarray:
-    """The triangles (k, 3 vertices, xyz) of MuJoCo's legacy binary .msh (no library reads
-    it): int32 counts (vertices, normals, texture coordinates, faces), then float32
-    positions (3 each), normals (3), texture coordinates (2) and int32 faces (3).
+    """The triangles (k, 3, xyz) of MuJoCo's legacy binary .msh: int32 counts, then float32
+    positions (3), normals (3), texture coordinates (2) and int32 faces (3).
 
     Args:
         data: The file's bytes.

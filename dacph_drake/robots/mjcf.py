@@ -1,34 +1,16 @@
-"""MJCF files as MuJoCo reads them, made into one text Drake's MuJoCo parser reads.
+"""MJCF files as MuJoCo reads them, made into one text Drake's MuJoCo parser reads, on a
+copy, rewriting what Drake refuses or asserts on:
 
-MuJoCo's compiler accepts what Drake's parser refuses or asserts on; each is rewritten
-here, on a copy (the user's files are not touched):
+- ``<include file>``: replaced by the included ``<mujoco>``'s children (MuJoCo's paths).
+- Meshes: resolved as MuJoCo does (meshdir, assetdir), non-OBJ converted to OBJ
+  (robots.meshes.obj_of), an unnamed mesh named by its file's stem.
+- An ``<inertial>`` of zero mass: dropped (a massless body, as in MuJoCo).
+- A servo on a joint: a ``<motor>`` of its gear, its force range the effort limit.
+- Thin-shell inertia (``shellinertia``) and vector attributes of the wrong count:
+  refused, naming the element.
 
-- ``<include file>``: replaced by the included file's ``<mujoco>`` (or older
-  ``<mujocoinclude>``) children, the path relative to the main file's folder (MuJoCo's
-  rule), else the including file's.
-- Meshes (``<asset><mesh file>``): resolved as MuJoCo resolves them (``compiler
-  meshdir``, else ``assetdir``, relative to the main file's folder; an absolute path as
-  it is), then any that is not .obj (STL, MuJoCo's legacy .msh) converted to OBJ in the
-  mesh cache (robots.meshes.obj_of); a mesh without a name keeps the name MuJoCo gives
-  it, its file's stem.
-- An ``<inertial>`` of zero mass (robosuite's mount bodies carry ``mass="0"
-  diaginertia="0 0 0"``): dropped, so the body is massless, as MuJoCo treats it. A
-  massless body welded to its parent adds nothing to the composite it belongs to; a
-  joint that moves only massless bodies is refused later, naming the joint
-  (dynamics.floating_model).
-- A servo on a joint (``<position>``, ``<velocity>``, ``<intvelocity>``, ``<damper>``,
-  ``<general>``): a ``<motor>`` of its gear, its force range the effort limit; the
-  controller commands the joint's torque itself (_ServosAsMotors).
-- A geom whose thin-shell inertia (``shellinertia``) would give its body's inertia,
-  and a vector attribute of the wrong count: refused, naming the element.
-
-Drake's parser does not model a joint's ``frictionloss`` (MuJoCo's dry friction), and
-takes a joint's ``armature`` only through a ``<motor>`` on it; both are read here,
-through the ``<default>`` classes and ``childclass`` (MjcfFile.JointAttribute), for the
-ground truth's friction (robots.description.joint_friction) and the rotor inertia of
-the actuators the library adds (robots.description.PopulateFromDescription).
-
-Errors name the file (and line, where the XML parser gives one) and the element."""
+A joint's ``frictionloss`` and ``armature``, which Drake's parser does not take, are
+read through the ``<default>`` classes. Errors name the file (and line) and element."""
 import functools
 from pathlib import Path
 from typing import Dict, Iterator, List, Tuple
@@ -56,20 +38,16 @@ VECTOR_SIZES = {"pos": (3,), "quat": (4,), "euler": (3,), "axis": (3,),
 
 
 class MjcfFile:
-    """One MJCF file, read once: ``drake_text``, the text Drake reads for it (module
-    docstring; None when the file needs no rewriting), its joints' attributes as
-    MuJoCo resolves them (JointAttribute), ``servos``, the actuators it drives as
-    torque motors (_ServosAsMotors: "kind 'name' on joint 'j'"), and
-    ``mesh_inertia_notes``, the meshes whose inertia MuJoCo takes otherwise
-    (_MeshInertiaNotes).
+    """One MJCF file, read once: ``drake_text`` (None when it needs no rewriting), its
+    joints' resolved attributes (JointAttribute), ``servos`` (replaced by torque motors) and
+    ``mesh_inertia_notes`` (_MeshInertiaNotes).
 
     Args:
         path: The MJCF file.
 
     Raises:
         ConfigError: A bad XML file, a non-MJCF root, a missing or cyclic include, a mesh
-            missing or of a format MuJoCo does not read, naming the file and the
-            element."""
+            missing or of a format MuJoCo does not read, naming the file and the element."""
 
     def __init__(self, path: Path):
         self.path = path
@@ -86,8 +64,8 @@ class MjcfFile:
                            if changed else None)
 
     def JointAttribute(self, attribute: str) -> Dict[str, float]:
-        """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]; joints
-        with a positive one), as MuJoCo resolves it (_Resolved).
+        """Joint name -> its ``attribute`` (frictionloss [N m], armature [kg m^2]) where
+        positive, as MuJoCo resolves it.
 
         Args:
             attribute: The joint attribute.
@@ -106,8 +84,7 @@ class MjcfFile:
 
 
 def _Classes(root: ElementTree.Element, tag: str) -> Dict[str, Dict[str, str]]:
-    """Default class -> the attributes it gives a ``tag`` element, each class inheriting
-    from the <default> that holds it."""
+    """Default class -> the attributes it gives a ``tag`` element (inherited by nesting)."""
     classes: Dict[str, Dict[str, str]] = {}
 
     def visit_default(default, inherited):
@@ -124,9 +101,8 @@ def _Classes(root: ElementTree.Element, tag: str) -> Dict[str, Dict[str, str]]:
 
 
 def _Resolved(root: ElementTree.Element, tag: str) -> Iterator[_Resolution]:
-    """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them, and
-    its body: the element's own attribute, else its class's (the element's ``class``,
-    else the nearest enclosing body's ``childclass``, else "main"; _Classes)."""
+    """Each ``tag`` element of the bodies with its attributes as MuJoCo resolves them (own,
+    else its class's, else the enclosing ``childclass``'s, else "main"), and its body."""
     classes = _Classes(root, tag)
 
     def visit_body(body, childclass):
@@ -142,13 +118,10 @@ def _Resolved(root: ElementTree.Element, tag: str) -> Iterator[_Resolution]:
 
 def _ServosAsMotors(root: ElementTree.Element) -> Tuple[List[str], bool]:
     """Replaces each servo on a joint (SERVOS) by a <motor> of its gear: the controller
-    commands the joint's torque (the paper's u), which the servo's own law would
-    replace. A servo's force limit (forcerange where forcelimited is "true", or "auto"
-    with a forcerange) becomes the motor's ctrlrange, so the effort limit |gear| x
-    forcerange (description._GearedEffortLimits); a <general> without bias (a torque
-    motor of gain gainprm[0]) keeps its ctrlrange with its gain in the gear. Returns
-    ("kind 'name' on joint 'j'" of each servo replaced (a <general> torque motor is not
-    one), whether any actuator was rewritten)."""
+    commands the joint's torque. The servo's force limit becomes the motor's ctrlrange
+    (effort limit |gear| x forcerange); a <general> without bias keeps its ctrlrange, its
+    gain in the gear. Returns (each servo replaced as "kind 'name' on joint 'j'", whether
+    any actuator was rewritten)."""
     replaced, rewritten = [], False
     classes = {tag: _Classes(root, tag) for tag in SERVOS}
     for actuators in root.iter("actuator"):
@@ -199,9 +172,8 @@ def _InertiaGeoms(root: ElementTree.Element) -> Iterator[_Resolution]:
 
 
 def _RefuseShellInertia(root: ElementTree.Element, path: Path) -> None:
-    """Refuses a geom whose inertia MuJoCo takes as a thin shell (shellinertia) where the
-    geoms give the body's inertia (_InertiaGeoms): Drake's parser would take the solid's,
-    silently another robot."""
+    """Refuses a geom whose inertia MuJoCo takes as a thin shell where the geoms give the
+    body's inertia: Drake's parser would take the solid's."""
     for geom, attributes, body in _InertiaGeoms(root):
         if attributes.get("shellinertia", "false") == "true":
             raise ConfigError(
@@ -230,8 +202,7 @@ def nonnegative_number(value: str, named: str) -> float:
 
 
 def _Parse(path: Path, included: bool = False) -> ElementTree.Element:
-    """The file's root element: <mujoco>, or for an included file also the older
-    <mujocoinclude> MuJoCo still reads."""
+    """The file's root element: <mujoco>, or for an included file <mujocoinclude>."""
     try:
         root = ElementTree.parse(path).getroot()
     except ElementTree.ParseError as e:
@@ -248,8 +219,7 @@ def _Parse(path: Path, included: bool = False) -> ElementTree.Element:
 
 def _ExpandIncludes(element: ElementTree.Element, path: Path, main: Path,
                     depth: int) -> bool:
-    """Replaces every <include> below ``element`` by its file's <mujoco> children (in
-    place); whether any was replaced."""
+    """Replaces each <include> below ``element`` by its file's children; whether any."""
     changed = False
     for index, child in reversed(list(enumerate(element))):
         if child.tag != "include":
@@ -280,8 +250,7 @@ def _ExpandIncludes(element: ElementTree.Element, path: Path, main: Path,
 
 
 def _AssetFolder(root: ElementTree.Element, path: Path, kind: str) -> Path:
-    """The folder relative asset files of a kind ("mesh", "texture") are in: compiler
-    KINDdir, else assetdir, relative to the main file's folder; else that folder."""
+    """The folder of a kind's assets: compiler KINDdir, else assetdir, else main's."""
     folder = None
     for compiler in root.iter("compiler"):
         folder = compiler.get(f"{kind}dir") or compiler.get("assetdir") or folder
@@ -291,9 +260,8 @@ def _AssetFolder(root: ElementTree.Element, path: Path, kind: str) -> Path:
 
 
 def _ConvertMeshes(root: ElementTree.Element, path: Path) -> bool:
-    """Points every <mesh file> at an absolute .obj (converted where needed), naming it
-    as MuJoCo would, and every <texture file> at its absolute path; whether any mesh
-    was seen."""
+    """Points every <mesh file> at an absolute .obj (converted where needed) named as MuJoCo
+    would, every <texture file> at its absolute path; whether any mesh was seen."""
     folder = _AssetFolder(root, path, "mesh")
     textures = _AssetFolder(root, path, "texture")
     for texture in root.iter("texture"):
@@ -323,8 +291,7 @@ def _ConvertMeshes(root: ElementTree.Element, path: Path) -> bool:
 
 
 def _CheckVectors(root: ElementTree.Element, path: Path) -> None:
-    """Refuses a vector attribute (VECTOR_SIZES) that is not its count of finite numbers,
-    naming the element: Drake's parser raises a bare ValueError for it."""
+    """Refuses a vector attribute (VECTOR_SIZES) not of its count of finite numbers."""
     for element in root.iter():
         for attribute, sizes in VECTOR_SIZES.items():
             value = element.get(attribute)
@@ -344,11 +311,9 @@ def _CheckVectors(root: ElementTree.Element, path: Path) -> None:
 
 
 def _MeshInertiaNotes(root: ElementTree.Element) -> List[str]:
-    """The meshes whose inertia MuJoCo takes otherwise than Drake's parser, where it gives
-    their body's (_InertiaGeoms): MuJoCo's mesh ``inertia`` "legacy" (its default: each
-    face's pyramid from the faces' centroid counted positive) or "convex" (the hull),
-    Drake's the mesh's exact volume. They agree where the mesh is star-shaped from that
-    centroid (legacy) or convex; otherwise "mesh 'name' (legacy: volume V, exact V_e)"."""
+    """The meshes whose inertia MuJoCo ("legacy": each face's pyramid counted positive;
+    "convex": the hull) takes otherwise than Drake's exact volume, where it gives their
+    body's: "mesh 'name' (legacy: volume V, exact V_e)"."""
     meshes = {}
     classes = _Classes(root, "mesh")
     for asset in root.iter("asset"):
@@ -374,12 +339,9 @@ def _MeshInertiaNotes(root: ElementTree.Element) -> List[str]:
 
 @functools.lru_cache(maxsize=None)
 def _MujocoVolumes(obj: str, modified: int, scale: str, mode: str) -> Tuple[float, float]:
-    """(MuJoCo's volume of a mesh in inertia mode ``mode``, its exact volume) of the OBJ
-    file ``obj`` (modified at ``modified`` ns: the cache's key) scaled by ``scale`` (the
-    <mesh> attribute): both from pyramids on each face with apex at the faces'
-    area-weighted centroid (MuJoCo's ComputeVolume), legacy counting each positive,
-    convex those of the hull. Cached: a description is parsed for the truth, the model
-    and the clearance queries alike."""
+    """(MuJoCo's volume in inertia mode ``mode``, exact volume) of OBJ ``obj`` scaled by
+    ``scale``, from pyramids on each face with apex at the area-weighted centroid (MuJoCo's
+    ComputeVolume); cached by (path, ``modified`` ns)."""
     import trimesh
     loaded = trimesh.load(obj, force="mesh", process=False)
     vertices = np.asarray(loaded.vertices) * [float(x) for x in scale.split()]

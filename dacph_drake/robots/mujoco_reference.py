@@ -1,11 +1,6 @@
-"""An MJCF arm's ground truth against MuJoCo's own model of the same file: the check that
-the MJCF path (robots/mjcf.py, Drake's MuJoCo parser) reads a file as MuJoCo reads it.
-
-At joint angles q, with the arm's joints matched by name, it compares the joint block of
-the ground truth's mass matrix H_mm(q) (armature included: MuJoCo adds it to M's diagonal,
-Drake reflects it through the actuator) with MuJoCo's M(q) (the fixed-base inertia, which
-is H_mm whatever the base does), and the joints' damping, frictionloss and limits.
-MuJoCo (pip install mujoco) is needed only here."""
+"""An MJCF arm's ground truth against MuJoCo's model of the same file: the joint block
+H_mm(q) of the truth's mass matrix (armature included) against MuJoCo's fixed-base M(q),
+and the joints' damping, frictionloss and limits. Needs ``pip install mujoco``."""
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Optional
@@ -26,8 +21,7 @@ class MujocoComparison:
         mass_matrix: max |H_mm - M_mujoco| / max |M_mujoco| over the angles.
         damping: max |b - b_mujoco| [N m s/rad].
         frictionloss: max |f - f_mujoco| [N m].
-        limits: max |limit - limit_mujoco| [rad].
-    """
+        limits: max |limit - limit_mujoco| [rad]."""
     joints: int
     dofs: int
     mass_matrix: float
@@ -44,11 +38,9 @@ def compare_with_mujoco(path: Path, end_effector: str, samples: int = 5, seed: i
     Args:
         path: The MJCF file, as its maker ships it.
         end_effector: A frame of it (robot.end_effector.frame).
-        samples: How many joint angles to compare the mass matrices at, each uniform
-            within the joints' limits and +-1.5 rad.
+        samples: How many joint angles to compare at, uniform within limits and +-1.5 rad.
         seed: Their seed.
-        locked_joints: Joints welded at a position (robot.locked_joints), held there in
-            MuJoCo's model too."""
+        locked_joints: Joints welded at a position (robot.locked_joints), also in MuJoCo."""
     import mujoco
     reference = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(reference)

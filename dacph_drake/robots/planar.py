@@ -68,25 +68,42 @@ class PlanarRobot:
                       task: Optional[EndEffectorAngle], rows: Sequence[int]
                       ) -> Optional[Scenario]:
         """robots.robot.Robot.SizedScenario: planar_arm_scenario; None for the paper's
-        arm (Scenario's defaults)."""
+        arm (Scenario's defaults).
+
+        Args:
+            section: The file's robot section.
+            q0: The file's q0 [rad] (None where it leaves it out).
+            task: The file's task section (None where it leaves it out).
+            rows: Unused (the planar task tracks alpha)."""
         if section.truth == RobotParams():
             return None
         return planar_arm_scenario(section, q0, task)
 
     @staticmethod
     def ResolvePaths(section: PlanarArm, folder: Path) -> None:
-        """robots.robot.Robot.ResolvePaths: a planar arm names no file."""
+        """robots.robot.Robot.ResolvePaths: a planar arm names no file.
+
+        Args:
+            section: The robot section.
+            folder: The scenario file's folder."""
 
     @staticmethod
     def JointNames(section: PlanarArm) -> None:
-        """robots.robot.Robot.JointNames: a planar arm's joints have no names."""
+        """robots.robot.Robot.JointNames: a planar arm's joints have no names.
+
+        Args:
+            section: The robot section."""
         return None
 
     @staticmethod
     def ApplyTruthSample(section: PlanarArm, sampled: Dict[str, object]) -> None:
         """robots.robot.Robot.ApplyTruthSample: per link mass (and inertia), length
         (com, width; inertia by its square) and inertia factors, the base's mass (and
-        inertia) and inertia factors."""
+        inertia) and inertia factors.
+
+        Args:
+            section: The robot section (changed in place).
+            sampled: The trial's sampled settings by name."""
         links = section.truth.links
         for link, f in zip(links, sampled.get("link_mass_scale", [1.0] * len(links))):
             link.mass *= f
@@ -105,7 +122,12 @@ class PlanarRobot:
     @staticmethod
     def ApplyModelError(section: PlanarArm, links: Optional[Sequence[float]],
                         base: Optional[float]) -> None:
-        """robots.robot.Robot.ApplyModelError: on the nominal links and base."""
+        """robots.robot.Robot.ApplyModelError: on the nominal links and base.
+
+        Args:
+            section: The robot section (changed in place).
+            links: One factor per link, or None.
+            base: The base's factor, or None."""
         for link, f in zip(section.nominal.links, links or []):
             link.mass *= f
             link.inertia *= f

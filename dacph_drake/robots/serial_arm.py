@@ -1,12 +1,7 @@
-"""Serial arms of cylinders as URDF text: test arms of any shape (the zoo's heavy
-joint damping, tiny wrist, long chain, heavy tool and light base;
-scripts/zoo.py), written without a CAD model.
-
-Link k is a solid cylinder of its mass, length L and radius max(0.1 L, 1 cm)
-along its frame's z axis (its centre of mass at L / 2), hinged to the previous
-link's tip about the k-th of ``axes`` (cycled), with limits +-2.9 rad, an effort
-limit of 1000 N m and the given damping; a massless frame "tool" sits at the last
-link's tip, and a tool mass is added to the last link."""
+"""Serial arms of cylinders as URDF text: test arms of any shape (scripts/zoo.py) without
+a CAD model. Link k is a solid cylinder (length L, radius max(0.1 L, 1 cm)) along its
+z axis, hinged to the previous tip about the k-th of ``axes`` (cycled), limits +-2.9
+rad, effort limit 1000 N m; a frame "tool" at the last tip, the tool mass in that link."""
 from dataclasses import dataclass
 from typing import Dict, Sequence
 
@@ -67,13 +62,10 @@ def serial_arm_mjcf(name: str, links: Sequence[SerialLink], tool_mass: float = 0
                     axes: Sequence[str] = AXES, armature: Sequence[float] = (),
                     frictionloss: float = 0.0, from_geoms: Sequence[bool] = ()
                     ) -> Dict[str, str]:
-    """The same arm as serial_arm_urdf as MJCF, written the way MuJoCo models are:
-    {file name: text} of NAME.xml, which includes the arm's bodies from NAME_arm.xml;
-    the joints' limits and ``frictionloss`` [N m] from a <default> class that the first
-    link's ``childclass`` passes down; each joint's ``armature`` [kg m^2] (none: 0) on
-    the joint; a link k with ``from_geoms[k]`` without an <inertial>, its inertia from
-    its cylinder geom of the link's mass (MuJoCo's inertiafromgeom); a massless body
-    "tool" at the tip.
+    """The serial_arm_urdf arm as MJCF, written as MuJoCo models are: {file name: text} of
+    NAME.xml including NAME_arm.xml; limits and ``frictionloss`` from a <default> class
+    passed down by ``childclass``; ``armature`` on each joint; inertia from the cylinder
+    geom where ``from_geoms``; a massless body "tool" at the tip.
 
     Args:
         name: The robot's name (its files' stem).

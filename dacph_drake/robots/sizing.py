@@ -1,28 +1,18 @@
-"""The rule that sizes every per-joint setting of a scenario to its arm, so that a
-scenario naming only the robot (and q0) runs DAC: each robot kind's SizedScenario
-(robots.described.arm_scenario, robots.planar.planar_arm_scenario) applies it, and a
-scenario file is read over its result (assembly.scenario_files.load_scenario).
+"""The rule that sizes every per-joint setting of a scenario to its arm, so that a scenario
+naming only the robot (and q0) runs DAC (each robot kind's SizedScenario applies it).
+Per joint j, from the description at q0 and the task's reference:
 
-The rule. Scales per joint j, from the description at q0 and the task's reference:
+    M_j = M_jj(q0)                                the reduced model's inertia [kg m^2]
+    w   = 2 pi a / T                              peak reference rate, a >= MIN_AMPLITUDE
+    p_j = max(M_j w, max_t |p_j(t)|)              momentum [kg m^2/s]
+    tau_j = max(M_j w 2 pi / T, max_t |dp_j/dt|)  inertial torque past the warm-up [N m]
 
-    M_j = M_jj(q0)      the joint's inertia in the reduced model (docs/equations.md
-                        E5-E9: base free, zero momentum) [kg m^2]
-    w   = 2 pi a / T    the reference's peak angular rate (task.reference amplitude
-                        a, at least MIN_AMPLITUDE, period T) [rad/s];
-    p_j = max(M_j w, max_t |p_j(t)|)            the joint's momentum [kg m^2/s]
-    tau_j = max(M_j w 2 pi / T, max_t |dp_j/dt|)  its inertial torque [N m]
-                        (t past the warm-up, when the uncertainty starts)
-
-with p(t) = M(q) qdot along a kinematic rehearsal of the task from q0 for the
-warm-up and one reference period (robots.start_pose.rehearse; a planar arm: M_j w
-and M_j times the peak acceleration): the coupling M_jk qdot_k drives a light
-joint's momentum far beyond M_j w, where the quadratic terms below would take its
-true actuator gain through zero; and the ground truth's RHS of the paper's form
-(eq. 19, scenario.Uncertainty) sized by them, signs alternating as the paper's two:
+with p(t) = M(q) qdot along a kinematic rehearsal (robots.start_pose.rehearse), as the
+coupling M_jk qdot_k drives a light joint far beyond M_j w. The truth's RHS (eq. 19),
+signs alternating as the paper's:
 
     B0_j = 1,  D0_j = DAMPING_RATE M_j
     D_offset_j = 0.25 D0_j,  D_linear_j = 0.25 D0_j / p_j,  D_quadratic_j = -+0.1 D0_j / p_j^2
-        (the linear group adds 0.5 D0_j at p_j, the nonlinear one -+0.1 D0_j)
     B_linear: the paper's 2x2 block [[-0.1, 0], [0.05, 0.15]] on each pair of joints
         [1/rad];  B_quadratic_j = +-0.1 / p_j^2;  B_q1_squared: the paper's
         [[0, -0.1], [0.4, 0]] between joints 1 and 2
@@ -30,21 +20,10 @@ true actuator gain through zero; and the ground truth's RHS of the paper's form
         0.05 + 0.01 j Hz, hf_amplitude = 0.05 max_j tau_j along hf_direction_j =
         +-tau_j / max_k tau_k (at the paper's 20 Hz)
 
-For a described arm, five factors on top: B_q1_squared is divided by the largest
-q1^2 past the warm-up where that exceeds 1 rad^2 (the paper's arm keeps |q1| <= 1
-rad); B~'s couplings (j, k) are multiplied by min(1, tau_j / tau_k)
-(scale_couplings); d's scale keeps the accelerations it causes through M^-1 within
-DISTURBANCE_ACCELERATION times the reference's (disturbance_scale); the excitation's
-per-joint scale keeps the motion it causes within EXCITATION_MOTION
-(excitation_scale); the clearance potential's margin is at most half the start's
-clearance (potential_margin). The ground truth's fixed RK2 step is the largest that
-keeps h lambda <= 1 for the fastest damping mode (truth_step). A described arm's q0,
-when the file gives none, is robots.start_pose.choose_start's; its other sections
-are the shipped spatial scenarios' (satellite_6dof: scenario.SATELLITE_PHASES,
-described_arm_periods, described_arm_rhs, described_arm_learner). A planar arm's are
-the paper's (Scenario's defaults); its reference alpha_d = sum_i a_i sin(2 pi t / T_i)
-gives w = sum_i 2 pi a_i / T_i and the peak acceleration sum_i a_i (2 pi / T_i)^2
-(tau_j = M_j times it), M_j from the true arm."""
+A described arm adds B_q1_squared over the largest q1^2 > 1 rad^2, scale_couplings,
+disturbance_scale, excitation_scale, potential_margin and truth_step. A planar arm
+(no rehearsal; M_j the true arm's): p_j = M_j w, w = sum_i 2 pi a_i / T_i, and tau_j =
+M_j sum_i a_i (2 pi / T_i)^2."""
 from typing import Optional
 
 import numpy as np
@@ -71,12 +50,9 @@ DISTURBANCE_ACCELERATION = 5.0  # the most d accelerates a joint, per reference'
 
 
 def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
-    """Scales the true actuators' couplings to the joint they act on: B~'s off-diagonal
-    entry (j, k) (B_linear and B_q1_squared) puts a fraction of actuator k's command
-    u_k ~ tau_k into joint j (the paper's 0.05 to 0.4, between joints of similar size);
-    each is multiplied by min(1, tau_j / tau_k), so that a heavy joint's actuator leaks
-    into a light one at most that fraction of the light joint's own torque (unscaled,
-    its true RHS may no longer be dominated by its own actuator).
+    """Multiplies B~'s off-diagonal entries (j, k) (B_linear, B_q1_squared) by
+    min(1, tau_j / tau_k), so that a heavy joint's actuator leaks into a light one at most
+    the paper's fraction of the light joint's own torque.
 
     Args:
         uncertainty: The sized uncertainty (changed in place).
@@ -89,11 +65,9 @@ def scale_couplings(uncertainty: Uncertainty, torque: np.ndarray) -> None:
 
 
 def potential_margin(margin: float, clearance: float) -> float:
-    """The clearance potential's margin [m] for a start's link-base clearance: at most
-    half of it (unchanged for a start inside the base, which validation refuses). A
-    link that always stays near the base (a UR arm's shoulder) otherwise keeps the
-    potential pushing through the whole run, its gradient jumping as the nearest mesh
-    features change.
+    """The clearance potential's margin [m]: at most half the start's link-base clearance
+    (unchanged for a start inside the base, which validation refuses), so that a link
+    always near the base does not keep the potential pushing through the whole run.
 
     Args:
         margin: The margin otherwise (robot.potential.margin) [m].
@@ -104,11 +78,8 @@ def potential_margin(margin: float, clearance: float) -> float:
 def disturbance_scale(disturbance: Disturbance, M: np.ndarray,
                       acceleration: float) -> float:
     """disturbance.scale = min(1, DISTURBANCE_ACCELERATION acceleration / max_i
-    sum_j |(M^-1)_ij| d_j): it keeps the accelerations the disturbance causes within
-    DISTURBANCE_ACCELERATION times the reference's peak, as d_j's peak |lf_offset_j| +
-    lf_amplitude_j + hf_amplitude |hf_direction_j| accelerates joint i by up to
-    sum_j |(M^-1)_ij| d_j (on arms whose light joints are coupled to heavy ones: a tiny
-    wrist, a chain of nine joints, a heavy tool).
+    sum_j |(M^-1)_ij| d_j), d_j = |lf_offset_j| + lf_amplitude_j + hf_amplitude
+    |hf_direction_j| the peak of d_j.
 
     Args:
         disturbance: The sized disturbance (its factor not yet applied).
@@ -122,10 +93,9 @@ def disturbance_scale(disturbance: Disturbance, M: np.ndarray,
 
 
 def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
-    """excitation.joint_scale: each factor min(1, EXCITATION_MOTION omega_j^2 /
-    (amplitude max_i |(M^-1)_ij|)), or none where every factor is 1, so that every
-    joint's motion under the excitation is at most EXCITATION_MOTION: the request
-    a_j sin(omega_j t) on joint j moves joint i by about |(M^-1)_ij| a_j / omega_j^2.
+    """excitation.joint_scale: min(1, EXCITATION_MOTION omega_j^2 / (amplitude
+    max_i |(M^-1)_ij|)) per joint (None where all are 1), as a_j sin(omega_j t) on joint j
+    moves joint i by about |(M^-1)_ij| a_j / omega_j^2.
 
     Args:
         excitation: The excitation (its amplitude and frequencies).
@@ -141,17 +111,10 @@ def excitation_scale(excitation: Excitation, M: np.ndarray) -> list:
 def truth_step(model: FloatingBaseModel, configurations: np.ndarray,
                uncertainty: Uncertainty, rhs_period: float,
                friction: Optional[np.ndarray] = None) -> float:
-    """The ground truth's fixed RK2 step [s] for an arm's fastest damping mode.
-
-    The explicit scheme is stable for a mode decaying at rate lambda while
-    h lambda <= 2; the step keeps h lambda <= STEP_RATE_PRODUCT for the fastest
-    mode, the largest generalized eigenvalue of (D, M(q)) with D the description's
-    joint damping plus D0, D_offset and D_linear at the sized momentum and the joint
-    friction's steepest slope f / FRICTION_VELOCITY (kernels.loop.add_friction), over
-    the configurations given. At most the default step (scenario.simulator), and
-    dividing the RHS period evenly (the discrete updates stop the integrator at
-    every RHS sample anyway); at least 1e-7 s (simulator.max_step_size's lower
-    bound).
+    """The ground truth's fixed RK2 step [s]: h lambda <= STEP_RATE_PRODUCT (RK2 is stable
+    to 2) for the fastest mode, the largest generalized eigenvalue of (D, M(q)) over the
+    configurations, D the joint damping plus 1.5 D0 (D0, D_offset, D_linear at p_j) and f /
+    FRICTION_VELOCITY; at most DEFAULT_STEP, dividing the RHS period, at least 1e-7 s.
 
     Args:
         model: The arm's model (its plant's joint damping).
@@ -176,12 +139,8 @@ def truth_step(model: FloatingBaseModel, configurations: np.ndarray,
 
 
 def rhs_period(scenario: Scenario, nominal: ReducedOrderModel) -> float:
-    """The scenario's periods.rhs [s], or a shorter one where the gain rule asks for it.
-
-    The RHS loop's largest rate c = (1 + rhs.c_margin) c_min(rhs.beta_max) (eq. 48)
-    grows as 1 / inf_q lambda_min(M): an arm with light distal links needs a
-    faster loop than the paper's (gain_rule.check_rhs_period: periods.rhs <=
-    1 / (4 c)). The period returned divides periods.lhs evenly.
+    """periods.rhs [s], or a shorter one dividing periods.lhs where the RHS loop's largest
+    rate c = (1 + rhs.c_margin) c_min(rhs.beta_max) (eq. 48) asks for h <= 1 / (4 c).
 
     Args:
         scenario: The scenario (its rhs settings, task.gains.Kd and periods).

@@ -1,10 +1,7 @@
-"""Where a described arm starts and what the attitude task asks of it.
-
-A kinematic rehearsal (ReferenceRehearsal) follows the task's law from q0 without
-dynamics, qdot = D^+ (omega_d(t) - Lambda e), D the generalized Jacobian's angular rows
-(docs/equations.md E5-E9), the base turning as zero momentum implies. Its momenta
-p = M(q) qdot and their rates size the gains (scenario.sizing): the coupled inertia
-M_jk qdot_k, not M_jj alone, decides a joint's momentum; its excursion checks limits."""
+"""Where a described arm starts and what the attitude task asks of it: a kinematic
+rehearsal (ReferenceRehearsal) follows qdot = D^+ (omega_d(t) - Lambda e) from q0
+without dynamics, the base turning as zero momentum implies; its momenta p = M(q) qdot
+and their rates size the gains (robots.sizing), its excursion checks limits."""
 from dataclasses import dataclass
 from typing import Callable, List, Optional, Sequence, Tuple
 
@@ -39,9 +36,8 @@ ATTITUDE_ROWS, POSITION_ROWS = (0, 1, 2), (3, 4, 5)
 
 
 def singular_bounds(rows: Sequence[int]) -> tuple:
-    """(the bound a chosen start keeps, the bound below which a q0 is refused) on
-    regularity(): the angular rows' [rad/s per rad/s], the position rows' ratio, else
-    (angular and linear rows) POSE_BOUNDS.
+    """(the bound a chosen start keeps, the bound below which q0 is refused) on regularity()
+    for the task's rows (attitude, position or POSE_BOUNDS).
 
     Args:
         rows: The task Jacobian's rows of the GJM (tasks.task.Task.jacobian_rows)."""
@@ -60,8 +56,7 @@ def tracked(rows: Sequence[int]) -> str:
 
 
 def regularity(D: np.ndarray, rows: Sequence[int]) -> float:
-    """How far the task Jacobian D (its ``rows``) is from singular: its smallest singular
-    value, or for the position rows alone the smallest over the largest (scale-free).
+    """D's smallest singular value (position rows alone: smallest over largest).
 
     Args:
         D: The task Jacobian (rows x n).
@@ -107,8 +102,7 @@ def end_effector_frame(model: FloatingBaseModel) -> Frame:
 def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
                   base_positions: Optional[np.ndarray] = None,
                   rows: Sequence[int] = ATTITUDE_ROWS) -> np.ndarray:
-    """D(q), the generalized Jacobian's rows ``rows`` (0-2 angular, 3-5 linear: the
-    attitude's (0, 1, 2), the pose's all six, the position's (3, 4, 5)) (rows x n).
+    """D(q) (rows x n): the GJM's rows ``rows`` (0-2 angular, 3-5 linear).
 
     Args:
         model: The arm's model.
@@ -121,10 +115,8 @@ def task_jacobian(model: FloatingBaseModel, q: np.ndarray,
 
 def rehearse(model: FloatingBaseModel, q0: Sequence[float], task: EndEffectorAttitude,
              duration: float, rows: Sequence[int] = ATTITUDE_ROWS) -> ReferenceRehearsal:
-    """Follows the task's reference kinematically from q0 (module docstring): its
-    attitude reference, or for a task without one (task: !EndEffectorPosition) its
-    position reference p_d(t) (tasks.end_effector_pose.PositionReference) by the
-    linear rows.
+    """Follows the task's reference kinematically from q0 (module docstring): its attitude
+    reference, or without one its position reference by the linear rows.
 
     Args:
         model: The arm's model.
@@ -211,8 +203,7 @@ def _allowed_box(model: FloatingBaseModel) -> tuple:
 
 
 def within_limits(model: FloatingBaseModel, q: np.ndarray) -> bool:
-    """Whether every sample of ``q`` keeps LIMIT_MARGIN of each joint's range free (no
-    limits: yes).
+    """Whether every sample of ``q`` keeps LIMIT_MARGIN of each joint's range free.
 
     Args:
         model: The arm's model.
@@ -228,15 +219,12 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
                  clearance: Callable[[np.ndarray], float],
                  null_space_rate: Optional[Callable[[np.ndarray], float]],
                  duration: float, rows: Sequence[int] = ATTITUDE_ROWS) -> np.ndarray:
-    """The start q0 [rad] a scenario file does not give.
-
-    Candidates: the middle of the limits and CANDIDATES quasi-random points of the
-    joints' ranges less LIMIT_MARGIN. A start qualifies when D's smallest singular value
-    stays above SINGULAR_BOUND along its rehearsal, which keeps the joints within the
-    margin, and its links are CLEARANCE_BOUND (or half the best clearance) clear of the
-    base. Of the REHEARSED candidates whose clearance potential pushes least at the start,
-    the qualifying one pushed least along the rehearsal wins (a potential pushing while
-    the task moves costs tracking error), then the best-conditioned one.
+    """The start q0 [rad] a scenario file does not give. Candidates: the middle of the
+    limits and CANDIDATES quasi-random points within them. One qualifies when D stays
+    regular (SINGULAR_BOUND) along its rehearsal within the limits and its links are
+    CLEARANCE_BOUND (or half the best clearance) off the base; of the REHEARSED candidates
+    pushed least at the start, the one pushed least along its rehearsal (then the
+    best-conditioned) wins.
 
     Args:
         model: The arm's model.
@@ -289,9 +277,8 @@ def choose_start(model: FloatingBaseModel, task: EndEffectorAttitude,
 
 def task_singularity(model: FloatingBaseModel, q0: Sequence[float],
                      rows: Sequence[int] = ATTITUDE_ROWS) -> Optional[str]:
-    """None unless the attitude task is (nearly) singular at q0 (D's smallest singular
-    value < REFUSED_SINGULAR_VALUE), else a sentence naming it and the joints that turn
-    the end effector least.
+    """A sentence naming the singularity and the joints that turn the end effector least if
+    D's smallest singular value at q0 < REFUSED_SINGULAR_VALUE, else None.
 
     Args:
         model: The arm's model.

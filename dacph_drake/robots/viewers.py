@@ -1,6 +1,5 @@
-"""The arm in Meshcat: ArmViewer draws a plant state (live, or simulate(meshcat=...)),
-write_animation replays a run's logs into a self-contained HTML file with an overlay
-naming what is drawn, the simulated time and the phase."""
+"""The arm in Meshcat: ArmViewer draws a plant state; write_animation replays a run's logs
+into a self-contained HTML file."""
 import html
 import json
 import logging
@@ -35,8 +34,7 @@ OVERLAY_BACKGROUND = "#fffbe6"
 
 
 def playback_speedup(duration: float, max_playback: float) -> float:
-    """A replay's simulated seconds per playback second: 1 unless the run is longer than
-    max_playback.
+    """Simulated seconds per playback second: 1 unless the run exceeds max_playback.
 
     Args:
         duration: The run's simulated duration [s].
@@ -78,15 +76,13 @@ class _RobotViewer:
 
 
 class ArmViewer(_RobotViewer):
-    """The planar arm viewed top-down, with the desired end-effector direction alpha_d
-    (wide red bar) and the measured alpha = theta0 + q1 + ... + qn (thin dark bar).
+    """The planar arm top-down, with alpha_d (wide red bar) and alpha (thin dark bar).
 
     Args:
         scenario: The scenario (its robot.truth is drawn).
         meshcat: The Meshcat to draw into.
         view: The half-width of the square shown [m].
-        fps: The visualizer's publish rate [1/s].
-    """
+        fps: The visualizer's publish rate [1/s]."""
 
     def __init__(self, scenario: Scenario, meshcat: Meshcat, view: float,
                  fps: float = 30.0):
@@ -128,15 +124,13 @@ class ArmViewer(_RobotViewer):
 
 
 class LiveView:
-    """Draws a closed loop's ground truth into Meshcat while it simulates: Update calls
-    ``draw`` at most ``fps`` times per simulated second.
+    """Draws a loop's ground truth in Meshcat as it simulates, <= ``fps`` per sim s.
 
     Args:
         plant: The loop's ground-truth plant.
         meshcat: The Meshcat drawn into.
         draw: ``draw(root_context, x, t)`` draws plant state x at time t [s].
-        fps: The most frames per simulated second.
-    """
+        fps: The most frames per simulated second."""
 
     def __init__(self, plant: MultibodyPlant, meshcat: Meshcat,
                  draw: Callable[[Context, np.ndarray, float], None], fps: float = 30.0):
@@ -187,8 +181,7 @@ def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
                     out_html: Union[str, Path], fps: float = 30.0,
                     max_playback: float = 60.0, meshcat: Optional[Meshcat] = None
                     ) -> Path:
-    """Writes a planar run's replay (logs["state"], the logged alpha_d) as an HTML file;
-    returns its path.
+    """Writes a planar run's replay as an HTML file; returns its path.
 
     Args:
         scenario: The scenario the run ran.
@@ -222,14 +215,12 @@ def write_animation(scenario: Scenario, logs: Dict[str, np.ndarray],
 
 
 class SpatialViewer(_RobotViewer):
-    """A robot from a description file in Meshcat, with the desired end-effector attitude
-    R_d (thick translucent triad) and the measured one (thin triad).
+    """A described robot in Meshcat, R_d a thick translucent triad, the measured thin.
 
     Args:
         description: The robot, as AddRobotFromDescription takes it.
         meshcat: The Meshcat to draw into.
-        fps: The visualizer's publish rate [1/s].
-    """
+        fps: The visualizer's publish rate [1/s]."""
 
     def __init__(self, description: Union[str, Path, DescribedArm], meshcat: Meshcat,
                  fps: float = 30.0):
@@ -259,8 +250,7 @@ def write_spatial_animation(robot: DescribedArm, logs: Dict[str, np.ndarray],
                             out_html: Union[str, Path], fps: float = 30.0,
                             max_playback: float = 60.0, meshcat: Optional[Meshcat] = None,
                             log_name: str = "attitude_log") -> Path:
-    """Writes a spatial run's replay (logs["state"], the logged R_d) as an HTML file;
-    returns its path.
+    """Writes a spatial run's replay as an HTML file; returns its path.
 
     Args:
         robot: The scenario's robot section (its description is drawn).
@@ -302,8 +292,7 @@ def _RequireReplayable(logs, fps: float, max_playback: float):
 
 
 def QuietMeshcat() -> Meshcat:
-    """A Meshcat without Drake's "listening for connections" message (nobody connects
-    when a file is written)."""
+    """A Meshcat without Drake's "listening for connections" message."""
     drake_logger = logging.getLogger("drake")
     level = drake_logger.level
     drake_logger.setLevel(logging.WARNING)
@@ -346,8 +335,7 @@ def _swatch(rgba) -> str:
 
 
 def _overlay(entries, phases, start: float, speedup: float) -> str:
-    """The legend, time readout and phase label over the viewer, with a script that maps
-    playback time to simulated time t = start + speedup * playback time."""
+    """Legend, time and phase label over the viewer; t = start + speedup * playback time."""
     legend = "".join(f"<div>{_swatch(rgba)}{label}</div>" for rgba, label in entries)
     phases = phases or [[float("-inf"), float("inf"), ""]]
     speed = "" if speedup == 1.0 else f" &times;{speedup:.3g} speed"

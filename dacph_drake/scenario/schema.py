@@ -1,5 +1,5 @@
 """Scenario: every setting of a closed-loop run as typed data (YAML through
-pydrake.common.yaml; scenario.files reads it). Defaults: the paper's 1500 s scenario;
+pydrake.common.yaml; assembly.scenario_files reads it). Defaults: the paper's 1500 s scenario;
 the reasons behind them: the docs' page "Settings explained"."""
 from dataclasses import dataclass, field
 from typing import Dict, List, Union

@@ -26,13 +26,9 @@ class AttitudeTrial:
     """One trial's part of an AttitudeController.
 
     Attributes:
-        model: The controller's model (its inertias set from input
-            ``inertial_parameters`` with ``identify``).
-        potential: The clearance potential
-            (robots.clearance_potential.BaseClearancePotential), or None.
-        q0: The initial joint angles [rad] (n): R_d(0) is the end effector's
-            attitude there.
-    """
+        model: The controller's model (inertias set by ``inertial_parameters``).
+        potential: The clearance potential (BaseClearancePotential), or None.
+        q0: The start [rad] (n), where R_d(0) is the end effector's attitude."""
     model: FloatingBaseModel
     potential: Optional[object]
     q0: Sequence[float]
@@ -43,8 +39,8 @@ class AttitudeTrial:
 SAMPLED_SLOPE = 0.5
 
 class AttitudeController(LeafSystem):
-    """The spatial LHS (the attitude or, with ``position``, the pose task). Every
-    ``period`` seconds, from the measured base pose and twist, q and qdot:
+    """The spatial LHS (the attitude or, with ``position``, the pose task). Every ``period``
+    seconds, from the measured base pose and twist, q and qdot:
 
         e   = attitude_error(R_WE, R_d(t)),   D = the end effector's GJM rows
         nu  = D^+ (omega_d - Lambda e) + (I - D^+ D) xi,   xi = -eta grad U(q)
@@ -54,37 +50,28 @@ class AttitudeController(LeafSystem):
               + tau_pe(t),   phi = epsilon + chi max(1, rho / rho_allowed) / boundary_rate
 
     rho = lambda_max(diag(M)^1/2 M^-1 diag(M)^1/2) >= 1: the layer thickens where
-    (damping_rate + boundary_rate rho) periods.lhs would pass SAMPLED_SLOPE, so the
-    sampled loop stays well damped on arms whose coupled motion is much lighter than
-    their joints' inertias. b is the description's joint damping, held by the LHS
-    model as M is (the port observer adds b qdot): V = s^T M s / 2 has
-    dV/dt = -2 damping_rate V - s^T b s - chi s^T tanh(...) + s^T (e_tau + tau_pe)
-    (Mdot - 2C' skew). chi comes from input ``chi``; nu_dot is nu's exact rate along
-    the motion (kernels.attitude); xi's rate a central difference (XI_DOT_STEP),
-    zero unless a link is within FAR beyond the potential's margin. Outputs:
-    ``tau_request`` (held), the log (log_layout.AttitudeLog, PoseLog) and
-    ``reduced_model`` = [vec(M), vec(C')] for the port observer. With ``identify``
-    the input ``inertial_parameters`` sets the model's inertias before each update.
-    A batch's trials are stacked on every port.
+    (damping_rate + boundary_rate rho) periods.lhs would pass SAMPLED_SLOPE, keeping the
+    sampled loop well damped when the coupled motion is much lighter than M_ii. b is the
+    joint damping: V = s^T M s / 2 has dV/dt = -2 damping_rate V - s^T b s
+    - chi s^T tanh(...) + s^T (e_tau + tau_pe) (Mdot - 2C' skew). nu_dot is exact
+    (kernels.attitude); xi's rate a central difference (XI_DOT_STEP), zero unless a link
+    is within FAR beyond the potential's margin. Outputs ``tau_request`` (held), the log
+    (log_layout.AttitudeLog, PoseLog) and ``reduced_model`` = [vec(M), vec(C')]; a batch's
+    trials are stacked on every port.
 
     Args:
-        trials: Each trial's AttitudeTrial (model, clearance potential, q0); one: a
-            single run.
+        trials: Each trial's AttitudeTrial; one: a single run.
         reference: The attitude reference R_d(t) (task.reference).
         gains: The sliding-mode gains (task.gains).
         period: The update period [s] (periods.lhs).
         eta: The null-space gain of xi = -eta grad U.
         excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
-        identify: Declare input ``inertial_parameters`` (an InertialIdentifier's).
-        position: The pose task's position reference (tasks.end_effector_pose.
-            PositionReference: p_d(t) = p_E(q0) + initial_offset + axis amplitude
-            sin(2 pi t / period), world), which adds the GJM's linear rows to D;
-            None: the attitude task.
-        log_name: The log output's name; with ``position`` its columns are
-            log_layout.PoseLog's.
-        attitude: Track the attitude reference; False (with ``position``): the
-            position rows alone (task: !EndEffectorPosition).
-    """
+        identify: Declare input ``inertial_parameters`` (the inertias, each update).
+        position: The pose task's position reference (PositionReference), which adds the
+            GJM's linear rows to D; None: the attitude task.
+        log_name: The log output's name (with ``position``: log_layout.PoseLog's columns).
+        attitude: Track the attitude reference; False (with ``position``): the position
+            rows alone (task: !EndEffectorPosition)."""
 
     def __init__(self, *, trials: Sequence[AttitudeTrial], reference: AttitudeReference,
                  gains: AttitudeGains, period: float, eta: float = 0.0,
@@ -174,8 +161,7 @@ class AttitudeController(LeafSystem):
         return -self._eta * clearance.gradient, clearance.min_distance
 
     def _CalcAttitudeLog(self, context, output):
-        """The update's logs with the smallest link-base distance at the current
-        state (the full query, at the loggers' rate rather than every update)."""
+        """The update's logs with the smallest link-base distance at the current state."""
         count = len(self._trials)
         logs = context.get_discrete_state(self._log_index).CopyToVector().reshape(
             count, -1)

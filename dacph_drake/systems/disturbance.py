@@ -13,8 +13,7 @@ class DisturbanceSource(LeafSystem):
         d_LF = offset + amplitude * [sin(2 pi f_1 t), cos(2 pi f_2 t), sin, cos, ...]
         d_HF = a_HF sin(2 pi f_HF t) direction.
 
-    Output ``disturbance_model``: the constant parameters of d(t), which the true RHS
-    evaluates in its compiled kernel (no Python call per stage); ``disturbance``: d(t).
+    Outputs ``disturbance_model`` (d(t)'s parameters, for the kernel), ``disturbance``.
 
     Args:
         settings: Each trial's disturbance d(t) (scenario.disturbance).

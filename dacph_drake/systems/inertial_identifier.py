@@ -24,25 +24,21 @@ class InertialIdentifier(LeafSystem):
         pi_hat = argmin pi^T A pi + r (pi - pi0)^T S^-2 (pi - pi0),
                  subject to pi0^T S^-2 pi = pi0^T S^-2 pi0
 
-    (r = ``settings.prior_weight``). The robot starts at rest, so L = P = 0 and
-    Y(x) pi~ = 0: the samples determine pi only up to a common factor, which the prior
-    pi0 fixes, or a measured mass (``settings.anchor``); uninformed directions stay at
-    the prior. No actuator model enters. A momentum misfit above
-    ``settings.fit_tolerance`` reports the kinematics mismatched (latched; with
-    ``settings.on_mismatch`` "nominal" the LHS then returns to the prior).
+    (r = ``settings.prior_weight``). From rest L = P = 0 and Y(x) pi~ = 0: the samples
+    determine pi up to a common factor, fixed by the prior or a measured mass
+    (``settings.anchor``); no actuator model enters. A momentum misfit above
+    ``settings.fit_tolerance`` reports the kinematics mismatched (latched;
+    ``settings.on_mismatch`` "nominal": the LHS returns to the prior).
 
     Every ``error_period`` it measures the LHS model's inertia error E = M_hat M~^-1 - I
-    from the same data (dynamics.model_error.ModelErrorEnsemble): output ``model_error``,
-    E's sd per entry (n x n per trial), from which the learner's claims about the
-    physical B~ and D~ are widened (learning.local_bayes.physical_claims).
+    (dynamics.model_error.ModelErrorEnsemble): output ``model_error``, E's sd per entry.
 
     Outputs ``identification_log`` = [total mass [kg], momentum misfit, mismatch (0/1)],
     ``inertial_parameters`` (pi0 until ``settings.start``, then pi_hat until
-    ``settings.duration`` has passed; an estimate with a mass <= 0 or an indefinite M is
-    not used) and ``model_epoch``, which counts the estimates that changed M(q) by more
-    than ``settings.change_threshold`` relative to sqrt(M_ii M_jj): the learner treats a
-    new epoch as a change of the port relation; smaller refinements do not disturb it.
-    Every port stacks the trials' signals; each trial is identified alone.
+    ``settings.duration``; an estimate with mass <= 0 or an indefinite M is not used) and
+    ``model_epoch``, counting estimates that changed M(q) by more than
+    ``settings.change_threshold`` relative to sqrt(M_ii M_jj) (the learner takes a new
+    epoch as a change of the port). Ports stack the trials; each is identified alone.
 
     Args:
         plants: Each trial's controller plant (its kinematic tree and layout).
@@ -51,9 +47,8 @@ class InertialIdentifier(LeafSystem):
         error_period: The period of E's measurement [s].
         seeds: Each trial's seed (its draws of plausible models).
         priors: Each trial's prior pi0, or None for the plant's own inertias.
-        measured_masses: Each trial's measured (total, base) mass [kg] of its ground
-            truth (the anchor when settings.anchor_mass is 0).
-    """
+        measured_masses: Each trial's measured (total, base) mass [kg] of its ground truth
+            (the anchor when settings.anchor_mass is 0)."""
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,

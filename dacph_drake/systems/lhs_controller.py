@@ -16,8 +16,7 @@ from dacph_drake.scenario import Excitation, LhsGains
 
 
 def boundary_layer_per_chi(gains: LhsGains, lambda_min_M: float) -> float:
-    """d phi / d chi of the robust term's boundary layer: 1 / (boundary_rate inf_q
-    lambda_min(M)) (0 with boundary_rate 0: phi = epsilon).
+    """d phi / d chi = 1 / (boundary_rate inf_q lambda_min(M)) (0 with boundary_rate 0).
 
     Args:
         gains: The sliding-mode gains (their boundary_rate [1/s]).
@@ -33,8 +32,7 @@ class LhsTrial:
         model: The controller's model of its robot.
         potential: The base-repulsion potential of that robot.
         reference: Its reference (theta0(0) from its q0).
-        lambda_min_M: inf_q lambda_min(M) of its model (the boundary layer's scale).
-    """
+        lambda_min_M: inf_q lambda_min(M) of its model (the boundary layer's scale)."""
     model: ReducedOrderModel
     potential: BaseRepulsionPotential
     reference: OrientationReference
@@ -42,9 +40,8 @@ class LhsTrial:
 
 
 class LhsController(LeafSystem):
-    """Every ``period`` seconds, for every trial of a batch (``trials``; one: a
-    single run), from the measured state (inputs ``base_pose`` = (x, y, theta0),
-    ``q``, ``qdot``; alpha = theta0 + q_1 + ... + q_n):
+    """Every ``period`` seconds, for every trial of a batch, from the measured state (inputs
+    ``base_pose`` = (x, y, theta0), ``q``, ``qdot``; alpha = theta0 + q_1 + ... + q_n):
 
         alpha~ = alpha - alpha_d,   D+ = D^T / (D D^T),   P = I - D+ D
         nu     = D+ (alpha_d_dot - Lambda alpha~) + P xi,  xi = -eta grad U(q)
@@ -52,27 +49,21 @@ class LhsController(LeafSystem):
         tau_c^r = M nu_dot + C' nu - K_d s - chi tanh(s / phi),
         phi    = epsilon + chi / (boundary_rate inf_q lambda_min(M))
 
-    with nu_dot exact: it uses dD/dq from the reduced model and Hess U qdot from the
-    potential (no numerical differentiation). chi comes from input ``chi``: the RHS
-    loop's bound on ||e_tau|| in DAC, a constant source in the baseline. The
-    boundary layer phi follows chi (Slotine and Li's balance condition): the robust
-    term's slope chi / phi then adds at most ``gains.boundary_rate`` [1/s] to any
-    joint's rate, whatever chi (with the paper's phi = epsilon a large chi makes the
-    sampled loop stiff). Output ``tau_request`` is held between updates; ``lhs_log`` =
-    [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]; ``reduced_model`` =
-    [vec(M), vec(C')] at the same sample (row-major), for the port observer. With
-    ``identify``, input ``inertial_parameters`` (InertialParameters, an
-    InertialIdentifier's estimate) replaces the models' inertias in M, C', D and their
-    derivatives. Ports stack the trials' signals in trial order; the update is one
-    compiled kernel for all trials (kernels.loop.lhs_samples).
+    with nu_dot exact (dD/dq and Hess U qdot, no numerical differentiation). chi comes
+    from input ``chi`` (the RHS loop's bound on ||e_tau|| in DAC, a constant in the
+    baseline); phi follows chi (Slotine and Li's balance condition) so the robust term
+    adds at most ``gains.boundary_rate`` [1/s] to any joint's rate. Outputs
+    ``tau_request`` (held), ``lhs_log`` = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q),
+    lambda_min(M)] and ``reduced_model`` = [vec(M), vec(C')] (row-major). With
+    ``identify``, input ``inertial_parameters`` replaces the models' inertias. Ports
+    stack the trials; one compiled kernel updates all (kernels.loop.lhs_samples).
 
     Args:
         trials: Each trial's LhsTrial.
         gains: The sliding-mode gains (task.gains).
         period: The update period [s] (periods.lhs).
         excitation: The learner's excitation tau_pe(t) (DAC loops; amplitude 0: off).
-        identify: Declare input ``inertial_parameters`` (an InertialIdentifier's).
-    """
+        identify: Declare input ``inertial_parameters`` (an InertialIdentifier's)."""
 
     def __init__(self, *, trials: Sequence[LhsTrial], gains: LhsGains, period: float,
                  excitation: Excitation = Excitation(amplitude=0.0),
@@ -151,9 +142,7 @@ class LhsController(LeafSystem):
         discrete_state.get_mutable_vector(self._model_index).SetFromVector(models)
 
     def _Coefficients(self, context) -> np.ndarray:
-        """The models' trigonometric coefficients (trials x ...): of the input
-        ``inertial_parameters`` when it is declared and connected (recomputed when
-        they change), else of the controller's models."""
+        """The trigonometric coefficients: of ``inertial_parameters`` if connected."""
         if self._parameters is None or not self._parameters.HasValue(context):
             return self._coefficients
         pi = self._parameters.Eval(context)

@@ -9,10 +9,8 @@ from dacph_drake.scenario import Uncertainty
 
 
 class ModelBasedInverter(Diagram):
-    """u = B0^-1 (tau_c^r + D0 qdot) per trial; stateless, inputs ``tau_request``, ``qdot``.
-
-    Built from Drake's C++ primitives (Multiplexer, MatrixGain) so that the true RHS's
-    evaluation at every integrator stage makes no Python call.
+    """u = B0^-1 (tau_c^r + D0 qdot) per trial; stateless, inputs ``tau_request``, ``qdot``;
+    Drake's C++ primitives, so no Python call per integrator stage.
 
     Args:
         uncertainties: Each trial's uncertainty (its nominal B0 and D0)."""

@@ -14,9 +14,8 @@ class PortObserver(LeafSystem):
         qddot = (qdot(t_k) - qdot(t_k-1)) / h,   qdot_mid = (qdot(t_k) + qdot(t_k-1)) / 2
         tau_obs(k) = M qddot + C' qdot_mid + b qdot_mid   (+ seeded Gaussian noise)
 
-    the interval's mean port torque (second order), held until the next sample. M, C'
-    come from input ``reduced_model``; b, the joint damping, is part of the LHS model, so
-    tau_obs = B~ u - D~ qdot + d. Output ``port_sample`` = [q, p, qdot_mid, u, tau_obs].
+    held until the next sample; M, C' from input ``reduced_model``, so tau_obs =
+    B~ u - D~ qdot + d. Output ``port_sample`` = [q, p, qdot_mid, u, tau_obs].
 
     Args:
         num_joints: n.
@@ -24,8 +23,7 @@ class PortObserver(LeafSystem):
         noise_std: The standard deviation of the measurement noise on tau_obs [N m].
         seeds: Each trial's noise seed (one per stacked trial).
         anti_alias_cutoff: Cutoff [Hz] of a low-pass on [qdot, u, tau_obs] (0: none).
-        joint_damping: b (n) [N m s/rad] (none: zero).
-    """
+        joint_damping: b (n) [N m s/rad] (none: zero)."""
 
     def __init__(self, *, num_joints: int, sample_period: float, noise_std: float,
                  seeds: Sequence[int], anti_alias_cutoff: float = 0.0,

@@ -7,7 +7,7 @@ from pydrake.systems.framework import Context, LeafSystem
 
 class ReducedModelInput:
     """Declares input ``reduced_model`` on ``system`` and reads p = M qdot from it, so p is
-    the same function of the state in the learner's samples and in B_hat(x), D_hat(x).
+    the same function of the state for the learner and for B_hat(x), D_hat(x).
 
     Args:
         system: The system that declares the input.

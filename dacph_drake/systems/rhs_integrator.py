@@ -41,39 +41,32 @@ class RhsTrial:
 
 
 class RhsIntegrator(LeafSystem):
-    """Decentralized integral control around the learned inverse feed-forward.
-
-    Every ``period`` h, at sample k (kernels.loop.integrator_samples):
+    """Decentralized integral control around the learned inverse feed-forward. Every
+    ``period`` h, at sample k (kernels.loop.integrator_samples):
 
         e_tau = tau_c^r(k-1) - tau_obs(k)
         u_I <- u_I + h K e_tau
         u    = B_hat^-1 (tau_c^r + D_hat qdot) + u_I
         chi  = max(||e_tau||, chi e^(-h / chi_window), chi_floor)
 
-    tau_obs(k) was formed at sample k-1, so e_tau compares it with that instant's
-    request (the paper's e_tau = tau_c^r - tau_c^g); against the current request the
-    integrator would wind up on the request's increment, which the feed-forward delivers.
+    (tau_obs(k) was formed at sample k-1, so it is compared with that instant's request:
+    against the current one the integrator would wind up on the request's increment).
 
     Every ``model_period`` it refreshes B_hat(x), D_hat(x) at x = (q, p = M qdot), the
-    gains k_p = c / Re(lambda_hat_p) and c, which follows (1 + c_margin) c_min(beta)
-    (eq. 48), beta = min(beta_hat, beta_max), through a first-order filter and never
-    drops below c_min (gain_rule "well_damped": c = 1 / (4 period)). An estimate that
-    fails DIC (det B_hat != 0, Re lambda_hat_p > 0) or leaves the trust band
-    (``trust_ratio`` around ``trust_anchor``) is not adopted; outside the band it is
-    adopted on evidence if its port residual is at most ``evidence_ratio`` times the
-    in-use one and the loop would stay stable were the in-use estimate true. B_hat
-    always stays within trust_ratio^2 of B0, so a slowly drifting learner is bounded.
-
-    With ``adoption`` "certified_set" and a learner that publishes a credible set of B,
-    the set's certificate (kernels.certificate.certified_gains) replaces band and
-    evidence: an estimate is adopted only if some c in [c_min, 1 / (4 period)]
-    certifies the discrete loop for every B of the set and each mode lies within
-    ``trust_ratio`` of the in-use set's range; c and K never fall below those of the
-    loop without learning (RhsTrial.prior_set).
+    gains k_p = c / Re(lambda_hat_p) and c, filtered towards (1 + c_margin) c_min(beta)
+    (eq. 48), beta = min(beta_hat, beta_max), never below c_min (gain_rule "well_damped":
+    c = 1 / (4 period)). An estimate failing DIC or leaving the trust band
+    (``trust_ratio`` around ``trust_anchor``) is not adopted, unless on evidence: its port
+    residual at most ``evidence_ratio`` times the in-use one and the loop stable were the
+    in-use estimate true. B_hat stays within trust_ratio^2 of B0. With ``adoption``
+    "certified_set" the set's certificate (kernels.certificate.certified_gains) replaces
+    band and evidence: adopted only if some c in [c_min, 1 / (4 period)] certifies the
+    loop for every B of the set, each mode within ``trust_ratio`` of the in-use set's
+    range; c and K never fall below the loop's without learning (RhsTrial.prior_set).
 
     Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
     ``port_sample`` and ``reduced_model`` (both optional). Outputs ``u``, ``chi`` and
-    ``rhs_log`` (log_layout.RhsLog); for several trials each port stacks theirs.
+    ``rhs_log`` (log_layout.RhsLog), each trial's stacked.
 
     Args:
         trials: Each trial's RhsTrial.
@@ -81,8 +74,7 @@ class RhsIntegrator(LeafSystem):
         period: The integrator's period h [s].
         model_period: The model refresh's period [s].
         stress: Verification setting: B_hat scaled by B_hat_scale from stress.start on.
-        channels: The learner's channels carried by ``port_sample`` (default: PortSample).
-    """
+        channels: The learner's channels in ``port_sample`` (default: PortSample)."""
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
                  model_period: float, stress: Stress = Stress(),

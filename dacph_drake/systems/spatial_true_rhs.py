@@ -16,24 +16,18 @@ from dacph_drake.systems.true_rhs import RUNAWAY_RATE, TrueRhsSystem
 
 
 class SpatialTrueRhs(TrueRhsSystem):
-    """tau = B~(x) u - D~(x) qdot + d(t) (E19) for a robot from a description file.
-
-    As TrueRhs, with p the joint rows of H(q_full) v (kernels.spatial.joint_momentum),
-    M(q) qdot exactly at zero momentum, all trials in one compiled call. u is clipped to
-    the effort limits (output ``saturated``: 1 per clipped joint). The description's
-    joint Coulomb friction f, which Drake's plant does not model, acts here as
-    f tanh(qdot / FRICTION_VELOCITY) (kernels.loop.add_friction): a part of D~(x) qdot.
-    Output ``true_matrices`` is the port's [vec(B~), diag(D~)] (D~ with the friction's
-    secant) beyond the description's joint damping b, which the plant applies itself
-    and the LHS model knows.
+    """tau = B~(x) u - D~(x) qdot + d(t) (E19) for a robot from a description file, as
+    TrueRhs (p by kernels.spatial.joint_momentum). u is clipped to the effort limits (output
+    ``saturated``: 1 per clipped joint); the joints' Coulomb friction f, which Drake's plant
+    does not model, acts as f tanh(qdot / FRICTION_VELOCITY), a part of D~ qdot. Output
+    ``true_matrices``: [vec(B~), diag(D~)] beyond the joint damping b the plant applies.
 
     Args:
         plant: The batch's ground truth (finalized).
         arms: Each trial's arm as a plant of its own (kinematic tree, default inertias).
         uncertainties: Each trial's true RHS (scenario.uncertainty).
         phases: Each trial's phases.
-        frictions: Each trial's joint Coulomb friction f (n) [N m] (none: zero).
-    """
+        frictions: Each trial's joint Coulomb friction f (n) [N m] (none: zero)."""
 
     def __init__(self, *, plant: MultibodyPlant, arms: Sequence[MultibodyPlant],
                  uncertainties: Sequence[Uncertainty], phases: Sequence[Phases],

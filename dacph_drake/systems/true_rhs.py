@@ -18,9 +18,7 @@ RUNAWAY_RATE = 50.0     # [rad/s]: a trial whose joint or base rate exceeds it s
 
 
 class TrueRhsSystem(LeafSystem):
-    """Base of the true RHSs: in the kernel, a stopped trial (Stop) or one whose state
-    or torque goes unsound (Unsound) gets zero torque, so that one trial's NaN never
-    reaches the plant the others share."""
+    """Base of the true RHSs: a stopped or unsound trial gets zero torque in the kernel."""
 
     def DeclareTrueRhsPorts(self, n: int, state_size: int, trials: int = 1
                             ) -> Tuple[InputPort, InputPort, InputPort]:
@@ -48,8 +46,7 @@ class TrueRhsSystem(LeafSystem):
         self._any_stopped = True
 
     def Unsound(self) -> Dict[int, Tuple[str, float]]:
-        """The trials whose state or torque went unsound (non-finite, or a rate beyond
-        RUNAWAY_RATE): trial -> (reason, first time [s]); their torque is zero since."""
+        """Trial -> (reason, first time [s]) of trials gone unsound (torque zero since)."""
         return dict(self._unsound)
 
     def _Running(self, context) -> np.ndarray:
@@ -71,10 +68,8 @@ class TrueRhsSystem(LeafSystem):
 
 
 class TrueRhs(TrueRhsSystem):
-    """tau = B~(x) u - D~(x) qdot + d(t) (E19), x = (q, p), p = M(q) qdot of the true robot.
-
-    Stateless (no delay), one compiled kernel for all trials; p is the joint rows of
-    H(q_full) v, M(q) qdot exactly at zero momentum. Also outputs ``true_matrices``.
+    """tau = B~(x) u - D~(x) qdot + d(t) (E19), x = (q, p), p = M(q) qdot of the true robot
+    (H(q_full) v's joint rows); one stateless kernel for all trials; also ``true_matrices``.
 
     Args:
         plant: The batch's ground truth (finalized).

@@ -113,7 +113,7 @@ class Task(Protocol):
             logs: The run's logs."""
 
     def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
-        """The task's own metrics beside analysis.metrics' shared ones.
+        """The task's own metrics beside loop.metrics' shared ones.
 
         Args:
             robot: The trial's Robot.
