@@ -1,12 +1,8 @@
-"""The controllers' logs by named columns (Drake's namedview, with widths), laid out
-from (name, width) pairs rather than offsets, shared by the systems that write them
-and the metrics, figures and checks that read them; a task's log is its layout
-(tasks.task.Task.LogLayout)."""
+"""The controllers' logs by named columns (as Drake's namedview, with widths)."""
 
 
 class LogColumns:
-    """A log's columns in the row's order: a scalar's name gives its index, a vector's
-    (name, width) its slice; ``size`` is the row's length.
+    """A log's columns in order: a scalar's index, a vector's slice; ``size``: the row's.
 
     Args:
         *columns: Each column: a name (a scalar) or (name, width) (a vector)."""
@@ -21,12 +17,10 @@ class LogColumns:
 
 
 class LhsLog(LogColumns):
-    """lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)]
-    (LhsController, planar robots).
+    """lhs_log = [s (n), alpha~, alpha_d, V = s^T M s / 2, U(q), lambda_min(M)].
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         super().__init__(("s", n), "alpha_error", "alpha_desired",
@@ -34,15 +28,14 @@ class LhsLog(LogColumns):
 
 
 class RhsLog(LogColumns):
-    """rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted,
-    certified, set_slowest, set_fastest]: trusted is 1 when this refresh adopted
-    the learner's estimate; certified 1 while the estimate in use was adopted on its
-    credible set's certificate (rhs.adoption certified_set), with that set's slowest
-    and fastest mode ratios (kernels.certificate.certified_gains; nan without a set).
+    """rhs_log = [e_tau (n), ||e_tau||, chi, K (n), c, c_min, dic_ok, trusted, certified,
+    set_slowest, set_fastest]: trusted 1 when this refresh adopted the learner's estimate;
+    certified 1 while the one in use was adopted on its credible set's certificate
+    (rhs.adoption certified_set), with that set's slowest and fastest mode ratios
+    (kernels.certificate.certified_gains; nan without a set).
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         super().__init__(("e_tau", n), "e_norm", "chi", ("K", n), "c",
@@ -61,8 +54,7 @@ class RhsState:
     rhs_log = [fast e_tau .. chi, model K .. trusted] (RhsLog).
 
     Args:
-        n: The number of joints.
-    """
+        n: The number of joints."""
 
     def __init__(self, n: int):
         self.u_I, self.e_tau = slice(0, n), slice(n, 2 * n)
@@ -83,17 +75,14 @@ class RhsState:
 
 class LearnerLog(LogColumns):
     """learner_log = [loss, beta_hat, nominal loss, holding, network published,
-    undetermined, restarts, physical]: the fitted model's weighted squared residual on
-    the window; the gain rule's 1 + RMS residual / RMS tau_obs; the nominal RHS's (B0,
-    D0) residual on the same samples; 1 while nothing is learned (training paused after
-    a change, learning.identification.ChangeDetector; no row of the local model
-    determined); 1 while some published quantity is learned, 0 while all are the prior's
-    (Learner.prior_fallback, a local model's undetermined rows; 0 in the learner-off
-    ablation); the share of the n^2 + n quantities [B, diag D] published at the prior;
-    the rows restarted this update (learning.local_bayes); physical: 1 while the
-    observed port is in physical units, 0 once the inertial identifier reported the
-    kinematics mismatched (scenario.inertia.fit_tolerance): the learned B and D are then
-    the port's as the model sees it, and the metrics count them as the prior."""
+    undetermined, restarts, physical]: the fit's weighted squared residual on the window;
+    the gain rule's 1 + RMS residual / RMS tau_obs; (B0, D0)'s residual on the same
+    samples; 1 while nothing is learned (paused after a change; no local row determined);
+    1 while some published quantity is learned (0: all the prior's, e.g. prior_fallback or
+    learner off); the share of the n^2 + n quantities [B, diag D] at the prior; the rows
+    restarted this update; 1 while the port is in physical units, 0 once the identifier
+    reported the kinematics mismatched (inertia.fit_tolerance): the learned B and D are
+    then the port's as the model sees it, and the metrics count them as the prior."""
 
     def __init__(self):
         super().__init__("loss", "beta_hat", "nominal_loss", "holding",
@@ -106,16 +95,14 @@ ATTITUDE_COLUMNS = (("e", 3), "e_norm", "s_norm", "lyapunov_V",
 
 
 class AttitudeLog(LogColumns):
-    """attitude_log = [e (3), |e|, ||s||, V = s^T M s / 2, smallest link-base distance,
-    R_d as a quaternion (w, x, y, z)] (AttitudeController, spatial robots)."""
+    """attitude_log = [e (3), |e|, ||s||, V = s^T M s / 2, clearance, R_d (w, x, y, z)]."""
 
     def __init__(self):
         super().__init__(*ATTITUDE_COLUMNS)
 
 
 class PoseLog(LogColumns):
-    """pose_log = attitude_log's columns, then e_p = p_E - p_d (3), |e_p|, p_d (3), in
-    m (the pose task's AttitudeController)."""
+    """pose_log = attitude_log's, then e_p = p_E - p_d (3), |e_p|, p_d (3) [m]."""
 
     def __init__(self):
         super().__init__(*ATTITUDE_COLUMNS, ("e_position", 3), "e_position_norm",

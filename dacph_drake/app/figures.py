@@ -23,7 +23,8 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from dacph_drake.controllers import BASELINE, REFERENCE, REGISTRY  # noqa: E402
-from dacph_drake.log_layout import LhsLog, PoseLog, RhsLog  # noqa: E402
+from dacph_drake.log_layout import LhsLog, RhsLog  # noqa: E402
+from dacph_drake.robots.start_pose import ATTITUDE_ROWS, POSITION_ROWS  # noqa: E402
 from dacph_drake.loop.metrics import (nominal_estimates, physical_view,  # noqa: E402
                                           port_truth, realized_error_of)
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
@@ -335,20 +336,23 @@ def _panel_inputs(runs: Dict[str, Logs], scenario: Scenario,
     return fig
 
 
-def _panel_spatial(runs: Dict[str, Logs], scenario, log_name: str):
-    """(e) of a described arm: |e| and/or |e_p| and ||s|| of every run, the smallest
+def _panel_spatial(runs: Dict[str, Logs], scenario):
+    """(e) of a described arm: the errors its task tracks (|e| where its GJM rows hold
+    the angular ones, |e_p| the linear ones) and ||s|| of every run, the smallest
     link-base distance against the potential's margin, d(t)."""
-    n, layout = len(scenario.q0), PoseLog()
-    errors = {"attitude_log": ("attitude",), "pose_log": ("attitude", "position"),
-              "position_log": ("position",)}[log_name]
+    task, n = task_of(scenario), len(scenario.q0)
+    layout, log_name, rows = task.LogLayout(n), task.log_name, set(task.jacobian_rows)
+    errors = [error for error, error_rows in (("attitude", ATTITUDE_ROWS),
+                                              ("position", POSITION_ROWS))
+              if set(error_rows) <= rows]
     dac = _primary(runs)
     fig, axes, xlim = _figure(3 + len(errors), scenario)
     error_axes, (ax2, ax3, ax4) = axes[:-3], axes[-3:]
-    columns = {"attitude": layout.e_norm, "position": layout.e_position_norm}
+    columns = {"attitude": "e_norm", "position": "e_position_norm"}
     for name, logs in _compared(runs):
         t, log = logs["time"], logs[log_name]
         for ax, error in zip(error_axes, errors):
-            _trace(ax, t, log[:, columns[error]], xlim, log=True, **_style(name))
+            _trace(ax, t, log[:, getattr(layout, columns[error])], xlim, log=True, **_style(name))
         _trace(ax2, t, log[:, layout.s_norm], xlim, log=True, **_style(name))
         _trace(ax3, t, log[:, layout.clearance], xlim, **_style(name))
     ax3.axhline(scenario.robot.potential.margin, color="k", ls=":", lw=1.0,
@@ -382,12 +386,9 @@ def zoom_window(scenario: Scenario) -> Tuple[float, float]:
 
 # The task panels by name (tasks.task.Task.panels).
 TASK_PANELS = {"e_dac_vs_model_based": _panel_e, "f_inputs_and_states": _panel_f,
-               "e_attitude_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
-                   runs, scenario, "attitude_log"),
-               "e_pose_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
-                   runs, scenario, "pose_log"),
-               "e_position_dac_vs_model_based": lambda runs, scenario: _panel_spatial(
-                   runs, scenario, "position_log"),
+               "e_attitude_dac_vs_model_based": _panel_spatial,
+               "e_pose_dac_vs_model_based": _panel_spatial,
+               "e_position_dac_vs_model_based": _panel_spatial,
                "f_inputs_and_joints": lambda runs, scenario: _panel_inputs(
                    runs, scenario, robot_of(scenario).model.coordinates)}
 

@@ -1,3 +1,1 @@
-"""Where a scenario's typed sections meet their implementations: the robot and task
-kinds' registry (registry) and scenario files, read and sized to their robot
-(scenario_files)."""
+"""Where a scenario's sections meet their implementations (registry) and its files."""

@@ -1,6 +1,4 @@
-"""The one place a scenario's typed sections meet their implementations: the robot
-section's Robot (ROBOTS), the task section's Task (tasks.TASKS), checked to be a pair
-that works together, and the learner's (learning.LEARNERS)."""
+"""The sections' kinds: ROBOTS, tasks.TASKS (checked to pair) and learning.LEARNERS."""
 from typing import List, Optional, Sequence, Type
 
 from dacph_drake.scenario.errors import ConfigError, require_setting_types
@@ -23,8 +21,7 @@ def register_robot(section: type, kind: Type[Robot]) -> None:
 
     Args:
         section: The robot section's dataclass.
-        kind: Its Robot class (the tasks it serves: those whose ``robots`` name it
-            or a class it derives from)."""
+        kind: Its Robot class (serving the tasks whose ``robots`` name it or a base)."""
     ROBOTS[section] = kind
     add_section_type("robot", section)
 
@@ -90,8 +87,7 @@ def robots_of(scenarios: Sequence[Scenario]) -> List[Robot]:
 
 
 def validate_scenario(scenario: Scenario) -> None:
-    """Checks every setting (the robot's constructor checks the seed, the robot and
-    its task: scenario.checks.validate_shared).
+    """Checks every setting (the robot's constructor: scenario.checks.validate_shared).
 
     Args:
         scenario: The scenario.
@@ -103,9 +99,7 @@ def validate_scenario(scenario: Scenario) -> None:
 
 def sized_defaults(robot: object, q0: Optional[Sequence[float]],
                    task: Optional[object]) -> Optional[Scenario]:
-    """The scenario a file naming this robot starts from: every per-joint setting sized
-    to the arm by its kind (Robot.SizedScenario), so that a file naming only the robot
-    (and q0) runs; None for the paper's planar arm (Scenario's defaults).
+    """Robot.SizedScenario: the scenario a file naming this robot starts from, or None.
 
     Args:
         robot: The file's robot section.
@@ -118,8 +112,7 @@ def sized_defaults(robot: object, q0: Optional[Sequence[float]],
 
 
 def validate_given(q0: Optional[Sequence[float]], task: Optional[object]) -> None:
-    """Checks what a file gives that sizing uses (the start and the task's reference)
-    before any sizing, start-pose search or plant call reads it.
+    """Checks a file's q0 and task before sizing, a start-pose search or a plant reads them.
 
     Args:
         q0: The file's q0 [rad] (None where it leaves it out).

@@ -1,7 +1,5 @@
-"""Scenario files: load_scenario and save_scenario, the texts a saved run's
-fingerprint is taken from (saved_forms), and the layouts before the robot: and task:
-sections (PlanarLayoutV1, SpatialLayoutV1), read so that older files keep loading
-(with a logged note) and saved runs keep their fingerprints."""
+"""Scenario files: load, save, saved_forms (a saved run's fingerprinted texts) and the older
+layouts (PlanarLayoutV1, SpatialLayoutV1), so old files load and runs keep fingerprints."""
 import dataclasses
 import difflib
 import logging
@@ -66,8 +64,7 @@ ADDED_AT_THE_OLD_BEHAVIOUR = (("DescribedArm", "joint_friction", "zero"),)
 
 
 def _bayes_as_introduced() -> LocalBayes:
-    """learner.bayes with the defaults it had when the section was added (a frozen
-    record: the defaults since changed are set back here, never edited)."""
+    """learner.bayes with its defaults as introduced (a frozen record, never edited)."""
     return LocalBayes(model_error=0.1, min_dof=6.0)
 
 
@@ -79,9 +76,7 @@ ADDED_SUBSECTIONS = (("learner", "bayes", _bayes_as_introduced),)
 
 
 def as_before_added(scenario: Scenario) -> Scenario:
-    """A copy of ``scenario`` with each setting of ADDED_TO_CURRENT_LAYOUT at its
-    value before it existed and ADDED_SUBSECTIONS as introduced: the settings a
-    saved run's file written before them is read with.
+    """``scenario`` with the settings and sections added since as they were before.
 
     Args:
         scenario: The scenario."""
@@ -95,8 +90,7 @@ def as_before_added(scenario: Scenario) -> Scenario:
 
 
 def _added_lines() -> Tuple[str, ...]:
-    """ADDED_TO_CURRENT_LAYOUT's lines and ADDED_SUBSECTIONS' lines as introduced, as
-    yaml_dump_typed writes them."""
+    """The added settings' and ADDED_SUBSECTIONS' lines, as yaml_dump_typed writes them."""
     lines = [f"  {key}: {str(value).lower()}" for _, key, value in
              ADDED_TO_CURRENT_LAYOUT + ADDED_AT_THE_OLD_BEHAVIOUR]
     for _, key, section in ADDED_SUBSECTIONS:
@@ -106,7 +100,6 @@ def _added_lines() -> Tuple[str, ...]:
 
 
 def _without_lines(text: str, lines) -> str:
-    """``text`` without the whole lines ``lines``."""
     for line in lines:
         text = re.sub(f"^{re.escape(line)}\n", "", text, flags=re.MULTILINE)
     return text
@@ -117,9 +110,7 @@ ADDED_SECTION_DEFAULTS = (
 
 @dataclass(eq=False)
 class PlanarLayoutV1:
-    """A planar scenario's fields as they stood before the robot: and task: sections, in
-    their order (the YAML text, hence a saved run's fingerprint, follows it): a frozen
-    record of that format, never edited.
+    """A planar scenario's fields, in order, before the robot: and task: sections (frozen).
 
     Attributes:
         robot: The ground truth (now robot.truth).
@@ -183,10 +174,7 @@ class PlanarLayoutV1:
             q0=self.q0, phases=self.phases, inertia=self.inertia, **_shared(self))
 
     def SavedForms(self) -> List[str]:
-        """This layout's YAML text without the settings and sections added since
-        at their defaults, and, where the simulator settings are those a
-        top-level ``integration_scheme: X`` implied (move_integration_scheme), the
-        form with that key."""
+        """Its YAML without later defaults, and the integration_scheme: form if implied."""
         text = _without_lines(yaml_dump_typed(self),
                               ADDED_SETTING_DEFAULTS + _added_lines())
         for section in ADDED_SECTION_DEFAULTS:
@@ -203,8 +191,7 @@ class PlanarLayoutV1:
 
 @dataclass(eq=False)
 class SpatialLayoutV1:
-    """A described arm's scenario (SpatialScenario) as it stood, with its defaults: a
-    frozen record of that format, never edited.
+    """A described arm's scenario (SpatialScenario) as it stood (a frozen record).
 
     Attributes:
         robot: The description's name (now robot.description).
@@ -258,8 +245,7 @@ class SpatialLayoutV1:
             "learner_sample_period", "learner_period", "log_period")
 
     def ToScenario(self, path: Union[str, Path]) -> Scenario:
-        """The scenario of these settings: the run lasts as long as the phases, so a
-        duration other than their end stretches (or shortens) the last phase.
+        """The scenario; a duration other than the phases' end resizes phase 3 to end there.
 
         Args:
             path: The file read, for the message.
@@ -292,7 +278,6 @@ OLDER_LAYOUTS = {PlanarArm: (PlanarLayoutV1,)}
 
 
 def _shared(settings, periods: bool = True):
-    """The sections both layouts share with Scenario, by name."""
     names = ["rhs", "uncertainty", "disturbance", "learner", "excitation", "stress",
              "simulator", "seed"] + (["periods"] if periods else [])
     return {name: getattr(settings, name) for name in names}
@@ -300,8 +285,7 @@ def _shared(settings, periods: bool = True):
 
 def load_older_layout(path: Union[str, Path], saved_run: bool = False
                       ) -> Optional[Scenario]:
-    """Reads a scenario file of an older layout, with a logged note naming it (and
-    note_changed_defaults); None for a file of the current layout.
+    """Reads an older layout's scenario file with a logged note; None: the current layout.
 
     Args:
         path: The scenario file.
@@ -353,16 +337,12 @@ def load_older_layout(path: Union[str, Path], saved_run: bool = False
 
 
 def _field_names(layout) -> Tuple[str, ...]:
-    """The top-level settings of a file layout."""
     return tuple(f.name for f in dataclasses.fields(layout))
 
 
 def load_scenario(path: Union[str, Path]) -> Scenario:
-    """Loads and validates a scenario: every setting the file does not name at its
-    current default. A file without a robot: section gets the paper's arm and a logged
-    warning saying so; files of the older layouts (PlanarLayoutV1, SpatialLayoutV1)
-    load with a logged note, which names each setting added since whose default is not
-    what the file's release ran.
+    """Loads and validates a scenario, settings the file leaves out at their defaults (no
+    robot: the paper's arm, with a warning); older layouts load with a logged note.
 
     Args:
         path: A YAML file, or a built-in name (BUILT_IN_SCENARIOS) if no file has that name.
@@ -373,9 +353,7 @@ def load_scenario(path: Union[str, Path]) -> Scenario:
 
 
 def load_saved_scenario(path: Union[str, Path]) -> Scenario:
-    """Loads a saved run's scenario.yaml with the meaning it had when it ran: a setting
-    added since (ADDED_TO_CURRENT_LAYOUT) that the file lacks at the value that
-    reproduces the run (its release's behaviour), not at today's default.
+    """Loads a saved run's scenario.yaml as it ran: later settings it lacks at old values.
 
     Args:
         path: The run directory's scenario.yaml.
@@ -403,10 +381,7 @@ def _load(path: Union[str, Path], saved_run: bool) -> Scenario:
 
 
 def _load_current_layout(path, saved_run: bool) -> Scenario:
-    """A file of the current layout, read over its robot's defaults: Scenario's own
-    for a planar arm; for an arm from its description, the settings sized to it
-    (assembly.registry.sized_defaults), so that a file naming only the robot
-    and q0 runs (a saved run's: the settings added since as they were)."""
+    """A current-layout file over its robot's defaults (sized_defaults)."""
     migrate = _migrate_saved_file if saved_run else _migrate_file
     scenario = load_yaml_dataclass(path, Scenario, noted_defaults=("robot",),
                                    migrate=migrate)
@@ -423,9 +398,7 @@ def _load_current_layout(path, saved_run: bool) -> Scenario:
 
 
 def _migrate_older_saved_file(raw, path):
-    """_migrate_saved_file, with the sections an older layout's file lacks added
-    holding ADDED_TO_CURRENT_LAYOUT's values before them (every such file was written
-    before them)."""
+    """_migrate_saved_file, the added sections an older layout's file lacks added too."""
     if isinstance(raw, dict):
         raw = {**raw, **{section: {} for section, _, _ in ADDED_TO_CURRENT_LAYOUT
                          if section not in raw}}
@@ -434,8 +407,7 @@ def _migrate_older_saved_file(raw, path):
 
 
 def _migrate_saved_file(raw, path):
-    """_migrate_file, then each setting of ADDED_TO_CURRENT_LAYOUT that the file's
-    section lacks set to its value before it existed (a saved run's meaning)."""
+    """_migrate_file, then each added setting a section lacks at its value before it."""
     migrated = _migrate_file(raw, path)
     source = migrated if migrated is not None else raw
     if not isinstance(source, dict):
@@ -453,8 +425,7 @@ def _migrate_saved_file(raw, path):
 
 
 def _migrate_file(raw, path):
-    """move_integration_scheme, and a q0 by joint name as a list (None: nothing to
-    change)."""
+    """move_integration_scheme, and a q0 by joint name as a list (None: no change)."""
     migrated = move_integration_scheme(raw, path)
     source = migrated if migrated is not None else raw
     if isinstance(source, dict) and isinstance(source.get("q0"), dict):
@@ -463,9 +434,7 @@ def _migrate_file(raw, path):
 
 
 def note_changed_defaults(raw: Dict, scenario: Scenario, path: Union[str, Path]) -> None:
-    """Logs, for a file of an older layout, each setting added since that the file does
-    not name and whose current default differs from what the file's release ran (its
-    value before the setting existed): the file now runs with the current one.
+    """Logs each added setting an older file leaves out whose default has changed since.
 
     Args:
         raw: The parsed file.
@@ -485,8 +454,7 @@ def note_changed_defaults(raw: Dict, scenario: Scenario, path: Union[str, Path])
 
 
 def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
-    """A q0 given as a mapping joint name -> angle, as the list [rad] in q's order; only
-    for an arm from its description (robot.description): its joints are named there.
+    """A q0 given as joint name -> angle, as the list [rad] in q's order (described arms).
 
     Args:
         raw: The parsed scenario file (its q0 a mapping).
@@ -523,13 +491,8 @@ def q0_by_joint_name(raw: Dict, path: Union[str, Path]) -> List[float]:
 
 
 def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dict]:
-    """Moves a top-level integration_scheme: into the simulator: section; returns the
-    parsed file with the key moved, or None when it has no such key.
-
-    Files saved before the scenario embedded Drake's SimulatorConfig have a
-    top-level ``integration_scheme: X``: it is read as ``simulator:
-    {integration_scheme: X, max_step_size: periods.rhs}`` (with a logged note), the
-    settings it implied; the rest are the simulator's defaults (FixedStepConfig).
+    """The parsed file with a top-level ``integration_scheme: X`` read as ``simulator:
+    {integration_scheme: X, max_step_size: periods.rhs}``, noted; None without that key.
 
     Args:
         raw: The parsed scenario file.
@@ -555,12 +518,8 @@ def move_integration_scheme(raw: object, path: Union[str, Path]) -> Optional[Dic
 
 
 def saved_forms(scenario: Scenario) -> List[str]:
-    """The YAML texts a saved run of a scenario may have been fingerprinted from: its
-    current form, without the settings added to the current layout since it was
-    introduced where they are at their defaults (ADDED_TO_CURRENT_LAYOUT: a setting
-    added at its default leaves a fingerprint as it was), then the forms of the same
-    settings in the layouts before (OLDER_LAYOUTS: a planar arm's scenario before the
-    robot: and task: sections, and before that the top-level integration_scheme:).
+    """The YAML texts a saved run may have been fingerprinted from: its form without later
+    settings at their defaults, then its older layouts' (OLDER_LAYOUTS).
 
     Args:
         scenario: The scenario."""

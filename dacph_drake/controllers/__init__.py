@@ -1,15 +1,7 @@
-"""The controllers every command knows, registered once, for every robot.
-
-A controller is one module of this package with a function ``build(*scenarios) ->
-closed_loop.ClosedLoop`` (one scenario: a single run; several: a batch of trials)
-that calls ``closed_loop.assemble_closed_loop(scenarios[0], name, add,
-scenarios[1:])``; ``add(loop, controller)`` adds the controller's systems to
-``controller.builder`` (the robot's LHS controller through ``closed_loop.AddLhsSide``)
-and returns them by name (model_based.py is the shortest). REGISTRY maps its name to
-that function as "module:function" (the command line lists the names without loading
-Drake), with how tables and figures show it; the commands, the sweep and
-``loop.simulate.simulate`` take their names from here. To add a controller, write its
-module and add one entry below."""
+"""The controllers every command knows: REGISTRY, name -> "module:function" (listed without
+loading Drake) and its look in figures. A controller's ``build(*scenarios)`` calls
+``closed_loop.assemble_closed_loop(scenarios[0], name, add, scenarios[1:])``, ``add``
+adding its systems by name (the LHS via ``AddLhsSide``); model_based.py is the shortest."""
 import importlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -30,8 +22,7 @@ class Controller:
         description: One line, for --help.
         label: Its name in legends (empty: the registered name).
         color: Its matplotlib colour in figures.
-        linestyle: Its matplotlib line style in figures.
-    """
+        linestyle: Its matplotlib line style in figures."""
     builder: str
     description: str
     label: str = ""

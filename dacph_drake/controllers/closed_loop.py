@@ -1,13 +1,7 @@
-"""The closed loop every controller and every robot shares: the ground truth
-(plant, state splitter, true RHS, disturbance) closed by a controller, logged.
-
-A controller is a Diagram with a fixed port contract: its inputs are named plant
-signals (plant.STATE_SIGNALS, from the state splitter), its outputs are ``u`` (the
-input of the true RHS) and the logs it offers; every output is logged. A
-controller's module (controllers/) builds it with assemble_closed_loop and a
-function adding its systems to a ControllerBuilder; the robot
-(robots.robot_of(scenario)) supplies the ground truth, the controller's model and
-the LHS controller."""
+"""The closed loop every controller and robot shares: the ground truth (plant, state
+splitter, true RHS, disturbance) closed by a controller, every output logged. A controller
+is a Diagram: its inputs named plant signals (plant.STATE_SIGNALS), its outputs ``u`` (the
+true RHS's input) and its logs."""
 from dataclasses import dataclass, field, fields
 from typing import Callable, Dict, List, Sequence, Tuple
 
@@ -28,10 +22,7 @@ from dacph_drake.systems.disturbance import DisturbanceSource
 
 @dataclass
 class ClosedLoop:
-    """A built closed loop of a batch of trials (one: a single run).
-
-    CreateSimulator() runs it with the scenarios' settings. Every signal is the
-    trials' signals stacked in trial order.
+    """A built closed loop of a batch of trials, their signals stacked in trial order.
 
     Attributes:
         diagram: The Drake diagram.
@@ -40,8 +31,7 @@ class ClosedLoop:
         plant: The ground-truth MultibodyPlant.
         scene_graph: Its SceneGraph.
         loggers: Signal name -> its VectorLogSink.
-        systems: System name -> the system (the ground truth's and the controller's).
-    """
+        systems: System name -> the system (the ground truth's and the controller's)."""
     diagram: Diagram
     scenarios: List[Scenario]
     robots: List[Robot]
@@ -52,8 +42,7 @@ class ClosedLoop:
 
     @property
     def scenario(self) -> Scenario:
-        """The first trial's scenario: the settings every trial shares (periods,
-        simulator, gains)."""
+        """The first trial's scenario: the settings every trial shares."""
         return self.scenarios[0]
 
     @property
@@ -77,9 +66,7 @@ class ClosedLoop:
         return c_lower_bound(self.scenario.rhs.Td, Kd_max, lambda_min_M, 1.0)
 
     def CreateSimulator(self) -> Simulator:
-        """A Simulator of this loop with the scenario's simulator settings
-        (scenario.simulator, Drake's SimulatorConfig) and initial state: the base at
-        the origin, the joints at q0, everything at rest (zero momentum)."""
+        """A Simulator of this loop (scenario.simulator), at rest at q0, base at origin."""
         simulator = MakeSimulator(self.diagram, self.scenario.simulator)
         SetArmsAtRest(self.plant, self.plant.GetMyContextFromRoot(
             simulator.get_mutable_context()), [s.q0 for s in self.scenarios])
@@ -87,16 +74,14 @@ class ClosedLoop:
 
 
 class ControllerBuilder:
-    """A DiagramBuilder for a controller: Input(port, signal) exports ``port`` as the
-    controller's input ``signal`` (several internal ports may read one signal)."""
+    """A controller's DiagramBuilder; Input(port, signal): one input, read by many ports."""
 
     def __init__(self):
         self.builder = DiagramBuilder()
         self._inputs = set()
 
     def Input(self, port: InputPort, signal: str) -> None:
-        """Feeds an internal input port from one of the controller's inputs (exported on
-        first use).
+        """Feeds an internal port from the controller's input ``signal`` (exported once).
 
         Args:
             port: An input port of a system in ``builder``.
@@ -111,10 +96,7 @@ class ControllerBuilder:
 def assemble_closed_loop(scenario: Scenario, name: str,
                          add_controller: Callable[[ClosedLoop, ControllerBuilder], Dict],
                          more_trials: Sequence[Scenario] = ()) -> ClosedLoop:
-    """Builds the ground truth (plant, state splitter, true RHS, disturbance) and closes
-    it with a controller; every signal of it and every output of the controller is
-    logged at periods.log. The trials share the settings that shape the diagram
-    (RequireOneDiagram).
+    """Closes the ground truth with a controller, every output logged at periods.log.
 
     Args:
         scenario: The (first) trial's scenario.
@@ -176,8 +158,7 @@ PER_TRIAL_SETTINGS = ("robot", "q0", "uncertainty", "disturbance", "seed")
 
 
 def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
-    """Requires the trials of a batch to share every setting that shapes the diagram,
-    compared in their YAML form (Drake's SimulatorConfig has no equality of its own).
+    """Requires a batch's trials to share the diagram's settings, compared as YAML.
 
     Args:
         scenarios: The batch's trials.
@@ -197,9 +178,7 @@ def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
 
 def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Excitation,
                identify: bool) -> Tuple[object, Dict]:
-    """Adds the robot's LHS controller to a controller's diagram; returns (the LHS
-    controller, its named systems). Its request and log are exported as the controller's
-    outputs ``tau_request`` and the robot's log name (robots.Robot.AddLhsController).
+    """Adds the task's LHS (tau_request and its log exported); returns (lhs, its systems).
 
     Args:
         loop: The loop being built (its robots: the trials').

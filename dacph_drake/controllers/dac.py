@@ -1,6 +1,5 @@
-"""DAC-pH (the paper's controller) and its learning ablation: the robot's LHS
-controller with chi from the RHS loop and the learner's excitation, the port
-observer, the regression filter, the learner and the RHS integrator."""
+"""DAC-pH (the paper's controller) and its learning ablation: the LHS controller (chi from
+the RHS loop), port observer, regression filter, learner and RHS integrator."""
 from typing import Dict, Optional
 
 from pydrake.systems.framework import LeafSystem
@@ -18,10 +17,7 @@ from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
 
 
 def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
-    """Builds the DAC-pH closed loop "dac": plant, true RHS and disturbance, closed by the
-    robot's LHS controller (chi from the RHS loop, plus scenario.excitation; an inertial
-    identifier with inertia.identify), the port observer, the RHS integrator and the
-    learner (in regularized mode behind a RegressionFilter).
+    """Builds "dac": the LHS (chi from the RHS loop) and the RHS side (AddRhsChain).
 
     Args:
         *scenarios: One scenario, or a batch of trials for one diagram.
@@ -36,9 +32,7 @@ def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop
 
 
 def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
-    """Builds the learning ablation "dac_nominal": build_dac_diagram with the learner off.
-    The integrator runs on the nominal RHS (B0, D0); the excitation stays, so that
-    learning is the only difference.
+    """The ablation "dac_nominal": build_dac_diagram with the learner off (excitation on).
 
     Args:
         *scenarios: One scenario, or a batch of trials for one diagram."""
@@ -48,13 +42,10 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
                 learning: bool, identifier: Optional[InertialIdentifier] = None
                 ) -> Dict[str, object]:
-    """Adds the DAC controller's RHS side to a controller's diagram; returns the added
-    systems by name: the port observer, the regression filter (regularized mode), the
-    learner and the RHS integrator, wired to the LHS controller and to the controller's
-    inputs q, qdot; exports ``u``, ``tau_observed``, ``rhs_log``, ``learner_log``,
-    ``estimates``, ``estimate_bounds``. The gain rule (eq. 48) uses each trial's robot's
-    LHS rates (robots.Robot.GainRuleRates); the RHS period is checked for the largest c
-    they allow (gain_rule.check_rhs_period). Each system serves every trial.
+    """Adds the RHS side (port observer, regression filter in regularized mode, learner,
+    RHS integrator), wired to the LHS and inputs q, qdot; exports u, tau_observed, the logs,
+    estimates and bounds; returns the systems by name. The RHS period is checked for the
+    largest c the gain rule (eq. 48) allows (gain_rule.check_rhs_period).
 
     Args:
         loop: The loop being built.

@@ -1,6 +1,5 @@
-"""The model-based baseline (a reading of docs/equations.md where the paper is
-silent): the robot's LHS controller with a constant chi (task.gains.chi_model_based) and the static
-inversion u = B0^-1 (tau_c^r + D0 qdot); no integrator, no learning."""
+"""The model-based baseline (docs/equations.md; the paper is silent): the LHS controller
+with a constant chi (task.gains.chi_model_based) and u = B0^-1 (tau_c^r + D0 qdot)."""
 from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
@@ -10,9 +9,7 @@ from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 
 
 def build_model_based_diagram(*scenarios: Scenario) -> ClosedLoop:
-    """Builds the model-based baseline loop "model_based" of the scenarios' robot: the
-    LHS's request is inverted through the nominal RHS (B0, D0); on a nominal ground
-    truth the inversion is exact and the plant receives the request.
+    """Builds the baseline loop "model_based" (module docstring).
 
     Args:
         *scenarios: One scenario, or a batch of trials for one diagram."""

@@ -1,31 +1,10 @@
-"""Learners of the port's RHS behind one protocol (paper section "RHS Control and
-Learning").
-
-A learner fits the port relation (the paper's tau_breve model, eq. "rhs_data_model")
-
-    tau_obs = B~(x) u - D~(x) qdot + d(t),      x = (q, p)
-
-to the band-passed port samples of a window, per trial of a batch, and publishes
-what the fast loops need as one vector per trial: an estimate B_hat(x), D_hat(x)
-and, if it knows it, a credible set of B (the RHS integrator adopts an estimate only
-if the loop's certificate holds on the whole set: gain_rule.CertifiedGains) and
-credible intervals of every entry (logged, for the metrics). A quantity the data
-do not determine is published at the prior (B0, D0) with the prior's range.
-
-- PortLearner: what systems.learner.RhsLearner asks of a learner: the channels its
-  regression filter forms (Channels), how its published vector is evaluated
-  (PublishedModel), its state in the Context, and Update; its class says whether it
-  learns from band-passed samples (BandPassed), how a trial's vector is evaluated
-  (Published) and its prior's credible set (PriorSet).
-- LEARNERS, by ``learner.model``: "local_bayes" (learning.local_bayes.LocalBayesLearner,
-  the default), a local Bayesian linear model per joint with calibrated intervals;
-  "network" (learning.network_learner.NetworkLearner), the paper's physics-informed
-  network (network.RhsNetwork), a point estimate (``learner.mode`` "plain": the
-  paper's learner, whatever ``model`` says).
-
-A new learner is one module with its PortLearner class and one register_learner
-line; every learner runs through the same diagram, metrics and ablation
-(scripts/learning_families.py)."""
+"""Learners of the port's RHS behind one protocol, PortLearner (paper section "RHS Control
+and Learning"): each fits tau_obs = B~(x) u - D~(x) qdot + d(t), x = (q, p) (tau_breve,
+eq. "rhs_data_model") to a window of band-passed port samples per trial and publishes
+B_hat(x), D_hat(x) and, if it knows them, a credible set of B (adopted only if the
+certificate holds on all of it: gain_rule.CertifiedGains) and intervals; what the data do
+not determine, at the prior (B0, D0). LEARNERS, by ``learner.model``: "local_bayes" (the
+default), "network" (the paper's, also for ``mode: plain``); register_learner adds one."""
 from typing import Dict, Optional, Sequence, Type
 
 import numpy as np
@@ -51,8 +30,7 @@ def register_learner(name: str, kind: Type[PortLearner]) -> None:
 
 
 def learner_kind(settings: Learner) -> Type[PortLearner]:
-    """The PortLearner class the settings name: LEARNERS[``model``], the network in
-    ``mode`` "plain" (the paper's plain learner).
+    """The PortLearner class: LEARNERS[``model``], the network in ``mode`` "plain".
 
     Args:
         settings: The learner's settings.
@@ -76,9 +54,7 @@ def make_port_learner(settings: Learner, trials: Sequence[LearnerTrial],
 
 
 def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
-    """The evaluator (PublishedModel; its Stack evaluates a batch's) of one trial's
-    published vector, as make_port_learner's learner publishes it (the RHS integrator
-    builds its own from the same settings).
+    """The PublishedModel of one trial's vector as make_port_learner's learner publishes it.
 
     Args:
         settings: The learner's settings.
@@ -88,8 +64,7 @@ def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
 
 def prior_set(settings: Learner, B0: Sequence[float], D0: Sequence[float]
               ) -> Optional[np.ndarray]:
-    """The credible set [lower, upper] of B (2 x n x n) the learner publishes before it has
-    learned anything, or None for a learner without a credible set.
+    """The learner's credible set [lower, upper] of B (2 x n x n) before learning, or None.
 
     Args:
         settings: The learner's settings.

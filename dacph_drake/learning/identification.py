@@ -1,10 +1,7 @@
-"""Online identification of the RHS (paper section "RHS Control and Learning"), free of Drake: the learner's regression, its band-pass prefilter and its change
-detector. A port sample [q, p, qdot, u, tau_obs] (PortSample) is one instant of the port
-relation (the paper's tau_breve model)
-
-    tau_obs = B~(x) u - D~(x) qdot + d(t),      x = (q, p),
-
-to which the learner fits the network's B_hat(x), D_hat(x) (network.RhsNetwork)."""
+"""Online identification of the RHS (paper section "RHS Control and Learning"), free of
+Drake: the regression, its band-pass prefilter and change detector. A port sample
+[q, p, qdot, u, tau_obs] (PortSample) is one instant of the port relation (tau_breve)
+tau_obs = B~(x) u - D~(x) qdot + d(t), x = (q, p), fitted by RhsNetwork's B_hat, D_hat."""
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
 
@@ -16,8 +13,7 @@ from dacph_drake.scenario import Learner
 
 
 class PortSample:
-    """The column layout [q, p, qdot, u, tau_obs] (n each) of a port sample; the band-pass
-    acts on its ``regressed`` part [qdot, u, tau_obs].
+    """Port sample columns [q, p, qdot, u, tau_obs] (n each); ``regressed``: the last three.
 
     Args:
         n: The number of joints."""
@@ -31,12 +27,9 @@ class PortSample:
 
 
 class BandPassCascade:
-    """A cascade of first-order sections sampled at h, high-pass ones then low-pass ones,
-
-        low-pass  y_k = y_(k-1) + a (x_k - y_(k-1)),   a = 1 - exp(-2 pi f h)
-        high-pass x_k - (the low-pass of x at f),
-
-    its state one row per section (its low-pass memory), so it can live in a Drake Context.
+    """First-order sections sampled at h, high-pass then low-pass: low-pass y_k = y_(k-1) +
+    a (x_k - y_(k-1)), a = 1 - exp(-2 pi f h); high-pass x_k - (x's low-pass at f). Its
+    state, one row per section (the low-pass memory), can live in a Drake Context.
 
     Args:
         low: The high-pass sections' corner frequency f [Hz].
@@ -157,9 +150,8 @@ class RhsIdentifier:
         E_u = sum w ||u||^2 / n,  E_q = sum w ||qdot||^2 / n,
         E_ij = E_u ("pooled") or max(E_i, E_j), E_j = sum w u_j^2 ("per_input").
 
-    The prior term holds at (B0, D0) what the window does not inform; dividing by E_u + E_q
-    makes rho dimensionless and the loss O(1) for Adam. One identifier fits a batch
-    (ForTrials): one StackedRhsNetworks, Adam with moments per trial.
+    The prior holds at (B0, D0) what the window does not inform; dividing by E_u + E_q
+    makes rho dimensionless and the loss O(1) for Adam. ForTrials: one network per trial.
 
     Args:
         n: The number of joints.
@@ -216,8 +208,7 @@ class RhsIdentifier:
 
     def Weights(self, times: torch.Tensor, t_now: float, window_starts: Sequence[float]
                 ) -> torch.Tensor:
-        """The samples' weights (trials, samples), normalized to sum 1 per trial (uniform in
-        plain mode).
+        """The samples' weights (trials, samples), sum 1 per trial (uniform in plain mode).
 
         Args:
             times: The samples' times (trials, samples) [s].
@@ -255,11 +246,10 @@ class RhsIdentifier:
 
     def ConstantFit(self, rows: np.ndarray, t_now: float, window_start: float,
                     trial: int = 0) -> np.ndarray:
-        """The constant B (n x n) that best fits a trial's window with the current D_hat(x):
+        """The constant B (n x n) best fitting a trial's window with the current D_hat(x):
         row i by weighted ridge least squares of tau_i + D_hat_i qdot_i on u, B_ij held to
-        B0_ij with weight rho E_ij / F_ij^2, since the network moves B_ij in steps F_ij
-        times its own (a coupling into a light joint stays near its prior, as in training).
-        D is left to Adam: on heavy joints it is hardly in the data.
+        B0_ij with weight rho E_ij / F_ij^2, as in training (the network steps B_ij by F_ij
+        times its own). D is left to Adam: on heavy joints it is hardly in the data.
 
         Args:
             rows: Trial ``trial``'s window (samples, 1 + PortSample size).
@@ -289,9 +279,8 @@ class RhsIdentifier:
 
     def WarmStart(self, rows: np.ndarray, t_now: float, window_start: float,
                   trial: int = 0) -> None:
-        """Restarts a trial's B_hat at its window's ConstantFit (after a hold Adam starts
-        from the new relation's best constant B) and Adam's moments of that layer only
-        (fresh moments make Adam's next steps about lr, which would kick D_hat).
+        """Restarts a trial's B_hat at its window's ConstantFit, and Adam's moments of that
+        layer only (fresh moments make Adam's next steps about lr, which would kick D_hat).
 
         Args:
             rows: The trial's window (samples, 1 + PortSample size).
@@ -314,10 +303,9 @@ class RhsIdentifier:
 
     def FitTrials(self, rows: np.ndarray, t_now: float, window_starts: Sequence[float],
                   fitting: np.ndarray) -> np.ndarray:
-        """Takes settings.steps_per_update Adam steps of some trials; in regularized mode
-        with step_guard G > 0 a trial's steps are undone if its loss after them exceeds G
-        times its loss before (Adam's moments keep the gradients seen). Returns which
-        trials' steps were kept (False for the others).
+        """Takes settings.steps_per_update Adam steps of some trials and returns whose were
+        kept: in regularized mode with step_guard G > 0 a trial's are undone if they raise
+        its loss over G times its loss before (Adam's moments keep the gradients seen).
 
         Args:
             rows: The trials' windows (trials, samples, width).
@@ -380,9 +368,8 @@ class RhsIdentifier:
 
     def StatisticsOfTrials(self, rows: np.ndarray, t_now: float,
                            window_starts: Sequence[float]) -> FitStatistics:
-        """FitStatistics (fields of shape (trials,)) of each trial on its window,
-        recency-weighted in regularized mode, the samples before a change included: they
-        show the stale model's misfit.
+        """FitStatistics (fields (trials,)) of each trial on its window, recency-weighted in
+        regularized mode, samples before a change included (they show the stale misfit).
 
         Args:
             rows: The trials' windows (trials, samples, width).
@@ -400,8 +387,7 @@ class RhsIdentifier:
                              beta_hat=1.0 + np.sqrt(loss / np.maximum(signal, 1e-300)))
 
     def RelativeResiduals(self, rows: np.ndarray) -> np.ndarray:
-        """Each trial's relative residual sqrt(sum ||r||^2 / sum ||tau||^2) on its rows
-        (trials,).
+        """Each trial's relative residual sqrt(sum ||r||^2 / sum ||tau||^2) (trials,).
 
         Args:
             rows: The trials' rows (trials, samples, width)."""
@@ -430,11 +416,10 @@ class RhsIdentifier:
 
 
 class ChangeDetector:
-    """Flags an abrupt change of the port relation. State (a vector, for a Drake Context):
-    [hold_until, window_start, count, the newest samples' last HISTORY relative residuals].
-    Update: nothing while t < hold_until; a change if MIN_HISTORY residuals are known and
-    e_new > max(ratio median(history), floor): hold_until = window_start = t + hold, the
-    history restarts; else e_new joins the history.
+    """Flags an abrupt change of the port relation; state (for a Drake Context) [hold_until,
+    window_start, count, the last HISTORY relative residuals]. Nothing while t < hold_until;
+    a change if MIN_HISTORY residuals are known and e_new > max(ratio median(history),
+    floor) (Changed); else e_new joins the history.
 
     Args:
         ratio: The jump over the history's median that is a change.
@@ -473,7 +458,7 @@ class ChangeDetector:
         return float(state[1])
 
     def Changed(self, state: np.ndarray, t: float) -> np.ndarray:
-        """The state after a change known at time t (hold_until = window_start = t + hold).
+        """The state after a change at t: hold_until = window_start = t + hold, no history.
 
         Args:
             state: The detector's state.

@@ -1,26 +1,17 @@
-"""The local Bayesian learner (``learner.model: local_bayes``): per joint i, the port
-relation's row
-
-    tau_i = sum_j B_ij(x) u_j - D_i(x) qdot_i + d_i(t)
-
-with every entry a local linear model around the newest sample (t_now, p_now),
-
-    X(x) = X + X_t (t - t_now) + X_p (p_i - p_now,i),      X in {B_i1..B_in, D_i},
-
-fitted by Bayesian linear regression, with exponential forgetting, to the band-passed
-products of the port signals with those features (LocalBayesChannels: exact when B
-moves) on the samples since the row's last restart. The filter's memory of what came
-before the window is a known span projected out (kernels.bayes.project_out): a window is
-consistent from its first sample, and a change costs a restart, not a wait. The
-residual's variance is calibrated in kernels.bayes.fit_row.
+"""The local Bayesian learner (``learner.model: local_bayes``): per joint i, the port row
+tau_i = sum_j B_ij(x) u_j - D_i(x) qdot_i + d_i(t), every entry a local linear model
+around the newest sample, X(x) = X + X_t (t - t_now) + X_p (p_i - p_now,i) for X in
+{B_i1..B_in, D_i}, fitted by Bayesian linear regression with exponential forgetting to the
+band-passed products of the port signals and those features (LocalBayesChannels: exact
+when B moves) since the row's last restart. The filter's memory of earlier samples is
+projected out (kernels.bayes.project_out): a change costs a restart, not a wait.
 
 A row restarts when its newest residual jumps (learner.change_ratio, change_floor), when
-its fit leaves the previous fit's prediction by more than the credible set's quantile (a
-fit through an undetected switch can look good), or when its gain or damping is credibly
-below zero; all rows restart when the LHS model changes. An entry is published as learned
-where the data move it from the prior by more than ``margin`` credible half-widths, so it
-is no worse than the prior; else at the prior, with the learned interval (or, while the
-row is not determined, the prior's range) around it."""
+its fit leaves the previous fit's prediction (a fit through an undetected switch can look
+good), or when its gain or damping is credibly below zero; all rows restart when the LHS
+model changes. An entry is published as learned where the data move it from the prior by
+more than ``margin`` credible half-widths (no worse than the prior); else at the prior,
+with the learned interval (or, while the row is undetermined, the prior's range)."""
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Optional, Sequence, Tuple
@@ -44,11 +35,8 @@ HISTORY, MIN_HISTORY = 10, 3
 
 
 class LocalBayesChannels(Channels):
-    """The band-passed channels of the local model, per trial (n^2 + 6 n), of the port
-    sample's u, qdot, tau (anti-aliased by the observer) and p, at its time t [s]:
-
-        [u_j (n), u_j t (n), u_j p_i (n^2, index i n + j), qdot_i (n), qdot_i t (n),
-         qdot_i p_i (n), tau_i (n)]
+    """The local model's channels (n^2 + 6 n per trial) of a sample at t [s]: [u_j, u_j t,
+    u_j p_i (n^2, at i n + j), qdot_i, qdot_i t, qdot_i p_i, tau_i], the others n each.
 
     Args:
         n: The number of joints."""
@@ -74,15 +62,11 @@ class LocalBayesChannels(Channels):
 
 
 class LocalModelLayout:
-    """The published vector of the local model per trial, for the k = n^2 + n quantities
-    [vec(B), diag(D)]:
-
-        [t_ref, p_ref (n), value (k), drift (k) [1/s], slope (k) [per unit p_i],
-         interval below, above (k each), set below, above (k each), learned (k)]
-
-    The estimate at (t, p) is value + drift (t - t_ref) + slope (p_i - p_ref,i); the
-    interval (credible_level) and set (certificate_level) are [estimate - below,
-    estimate + above]; learned is 1 where the entry is the learner's, 0 the prior's.
+    """The local model's published vector per trial, k = n^2 + n quantities [vec(B), D]:
+    [t_ref, p_ref (n), value (k), drift (k) [1/s], slope (k) [per unit p_i], interval
+    below, above (k each), set below, above (k each), learned (k)]. The estimate at (t, p)
+    is value + drift (t - t_ref) + slope (p_i - p_ref,i); the interval (credible_level) and
+    set (certificate_level) are [estimate - below, estimate + above]; learned: 1 learner's.
 
     Args:
         n: The number of joints."""
@@ -114,8 +98,7 @@ class LocalModel:
         self._row = np.concatenate([np.repeat(np.arange(n), n), np.arange(n)])
 
     def Stack(self, models: Sequence["LocalModel"]) -> "LocalModel":
-        """The batch's evaluator (learning.PublishedModel.Stack): this one, which serves any
-        batch of its n.
+        """learning.PublishedModel.Stack: this one, which serves any batch of its n.
 
         Args:
             models: The batch's trials' models."""
@@ -148,8 +131,7 @@ class LocalModel:
 
 
 def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
-    """The cascade's output (length, sections) from each unit state with zero input:
-    column s from state e_s, row 0 the first output after it.
+    """The cascade's zero-input output (length, sections), column s from unit state e_s.
 
     Args:
         cascade: The band-pass cascade.
@@ -164,9 +146,7 @@ def free_response(cascade: BandPassCascade, length: int) -> np.ndarray:
 
 def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
                 ) -> np.ndarray:
-    """The prior's range [lower, upper] (2, n^2 + n) of every quantity [vec(B), diag(D)]:
-    B_ii in gain_range B0_i, |B_ij| <= entry_coupling sqrt(B0_i B0_j), D_i in damping_range
-    D0_i (learner.bayes).
+    """The prior's range [lower, upper] (2, n^2 + n) of [vec(B), diag(D)] (LocalBayes).
 
     Args:
         bayes: The local Bayesian learner's settings.
@@ -184,9 +164,8 @@ def prior_range(bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float]
 
 
 def entry_coupling(bayes: LocalBayes, n: int) -> float:
-    """The prior's per-entry bound (and sd) of one |B_ij| / sqrt(B0_i B0_j): bayes.coupling
-    bounds a row's total, shared by its n - 1 entries, so the Gershgorin radius does not
-    grow.
+    """The prior's bound (and sd) of one |B_ij| / sqrt(B0_i B0_j): bayes.coupling bounds a
+    row's total, shared by its n - 1 entries, so the Gershgorin radius does not grow.
 
     Args:
         bayes: The local Bayesian learner's settings.
@@ -198,17 +177,14 @@ def physical_claims(point: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                     bayes: LocalBayes, B0: Sequence[float], D0: Sequence[float],
                     error_sd: Optional[np.ndarray] = None
                     ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What the published estimates say about the physical B~ and D~: (estimate, lower,
-    upper), each (T, n^2 + n).
-
-    The port is tau_obs = p_dot + dH/dq of the LHS model: with M_hat = (I + E) M~ the
-    learner sees (I + E) B~ and (I + E) D~ (port data cannot tell gain from inertia), so
-    B~ = (I + E)^-1 B ~ (I - E) B. With E's entries of sd e_ik (``error_sd``, the run's
-    measurement, dynamics/model_error.py, and bayes.model_error in quadrature), each
-    half-width grows in quadrature by z sqrt(sum_k e_ik^2 B_kj^2) (B_ij) or
-    z sqrt(sum_k e_ik^2 D_k^2) (D_i: damping leaks across joints through E), z the
-    normal quantile of credible_level; an entry within bayes.margin half-widths of the
-    prior is claimed at the prior.
+    """What the published estimates say about the physical B~, D~: (estimate, lower, upper),
+    each (T, n^2 + n). The port is tau_obs = p_dot + dH/dq of the LHS model: with M_hat =
+    (I + E) M~ the learner sees (I + E) B~ and (I + E) D~ (port data cannot tell gain from
+    inertia), so B~ = (I + E)^-1 B ~ (I - E) B. With E's entries of sd e_ik (``error_sd``,
+    and bayes.model_error in quadrature) each half-width grows in quadrature by
+    z sqrt(sum_k e_ik^2 B_kj^2) (B_ij) or z sqrt(sum_k e_ik^2 D_k^2) (D_i: damping leaks
+    across joints through E), z the normal quantile of credible_level; an entry within
+    bayes.margin half-widths of the prior is claimed at the prior.
 
     Args:
         point: The published estimates [vec(B), diag(D)] (T, n^2 + n).
@@ -254,8 +230,7 @@ class _RowState:
 
 @dataclass
 class _Prior:
-    """One trial's prior per row: mean and sd of [const, drift, slope] per entry, the
-    entries' scales (n, n + 1) and every quantity's range (2, n^2 + n)."""
+    """One trial's prior per row: mean and sd of [const, drift, slope], scales, ranges."""
     mean: np.ndarray
     sd: np.ndarray
     scale: np.ndarray
@@ -263,8 +238,7 @@ class _Prior:
 
 
 class LocalBayesLearner(PortLearner):
-    """The local Bayesian learner of a batch; its state per trial is, per row, _RowState
-    (window start, change-test history, previous fit).
+    """The local Bayesian learner of a batch; its state: a _RowState per trial and row.
 
     Args:
         settings: The learner's settings (``bayes``, band, forgetting, window, changes).
@@ -316,8 +290,7 @@ class LocalBayesLearner(PortLearner):
 
     @staticmethod
     def PriorSet(settings: Learner, B0: Sequence[float], D0: Sequence[float]) -> np.ndarray:
-        """The prior's range of B (2 x n x n), the credible set before any learning
-        (prior_range).
+        """prior_range's B (2 x n x n): the credible set before any learning.
 
         Args:
             settings: The learner's settings.
@@ -371,8 +344,7 @@ class LocalBayesLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Fits every trial's rows, oldest sample first, and publishes: (published, log
-        rows, state), as PortLearner.Update.
+        """PortLearner.Update: fits each trial's rows; (published, log rows, state).
 
         Args:
             t: The time [s].
@@ -461,13 +433,10 @@ class LocalBayesLearner(PortLearner):
         return False
 
     def _PriorResidualJumped(self, state, t, rows, prior) -> np.ndarray:
-        """Which rows' port relation changed by the prior's own residual: the prior (B0,
-        D0) is one fixed model, so its relative residual on the newest samples moves
-        only with the port. It is tested for every row, determined or not (a young
-        window has no fit to test, and one fitted through a switch it straddles looks
-        good); a jump by change_ratio over its recent median, above change_floor,
-        restarts the row and begins a new history at the new level (``state`` in
-        place)."""
+        """Which rows' port relation changed by the prior's residual on the newest samples,
+        which moves only with the port ((B0, D0) is fixed); tested for every row, determined
+        or not: a jump by change_ratio over its recent median, above change_floor, restarts
+        the row and a history at the new level (``state`` in place)."""
         S, n = self._row_state, self.n
         newest = rows[rows[:, 0] > t - self._period + 1e-9, 1:]
         jumped = np.zeros(n, bool)
@@ -495,8 +464,7 @@ class LocalBayesLearner(PortLearner):
 
     def _EntrySd(self, trial, t, times, starts, variance) -> np.ndarray:
         """Each row's entries' sd (n, n + 1): the posterior's and the local model's error,
-        curvature / 2 x the weighted mean of (t_k - t_now)^2, per unit of the entry's
-        scale."""
+        curvature / 2 x the weighted mean of (t_k - t_now)^2 (times the entry's scale)."""
         n, bayes = self.n, self._bayes
         scale = self._priors[trial].scale
         sd = np.empty((n, n + 1))
@@ -509,8 +477,7 @@ class LocalBayesLearner(PortLearner):
         return sd
 
     def _Jumped(self, state, t, newest, mean, variance, sd) -> np.ndarray:
-        """Which rows' fits left their previous fit's prediction at (t, p) by more than the
-        credible set's quantile of the combined sd, in some entry."""
+        """Rows whose fit left the previous one's prediction by the set's quantile of sd."""
         S, n = self._row_state, self.n
         p = newest[1 + n:1 + 2 * n]
         previous = state[:, S.fit_time]
@@ -547,22 +514,19 @@ class LocalBayesLearner(PortLearner):
         state[:, S.fit_spread] = spread.reshape(n, -1)
 
     def _Restart(self, state, rows, t) -> None:
-        """Restarts the masked rows at the newest samples (``state`` in place)."""
         state[rows, 0] = t + 1e-9
         state[rows, 1] = 0.0
         state[rows, self._row_state.fit_time] = -np.inf
 
     @staticmethod
     def _Remember(row: np.ndarray, relative: float) -> None:
-        """Adds a relative residual to a row's history (its state, in place)."""
         if np.isfinite(relative):
             count = int(row[1])
             row[2 + count % HISTORY] = relative
             row[1] = count + 1
 
     def _Publish(self, trial, t, newest, mean, sd, determined, dof):
-        """The published vector from the rows' posteriors and entry sd (Student's t at each
-        row's residual dof); a damping fitted below zero keeps the prior and its range."""
+        """The published vector (Student's t at each row's dof); damping < 0: prior's."""
         L, n, bayes = self._layout, self.n, self._bayes
         prior = self._priors[trial]
         out = self._prior_vectors[trial].copy()
@@ -600,8 +564,7 @@ class LocalBayesLearner(PortLearner):
         return out
 
     def _Log(self, trial, t, rows, published, fitted, determined, log):
-        """The log row: fitted and prior weighted squared residuals on the buffer, beta_hat,
-        holding, whether any quantity is learned, the share at the prior."""
+        """The trial's LearnerLog row."""
         n, layout = self.n, LearnerLog()
         times = rows[:, 0]
         w = np.exp((times - t) / self._bayes.forgetting)

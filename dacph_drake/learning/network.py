@@ -5,9 +5,8 @@
     D_hat(x) = diag(softplus(W_D h_D + b_D))      (positive definite)
     tau_hat = B_hat(x) u - D_hat(x) qdot          (d_known = 0)
 
-Trained in torch (float64); the fast loops evaluate a compiled, exported copy
-(ExportedNetwork), so torch never runs inside them. The output layers start at zero with
-biases vec(B0 / F) and softplus^-1(D0): the first estimate is the nominal RHS."""
+Trained in torch (float64); the fast loops evaluate a compiled copy (ExportedNetwork). The
+output layers start at zero, biases vec(B0 / F) and softplus^-1(D0): the nominal RHS."""
 from typing import List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -25,9 +24,8 @@ def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarr
         "uniform": F_ij = 1 (the paper's network)
         "inertia": F_ij = min(1, m_i / m_j),  m = ``joint_inertias`` (diag M(q0))
 
-    Why: an error delta in B_ij adds delta u_j to joint i's torque; where u_j is a
-    shoulder's and joint i a light wrist, no in-band data bound delta tightly enough, so
-    that coupling and its learning steps are scaled down by m_i / m_j.
+    An error delta in B_ij adds delta u_j to joint i's torque; for a shoulder's u_j and a
+    light wrist i no in-band data bound delta tightly, so F scales it and its steps down.
 
     Args:
         coupling: "uniform" or "inertia" (the learner's ``coupling`` setting).
@@ -45,8 +43,7 @@ def coupling_factors(coupling: str, joint_inertias: Sequence[float]) -> np.ndarr
 
 def port_torque(B: torch.Tensor, D: torch.Tensor, u: torch.Tensor,
                 qdot: torch.Tensor) -> torch.Tensor:
-    """The RHS's port torque tau = B u - D qdot (..., n) for samples (torch); the leading
-    axes broadcast (one B for all samples, or one per sample).
+    """The port torque tau = B u - D qdot (..., n) in torch; the leading axes broadcast.
 
     Args:
         B: Shape (..., n, n).
@@ -57,8 +54,7 @@ def port_torque(B: torch.Tensor, D: torch.Tensor, u: torch.Tensor,
 
 
 class RhsNetwork(torch.nn.Module):
-    """The physics-informed RHS network of one trial (module docstring), starting at the
-    constant prior (B0, D0).
+    """One trial's physics-informed RHS network (module docstring), starting at (B0, D0).
 
     Args:
         n: The number of joints.
@@ -85,8 +81,7 @@ class RhsNetwork(torch.nn.Module):
         torch.random.set_rng_state(generator_state)
 
     def set_constant(self, B: np.ndarray, D: Sequence[float]) -> None:
-        """Sets the output layers to B_hat = B, D_hat = diag(D) at every state (zero
-        weights).
+        """Sets the output layers to B_hat = B, D_hat = diag(D) everywhere (zero weights).
 
         Args:
             B: The constant B_hat (n x n).
@@ -97,8 +92,7 @@ class RhsNetwork(torch.nn.Module):
             self.head_D.bias.copy_(torch.as_tensor(np.log(np.expm1(np.asarray(D, float)))))
 
     def set_constant_B(self, B: np.ndarray) -> None:
-        """Sets B's output layer to B_hat = B at every state (zero weights); D_hat
-        unchanged.
+        """Sets B's output layer to B_hat = B at every state (zero weights), not D_hat's.
 
         Args:
             B: The constant B_hat (n x n)."""
@@ -134,9 +128,8 @@ class RhsNetwork(torch.nn.Module):
 
 
 class StackedRhsNetworks(torch.nn.Module):
-    """The RhsNetworks of a batch's trials as one module with one parameter ``flat`` (trials
-    x P), row i trial i's exported vector, the layers views of it: one forward and backward
-    pass of batched products trains them all, each trial's gradient its own row.
+    """A batch's RhsNetworks as one parameter ``flat`` (trials x P, row i trial i's export),
+    the layers its views: one batched pass trains all, each trial's gradient its own row.
 
     Args:
         networks: Each trial's RhsNetwork, alike but for weights and coupling scales."""
@@ -161,8 +154,7 @@ class StackedRhsNetworks(torch.nn.Module):
     def forward(self, q: torch.Tensor, p: torch.Tensor,
                 trials: Optional[Union[Sequence[int], torch.Tensor]] = None
                 ) -> Tuple[torch.Tensor, torch.Tensor]:
-        """The estimates (B_hat (t, m, n, n), D_hat's diagonal (t, m, n)) of some trials at
-        their samples.
+        """Some trials' (B_hat (t, m, n, n), D_hat's diagonal (t, m, n)) at their samples.
 
         Args:
             q: The joint angles, shape (t, m, n) [rad].
@@ -214,9 +206,7 @@ def _mlp(inputs: int, hidden: List[int]) -> torch.nn.Sequential:
 
 
 class ExportedNetwork:
-    """RhsNetwork evaluated from its exported parameters by
-    kernels.network.evaluate_networks: one trial's learning.PublishedModel (a point
-    estimate: no credible set).
+    """RhsNetwork from its exported parameters: a PublishedModel with no credible set.
 
     Args:
         n: The number of joints.
@@ -255,8 +245,7 @@ class ExportedNetwork:
     @staticmethod
     def ForLearner(settings: Learner, model: ReducedModel, q0: Sequence[float]
                    ) -> "ExportedNetwork":
-        """The evaluator of the network a learner trains (the learner and every system
-        reading its ``weights`` port build their own from the same settings).
+        """The evaluator of a learner's network (each reader of ``weights`` builds its own).
 
         Args:
             settings: The learner's settings (scenario.Learner).
@@ -295,8 +284,7 @@ class NetworkStack:
 
     def Estimate(self, published: np.ndarray, t: float, q: np.ndarray, p: np.ndarray
                  ) -> PortEstimate:
-        """Every trial's estimate at its state (PublishedModel.Estimate), a
-        learning.PortEstimate: the point, which is also its interval (no credible set).
+        """PublishedModel.Estimate: the point, which is also its interval (no credible set).
 
         Args:
             published: Each trial's exported parameters (trials, size).
@@ -309,8 +297,7 @@ class NetworkStack:
 
     def Evaluate(self, weights: np.ndarray, q: np.ndarray, p: np.ndarray
                  ) -> Tuple[np.ndarray, np.ndarray]:
-        """The estimates (B_hat (trials, n, n), D_hat's diagonal (trials, n)) of every
-        trial, trial i at weights[i] and (q[i], p[i]).
+        """(B_hat (trials, n, n), diag D_hat (trials, n)), each trial at its weights, q, p.
 
         Args:
             weights: Each trial's exported parameters, shape (trials, size).

@@ -1,15 +1,11 @@
 """The paper's physics-informed network as a learning.PortLearner (``learner.model:
-network``): identification.RhsIdentifier fits network.RhsNetwork (docs/equations.md
-E33-E35) to the window of port samples [q, p, qdot, u, tau_obs], band-passed
-(regularized mode) or raw (plain mode, the paper's).
-
-In regularized mode a ChangeDetector pauses training after an abrupt change, at the start
-(settings.start_hold) and after an LHS model change; a fit needs settings.min_window
-seconds of samples, and the run's first fit starts from the window's best constant B
-(settings.warm_start). With settings.prior_fallback the prior (B0, D0) is published
-whenever the network does not beat it. The estimate is a point estimate, no credible set.
-The torch modules and Adam's moments live in this object, not in the Context: one
-diagram per run."""
+network``): identification.RhsIdentifier fits network.RhsNetwork (E33-E35) to the window
+of port samples, band-passed (regularized mode) or raw (plain mode, the paper's). In
+regularized mode a ChangeDetector pauses training after an abrupt change, at the start
+(start_hold) and after an LHS model change; a fit needs min_window seconds of samples,
+the first starts from the window's best constant B (warm_start), and with prior_fallback
+(B0, D0) is published while the network does not beat it. The torch modules and Adam's
+moments live in this object, not in the Context: one diagram per run."""
 from typing import Sequence, Tuple
 
 import numpy as np
@@ -22,8 +18,7 @@ from dacph_drake.scenario import Learner
 
 
 class PortSampleChannels(Channels):
-    """The network's channels: the port sample's regressed part [qdot, u, tau_obs]
-    (identification.PortSample), so that the filtered sample keeps its layout.
+    """Channels [qdot, u, tau_obs]: the filtered sample keeps PortSample's layout.
 
     Args:
         n: The number of joints."""
@@ -44,9 +39,7 @@ class PortSampleChannels(Channels):
 
 
 class NetworkLearner(PortLearner):
-    """The network learner of a batch: per trial a network, Adam moments, window and
-    ChangeDetector; one torch pass fits every trial that fits this update. Its state per
-    trial is its detector's and its warm start's window start (-inf before it).
+    """A batch's network learner; per trial a ChangeDetector state and warm-start time.
 
     Args:
         settings: The learner's settings.
@@ -117,8 +110,7 @@ class NetworkLearner(PortLearner):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Detects changes, fits and publishes: (published, log rows, state), as
-        PortLearner.Update.
+        """PortLearner.Update: detects changes, fits and publishes (published, logs, state).
 
         Args:
             t: The time [s].
@@ -162,9 +154,8 @@ class NetworkLearner(PortLearner):
         return weights, logs, np.concatenate([detectors, warm_started[:, None]], axis=1)
 
     def _NetworkPublished(self, rows, t, window_starts, fitted, learning) -> np.ndarray:
-        """Whether each trial publishes its network, not the prior: always while learning,
-        unless settings.prior_fallback; then only if this update fitted and the network
-        fits the samples since the change and of the last period no worse than (B0, D0)."""
+        """Whether each trial publishes its network: while learning, unless prior_fallback;
+        then if fitted now and no worse than (B0, D0) since the change and last period."""
         count = self._trials
         if not learning:
             return np.zeros(count, bool)

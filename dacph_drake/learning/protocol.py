@@ -1,5 +1,4 @@
-"""The port learner's protocol: what it is given (LearnerTrial, Channels), what it
-publishes (PortEstimate, PublishedModel) and how it is driven (PortLearner)."""
+"""The port learner's protocol: its inputs, what it publishes and how it is driven."""
 from dataclasses import dataclass
 from typing import Optional, Protocol, Sequence, Tuple
 
@@ -13,10 +12,8 @@ class PortEstimate:
     Attributes:
         B: B_hat (trials, n, n).
         D: diag D_hat (trials, n) [N m s].
-        B_set: The credible set of B at the certificate level, entrywise bounds
-            (2, trials, n, n) (lower, upper); None for a learner without one.
-        B_interval: The reporting interval of B (learner.local_bayes.credible_level)
-            (2, trials, n, n); the point twice for a learner without one.
+        B_set: B's certificate-level credible set [lower, upper] (2, trials, n, n), or None.
+        B_interval: B's interval at credible_level (2, trials, n, n); else the point twice.
         D_interval: The same of D (2, trials, n)."""
     B: np.ndarray
     D: np.ndarray
@@ -26,8 +23,7 @@ class PortEstimate:
 
 
 class PublishedModel(Protocol):
-    """How the fast loops evaluate what a learner publishes, one per trial
-    (published_model); Stack(models) evaluates a batch's.
+    """How the fast loops evaluate what a learner publishes per trial; Stack: a batch's.
 
     Attributes:
         size: The published vector's length per trial.
@@ -57,8 +53,7 @@ class Channels(Protocol):
 
     Attributes:
         size: The channels per trial.
-        port_columns: Where the filtered sample [q, p, channels] holds the
-            band-passed [qdot, u, tau_obs] (the RHS integrator's evidence reads them)."""
+        port_columns: Where [q, p, channels] holds the band-passed [qdot, u, tau_obs]."""
     size: int
     port_columns: np.ndarray
 
@@ -71,12 +66,7 @@ class Channels(Protocol):
 
 
 class PortLearner(Protocol):
-    """A learner of a batch's trials (one: a single run), as RhsLearner drives it.
-
-    Every ``period`` RhsLearner calls Update with the buffered band-passed samples
-    of each trial; the learner returns what it publishes, its log row and its
-    state, which lives in the Context (so that a run restored from a snapshot
-    learns as the one it was taken from).
+    """A batch's learner, state in the Context (a restored snapshot learns alike).
 
     Attributes:
         channels: The channels its regression filter forms (Channels).
@@ -104,8 +94,7 @@ class PortLearner(Protocol):
     @staticmethod
     def PriorSet(settings: object, B0: Sequence[float], D0: Sequence[float]
                  ) -> Optional[np.ndarray]:
-        """The credible set [lower, upper] of B (2 x n x n) before any learning; None
-        for a learner without one.
+        """The credible set [lower, upper] of B (2 x n x n) before learning, or None.
 
         Args:
             settings: The learner's settings.
@@ -121,13 +110,11 @@ class PortLearner(Protocol):
     def Update(self, t: float, rows: np.ndarray, state: np.ndarray,
                model_changed: np.ndarray, learning: bool
                ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One learner update: (published (trials, model.size), log rows (trials, LearnerLog
-        size), state (trials, state_size)).
+        """One update: (published (trials, model.size), LearnerLog rows, state) per trial.
 
         Args:
             t: The time [s].
-            rows: Each trial's buffered samples, oldest first (trials, samples,
-                1 + 2 n + channels.size): [t, q, p, channels].
+            rows: Each trial's buffered samples [t, q, p, channels], oldest first.
             state: Each trial's state (trials, state_size).
             model_changed: Whether each trial's LHS model changed since the last update.
             learning: False publishes the prior (the dac-nominal ablation)."""

@@ -1,8 +1,6 @@
 """A run's signals by name (python-control's TimeResponseData, Drake's namedview): the
-columns of the controllers' logs named after their log_layout attributes
-(``alpha_error``, ``e_tau``, ``beta_hat``, ``position_error`` ...), every other log
-by its own name (``u``, ``tau``, ``state`` ...), and ``LOG.NAME`` where a name is in
-two logs (``rhs_log.e_norm``)."""
+controllers' log columns by their log_layout names (``alpha_error``, ``e_tau`` ...), other
+logs by their own (``u``, ``state`` ...), ``LOG.NAME`` where a name is in two logs."""
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -55,15 +53,11 @@ def signal_index(logs: Dict[str, np.ndarray]) -> Dict[str, Tuple[str, object]]:
 
 
 class Signals:
-    """A run's (or a batch's) signals by name.
-
-    ``signals["alpha_error"]`` is one array over time (T, or T x k); with several
-    trials (``Signals.Of(results)``) an array of traces, trials first.
+    """A run's signals by name, each over time (T, or T x k); a batch's: trials first.
 
     Args:
         time: The logged times [s] (T).
-        logs: Each trial's logs, one dict per trial.
-    """
+        logs: Each trial's logs, one dict per trial."""
 
     def __init__(self, time: np.ndarray, logs: Sequence[Dict[str, np.ndarray]]):
         self.time = np.asarray(time)
@@ -72,8 +66,7 @@ class Signals:
 
     @classmethod
     def Of(cls, results: Sequence) -> "Signals":
-        """The signals of a batch's trials as traces (a trial that stopped early is
-        nan after its stop).
+        """A batch's trials' signals as traces (nan after a trial's early stop).
 
         Args:
             results: The trials' loop.run_store.RunResult (one batch's time grid)."""
@@ -106,8 +99,7 @@ class Signals:
         return out
 
     def to_pandas(self, names: Sequence[str] = ()):
-        """The signals as a pandas DataFrame indexed by time [s]: a vector signal's
-        entries as NAME[i]; a batch's trials as a (trial, time) MultiIndex.
+        """A pandas DataFrame by time [s] (a batch: by trial, time), entries as NAME[i].
 
         Args:
             names: The signals (none: every log's named columns and raw logs)."""

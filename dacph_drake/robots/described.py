@@ -1,9 +1,6 @@
-"""An arm from a description file (scenario.DescribedArm: URDF/SDF/MJCF, the root
-body the free base): the description parsed once per diagram
-(description.ParsedDescription) into the ground truth's plant, which the controller's
-model evaluates in contexts of its own with its inertias scaled
-(floating_model.FloatingBaseModel), and the link-base clearance of its collision
-geometry."""
+"""An arm from a description file (scenario.DescribedArm: URDF/SDF/MJCF, the root body the
+free base), parsed once per diagram into the truth's plant, which the controller's model
+(FloatingBaseModel) evaluates in its own contexts, inertias scaled; its clearance."""
 import copy
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
@@ -95,10 +92,8 @@ def validate_bodies(arm: DescribedArm, bodies: Sequence[str]) -> None:
 
 def model_error_scale(arm: "DescribedArm", links: Optional[Sequence[float]],
                       base: Optional[float]) -> list:
-    """robot.nominal_inertia_scale for a sweep's model-error sample, one factor per body
-    with mass in the plant's order: ``base`` on the free base's body, links[j] on the
-    body joint j moves (its child), 1 on every other body (a welded tool, a locked
-    finger, a mounted description's own root); an entry left out is 1.
+    """robot.nominal_inertia_scale of a sweep's model error, per body with mass: ``base`` on
+    the free base's, links[j] on joint j's child, 1 on others (a welded tool) or left out.
 
     Args:
         arm: The robot section (parsed once per process and section).
@@ -118,9 +113,7 @@ _BODY_ROLES: Dict[str, Tuple[list, int, list]] = {}
 
 
 def _body_roles(arm: "DescribedArm") -> Tuple[list, int, list]:
-    """(body names with mass in the plant's order, the free base's index, each
-    joint's child's index or None where that body has no mass), cached per robot
-    section (its model error left out: the bodies do not depend on it)."""
+    """(massive body names, the base's index, each joint child's index or None), cached."""
     section = copy.copy(arm)
     section.nominal_inertia_scale = []
     key = repr(section)
@@ -136,8 +129,7 @@ def _body_roles(arm: "DescribedArm") -> Tuple[list, int, list]:
 
 
 def joint_friction(parsed: ParsedDescription, model: FloatingBaseModel) -> np.ndarray:
-    """The parsed description's joint Coulomb friction f (n) [N m] in q's order
-    (ParsedDescription.joint_friction, by name; zero where none).
+    """The description's joint Coulomb friction f (n) [N m] in q's order (zero where none).
 
     Args:
         parsed: The parsed description.
@@ -148,11 +140,8 @@ def joint_friction(parsed: ParsedDescription, model: FloatingBaseModel) -> np.nd
 
 def require_every_joint_moves_inertia(model: FloatingBaseModel, description: str
                                       ) -> None:
-    """Requires every actuated joint of a described arm to move some inertia.
-
-    A joint whose outboard bodies have no mass and no rotational inertia about its
-    axis has M_jj = 0: M(q) is singular, and the gain rule's bound, the sizing
-    rule's scales and the port's momentum are undefined.
+    """Requires every actuated joint to move some inertia: else M_jj = 0, M(q) is singular
+    and the gain rule's bound, the sizing's scales and the port's momentum are undefined.
 
     Args:
         model: The arm's model.
@@ -211,9 +200,8 @@ class DescribedRobot:
 
     @staticmethod
     def ResolvePaths(section: DescribedArm, folder: Path) -> None:
-        """robots.robot.Robot.ResolvePaths: the description, package_paths and packages;
-        shipped names, package:// URIs and a path that exists only relative to the
-        working directory stay.
+        """robots.robot.Robot.ResolvePaths: the description, package_paths and packages
+        (shipped names, package:// URIs, paths existing from the working directory stay).
 
         Args:
             section: The robot section (changed in place).
@@ -249,8 +237,7 @@ class DescribedRobot:
     @staticmethod
     def ApplyModelError(section: DescribedArm, links: Optional[Sequence[float]],
                         base: Optional[float]) -> None:
-        """robots.robot.Robot.ApplyModelError: on the bodies the joints move
-        (model_error_scale).
+        """robots.robot.Robot.ApplyModelError: on the joints' bodies (model_error_scale).
 
         Args:
             section: The robot section (changed in place).
@@ -276,26 +263,19 @@ class DescribedRobot:
 
     @property
     def joint_friction(self) -> np.ndarray:
-        """The description's joint Coulomb friction f (n) [N m] in q's order, which the
-        ground truth's RHS applies (robot.joint_friction "keep"; else zero)."""
+        """joint_friction(), which the truth's RHS applies (robot.joint_friction "keep")."""
         return joint_friction(self.parsed, self.model)
 
     @property
     def truth_plant(self) -> MultibodyPlant:
-        """The ground truth's plant: its default context holds the description's
-        inertias; the controller's model evaluates it with its own."""
+        """The parsed plant, its default context holding the description's inertias."""
         return self.parsed.plant
 
     @classmethod
     def AddGroundTruth(cls, builder: DiagramBuilder, trials: Sequence["DescribedRobot"]
                        ) -> Tuple[MultibodyPlant, SceneGraph]:
-        """Adds the ground-truth plant of a batch and its SceneGraph; returns
-        (plant, scene_graph).
-
-        One trial: its parsed plant and SceneGraph (ParsedDescription.AddTo: the
-        description is parsed once per diagram). A batch: one plant holding a copy
-        of each trial's arm (plant.AddClonedArms), whose dynamics are the parsed
-        plant's bit for bit.
+        """The batch's truth and SceneGraph, (plant, scene_graph): one trial's parsed plant,
+        or one plant of copies of each trial's arm (AddClonedArms), bit for bit the same.
 
         Args:
             builder: The closed loop's builder.
@@ -322,11 +302,8 @@ class DescribedRobot:
                               frictions=[t.joint_friction for t in trials])
 
     def RequireRunnableStart(self) -> None:
-        """Requires that a run can start at the scenario's q0: within the description's
-        joint limits (robot.joint_limits "stop"), every link's collision geometry outside
-        the base's (Clearance), and a ground-truth step of at least MIN_TRUTH_STEP (a
-        description whose joint damping over its inertia asks for less is named instead
-        of run for hours).
+        """Requires q0 within the joint limits ("stop"), links clear of the base, a truth
+        step >= MIN_TRUTH_STEP (damping asking for less is named, not run for hours).
 
         Raises:
             ConfigError: The joint beyond its limits, the link in the base, or the step."""
@@ -351,9 +328,7 @@ class DescribedRobot:
         require_clear_start(self.scenario.q0, self.Clearance())
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
-        """The run monitor's check of the description's joint limits: with
-        robot.joint_limits "stop" and finite limits, q -> "joint NAME at X rad beyond
-        [LOWER, UPPER] rad" for the first joint out of its limits, or None; else None."""
+        """robots.robot.Robot.LimitViolation, with joint_limits "stop" and finite limits."""
         if self.scenario.robot.joint_limits != "stop":
             return None
         arm = arm_joints(self.model)
@@ -396,15 +371,11 @@ class DescribedRobot:
                 if arm.potential.gain > 0 else None)
 
     def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
-        """q -> the ground truth's link-base clearance [m], for the run's monitor and the
-        start's check: the smallest signed distance between a link's collision geometry
-        and the base's, as the clearance potential measures it (its own contexts; q
-        alone), inf beyond CONTACT_QUERY."""
+        """robots.robot.Robot.Clearance: link_base_clearance, inf beyond CONTACT_QUERY."""
         return link_base_clearance(self.parsed, self.model, CONTACT_QUERY)
 
     def LiveView(self, loop: "ClosedLoop", meshcat: Meshcat) -> "viewers.LiveView":
-        """Makes a viewers.LiveView drawing the loop's ground truth through a
-        SpatialViewer, with R_d(t) from the loop's AttitudeController.
+        """A viewers.LiveView of the truth through a SpatialViewer, R_d(t) from the LHS.
 
         Args:
             loop: The closed loop (of this robot) being simulated.
@@ -417,8 +388,7 @@ class DescribedRobot:
 
     def WriteAnimation(self, logs: Dict[str, np.ndarray], out_html: Union[str, Path]
                        ) -> Path:
-        """Writes a self-contained HTML replay of a run's logs
-        (viewers.write_spatial_animation); returns its path.
+        """Writes a run's HTML replay (viewers.write_spatial_animation); returns its path.
 
         Args:
             logs: The run's logs (RunResult.logs).
@@ -428,8 +398,7 @@ class DescribedRobot:
                                        log_name=self.task.log_name)
 
     def MeasuredMasses(self) -> Tuple[float, float]:
-        """The ground truth's (total, base) mass [kg], as a spacecraft's mass
-        properties give them (the identifier's anchor, scenario.inertia)."""
+        """The truth's (total, base) mass [kg] as mass properties give them (the anchor)."""
         base = KinematicTree.FromPlant(self.truth_plant).bodies[0]
         return self.TotalMass(), float(base.default_mass())
 
@@ -442,15 +411,13 @@ class DescribedRobot:
 def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
                  task: Optional[object] = None,
                  rows: Sequence[int] = ATTITUDE_ROWS) -> Scenario:
-    """The scenario of an arm, its per-joint settings sized by the module's rule
-    (unsized where q0 has not one entry per joint: its validation names q0's length).
+    """The scenario of an arm, sized to it (unsized where q0's length is wrong).
 
     Args:
         robot: The arm's robot section.
         q0: The initial joint angles [rad] (default: robots.start_pose.choose_start).
         task: The task it tracks (default EndEffectorAttitude()).
-        rows: The GJM's rows the task tracks (tasks.Task.jacobian_rows; default the
-            attitude's).
+        rows: The GJM's rows the task tracks (Task.jacobian_rows; default the attitude's).
 
     Raises:
         ConfigError: Bad assembly settings, an unloadable description, no start found."""
@@ -519,9 +486,8 @@ def arm_scenario(robot: DescribedArm, q0: Optional[Sequence[float]] = None,
 
 
 def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
-    """The reference's amplitude as a joint angle [rad]: the attitude's; a position's
-    [m] over the position rows' largest singular value at q0 [m/rad] (the longest
-    lever the joints move the end effector by)."""
+    """The reference's amplitude as a joint angle [rad]: the attitude's, or a position's [m]
+    over the position rows' largest singular value at q0 [m/rad] (the longest lever)."""
     if getattr(task, "reference", None) is not None:
         return task.reference.amplitude
     lever = np.linalg.svd(task_jacobian(model, q0, rows=POSITION_ROWS),
@@ -531,8 +497,7 @@ def _reference_angle(model: "FloatingBaseModel", q0: np.ndarray, task) -> float:
 
 def link_base_clearance(parsed: ParsedDescription, model: FloatingBaseModel,
                         query_distance: float = 1.0) -> Callable[[np.ndarray], float]:
-    """q -> the smallest signed distance [m] between a link's collision geometry and the
-    base's, as the clearance potential measures it (with its own contexts).
+    """q -> the smallest link-base signed distance [m], as the clearance potential's.
 
     Args:
         parsed: The arm's parsed description.
@@ -546,8 +511,7 @@ def link_base_clearance(parsed: ParsedDescription, model: FloatingBaseModel,
 def null_space_rate(parsed: ParsedDescription, model: FloatingBaseModel,
                     potential: ClearancePotential
                     ) -> Optional[Callable[[np.ndarray], float]]:
-    """q -> the clearance potential's null-space rate ||xi|| = eta ||grad U|| [rad/s], or
-    None with a zero gain or eta.
+    """q -> the null-space rate ||xi|| = eta ||grad U|| [rad/s]; None with gain or eta 0.
 
     Args:
         parsed: The arm's parsed description.
@@ -562,9 +526,7 @@ def null_space_rate(parsed: ParsedDescription, model: FloatingBaseModel,
 
 
 def _RequireOneTree(trials) -> None:
-    """ConfigError unless the trials' arms have one kinematic tree (the same
-    joints on the same bodies: the batch's compiled kernels share it; their
-    dimensions, axes and inertias may differ)."""
+    """ConfigError unless the trials' arms share one kinematic tree, as the kernels do."""
     first = KinematicTree.FromPlant(trials[0].parsed.plant)
     for i, trial in enumerate(trials[1:], start=1):
         tree = KinematicTree.FromPlant(trial.parsed.plant)

@@ -1,6 +1,4 @@
-"""The planar n-link arm (scenario.PlanarArm): the ground truth built directly
-(dynamics/plant.py), the controller's closed-form reduced model with its compiled
-kernels (reduced_model.ReducedOrderModel) and the kinematic base-repulsion clearance."""
+"""The planar n-link arm (scenario.PlanarArm): truth, closed-form model, clearance."""
 import copy
 from pathlib import Path
 from typing import Callable, Dict, Optional, Sequence, Tuple, Union
@@ -67,8 +65,7 @@ class PlanarRobot:
     def SizedScenario(section: PlanarArm, q0: Optional[Sequence[float]],
                       task: Optional[EndEffectorAngle], rows: Sequence[int]
                       ) -> Optional[Scenario]:
-        """robots.robot.Robot.SizedScenario: planar_arm_scenario; None for the paper's
-        arm (Scenario's defaults).
+        """robots.robot.Robot.SizedScenario: planar_arm_scenario; None for the paper's arm.
 
         Args:
             section: The file's robot section.
@@ -97,9 +94,8 @@ class PlanarRobot:
 
     @staticmethod
     def ApplyTruthSample(section: PlanarArm, sampled: Dict[str, object]) -> None:
-        """robots.robot.Robot.ApplyTruthSample: per link mass (and inertia), length
-        (com, width; inertia by its square) and inertia factors, the base's mass (and
-        inertia) and inertia factors.
+        """robots.robot.Robot.ApplyTruthSample: per link mass (and inertia), length (com,
+        width; inertia squared) and inertia factors; the base's mass (and inertia), inertia.
 
         Args:
             section: The robot section (changed in place).
@@ -162,8 +158,7 @@ class PlanarRobot:
     @classmethod
     def AddGroundTruth(cls, builder: DiagramBuilder, trials: Sequence["PlanarRobot"]
                        ) -> Tuple[MultibodyPlant, SceneGraph]:
-        """Adds one plant of every trial's true arm (AddFreeFloatingArms); returns
-        (plant, scene_graph).
+        """A plant of every trial's true arm (AddFreeFloatingArms): (plant, scene_graph).
 
         Args:
             builder: The closed loop's builder.
@@ -183,8 +178,7 @@ class PlanarRobot:
                        phases=[t.scenario.phases for t in trials])
 
     def RequireRunnableStart(self) -> None:
-        """ConfigError unless every true link is outside the base at q0 and the
-        task is regular there (Task.RequireRegularStart)."""
+        """ConfigError unless every true link clears the base at q0, the task regular."""
         require_clear_start(self.scenario.q0, self.Clearance())
         self.task.RequireRegularStart(self)
 
@@ -206,8 +200,7 @@ class PlanarRobot:
         return None                 # the planar arm's joints turn freely
 
     def Clearance(self) -> Optional[Callable[[np.ndarray], float]]:
-        """q -> the smallest clearance [m] of the true arm's links from the base, for the
-        run's monitor."""
+        """q -> the smallest clearance [m] of the true arm's links from the base."""
         return BaseRepulsionPotential(self.scenario.robot.truth,
                                       self.scenario.robot.potential).MinClearance
 
@@ -222,8 +215,7 @@ class PlanarRobot:
 
     def WriteAnimation(self, logs: Dict[str, np.ndarray], out_html: Union[str, Path]
                        ) -> Path:
-        """Writes a self-contained HTML replay of a run's logs (viewers.write_animation);
-        returns its path.
+        """Writes a run's HTML replay (viewers.write_animation); returns its path.
 
         Args:
             logs: The run's logs (RunResult.logs).
@@ -240,13 +232,11 @@ class PlanarRobot:
 
 def planar_arm_scenario(robot: PlanarArm, q0: Optional[Sequence[float]] = None,
                         task: Optional[EndEffectorAngle] = None) -> Scenario:
-    """The scenario of a planar arm of any number of links, sized by the module's
-    rule: its uncertainty and disturbance from the true arm's joint inertias at q0
-    and the reference's rates; without a task, the LHS damping K_d = Kd I at most
-    LHS_DAMPING_RATE inf_q lambda_min(M), so that the sampled LHS loop stays well
-    damped on an arm with light distal links; periods.rhs shortened where the gain
-    rule asks for it (rhs_period: c grows as Kd / inf lambda_min); the paper's phases,
-    periods, RHS and learner settings.
+    """The scenario of a planar arm of any number of links: uncertainty and disturbance from
+    the true joint inertias at q0 and the reference's rates; without a task, K_d = Kd I at
+    most LHS_DAMPING_RATE inf_q lambda_min(M) (the sampled LHS loop stays well damped with
+    light distal links); periods.rhs shortened where the gain rule asks (rhs_period: c
+    grows as Kd / inf lambda_min); otherwise the paper's settings.
 
     Args:
         robot: The robot section (the defaults' nominal arm: a copy of its truth).

@@ -1,6 +1,4 @@
-"""The Robot protocol: what a scenario's load, a sweep and a closed loop's build need
-of the arm, whatever task it serves (tasks.Task); robots.planar and robots.described
-implement it, assembly.registry.ROBOTS maps each robot section to its kind."""
+"""The Robot protocol: what a scenario's load, a sweep and a closed loop need of an arm."""
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple, Union
 
@@ -18,9 +16,7 @@ class Robot(Protocol):
         num_joints: n.
         model: The controller's reduced model (nominal inertias).
         BATCH_SIZE: A sweep's trials per diagram where the sweep does not say.
-        TRUTH_SAMPLES: The sweep distributions of the ground truth the section takes
-            (montecarlo.definition.ROBOT_DISTRIBUTIONS).
-    """
+        TRUTH_SAMPLES: The truth's sweep distributions it takes (ROBOT_DISTRIBUTIONS)."""
     scenario: object
     task: object
     num_joints: int
@@ -31,8 +27,7 @@ class Robot(Protocol):
     @staticmethod
     def SizedScenario(section: object, q0: Optional[Sequence[float]], task: Optional[object],
                       rows: Sequence[int]) -> Optional["Scenario"]:
-        """The scenario a file naming this robot starts from, every per-joint setting
-        sized to the arm (robots.sizing); None: Scenario's defaults.
+        """The scenario a file naming this robot starts from, sized to it; None: defaults.
 
         Args:
             section: The file's robot section.
@@ -66,8 +61,7 @@ class Robot(Protocol):
     @staticmethod
     def ApplyModelError(section: object, links: Optional[Sequence[float]],
                         base: Optional[float]) -> None:
-        """Applies a sweep trial's controller model error: factors on the nominal
-        mass and inertia of each link (joint) and of the base.
+        """Applies a sweep trial's model error: nominal link and base mass, inertia factors.
 
         Args:
             section: The robot section (changed in place).
@@ -76,8 +70,7 @@ class Robot(Protocol):
 
     @property
     def truth_plant(self) -> "MultibodyPlant":
-        """The ground truth's arm as a finalized plant of its own, its default context
-        holding the true inertias (for what only a simulation can measure)."""
+        """The truth's arm as its own finalized plant (default context: true inertias)."""
 
     @classmethod
     def AddGroundTruth(cls, builder: "DiagramBuilder", trials: Sequence["Robot"]) -> Tuple[object, object]:
@@ -92,8 +85,7 @@ class Robot(Protocol):
 
     @classmethod
     def MakeTrueRhs(cls, plant: "MultibodyPlant", trials: Sequence["Robot"]) -> object:
-        """The port's true RHS system of the batch (inputs u, state,
-        disturbance_model; outputs tau, true_matrices).
+        """The batch's true RHS (in: u, state, disturbance_model; out: tau, true_matrices).
 
         Args:
             plant: The ground-truth plant.

@@ -1,6 +1,4 @@
-"""The built-in scenarios by name (``dacph ... paper|short|satellite_6dof|
-satellite_3dof``) and the sections a described arm's scenario changes from the planar
-defaults; scenarios/*.yaml are their files."""
+"""The built-in scenarios by name (scenarios/*.yaml) and a described arm's own sections."""
 import numpy as np
 
 from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAttitude,
@@ -8,8 +6,7 @@ from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAttitude
 
 
 def paper_scenario() -> Scenario:
-    """The paper's 1500 s scenario, its exact LHS model stated
-    (learner.bayes.model_error 0); scenarios/paper.yaml."""
+    """The paper's 1500 s scenario, its LHS model exact (bayes.model_error 0)."""
     scenario = Scenario()
     scenario.learner.bayes.model_error = 0.0
     return scenario

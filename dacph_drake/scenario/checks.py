@@ -1,6 +1,4 @@
-"""The checks of the sections every robot and task share (the robot's and the task's
-own sections are checked by their robots/ and tasks/ modules). Each raises
-ConfigError naming the first invalid setting and what is allowed."""
+"""The checks of the sections every robot and task share (their own: robots/, tasks/)."""
 from typing import List, Sequence, Tuple
 
 import numpy as np
@@ -15,8 +13,7 @@ from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNE
 
 
 def check_period_order(periods: Periods) -> None:
-    """Refuses periods that break the time-scale separation: the RHS must be faster than
-    the LHS, the LHS no slower than the learner's sampling, nor the sampling than training.
+    """Refuses periods breaking rhs < lhs <= learner_sample <= learner (time scales).
 
     Args:
         periods: The scenario's periods.
@@ -38,8 +35,7 @@ def check_period_order(periods: Periods) -> None:
 
 def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Sequence[str] = ()
                     ) -> None:
-    """Checks the seed and the sections every robot shares (a robot's constructor
-    calls it, so a scenario built in Python is checked as a file is).
+    """Checks the seed and shared sections (robots' constructors call it: Python's too).
 
     Args:
         scenario: The scenario.
@@ -123,8 +119,7 @@ def validate_phases(phases: Phases) -> None:
 
 
 def validate_port_settings(scenario: Scenario, n: int) -> None:
-    """Checks the settings of the port's RHS chain: the sections rhs, stress, periods,
-    uncertainty, disturbance, learner and excitation.
+    """Checks rhs, stress, periods, uncertainty, disturbance, learner and excitation.
 
     Args:
         scenario: The scenario.
@@ -308,9 +303,7 @@ def require_length(name: str, values: Sequence, n: int, meaning: str = "one per 
 
 
 def scheduled_events(scenario: Scenario) -> List[Tuple[str, float]]:
-    """The events a scenario schedules at a time it sets: (setting, time [s]) of each
-    actuator fault, of a disturbance start given in seconds (not phase 3's) and of
-    the stress test's start where it scales B_hat.
+    """(setting, time [s]) of each fault, a timed disturbance start and a stress start.
 
     Args:
         scenario: The scenario."""

@@ -80,8 +80,7 @@ def _require(name: str, value: float, ok: bool, allowed: str) -> None:
 
 
 def require_setting_types(name: str, value: object) -> None:
-    """Requires every setting of a dataclass, recursively, to have its declared kind
-    (number, list, mapping or section): YAML is checked when read, this checks Python's.
+    """Requires each setting of a dataclass, recursively, of its declared kind (in Python).
 
     Args:
         name: The setting's dotted path, for the message ("" for the root).
@@ -129,8 +128,7 @@ def _require_kind(name: str, value: object, declared: object) -> None:
 
 
 def require_finite_numbers(name: str, value: object) -> None:
-    """Requires every number of a setting, walked recursively, to be finite (fields
-    that hold strings by design are left to their own checks).
+    """Requires every number of a setting, walked recursively, to be finite.
 
     Args:
         name: The setting's dotted path, for the message.

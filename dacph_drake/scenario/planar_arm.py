@@ -1,7 +1,6 @@
-"""Description of a planar free-floating arm: a base on a free planar joint and a serial
-chain of n revolute links in the x-y plane, zero gravity; the defaults are the paper's
-robot (docs/equations.md). Each link's frame sits at its proximal joint with x along the
-link. Descriptions load from YAML with ``pydrake.common.yaml``."""
+"""Description of a planar free-floating arm: a base on a free planar joint and n revolute
+links in the x-y plane, zero gravity, each link's frame at its proximal joint with x along
+the link; the defaults are the paper's robot (docs/equations.md)."""
 from dataclasses import dataclass, field
 from typing import List
 
@@ -19,8 +18,7 @@ class BaseParams:
         mass: The base's mass m [kg], > 0.
         inertia: Its central inertia I about the z axis [kg m^2], 0 < I <= m a^2 / 2.
         size: The side a of the square [m], > 0.
-        shoulder_offset: Base centre to shoulder joint along the base x axis [m], in
-            [size / 2, 100 size] (the shoulder sits on or outside the base's side)."""
+        shoulder_offset: Base centre to shoulder along base x [m], [size / 2, 100 size]."""
     mass: float = 2.0               # [kg]
     inertia: float = 0.02           # about its centre of mass, z axis [kg m^2]
     size: float = 0.245             # side of the square [m]
@@ -64,9 +62,8 @@ class RobotParams:
         return len(self.links)
 
     def Validate(self, name: str = "robot") -> None:
-        """Checks every field against its allowed range. The inertia bounds confine the mass
-        to the body's outline (links: link_inertia_bound; base: 0 < I <= m a^2 / 2, all mass
-        in the corners), which makes the plant's lamina tensor satisfy Ixx + Iyy >= Izz.
+        """Checks every field's range. The inertia bounds keep the mass in the body's
+        outline (link_inertia_bound; base: I <= m a^2 / 2): the lamina's Ixx + Iyy >= Izz.
 
         Args:
             name: The robot's setting path, for the messages (e.g. robot.truth).
@@ -97,8 +94,7 @@ class RobotParams:
 
 
 def unequal_three_link_arm() -> RobotParams:
-    """A 3-link arm with unequal, off-centre links (nothing tied to two links): the
-    tests' and scripts' second planar arm."""
+    """A 3-link arm of unequal, off-centre links: the tests' second planar arm."""
     return RobotParams(links=[
         LinkParams(mass=1.2, length=0.30, inertia=0.008, com=0.12),
         LinkParams(mass=0.8, length=0.25, inertia=0.004, com=0.14),

@@ -1,6 +1,5 @@
-"""Scenario: every setting of a closed-loop run as typed data (YAML through
-pydrake.common.yaml; assembly.scenario_files reads it). Defaults: the paper's 1500 s scenario;
-the reasons behind them: the docs' page "Settings explained"."""
+"""Scenario: every setting of a closed-loop run as typed data (pydrake.common.yaml).
+Defaults: the paper's 1500 s scenario; why: the docs' page "Settings explained"."""
 from dataclasses import dataclass, field
 from typing import Dict, List, Union
 
@@ -27,14 +26,13 @@ EFFORT_LIMITS = ("saturate", "ignore")                    # DescribedArm.effort_
 
 @dataclass
 class Phases:
-    """The run's phases [s]: warm-up on (B0, D0), then (1) linear uncertainty, (2) plus
-    nonlinear uncertainty, (3) plus the disturbance d(t).
+    """The run's phases, one after the other.
 
     Attributes:
-        warmup: The warm-up [s], >= 0.
-        linear: Phase 1 [s], >= 0.
-        nonlinear: Phase 2 [s], >= 0.
-        disturbance: Phase 3 [s], >= 0; the four add up to > 0 and >= periods.log."""
+        warmup: On (B0, D0) [s], >= 0.
+        linear: Phase 1, linear uncertainty [s], >= 0.
+        nonlinear: Phase 2, plus nonlinear uncertainty [s], >= 0.
+        disturbance: Phase 3, plus d(t) [s], >= 0; the sum > 0 and >= periods.log."""
     warmup: float = 60.0
     linear: float = 480.0
     nonlinear: float = 480.0
@@ -80,8 +78,7 @@ class LhsGains:
 
 @dataclass
 class InertiaIdentification:
-    """The DAC loops' identification of the inertial parameters from momentum
-    conservation (systems/inertial_identifier.py).
+    """Inertial parameters identified from momentum conservation (inertial_identifier).
 
     Attributes:
         identify: Identify them (False: the controller keeps the nominal model).
@@ -92,14 +89,11 @@ class InertiaIdentification:
         anchor: What fixes the common scale, one of INERTIA_ANCHORS.
         anchor_mass: The anchor's measured mass [kg], >= 0 (0: the robot's own).
         anchor_error: The measurement's relative error, in [-0.5, 0.5].
-        fit_tolerance: The momentum misfit that reports the kinematics mismatched,
-            >= 0 (0: no test).
+        fit_tolerance: Momentum misfit reporting the kinematics mismatched, >= 0 (0: off).
         on_mismatch: What the LHS uses after a mismatch, one of ON_MISMATCH.
-        nominal_tolerance: The relative sd to which robot.nominal's inertial
-            parameters are known, in [0, 1) (dynamics/model_error.py).
+        nominal_tolerance: Relative sd of robot.nominal's inertial parameters, in [0, 1).
         anchor_tolerance: The anchor's mass known to this relative sd, in [0, 0.5].
-        kinematic_tolerance: Every joint placement's components known to this
-            relative sd, in [0, 0.5] (0: robot.nominal's kinematics are exact).
+        kinematic_tolerance: Relative sd of each joint placement's components, [0, 0.5].
         error_draws: The plausible models per trial that measure E, in [2, 256]."""
     identify: bool = True
     prior_weight: float = 1e-12
@@ -166,8 +160,7 @@ class AttitudeReference:
 
 @dataclass
 class AttitudeGains:
-    """The spatial LHS gains: K_d = damping_rate M(q), the boundary layer
-    phi = epsilon + chi / boundary_rate (systems/attitude_controller.py).
+    """The spatial LHS gains: K_d = damping_rate M(q), phi = epsilon + chi / boundary_rate.
 
     Attributes:
         Lambda: The task error's gain in nu [1/s], > 0.
@@ -222,8 +215,7 @@ class Rhs:
 
 @dataclass
 class Periods:
-    """Update periods [s], rhs < lhs <= learner_sample <= learner (the time-scale
-    separation).
+    """Update periods [s], rhs < lhs <= learner_sample <= learner (time-scale separation).
 
     Attributes:
         rhs: The integrator and the observer [s].
@@ -256,10 +248,7 @@ class Uncertainty:
     """The true RHS (E19): B~ = diag(g(t)) (B0 + Delta B), D~ = D0 + Delta D,
 
         Delta D = diag(D_offset + D_linear p) + diag(D_quadratic p^2)
-        Delta B = diag(B_linear q) + diag(B_quadratic p^2) + B_q1_squared q1^2,
-
-    the linear group from phase 1 times linear_scale, the quadratic one from phase 2
-    times nonlinear_scale; g_j = B_scale_j times the faults on joint j.
+        Delta B = diag(B_linear q) + diag(B_quadratic p^2) + B_q1_squared q1^2.
 
     Attributes:
         B0: diag B0 (n), each > 0.
@@ -270,10 +259,10 @@ class Uncertainty:
         B_linear: n x n [1/rad].
         B_quadratic: (n).
         B_q1_squared: n x n.
-        linear_scale: >= 0.
-        nonlinear_scale: >= 0.
-        B_scale: One per joint in [1e-2, 1e2], or none (all 1).
-        faults: ActuatorFault entries."""
+        linear_scale: The linear group's factor from phase 1 on, >= 0.
+        nonlinear_scale: The quadratic group's factor from phase 2 on, >= 0.
+        B_scale: g_j before faults, one per joint in [1e-2, 1e2], or none (all 1).
+        faults: ActuatorFault entries (g_j times those on joint j)."""
     B0: List[float] = field(default_factory=lambda: [1.0, 1.0])
     D0: List[float] = field(default_factory=lambda: [0.1, 0.1])
     D_offset: List[float] = field(default_factory=lambda: [0.02, 0.05])
@@ -317,8 +306,7 @@ class Disturbance:
 
 @dataclass
 class LocalBayes:
-    """The local Bayesian learner (learning.local_bayes): per joint, local linear
-    models of B_ij and D_i under a Gaussian prior around (B0, D0).
+    """learning.local_bayes: local linear models of B_ij, D_i; Gaussian prior at (B0, D0).
 
     Attributes:
         gain_range: [low, high] of B~_ii / B0_i, 0 < low < 1 < high <= 100.
@@ -335,11 +323,9 @@ class LocalBayes:
         certificate_level: The certified set's level, in [credible_level, 1).
         margin: Half-widths by which a learned entry must leave the prior, >= 0.
         change_floor: The relative residual that is a change, >= 0.
-        inconsistency: The relative residual that restarts a window,
-            > change_floor.
-        model_error: A relative sd of the LHS model's inertia error E the claims
-            allow beyond the one the run measures (dynamics/model_error.py), in
-            quadrature, [0, 1)."""
+        inconsistency: The relative residual that restarts a window, > change_floor.
+        model_error: Relative sd of the LHS inertia error E the claims add to the measured
+            one in quadrature, [0, 1)."""
     gain_range: List[float] = field(default_factory=lambda: [0.5, 2.0])
     coupling: float = 0.05
     damping_range: List[float] = field(default_factory=lambda: [0.0, 3.0])
@@ -487,14 +473,12 @@ class ClearancePotential:
 
 @dataclass
 class ArmBase:
-    """robot.base: a uniform box the description is welded to (mass 0: none, the
-    description's root body is the free base).
+    """robot.base: a uniform box the description is welded to.
 
     Attributes:
-        mass: [kg], >= 0.
+        mass: [kg], >= 0 (0: no box, the description's root body is the free base).
         size: Sides x, y, z [m], each > 0.
-        mount: The root frame in the box's centre frame, [x, y, z] in m and
-            [roll, pitch, yaw] in rad."""
+        mount: The root in the box's centre frame: x, y, z [m], roll, pitch, yaw [rad]."""
     mass: float = 0.0
     size: List[float] = field(default_factory=lambda: [1.0, 1.0, 1.0])
     mount: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.5, 0.0, 0.0, 0.0])
@@ -522,10 +506,9 @@ class DescribedArm:
         package_paths: Folders holding ROS packages.
         packages: Package name -> folder, for package:// URIs.
         joint_damping: One of JOINT_DAMPING ("keep": in the truth and the LHS model).
-        joint_friction: One of JOINT_FRICTION ("keep": the description's Coulomb
-            friction, a URDF's <dynamics friction> or an MJCF's frictionloss, in the
-            truth: a part of the RHS the learner meets, the LHS model has none; "zero",
-            the default: none, as Drake's plant).
+        joint_friction: One of JOINT_FRICTION ("keep": the description's Coulomb friction,
+            URDF <dynamics friction> or MJCF frictionloss, in the truth only: an RHS part
+            the learner meets; "zero": none, as in Drake's plant).
         locked_joints: Joints welded at a position (name: [rad] or [m]).
         joint_limits: One of JOINT_LIMITS ("stop": refused at q0, stopped in a run).
         effort_limits: One of EFFORT_LIMITS ("saturate": u clipped in the truth).
@@ -657,9 +640,7 @@ class Scenario:
 
 
 def add_section_type(name: str, section: type) -> None:
-    """Lets a scenario's ``name:`` setting take ``!Section``: a robot kind, task or
-    learner registered from outside the package, at its registration (the shipped
-    ones are written out in Scenario).
+    """Lets setting ``name:`` take ``!Section``, a kind registered from outside the package.
 
     Args:
         name: The setting (robot, task or learner).

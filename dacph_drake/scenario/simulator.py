@@ -1,6 +1,4 @@
-"""A scenario's ``simulator:`` section: Drake's SimulatorConfig, with the closed loop's
-default (FixedStepConfig), the schemes it accepts and their check, and the Simulator
-every diagram of the package runs in (MakeSimulator)."""
+"""The ``simulator:`` section, Drake's SimulatorConfig: its default, check and Simulator."""
 import copyreg
 
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
@@ -19,11 +17,8 @@ ERROR_CONTROLLED_SCHEMES = ("runge_kutta3", "runge_kutta5")
 
 def FixedStepConfig(integration_scheme: str = "runge_kutta2",
                     step: float = 2.5e-4) -> SimulatorConfig:
-    """Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator.
-
-    Fixed steps because the closed loop's discrete updates stop the integrator at
-    every RHS sample anyway (the step taken is min(step, periods.rhs)); as fast as
-    the machine allows (target_realtime_rate 0).
+    """Drake's SimulatorConfig for a fixed-step explicit Runge-Kutta integrator, unpaced:
+    the loop's discrete updates stop it at every RHS sample anyway (min(step, periods.rhs)).
 
     Args:
         integration_scheme: Drake's scheme name (runge_kutta2, 3 or 5).

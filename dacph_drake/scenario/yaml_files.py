@@ -1,7 +1,5 @@
-"""YAML files as the scenario's sections read them: plain values with their tags
-(read_yaml), and a typed dataclass with every key and kind checked against its schema
-before pydrake's typed loader sees it (load_yaml_dataclass): one line naming the file and
-the setting, never a traceback."""
+"""YAML files as tagged plain values (read_yaml) or a typed dataclass, every key and kind
+checked first (load_yaml_dataclass): one line naming file and setting, no traceback."""
 import dataclasses
 import difflib
 import logging
@@ -18,8 +16,7 @@ _Schema = TypeVar("_Schema")
 
 
 def read_yaml(path: Union[str, Path]) -> Any:
-    """Reads a YAML file as plain Python values (tagged mappings as _TaggedMapping; {} when
-    empty).
+    """Reads a YAML file as plain values (tagged mappings as _TaggedMapping; {} if empty).
 
     Args:
         path: The file.
@@ -78,8 +75,7 @@ class _TaggedLoader(yaml.SafeLoader):
 
 
 def _construct_unique_mapping(loader, node, deep=False):
-    """A mapping whose keys are each given once (PyYAML keeps the last of a repeated
-    key silently; a file setting q0: twice is refused, naming the key and lines)."""
+    """A mapping with each key once (PyYAML silently keeps a repeated key's last value)."""
     seen = {}
     for key_node, _ in node.value:
         key = loader.construct_object(key_node, deep=True)

@@ -1,5 +1,4 @@
-"""Online learner of the RHS (paper section "RHS Control and Learning"; the learning
-package's learners)."""
+"""Online learner of the RHS (paper section "RHS Control and Learning"; learning/)."""
 from typing import Sequence
 
 import numpy as np
@@ -12,21 +11,13 @@ from dacph_drake.systems.reduced_model_input import ReducedModelInput
 
 
 class RhsLearner(LeafSystem):
-    """The slowest loop: learns the RHS's port relation online.
-
-    Every ``sample_period`` it appends input ``port_sample`` with its time to a ring
-    buffer of ``settings.window`` samples; every ``period`` the learner
-    ``settings.model`` names (learning.make_port_learner) fits the buffer, oldest first,
-    and returns what it publishes, its log row and its state. With ``watch_model`` an
-    InertialIdentifier's new ``model_epoch`` is a change of the port relation
-    (settings.model_change); after a kinematic mismatch reported in its
-    ``identification_log`` the log's ``physical`` column is 0.
-
-    Outputs ``weights`` (the published vector, held), ``beta_hat`` (1 + RMS residual /
-    RMS tau_obs, for the gain rule), ``learner_log`` (log_layout.LearnerLog),
-    ``estimates`` = [vec(B_hat(x)), diag(D_hat(x))] and ``estimate_bounds`` (their
-    credible [lower, upper]) at the current state. Every port stacks the trials' signals;
-    each trial is learned alone.
+    """The slowest loop, learning the port relation online: every ``sample_period``
+    ``port_sample`` joins a ring buffer of ``settings.window`` samples, fitted every
+    ``period`` (learning.make_port_learner). With ``watch_model`` a new ``model_epoch`` is
+    a change (settings.model_change); a kinematic mismatch (``identification_log``) zeroes
+    the log's ``physical``. Outputs ``weights`` (held), ``beta_hat``, ``learner_log``,
+    ``estimates`` [vec(B_hat(x)), diag(D_hat(x))] and ``estimate_bounds`` (credible [lower,
+    upper]) at the current state, each stacking the trials'.
 
     Args:
         trials: Each trial's LearnerTrial.
@@ -34,8 +25,7 @@ class RhsLearner(LeafSystem):
         period: The training period [s].
         sample_period: The sampling period [s].
         learning: False publishes the prior (B0, D0) throughout (the dac-nominal ablation).
-        watch_model: Declare inputs ``model_epoch`` and ``identification_log``.
-    """
+        watch_model: Declare inputs ``model_epoch`` and ``identification_log``."""
 
     def __init__(self, *, trials: Sequence[LearnerTrial], settings: Learner,
                  period: float, sample_period: float, learning: bool = True,

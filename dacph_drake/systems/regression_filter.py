@@ -11,20 +11,16 @@ from dacph_drake.scenario import Learner
 
 
 class RegressionFilter(LeafSystem):
-    """Every ``period`` it forms the learner's channels from input ``port_sample``, passes
-    them through learning.identification.BandPassCascade (settings.band,
-    settings.band_sections) and holds [q, p, filtered channels] on output
-    ``filtered_sample``. One linear filter
-    on every signal keeps the port relation tau = B u - D qdot + d while B(x), D(x) vary
-    slowly, and removes d(t) outside the band; q and p, the features, pass unfiltered.
+    """Every ``period`` holds port_sample's [q, p, band-passed channels] (BandPassCascade)
+    on ``filtered_sample``: one linear filter on every channel keeps tau = B u - D qdot + d
+    while B(x), D(x) vary slowly, and removes d(t) outside the band.
 
     Args:
         settings: The learner's settings (its band and sections).
         num_joints: n.
         period: The sample period [s].
         trials: The number of trials of the batch.
-        channels: The learner's channels (default: PortSample's [qdot, u, tau_obs]).
-    """
+        channels: The learner's channels (default: PortSample's [qdot, u, tau_obs])."""
 
     def __init__(self, *, settings: Learner, num_joints: int, period: float,
                  trials: int = 1, channels: Optional[Channels] = None):

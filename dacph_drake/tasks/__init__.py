@@ -1,2 +1,1 @@
-"""Tasks: what an LHS controller tracks, as its own axis beside the robot
-(tasks.task.Task; the registered ones in tasks.registry.TASKS)."""
+"""Tasks: what an LHS controller tracks, beside the robot (task.Task; registry.TASKS)."""

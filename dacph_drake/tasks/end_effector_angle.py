@@ -1,7 +1,5 @@
-"""task: the planar end effector's angle alpha = theta0 + sum q (scenario.
-EndEffectorAngle), tracked by the sliding-mode LhsController (E23-E25) with
-K_d = Kd I; its certificate is Drake's SOS region at frozen q
-(region_of_attraction.sliding_region_of_attraction)."""
+"""task: the planar end effector's angle alpha = theta0 + sum q, tracked by the sliding-mode
+LhsController (E23-E25), K_d = Kd I; certificate: Drake's SOS region at frozen q."""
 from typing import Dict, Sequence, Tuple
 
 import numpy as np
@@ -55,8 +53,7 @@ class EndEffectorAngleTask:
             require_positive(f"task.reference.periods[{i}]", T, "s")
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """ConfigError unless ||D(q0)|| >= task.gains.min_task_singular_value, D the
-        1 x n task Jacobian d alpha / d qdot (D+ = D^T / (D D^T)).
+        """ConfigError unless ||d alpha / d qdot|| >= gains.min_task_singular_value at q0.
 
         Args:
             robot: The trial's robots.planar.PlanarRobot."""
@@ -131,8 +128,7 @@ class EndEffectorAngleTask:
 
     def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
                   ) -> LhsSide:
-        """V with the M the controller ran on (nominal, then identified): the envelope
-        and eq. (45) take both models' inertia bounds.
+        """The envelope and eq. (45) on the nominal and identified models' inertia bounds.
 
         Args:
             robot: The trial's PlanarRobot.

@@ -1,7 +1,5 @@
-"""task: !EndEffectorAttitude, a described arm's end-effector attitude, tracked by the
-AttitudeController (K_d = damping_rate M(q), the inertia-scaled boundary layer); its
-certificate is the region with nothing frozen (E26-E28:
-region_of_attraction.moving_region_of_attraction)."""
+"""task: !EndEffectorAttitude, tracked by the AttitudeController (K_d = damping_rate M(q),
+inertia-scaled layer); certificate: the region with nothing frozen (E26-E28)."""
 from typing import Dict, Sequence, Tuple
 
 import numpy as np
@@ -80,16 +78,14 @@ class EndEffectorAttitudeTask:
                     "sampled sliding-mode loop stays well damped)")
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """ConfigError if the task's rows of the GJM are (nearly) singular at q0,
-        naming the joints.
+        """RequireRegularRows: ConfigError if the task's GJM rows are (nearly) singular.
 
         Args:
             robot: The trial's robots.described.DescribedRobot."""
         self.RequireRegularRows(robot)
 
     def RequireRegularRows(self, robot: Robot) -> None:
-        """ConfigError if the task's rows of the GJM are (nearly) singular at q0, naming
-        the joints.
+        """ConfigError if the task's GJM rows are (nearly) singular at q0, naming joints.
 
         Args:
             robot: The trial's robots.described.DescribedRobot."""
@@ -101,8 +97,7 @@ class EndEffectorAttitudeTask:
                               "chosen: robots.start_pose.choose_start)")
 
     def GainRuleRates(self, robot: Robot) -> Tuple[float, float]:
-        """(damping_rate, 1): K_d = damping_rate M makes the LHS rate damping_rate
-        for every arm (gain_rule.inertia_scaled_c_lower_bound).
+        """(damping_rate, 1): K_d = damping_rate M sets the LHS rate on every arm.
 
         Args:
             robot: The trial's DescribedRobot."""
@@ -138,8 +133,7 @@ class EndEffectorAttitudeTask:
     def AddLhsController(self, controller: "ControllerBuilder", trials: Sequence[Robot],
                          excitation: Excitation,
                          identify: bool) -> Dict:
-        """Adds the controller (each trial's clearance potential unless its gain is
-        0), and its InertialIdentifier with ``identify``.
+        """Adds the controller and, with ``identify``, its InertialIdentifier.
 
         Args:
             controller: The controller's ControllerBuilder.
@@ -175,9 +169,8 @@ class EndEffectorAttitudeTask:
                            2 * np.arccos(cosine))
 
     def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
-        """|e| after SETTLING_TIME (final, RMS, max) [rad], the smallest link-base
-        distance [m], the largest |spatial momentum| and the share of samples with a
-        command clipped to its effort limit.
+        """|e| after SETTLING_TIME (final, RMS, max) [rad], the least link-base distance
+        [m], the largest |spatial momentum| and the share of samples with a command clipped.
 
         Args:
             robot: The trial's DescribedRobot.
@@ -210,9 +203,7 @@ class EndEffectorAttitudeTask:
 
     def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
                   ) -> LhsSide:
-        """K_d = damping_rate M, the inertia-scaled layer
-        (EnvelopeConstants.ForInertiaScaled), with the model's and the identified
-        inertias' bounds; the moving-configuration region (milliseconds).
+        """The inertia-scaled envelope (ForInertiaScaled), the moving-configuration region.
 
         Args:
             robot: The trial's DescribedRobot.

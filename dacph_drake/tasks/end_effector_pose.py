@@ -1,13 +1,8 @@
 """task: !EndEffectorPose, a described arm's end-effector position and attitude: the
-AttitudeController with the GJM's linear rows stacked under its angular ones
-(kernels.attitude.pose_rates), so
-
-    nu = D^+ [omega_d - Lambda e; v_d - Lambda e_p] + (I - D^+ D) xi,
-    D = [angular rows; linear rows] of the generalized Jacobian (6 x n),
-
-e_p = p_E - p_d(t) in the world; the null space (n > 6) keeps the links off the base
-as in the attitude task. The sliding-mode law, its Lyapunov function V = s^T M s / 2
-and hence the certificate are the attitude task's (E26-E28 hold for any nu)."""
+AttitudeController with the GJM's linear rows under its angular ones (D, 6 x n,
+pose_rates), so nu = D^+ [omega_d - Lambda e; v_d - Lambda e_p] + (I - D^+ D) xi,
+e_p = p_E - p_d(t) (world); the null space (n > 6) keeps the links off the base. The law,
+V = s^T M s / 2 and the certificate are the attitude task's (E26-E28 hold for any nu)."""
 from typing import Dict
 
 import numpy as np
@@ -61,8 +56,7 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
                                   + ("non-zero " if name == "axis" else "") + "3-vector")
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """ConfigError on fewer than 6 joints, or where the 6-row GJM is (nearly)
-        singular at q0 (naming the joints).
+        """ConfigError on fewer than 6 joints or a (nearly) singular 6-row GJM at q0.
 
         Args:
             robot: The trial's DescribedRobot."""
@@ -80,8 +74,7 @@ class EndEffectorPoseTask(EndEffectorAttitudeTask):
         return {"position": section.position, "log_name": self.log_name}
 
     def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
-        """The attitude task's metrics, and the RMS |e_p| [m] per phase (the
-        attitude's is the shared tracking_error_rms).
+        """The attitude task's metrics and the RMS |e_p| [m] per phase.
 
         Args:
             robot: The trial's DescribedRobot.

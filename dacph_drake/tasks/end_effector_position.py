@@ -1,13 +1,9 @@
 """task: !EndEffectorPosition, a described arm's end-effector position: the
-AttitudeController with the GJM's linear rows alone (kernels.attitude.position_rates),
-
-    nu = D_p^+ (v_d - Lambda e_p) + (I - D_p^+ D_p) xi,    e_p = p_E - p_d(t) (world),
-
-D_p the generalized Jacobian's linear rows (3 x n). An arm of 3 to 5 joints cannot turn
-its end effector about every axis, but it can place it; on a longer arm the end
-effector's attitude is left to the null space (the clearance potential's xi). The
-sliding-mode law, V = s^T M s / 2 and the certificate are the attitude task's (E26-E28
-hold for any nu); the tracking error the metrics and figures report is |e_p| [m]."""
+AttitudeController with the GJM's linear rows D_p (3 x n) alone (position_rates),
+nu = D_p^+ (v_d - Lambda e_p) + (I - D_p^+ D_p) xi, e_p = p_E - p_d(t) (world): an arm
+of 3 to 5 joints can place its end effector, not turn it about every axis; a longer arm
+leaves its attitude to the null space. The law, V = s^T M s / 2 and the certificate are
+the attitude task's (E26-E28 hold for any nu); the tracking error is |e_p| [m]."""
 from typing import Dict
 
 import numpy as np
@@ -38,8 +34,7 @@ class EndEffectorPositionTask(EndEffectorPoseTask):
         self.ValidatePosition(section.position)
 
     def RequireRegularStart(self, robot: Robot) -> None:
-        """ConfigError on fewer than 3 joints, or where the linear rows of the GJM are
-        (nearly) singular at q0 (naming the joints).
+        """ConfigError on fewer than 3 joints or (nearly) singular linear GJM rows at q0.
 
         Args:
             robot: The trial's DescribedRobot."""
@@ -68,8 +63,7 @@ class EndEffectorPositionTask(EndEffectorPoseTask):
 
 
     def Metrics(self, robot: Robot, logs: Dict[str, np.ndarray]) -> Dict[str, float]:
-        """The pose task's metrics without the attitude's (no attitude is tracked):
-        the RMS |e_p| [m] per phase, clearance, momentum and saturation.
+        """The pose task's metrics but the attitude's (no attitude is tracked).
 
         Args:
             robot: The trial's DescribedRobot.

@@ -1,6 +1,4 @@
-"""The tasks an LHS controller tracks, registered once (tasks.task.Task). To add a
-task, write its module (its section dataclass and its Task) and add it to TASKS;
-register() does the same from outside the package."""
+"""The tasks an LHS controller tracks (task.Task); register() adds one from outside."""
 from dacph_drake.scenario import add_section_type
 from dacph_drake.tasks.end_effector_angle import END_EFFECTOR_ANGLE
 from dacph_drake.tasks.end_effector_attitude import END_EFFECTOR_ATTITUDE

@@ -1,8 +1,5 @@
-"""The Task protocol: what an LHS controller tracks, as its own axis beside the robot
-(robots.robot.Robot). A task owns its scenario section (``task: !Name``), the LHS
-system it adds, its log and panels, its signals and metrics, and its part of the
-certificate; it names the robot sections it can serve. A new task is one module
-with one Task and one line in tasks.TASKS."""
+"""The Task protocol: what an LHS controller tracks, beside the robot: its section, LHS
+system, log, panels, signals, metrics, part of the certificate and the robots it serves."""
 from dataclasses import dataclass
 from typing import Dict, NamedTuple, Protocol, Sequence, Tuple
 
@@ -20,8 +17,7 @@ class TaskSignals(NamedTuple):
         error: The tracking error the tables compare (rad for the shipped tasks).
         sliding: s, or ||s|| (T or T x n).
         clearance: The link-base clearance [m].
-        base_turn: The base's rotation from its start [rad].
-    """
+        base_turn: The base's rotation from its start [rad]."""
     error: np.ndarray
     sliding: np.ndarray
     clearance: np.ndarray
@@ -38,8 +34,7 @@ class LhsSide:
         constants: The envelope's lyapunov_envelope.EnvelopeConstants.
         lambda_lhs: lambda_LHS of eq. (45) [1/s].
         region: The region-of-attraction certificate at q0.
-        settings: The LHS's settings, for the report.
-    """
+        settings: The LHS's settings, for the report."""
     V: np.ndarray
     s0_norm: float
     constants: object
@@ -53,12 +48,10 @@ class Task(Protocol):
 
     Attributes:
         section: Its scenario section's dataclass (YAML tag ``!section``).
-        robots: The robot kinds it can serve (robots.planar.PlanarRobot,
-            robots.described.DescribedRobot), their subclasses too.
+        robots: The robot kinds it serves (PlanarRobot, DescribedRobot), subclasses too.
         lhs_name: The LHS system's name.
         log_name: Its log output's name.
-        panels: figures.make_panels' panels of this task.
-    """
+        panels: figures.make_panels' panels of this task."""
     section: type
     robots: Tuple[type, ...]
     lhs_name: str
@@ -93,8 +86,7 @@ class Task(Protocol):
     def AddLhsController(self, controller: "ControllerBuilder", trials: Sequence[Robot],
                          excitation: Excitation,
                          identify: bool) -> Dict:
-        """Adds the batch's LHS system (outputs tau_request, reduced_model and
-        log_name; input chi), and with ``identify`` its inertial identifier.
+        """Adds the batch's LHS (out: tau_request, reduced_model, log_name; in: chi).
 
         Args:
             controller: The controller's closed_loop.ControllerBuilder.
