@@ -1,4 +1,5 @@
 """The controllers' logs by named columns (as Drake's namedview, with widths)."""
+from typing import Tuple, Union
 
 
 class LogColumns:
@@ -7,7 +8,7 @@ class LogColumns:
     Args:
         *columns: Each column: a name (a scalar) or (name, width) (a vector)."""
 
-    def __init__(self, *columns):
+    def __init__(self, *columns: Union[str, Tuple[str, int]]):
         start = 0
         for column in columns:
             name, width = (column, None) if isinstance(column, str) else column
