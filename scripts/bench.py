@@ -221,6 +221,25 @@ def bench_spatial(duration: float, planar_dac: float):
                   f"planar DAC loop (target <= {wanted:g}x)")
 
 
+def bench_sensing(duration: float):
+    """The sensors' cost: the short scenario's DAC loop with sensing off, with the
+    spacecraft's sensors and delays (scenario.built_in.spacecraft_sensing), and with the
+    sensors wired in noiseless, as wall per simulated second and their ratios (target:
+    the sensors cost <= 10 % of a run's wall time)."""
+    from dacph_drake.scenario import Sensing
+    from dacph_drake.scenario.built_in import spacecraft_sensing
+    walls = {}
+    for label, sensing in (("off", Sensing()), ("noiseless", Sensing(enabled=True)),
+                           ("spacecraft", spacecraft_sensing())):
+        scenario = short_scenario()
+        scenario.sensing = sensing
+        walls[label] = simulate(scenario, "dac", duration=duration).wall_time / duration
+    print(f"sensing, DAC on {duration:g} s of the short scenario:")
+    for label, wall in walls.items():
+        print(f"  {label:11s} {wall:6.3f} s wall per simulated s   ratio to off "
+              f"{wall / walls['off']:5.3f}  (target <= 1.10)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=20.0)
@@ -234,6 +253,7 @@ def main():
     bench_plant_integration(args.duration)
     planar_dac = bench_closed_loop(args.loop_duration, args.paper_run)
     bench_spatial(min(args.loop_duration, 8.0), planar_dac)
+    bench_sensing(args.loop_duration)
     bench_quick_reproduction()
 
 

@@ -17,6 +17,82 @@ from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
 
 
 
+def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int = 0,
+                        lag: float = 0.0) -> np.ndarray:
+    """The discrete RHS loop's matrix with the command ``delay`` samples late and a
+    first-order actuator lag of time constant ``lag``, on (u_I, the delay line's d
+    commands, the actuators' torque s (with a lag), tau_obs):
+
+        s(k+1) = a s(k) + (1 - a) u_I(k - d),   a = exp(-h / lag) (0: no lag, s = u_I(k - d))
+        tau_obs(k+1) = B s(k+1)
+
+    (the exact sampling of the lag under a held command); delay 0 and no lag is
+    gain_rule.loop_matrix.
+
+    Args:
+        B: The port's input matrix (n x n).
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+        delay: The samples by which the command is late (computation and sensing).
+        lag: The actuators' time constant [s] (0: none)."""
+    n = B.shape[0]
+    a = float(np.exp(-period / lag)) if lag > 0 else 0.0
+    blocks = 1 + delay + (1 if lag > 0 else 0) + 1
+    A = np.zeros((blocks * n, blocks * n))
+    I = np.eye(n)
+    def at(row, column, value):
+        A[row * n:(row + 1) * n, column * n:(column + 1) * n] = value
+    at(0, 0, I)
+    at(0, blocks - 1, -period * np.diag(K))
+    for j in range(1, delay + 1):
+        at(j, j - 1, I)                       # the delay line
+    applied = delay                           # u_I(k - d)'s block
+    if lag > 0:
+        at(blocks - 2, blocks - 2, a * I)
+        at(blocks - 2, applied, (1 - a) * I)
+        at(blocks - 1, blocks - 2, a * B)
+        at(blocks - 1, applied, (1 - a) * B)
+    else:
+        at(blocks - 1, applied, B)
+    return A
+
+
+def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
+                            lag: float = 0.0, radius: float = 1.0 - STABILITY_MARGIN,
+                            limit: int = 400) -> int:
+    """The largest command delay [samples] at which the RHS loop's spectral radius stays
+    below ``radius`` (1 - STABILITY_MARGIN: the certificate; 1: stability), with the
+    actuators' lag; -1 if none does, ``limit`` if every delay up to it does.
+
+    Args:
+        B: The port's input matrix (n x n).
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+        lag: The actuators' time constant [s] (0: none).
+        radius: The spectral radius the loop must stay below.
+        limit: The largest delay tried."""
+    def certified(delay: int) -> bool:
+        return np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(
+            B, K, period, delay, lag)))) < radius
+    if not certified(0):
+        return -1
+    low, high = 0, 1                 # certified(low); search up by doubling, then bisect
+    while high <= limit and certified(high):
+        low, high = high, 2 * high
+    if high > limit:
+        return limit if certified(limit) else _bisect(certified, low, limit)
+    return _bisect(certified, low, high)
+
+
+def _bisect(certified, low: int, high: int) -> int:
+    """The largest delay in [low, high) with certified(delay), certified(low) true and
+    certified(high) false (the radius grows with the delay)."""
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (middle, high) if certified(middle) else (low, middle)
+    return low
+
+
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:
     """The closed discrete RHS loop as a LinearSystem: tau_c^r in, e_tau out, period h.
 
@@ -63,7 +139,7 @@ class RhsLoopCheck:
 
 
 def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: float,
-                   Td: float) -> RhsLoopCheck:
+                   Td: float, delay: int = 0, lag: float = 0.0) -> RhsLoopCheck:
     """The RHS loop's certificate at one operating point: spectral radius <= 1 -
     STABILITY_MARGIN and P > 0 from RealDiscreteLyapunovEquation(A, I); DIC; and
     sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS (eq. 45).
@@ -73,9 +149,12 @@ def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: floa
         K: The integrator's gains (n).
         period: The RHS period h [s].
         lambda_lhs: The LHS rate lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) [1/s].
-        Td: The time-scale separation factor T_d."""
+        Td: The time-scale separation factor T_d.
+        delay: The samples by which the command is late (sensing.rhs_delay + latency).
+        lag: The actuators' time constant [s] (sensing.actuator_lag; 0: none)."""
     _, paired, dic_ok = integral_gains(B, 1.0)
-    A = rhs_loop_system(B, K, period).A()
+    A = (delayed_loop_matrix(B, K, period, delay, lag) if delay or lag
+         else rhs_loop_system(B, K, period).A())
     radius = float(np.max(np.abs(np.linalg.eigvals(A))))
     reasons = []
     if radius <= 1.0 - STABILITY_MARGIN:

@@ -19,7 +19,7 @@ from dacph_drake.scenario import (AttitudeGains, AttitudeReference, ClearancePot
                                   EndEffectorAttitude, Excitation,
                                   InertiaIdentification, Learner, LocalBayes, LhsGains,
                                   Periods, Phases, PlanarArm, Potential, Reference,
-                                  Rhs, Scenario, Stress, Uncertainty)
+                                  Rhs, Scenario, Sensing, Stress, Uncertainty)
 from dacph_drake.scenario.built_in import (BUILT_IN_SCENARIOS, described_arm_learner,
                                            described_arm_rhs, six_dof_disturbance,
                                            six_dof_uncertainty)
@@ -73,6 +73,19 @@ def _bayes_as_introduced() -> LocalBayes:
 # fingerprinted text too, and a saved run's file without them reads them at those
 # values (an input file, at today's defaults).
 ADDED_SUBSECTIONS = (("learner", "bayes", _bayes_as_introduced),)
+
+
+# Top-level sections added since whose defaults are the behaviour before them: the
+# section's text at its defaults is left out of the fingerprinted text.
+ADDED_SECTIONS = (("sensing", Sensing),)
+
+
+def _without_default_sections(text: str) -> str:
+    """The YAML text without each ADDED_SECTIONS section that holds its defaults."""
+    for name, section in ADDED_SECTIONS:
+        block = "".join(f"  {line}\n" for line in yaml_dump_typed(section()).splitlines())
+        text = text.replace(f"{name}:\n{block}", "")
+    return text
 
 
 def as_before_added(scenario: Scenario) -> Scenario:
@@ -523,7 +536,8 @@ def saved_forms(scenario: Scenario) -> List[str]:
 
     Args:
         scenario: The scenario."""
-    return [_without_lines(yaml_dump_typed(scenario), _added_lines())] + [
+    return [_without_lines(_without_default_sections(yaml_dump_typed(scenario)),
+                           _added_lines())] + [
         form for layout in OLDER_LAYOUTS.get(type(scenario.robot), ())
         for form in layout.From(scenario).SavedForms()]
 

@@ -7,17 +7,20 @@ from typing import Callable, Dict, List, Sequence, Tuple
 
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort
-from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
+from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort, OutputPort, System
+from pydrake.systems.primitives import (DiscreteTimeDelay, FirstOrderLowPassFilter,
+                                        LogVectorOutput, VectorLogSink)
 
 from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.gain_rule import c_lower_bound
-from dacph_drake.dynamics.plant import AddStateSplitter, SetArmsAtRest
+from dacph_drake.dynamics.plant import (STATE_SIGNALS, AddStateSplitter, SetArmsAtRest,
+                                        trial_coordinates)
 from dacph_drake.assembly.registry import robots_of
 from dacph_drake.robots.robot import Robot
 from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.scenario.simulator import MakeSimulator
 from dacph_drake.systems.disturbance import DisturbanceSource
+from dacph_drake.systems.sensors import Sensors
 
 
 @dataclass
@@ -134,10 +137,12 @@ def assemble_closed_loop(scenario: Scenario, name: str,
     controller = controller_builder.builder.Build()
     controller.set_name(f"{name}_controller")
     builder.AddSystem(controller)
+    measured = AddSensors(builder, loop, splitter)
     for i in range(controller.num_input_ports()):
         port = controller.get_input_port(i)
-        builder.Connect(splitter.GetOutputPort(port.get_name()), port)
-    builder.Connect(controller.GetOutputPort("u"), truth.GetInputPort("u"))
+        builder.Connect(measured.GetOutputPort(port.get_name()), port)
+    builder.Connect(AddActuation(builder, loop, controller.GetOutputPort("u")),
+                    truth.GetInputPort("u"))
     logged = [("state", plant.get_state_output_port())]
     logged += [(truth.get_output_port(i).get_name(), truth.get_output_port(i))
                for i in range(truth.num_output_ports())]      # tau, true_matrices, ...
@@ -150,6 +155,66 @@ def assemble_closed_loop(scenario: Scenario, name: str,
     loop.diagram = builder.Build()
     loop.diagram.set_name(f"{name}_closed_loop")
     return loop
+
+
+def DelayLine(period: float, samples: int, size: int) -> DiscreteTimeDelay:
+    """A delay of ``samples`` periods on a signal that a discrete system updates at the
+    same instants: Drake's DiscreteTimeDelay holds what it samples for a period before
+    its delay line starts, so ``samples - 1`` steps of it delay such a signal by
+    ``samples`` periods (tests/test_sensing.py).
+
+    Args:
+        period: The sample period [s].
+        samples: The delay [periods], >= 1.
+        size: The signal's size."""
+    return DiscreteTimeDelay(period, samples - 1, size)
+
+
+def AddSensors(builder: DiagramBuilder, loop: ClosedLoop, splitter: System) -> System:
+    """The system whose outputs (plant.STATE_SIGNALS) the controller reads: the state
+    splitter itself, or with sensing.enabled the systems.sensors.Sensors it feeds.
+
+    Args:
+        builder: The closed loop's builder.
+        loop: The loop being built (its systems get ``sensors``).
+        splitter: The state splitter (AddStateSplitter)."""
+    sensing = loop.scenario.sensing
+    if not sensing.enabled:
+        return splitter
+    coordinates = trial_coordinates(loop.plant)[0]
+    sensors = builder.AddNamedSystem("sensors", Sensors(
+        settings=sensing, num_joints=coordinates.num_joints,
+        base_positions=len(coordinates.base_q), period=loop.scenario.periods.rhs,
+        seeds=[s.seed for s in loop.scenarios]))
+    for name in STATE_SIGNALS:
+        builder.Connect(splitter.GetOutputPort(name), sensors.GetInputPort(name))
+    loop.systems["sensors"] = sensors
+    return sensors
+
+
+def AddActuation(builder: DiagramBuilder, loop: ClosedLoop, u: OutputPort) -> OutputPort:
+    """The command as the actuators deliver it: u itself, or with sensing.enabled u
+    sensing.rhs_delay samples of periods.rhs late (a computation delay) through a
+    first-order lag of time constant sensing.actuator_lag (the actuators' bandwidth).
+
+    Args:
+        builder: The closed loop's builder.
+        loop: The loop being built (its systems get ``rhs_delay``, ``actuator_lag``).
+        u: The controller's command output."""
+    sensing, size = loop.scenario.sensing, u.size()
+    if sensing.enabled and sensing.rhs_delay > 0:
+        delay = builder.AddNamedSystem("rhs_delay", DelayLine(
+            loop.scenario.periods.rhs, sensing.rhs_delay, size))
+        builder.Connect(u, delay.get_input_port())
+        u = delay.get_output_port()
+        loop.systems["rhs_delay"] = delay
+    if sensing.enabled and sensing.actuator_lag > 0:
+        lag = builder.AddNamedSystem("actuator_lag", FirstOrderLowPassFilter(
+            sensing.actuator_lag, size))
+        builder.Connect(u, lag.get_input_port())
+        u = lag.get_output_port()
+        loop.systems["actuator_lag"] = lag
+    return u
 
 
 # What the trials of one batch may each have of their own; every other setting
@@ -179,6 +244,8 @@ def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:
 def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Excitation,
                identify: bool) -> Tuple[object, Dict]:
     """Adds the task's LHS (tau_request and its log exported); returns (lhs, its systems).
+    With sensing.enabled and sensing.lhs_delay > 0 the systems hold ``lhs_delay``, the
+    request sensing.lhs_delay LHS periods late (LhsRequest gives the port to read).
 
     Args:
         loop: The loop being built (its robots: the trials').
@@ -191,6 +258,12 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
     lhs = systems[task.lhs_name]
     builder.ExportOutput(lhs.GetOutputPort("tau_request"), "tau_request")
     builder.ExportOutput(lhs.GetOutputPort(task.log_name), task.log_name)
+    sensing = loop.scenario.sensing
+    if sensing.enabled and sensing.lhs_delay > 0:
+        request = lhs.GetOutputPort("tau_request")
+        delay = systems["lhs_delay"] = builder.AddNamedSystem("lhs_delay", DelayLine(
+            loop.scenario.periods.lhs, sensing.lhs_delay, request.size()))
+        builder.Connect(request, delay.get_input_port())
     identifier = systems.get("inertial_identifier")
     if identifier is not None:
         for signal in ("base_pose", "base_velocity", "q", "qdot"):
@@ -203,3 +276,13 @@ def AddLhsSide(loop: ClosedLoop, controller: ControllerBuilder, excitation: Exci
                              "identification_log")
         builder.ExportOutput(identifier.GetOutputPort("model_error"), "model_error")
     return lhs, systems
+
+
+def LhsRequest(lhs: System, systems: Dict) -> OutputPort:
+    """The LHS's request tau_c^r as the RHS side receives it (AddLhsSide's delay, if any).
+
+    Args:
+        lhs: The LHS controller (AddLhsSide).
+        systems: AddLhsSide's systems."""
+    delay = systems.get("lhs_delay")
+    return delay.get_output_port() if delay is not None else lhs.GetOutputPort("tau_request")

@@ -2,10 +2,10 @@
 the RHS loop), port observer, regression filter, learner and RHS integrator."""
 from typing import Dict, Optional
 
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import LeafSystem, OutputPort
 
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
-                                     assemble_closed_loop)
+                                                 LhsRequest, assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
 from dacph_drake.learning import LearnerTrial, learner_kind, prior_set, published_model
 from dacph_drake.scenario import Scenario
@@ -26,7 +26,8 @@ def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop
         lhs, systems = AddLhsSide(loop, controller, loop.scenario.excitation,
                                   identify=loop.scenario.inertia.identify)
         return {**systems, **AddRhsChain(loop, controller, lhs, learning,
-                                         systems.get("inertial_identifier"))}
+                                         systems.get("inertial_identifier"),
+                                         LhsRequest(lhs, systems))}
     return assemble_closed_loop(scenarios[0], "dac" if learning else "dac_nominal", add,
                                 scenarios[1:])
 
@@ -40,8 +41,8 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
 
 
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
-                learning: bool, identifier: Optional[InertialIdentifier] = None
-                ) -> Dict[str, object]:
+                learning: bool, identifier: Optional[InertialIdentifier] = None,
+                request: Optional[OutputPort] = None) -> Dict[str, object]:
     """Adds the RHS side (port observer, regression filter in regularized mode, learner,
     RHS integrator), wired to the LHS and inputs q, qdot; exports u, tau_observed, the logs,
     estimates and bounds; returns the systems by name. The RHS period is checked for the
@@ -53,6 +54,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         lhs: The LHS controller (outputs ``reduced_model``, ``tau_request``; input ``chi``).
         learning: False keeps the learner's initial weights (dac-nominal).
         identifier: The LHS's InertialIdentifier, if any (Learner.model_change watches it).
+        request: The request tau_c^r as the RHS receives it (closed_loop.LhsRequest;
+            None: the LHS's own output).
 
     Raises:
         ConfigError: The RHS period cannot realize the gain rule's largest rate."""
@@ -117,7 +120,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         controller.Input(learner.GetInputPort(signal), signal)
     builder.Connect(observer.GetOutputPort("tau_observed"),
                     rhs.GetInputPort("tau_observed"))
-    builder.Connect(lhs.GetOutputPort("tau_request"), rhs.GetInputPort("tau_request"))
+    builder.Connect(request or lhs.GetOutputPort("tau_request"),
+                    rhs.GetInputPort("tau_request"))
     builder.Connect(learner.GetOutputPort("weights"), rhs.GetInputPort("weights"))
     builder.Connect(learner.GetOutputPort("beta_hat"), rhs.GetInputPort("beta_hat"))
     for signal in ("q", "qdot"):

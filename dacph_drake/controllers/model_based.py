@@ -3,7 +3,7 @@ with a constant chi (task.gains.chi_model_based) and u = B0^-1 (tau_c^r + D0 qdo
 from pydrake.systems.primitives import ConstantVectorSource
 
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
-                                     assemble_closed_loop)
+                                                 LhsRequest, assemble_closed_loop)
 from dacph_drake.scenario import Excitation, Scenario
 from dacph_drake.systems.model_based_inverter import ModelBasedInverter
 
@@ -22,8 +22,7 @@ def build_model_based_diagram(*scenarios: Scenario) -> ClosedLoop:
         builder.Connect(fixed_chi.get_output_port(), lhs.GetInputPort("chi"))
         inverter = builder.AddNamedSystem("model_based_inverter", ModelBasedInverter(
             uncertainties=[s.uncertainty for s in loop.scenarios]))
-        builder.Connect(lhs.GetOutputPort("tau_request"),
-                        inverter.GetInputPort("tau_request"))
+        builder.Connect(LhsRequest(lhs, systems), inverter.GetInputPort("tau_request"))
         controller.Input(inverter.GetInputPort("qdot"), "qdot")
         builder.ExportOutput(inverter.GetOutputPort("u"), "u")
         return {**systems, "model_based_inverter": inverter}

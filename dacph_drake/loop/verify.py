@@ -10,7 +10,7 @@ when any fails.
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import matplotlib
 
@@ -21,8 +21,12 @@ import numpy as np  # noqa: E402
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
-from dacph_drake.analysis.rhs_loop import STABILITY_MARGIN, check_rhs_loop  # noqa: E402
+from dacph_drake.analysis.rhs_loop import (STABILITY_MARGIN, check_rhs_loop,  # noqa: E402
+                                           largest_tolerated_delay)
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
+from dacph_drake.dynamics.model_error import realized_model_error  # noqa: E402
+from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
+from dacph_drake.robots.robot import Robot  # noqa: E402
 from dacph_drake.scenario.errors import ConfigError  # noqa: E402
 from dacph_drake.log_layout import RhsLog  # noqa: E402
 from dacph_drake.assembly.registry import robot_of  # noqa: E402
@@ -79,7 +83,7 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
         if learned and t[k] > scenario.stress.start:
             B = scenario.stress.B_hat_scale * B
         check = check_rhs_loop(B, rhs[k, R.K], scenario.periods.rhs,
-                               lambda_lhs, scenario.rhs.Td)
+                               lambda_lhs, scenario.rhs.Td, *loop_delays(scenario))
         series.time.append(float(t[k]))
         series.margin.append(check.margin)
         series.separation.append(check.separation)
@@ -87,6 +91,55 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
             series.failures.append(f"t = {t[k]:.3f} s: {check.reason}")
             series.failure_times.append(float(t[k]))
     return series
+
+
+def loop_delays(scenario: Scenario) -> Tuple[int, float]:
+    """(the samples by which the RHS loop's command acts late: sensing.rhs_delay plus
+    the sensors' latency; the actuators' lag [s]) (0, 0.0 with sensing off).
+
+    Args:
+        scenario: The scenario."""
+    sensing = scenario.sensing
+    if not sensing.enabled:
+        return 0, 0.0
+    return sensing.rhs_delay + sensing.latency, sensing.actuator_lag
+
+
+def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robot,
+                    every: int = 1) -> Dict:
+    """The largest delay of the RHS loop's command (samples of periods.rhs, and
+    seconds) that keeps it stable, and that keeps its certificate, with the run's
+    actuator lag, at every ``every``-th logged sample: the least over the run, and when.
+    The loop's gain there is the one the integrator meets, (I + E) B~ with the gains K
+    in effect: the observer's tau_obs = M_hat qddot + ... is (I + E) times the port's
+    torque, E = M_hat M~^-1 - I the LHS model's realized inertia error.
+
+    Args:
+        logs: The run's logs.
+        scenario: The scenario it ran.
+        robot: Its Robot (the model's and the truth's plants).
+        every: Every how many logged samples to evaluate."""
+    n, h = len(scenario.q0), scenario.periods.rhs
+    rhs, R = logs["rhs_log"], RhsLog(n)
+    delay, lag = loop_delays(scenario)
+    samples = np.array([k for k in range(0, len(logs["time"]), every)
+                        if np.all(np.isfinite(rhs[k, R.K]))])
+    pis = logs.get("inertial_parameters")
+    pis = (np.tile(robot.model.inertial_parameters, (len(samples), 1)) if pis is None
+           else pis[samples])
+    joints = ArmCoordinates.FromPlant(robot.model.plant).joint_q
+    E = realized_model_error(robot.model.plant, robot.truth_plant, pis,
+                             logs["state"][samples][:, joints])
+    stable, certified = [], []
+    for k, error in zip(samples, E):
+        B = (np.eye(n) + error) @ logs["true_matrices"][k, :n * n].reshape(n, n)
+        stable.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, radius=1.0))
+        certified.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag))
+    worst = int(np.argmin(stable))
+    return {"time": float(logs["time"][samples[worst]]), "in_the_run": delay,
+            "actuator_lag": lag, "stable_samples": stable[worst],
+            "stable_seconds": stable[worst] * h, "certified_samples": int(min(certified)),
+            "certified_seconds": min(certified) * h}
 
 
 def _refresh_reads(t: np.ndarray, period: float) -> np.ndarray:
@@ -180,6 +233,7 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
               "controller": run_meta.get("controller", "dac"),
               "learning": learning_report(logs, scenario),
+              "delay_tolerance": delay_tolerance(logs, scenario, robot, per_update),
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
                            "excitation_norm": excitation_norm,

@@ -4,10 +4,10 @@ against the schema), checks (allowed ranges), built_in (named scenarios), errors
 (ConfigError). Files: assembly.scenario_files; sizing: robots.sizing."""
 from dacph_drake.scenario.schema import (  # noqa: F401
     ADOPTIONS, EFFORT_LIMITS, GAIN_RULES, INERTIA_ANCHORS, JOINT_DAMPING, JOINT_FRICTION,
-    JOINT_LIMITS, LEARNER_COUPLINGS, LEARNER_MODES, LEARNER_PRIOR_SCALES,
+    JOINT_LIMITS, RATE_SOURCES, LEARNER_COUPLINGS, LEARNER_MODES, LEARNER_PRIOR_SCALES,
     ON_MISMATCH, TRUST_ANCHORS, ActuatorFault, ArmBase, AttitudeGains, AttitudeReference,
     ClearancePotential, DescribedArm, Disturbance, EndEffectorAngle, EndEffectorAttitude,
     EndEffectorFrame, EndEffectorPose, EndEffectorPosition, Excitation,
     InertiaIdentification, Learner, LhsGains, LocalBayes, Periods, Phases, PlanarArm,
-    PositionReference, Potential, Reference, Rhs, Scenario, Stress, Uncertainty,
+    PositionReference, Potential, Reference, Rhs, Scenario, Sensing, Stress, Uncertainty,
     add_section_type)

@@ -2,7 +2,8 @@
 import numpy as np
 
 from dacph_drake.scenario import (DescribedArm, Disturbance, EndEffectorAttitude,
-                                  Learner, Periods, Phases, Rhs, Scenario, Uncertainty)
+                                  Learner, Periods, Phases, Rhs, Scenario, Sensing,
+                                  Uncertainty)
 
 
 def paper_scenario() -> Scenario:
@@ -70,6 +71,23 @@ def six_dof_disturbance(scale: float = 1.0) -> Disturbance:
 
 
 SATELLITE_PHASES = dict(warmup=2.0, linear=4.0, nonlinear=4.0, disturbance=4.0)
+
+
+def spacecraft_sensing(actuator_lag: float = 0.001, latency: int = 0) -> Sensing:
+    """The sensors and delays of a small spacecraft arm (docs/results/sensing.md gives
+    each value's source): 17-bit joint encoders, tachometers of 1e-4 rad/s noise, a gyro
+    of 0.01 deg/s noise with a 1 deg/h bias walking 1e-5 rad/s/sqrt(s), a star tracker of
+    10 arcsec at 10 Hz, one sample of computation delay on the LHS and on the RHS.
+
+    Args:
+        actuator_lag: The actuators' time constant [s].
+        latency: The sensors' latency [samples of periods.rhs]."""
+    degree = np.pi / 180
+    return Sensing(enabled=True, encoder_counts=2**17, rate_source="tachometer",
+                   rate_noise=1e-4, gyro_noise=0.01 * degree, gyro_bias=degree / 3600,
+                   gyro_bias_walk=1e-5, star_tracker_noise=10 * degree / 3600,
+                   star_tracker_rate=10.0, latency=latency, lhs_delay=1,
+                   rhs_delay=1, actuator_lag=actuator_lag)
 
 
 def satellite_6dof_scenario() -> Scenario:

@@ -7,9 +7,9 @@ from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, re
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.scenario.simulator import validate_simulator_config
 from dacph_drake.scenario import (ADOPTIONS, GAIN_RULES, INERTIA_ANCHORS, LEARNER_COUPLINGS,
-                                  LEARNER_MODES, LEARNER_PRIOR_SCALES,
-                                  ON_MISMATCH, TRUST_ANCHORS, LocalBayes, Periods,
-                                  Phases, Scenario)
+                                  LEARNER_MODES, LEARNER_PRIOR_SCALES, ON_MISMATCH,
+                                  RATE_SOURCES, TRUST_ANCHORS, LocalBayes, Periods,
+                                  Phases, Scenario, Sensing)
 
 
 def check_period_order(periods: Periods) -> None:
@@ -73,6 +73,7 @@ def validate_shared(scenario: Scenario, task: "Task", n: int, joint_names: Seque
                      0.0, 0.5)
     require_in_range("inertia.error_draws", scenario.inertia.error_draws, 2, 256)
     validate_port_settings(scenario, n)
+    validate_sensing(scenario.sensing, scenario.periods)
     validate_simulator_config(scenario.simulator)
     # Last, so that a setting with a range names it: every other number finite.
     require_finite_numbers("", scenario)
@@ -116,6 +117,26 @@ def validate_phases(phases: Phases) -> None:
         ConfigError: Unless every phase duration is >= 0."""
     for name in ("warmup", "linear", "nonlinear", "disturbance"):
         require_nonnegative(f"phases.{name}", getattr(phases, name), "s")
+
+
+def validate_sensing(sensing: Sensing, periods: Periods) -> None:
+    """Checks the sensing section (ranges; the star tracker no faster than the samples).
+
+    Args:
+        sensing: The section.
+        periods: The scenario's periods (the sensors sample at periods.rhs)."""
+    require_in_range("sensing.encoder_counts", sensing.encoder_counts, 0, 2**40,
+                     "(0: unquantized)")
+    for name in ("encoder_noise", "rate_noise", "gyro_noise", "gyro_bias_walk",
+                 "star_tracker_noise", "actuator_lag"):
+        require_nonnegative(f"sensing.{name}", getattr(sensing, name))
+    require_finite_numbers("sensing.gyro_bias", [sensing.gyro_bias])
+    require_one_of("sensing.rate_source", sensing.rate_source, RATE_SOURCES)
+    require_positive("sensing.rate_cutoff", sensing.rate_cutoff, "Hz")
+    require_in_range("sensing.star_tracker_rate", sensing.star_tracker_rate, 0.0,
+                     1.0 / periods.rhs, "Hz (0: exact; at most 1 / periods.rhs)")
+    for name in ("latency", "lhs_delay", "rhs_delay"):
+        require_in_range(f"sensing.{name}", getattr(sensing, name), 0, 1000, "samples")
 
 
 def validate_port_settings(scenario: Scenario, n: int) -> None:

@@ -22,6 +22,7 @@ JOINT_DAMPING = ("keep", "zero")                          # DescribedArm.joint_d
 JOINT_FRICTION = ("keep", "zero")                         # DescribedArm.joint_friction
 JOINT_LIMITS = ("stop", "ignore")                         # DescribedArm.joint_limits
 EFFORT_LIMITS = ("saturate", "ignore")                    # DescribedArm.effort_limits
+RATE_SOURCES = ("tachometer", "differentiated")           # Sensing.rate_source
 
 
 @dataclass
@@ -445,6 +446,48 @@ class Stress:
 
 
 @dataclass
+class Sensing:
+    """What the controllers measure, and when (off: the ground truth's exact state at
+    once; systems.sensors, controllers.closed_loop). Every sensor samples at periods.rhs
+    with its noise held for the sample; the star tracker fixes the base attitude at its
+    own rate and the gyro propagates it between fixes.
+
+    Attributes:
+        enabled: Measure through the sensors and delays below (false: exact, at once).
+        encoder_counts: The joint encoders' counts per revolution (0: unquantized).
+        encoder_noise: The encoders' noise sd [rad], >= 0.
+        rate_source: "tachometer" (qdot + rate_noise) or "differentiated" (the encoder
+            readings differenced each sample, low-passed at rate_cutoff).
+        rate_noise: The tachometers' noise sd [rad/s], >= 0.
+        rate_cutoff: The differentiated rate's first-order low-pass cutoff [Hz], > 0.
+        gyro_noise: The base gyro's noise sd per sample and axis [rad/s], >= 0.
+        gyro_bias: Its initial bias on every axis [rad/s].
+        gyro_bias_walk: Its bias random walk [rad/s/sqrt(s)], >= 0.
+        star_tracker_noise: The star tracker's attitude noise sd per axis [rad], >= 0.
+        star_tracker_rate: Its fixes per second [Hz] (0: the attitude exact at every
+            sample, no gyro propagation).
+        latency: Samples (of periods.rhs) by which every measurement is late, >= 0.
+        lhs_delay: Samples (of periods.lhs) by which the LHS's request is late, >= 0.
+        rhs_delay: Samples (of periods.rhs) by which the command u is late, >= 0.
+        actuator_lag: The actuators' first-order time constant [s] (0: none), >= 0."""
+    enabled: bool = False
+    encoder_counts: int = 0
+    encoder_noise: float = 0.0
+    rate_source: str = "tachometer"
+    rate_noise: float = 0.0
+    rate_cutoff: float = 200.0
+    gyro_noise: float = 0.0
+    gyro_bias: float = 0.0
+    gyro_bias_walk: float = 0.0
+    star_tracker_noise: float = 0.0
+    star_tracker_rate: float = 0.0
+    latency: int = 0
+    lhs_delay: int = 0
+    rhs_delay: int = 0
+    actuator_lag: float = 0.0
+
+
+@dataclass
 class PlanarArm:
     """robot: a planar n-link arm on a free base.
 
@@ -606,6 +649,7 @@ class Scenario:
         learner: Learner.
         excitation: Excitation.
         stress: Stress.
+        sensing: Sensing (off by default).
         simulator: Drake's settings for the truth (step: min(max_step, periods.rhs)).
         seed: The learner's and the observer noise's, in [0, 2^32 - 1]."""
     robot: Union[PlanarArm, DescribedArm] = field(default_factory=PlanarArm)
@@ -621,6 +665,7 @@ class Scenario:
     learner: Learner = field(default_factory=Learner)
     excitation: Excitation = field(default_factory=Excitation)
     stress: Stress = field(default_factory=Stress)
+    sensing: Sensing = field(default_factory=Sensing)
     simulator: SimulatorConfig = field(default_factory=FixedStepConfig)
     seed: int = 0
 

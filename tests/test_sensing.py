@@ -1,0 +1,193 @@
+"""Sensors, delays and lags between the ground truth and the controllers
+(scenario.Sensing, systems.sensors, controllers.closed_loop.AddSensors/AddActuation) and
+the RHS loop's certificate that knows them (analysis.rhs_loop.delayed_loop_matrix)."""
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
+
+from dacph_drake.analysis.rhs_loop import delayed_loop_matrix, largest_tolerated_delay
+from dacph_drake.assembly.scenario_files import load_scenario
+from dacph_drake.controllers.dac import build_dac_diagram
+from dacph_drake.gain_rule import loop_matrix
+from dacph_drake.loop.simulate import simulate
+from dacph_drake.scenario import Phases, Sensing
+from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.systems.sensors import Sensors
+
+H = 2.5e-4
+
+
+def _tiny(name: str, sensing: Sensing):
+    scenario = load_scenario(name)
+    scenario.phases = Phases(warmup=0.2, linear=0.3, nonlinear=0.3, disturbance=0.3)
+    scenario.sensing = sensing
+    return scenario
+
+
+def test_sensing_is_off_by_default_and_adds_no_system():
+    loop = build_dac_diagram(_tiny("short", Sensing()))
+    assert not {"sensors", "rhs_delay", "actuator_lag", "lhs_delay"} & set(loop.systems)
+    on = build_dac_diagram(_tiny("short", Sensing(enabled=True, rhs_delay=2, lhs_delay=1,
+                                                  actuator_lag=0.005)))
+    assert {"sensors", "rhs_delay", "actuator_lag", "lhs_delay"} <= set(on.systems)
+
+
+@pytest.mark.parametrize("name", ["short", "satellite_3dof"])
+def test_noiseless_sensors_without_delays_change_no_log(name):
+    """The sensors wired in with no noise, quantization, latency or lag: every log of
+    the run is the one without them, bit for bit (their outputs equal their inputs)."""
+    off = simulate(_tiny(name, Sensing()), "dac").logs
+    on = simulate(_tiny(name, Sensing(enabled=True)), "dac").logs
+    for log in off:
+        assert np.array_equal(off[log], on[log], equal_nan=True), log
+
+
+def _sensors(settings: Sensing, pose, q, velocity, qdot, seeds=(3,), duration=1.0):
+    """Simulates a Sensors alone on constant true signals; returns its logged outputs."""
+    builder = DiagramBuilder()
+    sensors = builder.AddSystem(Sensors(settings=settings, num_joints=len(q) // len(seeds),
+                                        base_positions=len(pose) // len(seeds),
+                                        period=H, seeds=list(seeds)))
+    for name, value in zip(("base_pose", "q", "base_velocity", "qdot"),
+                           (pose, q, velocity, qdot)):
+        source = builder.AddSystem(ConstantVectorSource(np.asarray(value, float)))
+        builder.Connect(source.get_output_port(), sensors.GetInputPort(name))
+    logs = {name: LogVectorOutput(sensors.GetOutputPort(name), builder, H)
+            for name in ("base_pose", "q", "base_velocity", "qdot")}
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(duration)
+    context = simulator.get_context()
+    return {name: log.FindLog(context).data().T for name, log in logs.items()}
+
+
+def test_encoders_quantize_to_their_counts():
+    counts = 2**17
+    q = [0.3 + 1e-6, -1.234567]
+    out = _sensors(Sensing(enabled=True, encoder_counts=counts), [0, 0, 0.1], q,
+                   [0, 0, 0], [0, 0], duration=0.01)["q"]
+    step = 2 * np.pi / counts
+    assert np.allclose(out / step, np.round(out / step), atol=1e-9)
+    assert np.all(np.abs(out - q) <= step / 2 + 1e-15)
+
+
+def test_gyro_noise_and_bias_walk_have_their_sizes():
+    """The planar base's measured rate: omega + b + n_g, n_g of sd gyro_noise per sample;
+    b starts at gyro_bias and walks with variance gyro_bias_walk^2 t."""
+    noise, bias, walk, duration = 1e-3, 2e-4, 5e-3, 4.0
+    seeds = tuple(range(40))
+    trials = len(seeds)
+    out = _sensors(Sensing(enabled=True, gyro_noise=noise, gyro_bias=bias,
+                           gyro_bias_walk=walk),
+                   np.tile([0, 0, 0.1], trials), np.tile([0.3, 1.0], trials),
+                   np.tile([0, 0, 0.05], trials), np.zeros(2 * trials), seeds=seeds,
+                   duration=duration)["base_velocity"].reshape(-1, trials, 3)
+    error = out[1:, :, 2] - 0.05
+    increments = np.diff(error, axis=0)          # white noise differences: var 2 sd^2
+    assert np.std(increments) == pytest.approx(np.sqrt(2) * noise, rel=0.05)
+    final_bias = np.mean(error[-400:], axis=0)   # the bias at the end, per trial
+    assert np.mean(final_bias) == pytest.approx(bias, abs=4 * walk * np.sqrt(duration)
+                                                / np.sqrt(trials))
+    assert np.std(final_bias) == pytest.approx(walk * np.sqrt(duration), rel=0.35)
+
+
+def test_the_gyro_carries_the_attitude_between_star_tracker_fixes():
+    """A spatial base turning at a constant world rate: with exact sensors the estimate
+    propagated by the gyro is the truth's attitude at the last fix turned by omega t
+    (the truth held constant here, the estimate turns away from it by |omega| t since
+    the fix); at each fix it is reset to the truth."""
+    omega = np.array([0.0, 0.0, 0.2])
+    rate = 10.0
+    out = _sensors(Sensing(enabled=True, star_tracker_rate=rate, star_tracker_noise=1e-9),
+                   [1, 0, 0, 0, 0, 0, 0], [0.1], np.concatenate([omega, [0, 0, 0]]),
+                   [0.0], duration=0.35)["base_pose"]
+    angle = 2 * np.arctan2(np.linalg.norm(out[:, 1:4], axis=1), out[:, 0])
+    t = np.arange(len(angle)) * H
+    since_fix = (t + 1e-9) % (1 / rate)
+    drifted = since_fix > 2 * H                  # away from the fix
+    assert np.allclose(angle[drifted], 0.2 * since_fix[drifted], atol=1e-9)
+    assert np.all(angle[~drifted] < 2e-4)
+
+
+def test_the_delayed_loop_matrix_is_the_recursion_it_models():
+    """delayed_loop_matrix iterated equals the loop's recursion run step by step (the
+    integrator, a delay line of d commands, the sampled first-order lag, tau_obs one
+    sample late), and with no delay or lag it is gain_rule.loop_matrix."""
+    rng = np.random.default_rng(0)
+    B = np.eye(3) + 0.1 * rng.standard_normal((3, 3))
+    K, d, lag = np.array([500.0, 700.0, 900.0]), 3, 0.002
+    assert np.array_equal(delayed_loop_matrix(B, K, H), loop_matrix(B, K, H))
+    A = delayed_loop_matrix(B, K, H, d, lag)
+    a = np.exp(-H / lag)
+    u_I, line, s, tau = rng.standard_normal(3), [rng.standard_normal(3) for _ in range(d)], \
+        rng.standard_normal(3), rng.standard_normal(3)
+    x = np.concatenate([u_I, *line, s, tau])
+    for _ in range(25):
+        applied = line[-1]
+        s_next = a * s + (1 - a) * applied
+        u_I, line, s, tau = u_I - H * K * tau, [u_I] + line[:-1], s_next, B @ s_next
+        x = A @ x
+        assert np.allclose(x, np.concatenate([u_I, *line, s, tau]))
+
+
+def test_the_tolerated_delay_is_where_the_radius_crosses():
+    B = np.array([[1.0, 0.1], [0.05, 0.9]])
+    K = np.array([800.0, 900.0])
+    for lag in (0.0, 0.002):
+        stable = largest_tolerated_delay(B, K, H, lag, radius=1.0)
+        radius = [np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(B, K, H, d, lag))))
+                  for d in (stable, stable + 1)]
+        assert radius[0] < 1.0 <= radius[1]
+        assert largest_tolerated_delay(B, K, H, lag) <= stable
+
+
+@pytest.mark.parametrize("setting, value, message", [
+    ("rate_source", "kalman", r"sensing.rate_source = 'kalman'; allowed: tachometer, "
+                              r"differentiated"),
+    ("star_tracker_rate", 1e5, r"sensing.star_tracker_rate"),
+    ("gyro_noise", -1.0, r"sensing.gyro_noise = -1.0"),
+    ("rhs_delay", -1, r"sensing.rhs_delay = -1"),
+])
+def test_a_bad_sensing_setting_is_named(setting, value, message):
+    from dacph_drake.assembly.registry import validate_scenario
+    scenario = _tiny("short", Sensing(enabled=True))
+    setattr(scenario.sensing, setting, value)
+    with pytest.raises(ConfigError, match=message):
+        validate_scenario(scenario)
+
+
+def test_a_delay_line_of_k_samples_delays_a_discrete_signal_by_k_samples():
+    """DelayLine(h, k) between a system updated every h and one reading it at the same
+    instants: the reader sees the value k samples later than it would directly."""
+    from pydrake.systems.framework import LeafSystem
+    from dacph_drake.controllers.closed_loop import DelayLine
+
+    class Counter(LeafSystem):
+        def __init__(self, reads: bool):
+            super().__init__()
+            self._u = self.DeclareVectorInputPort("u", 1) if reads else None
+            state = self.DeclareDiscreteState(1)
+            self.DeclareStateOutputPort("y", state)
+            self.DeclarePeriodicDiscreteUpdateEvent(H, 0.0, self._Update)
+
+        def _Update(self, context, discrete_state):
+            value = (self._u.Eval(context) if self._u is not None
+                     else context.get_discrete_state(0).get_value() + 1)
+            discrete_state.get_mutable_vector(0).SetFromVector(value)
+
+    for k in (1, 3):
+        builder = DiagramBuilder()
+        counter = builder.AddSystem(Counter(False))
+        direct, delayed = builder.AddSystem(Counter(True)), builder.AddSystem(Counter(True))
+        line = builder.AddSystem(DelayLine(H, k, 1))
+        builder.Connect(counter.get_output_port(), direct.get_input_port())
+        builder.Connect(counter.get_output_port(), line.get_input_port())
+        builder.Connect(line.get_output_port(), delayed.get_input_port())
+        logs = [LogVectorOutput(s.get_output_port(), builder, H) for s in (direct, delayed)]
+        simulator = Simulator(builder.Build())
+        simulator.AdvanceTo(12 * H)
+        direct_log, delayed_log = (log.FindLog(simulator.get_context()).data().ravel()
+                                   for log in logs)
+        assert np.array_equal(delayed_log[k:], direct_log[:-k])
