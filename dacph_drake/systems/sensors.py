@@ -4,7 +4,8 @@ the base's gyro and star tracker, and a latency."""
 from typing import Sequence
 
 import numpy as np
-from pydrake.systems.framework import LeafSystem
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from dacph_drake.scenario import Sensing
 
@@ -75,6 +76,7 @@ class Sensors(LeafSystem):
         self._since_fix = offsets[-2]
         self._width = offsets[-1]
         self._noise_width = 2 * n + a
+        self._draws, self._walk_draws = np.empty((trials, 2 * n + a)), np.empty((trials, a))
         self._state = self.DeclareDiscreteState(self._width * trials)
         # The measurements of the last ``latency`` samples, oldest first.
         self._measured = sum(self._sizes) * trials
@@ -86,14 +88,19 @@ class Sensors(LeafSystem):
         self._inputs = [self.DeclareVectorInputPort(name, size * trials)
                         for name, size in zip(("base_pose", "q", "base_velocity", "qdot"),
                                               self._sizes)]
-        tickets = {self.all_input_ports_ticket(), self.all_state_ticket()}
+        # The stacked measurement, computed once per context for the four outputs.
+        self._measurement = self.DeclareCacheEntry(
+            "measurement", ValueProducer(
+                allocate=lambda: AbstractValue.Make(np.zeros(self._measured)),
+                calc=lambda context, value: value.set_value(self._CalcMeasured(context))),
+            {self.all_input_ports_ticket(), self.all_state_ticket()})
         starts = np.cumsum([0, *[size * trials for size in self._sizes]])
         for name, lo, hi in zip(("base_pose", "q", "base_velocity", "qdot"),
                                 starts[:-1], starts[1:]):
             self.DeclareVectorOutputPort(
                 name, hi - lo, lambda context, output, lo=lo, hi=hi: output.SetFromVector(
-                    self._CalcMeasured(context)[lo:hi]),
-                prerequisites_of_calc=tickets)
+                    self._measurement.Eval(context)[lo:hi]),
+                prerequisites_of_calc={self._measurement.ticket()})
         self.DeclareInitializationDiscreteUpdateEvent(self._Initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateSample)
 
@@ -159,14 +166,18 @@ class Sensors(LeafSystem):
         pose, q, velocity, _ = (self._Trials(x, size) for x, size in zip(truth, self._sizes))
         state = self._Trials(context.get_discrete_state(self._state).get_value(),
                              self._width).copy()
-        draws = np.stack([rng.standard_normal(self._noise_width) for rng in self._rngs])
+        draws = self._draws
+        for rng, row in zip(self._rngs, draws):
+            rng.standard_normal(out=row)
         n, a = self._n, self._axes
         state[:, self._nq] = s.encoder_noise * draws[:, :n]
         state[:, self._nr] = s.rate_noise * draws[:, n:2 * n]
         state[:, self._ng] = s.gyro_noise * draws[:, 2 * n:2 * n + a]
         if s.gyro_bias_walk > 0:
-            state[:, self._bias] += s.gyro_bias_walk * np.sqrt(h) * np.stack(
-                [rng.standard_normal(a) for rng in self._rngs])
+            walk = self._walk_draws
+            for rng, row in zip(self._rngs, walk):
+                rng.standard_normal(out=row)
+            state[:, self._bias] += s.gyro_bias_walk * np.sqrt(h) * walk
         measured_q = q + state[:, self._nq]
         if self._step:
             measured_q = self._step * np.round(measured_q / self._step)
