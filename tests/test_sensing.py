@@ -149,6 +149,16 @@ def test_the_tolerated_delay_is_where_the_radius_crosses():
     ("star_tracker_rate", 1e5, r"sensing.star_tracker_rate"),
     ("gyro_noise", -1.0, r"sensing.gyro_noise = -1.0"),
     ("rhs_delay", -1, r"sensing.rhs_delay = -1"),
+    ("lhs_delay", 2000, r"sensing.lhs_delay = 2000"),
+    ("latency", -2, r"sensing.latency = -2"),
+    ("encoder_counts", -1, r"sensing.encoder_counts = -1"),
+    ("encoder_noise", -1e-3, r"sensing.encoder_noise"),
+    ("rate_noise", -1e-3, r"sensing.rate_noise"),
+    ("rate_cutoff", 0.0, r"sensing.rate_cutoff = 0.0"),
+    ("gyro_bias", float("nan"), r"sensing.gyro_bias"),
+    ("gyro_bias_walk", -1.0, r"sensing.gyro_bias_walk"),
+    ("star_tracker_noise", -1.0, r"sensing.star_tracker_noise"),
+    ("actuator_lag", -0.005, r"sensing.actuator_lag"),
 ])
 def test_a_bad_sensing_setting_is_named(setting, value, message):
     from dacph_drake.assembly.registry import validate_scenario
@@ -191,3 +201,9 @@ def test_a_delay_line_of_k_samples_delays_a_discrete_signal_by_k_samples():
         direct_log, delayed_log = (log.FindLog(simulator.get_context()).data().ravel()
                                    for log in logs)
         assert np.array_equal(delayed_log[k:], direct_log[:-k])
+
+
+def test_an_unknown_sensing_key_in_a_file_is_refused(tmp_path):
+    (tmp_path / "s.yaml").write_text("sensing: {enabeld: true}\n")
+    with pytest.raises(ConfigError, match="enabeld"):
+        load_scenario(tmp_path / "s.yaml")

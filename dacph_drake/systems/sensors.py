@@ -58,6 +58,9 @@ class Sensors(LeafSystem):
         self._n, self._trials, self._h, self._s = n, trials, period, s
         self._spatial = base_positions == 7
         self._axes = 3 if self._spatial else 1
+        # The attitude's columns in base_pose and the angular rates' in base_velocity.
+        self._attitude_columns = slice(0, 4) if self._spatial else slice(2, 3)
+        self._rate_columns = slice(0, 3) if self._spatial else slice(2, 3)
         self._rngs = [np.random.default_rng(seed + SEED_OFFSET) for seed in seeds]
         self._step = 2 * np.pi / s.encoder_counts if s.encoder_counts else 0.0
         self._alpha = 1.0 - np.exp(-2 * np.pi * s.rate_cutoff * period)
@@ -111,18 +114,20 @@ class Sensors(LeafSystem):
         """The stacked measurements [base_pose, q, base_velocity, qdot] at the truth."""
         pose, q, velocity, qdot = (self._Trials(x, size).copy()
                                    for x, size in zip(truth, self._sizes))
-        q = q + state[:, self._nq]
-        if self._step:
-            q = self._step * np.round(q / self._step)
+        q = self._Encoders(q, state[:, self._nq])
         if self._differentiated:
             qdot = state[:, self._rate].copy()
         else:
             qdot = qdot + state[:, self._nr]
-        rates = slice(0, 3) if self._spatial else slice(2, 3)
-        velocity[:, rates] += state[:, self._bias] + state[:, self._ng]
+        velocity[:, self._rate_columns] += state[:, self._bias] + state[:, self._ng]
         if self._estimated:
-            pose[:, slice(0, 4) if self._spatial else slice(2, 3)] = state[:, self._attitude]
+            pose[:, self._attitude_columns] = state[:, self._attitude]
         return np.concatenate([x.reshape(-1) for x in (pose, q, velocity, qdot)])
+
+    def _Encoders(self, q: np.ndarray, noise: np.ndarray) -> np.ndarray:
+        """The encoders' readings of q with their noise, quantized to their counts."""
+        q = q + noise
+        return self._step * np.round(q / self._step) if self._step else q
 
     def _CalcMeasured(self, context) -> np.ndarray:
         if context.get_discrete_state(self._ready).get_value()[0] == 0:
@@ -136,8 +141,9 @@ class Sensors(LeafSystem):
     def _Fix(self, pose: np.ndarray, noise: np.ndarray) -> np.ndarray:
         """A star-tracker fix of each trial's attitude with per-axis noise."""
         if not self._spatial:
-            return pose[:, 2:3] + noise
-        fixed = _quaternion_product(_rotation_quaternion(noise), pose[:, :4])
+            return pose[:, self._attitude_columns] + noise
+        fixed = _quaternion_product(_rotation_quaternion(noise),
+                                    pose[:, self._attitude_columns])
         return fixed / np.linalg.norm(fixed, axis=1, keepdims=True)
 
     def _Initialize(self, context, discrete_state):
@@ -147,8 +153,7 @@ class Sensors(LeafSystem):
         state = np.zeros((self._trials, self._width))
         state[:, self._bias] = s.gyro_bias
         state[:, self._attitude] = self._Fix(pose, self._StarNoise())
-        state[:, self._previous] = (self._step * np.round(q / self._step) if self._step
-                                    else q)
+        state[:, self._previous] = self._Encoders(q, 0.0)
         discrete_state.get_mutable_vector(self._state).SetFromVector(state.reshape(-1))
         discrete_state.get_mutable_vector(self._ready).SetFromVector([1.0])
         if self._queue is not None:
@@ -178,17 +183,15 @@ class Sensors(LeafSystem):
             for rng, row in zip(self._rngs, walk):
                 rng.standard_normal(out=row)
             state[:, self._bias] += s.gyro_bias_walk * np.sqrt(h) * walk
-        measured_q = q + state[:, self._nq]
-        if self._step:
-            measured_q = self._step * np.round(measured_q / self._step)
+        measured_q = self._Encoders(q, state[:, self._nq])
         state[:, self._rate] += self._alpha * (
             (measured_q - state[:, self._previous]) / h - state[:, self._rate])
         state[:, self._previous] = measured_q
         if self._estimated:
             state[:, self._since_fix] += 1
             fix = state[:, self._since_fix] >= self._fix_every
-            omega = (velocity[:, :3] if self._spatial else velocity[:, 2:3]) + state[
-                :, self._bias] + state[:, self._ng]
+            omega = (velocity[:, self._rate_columns] + state[:, self._bias]
+                     + state[:, self._ng])
             if self._spatial:
                 turned = _quaternion_product(_rotation_quaternion(omega * h),
                                              state[:, self._attitude])
