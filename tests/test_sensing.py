@@ -207,3 +207,15 @@ def test_an_unknown_sensing_key_in_a_file_is_refused(tmp_path):
     (tmp_path / "s.yaml").write_text("sensing: {enabeld: true}\n")
     with pytest.raises(ConfigError, match="enabeld"):
         load_scenario(tmp_path / "s.yaml")
+
+
+def test_a_run_saved_before_sensing_keeps_its_fingerprint():
+    """The sensing section off, as introduced, leaves a scenario's fingerprinted text
+    as it was before the section existed; turned on, it changes the fingerprint."""
+    from pydrake.common.yaml import yaml_dump_typed
+    from dacph_drake.assembly.scenario_files import saved_forms
+    scenario = load_scenario("short")
+    text = saved_forms(scenario)[0]
+    assert "sensing:" in yaml_dump_typed(scenario) and "sensing:" not in text
+    scenario.sensing.enabled = True
+    assert "sensing:" in saved_forms(scenario)[0]

@@ -75,15 +75,27 @@ def _bayes_as_introduced() -> LocalBayes:
 ADDED_SUBSECTIONS = (("learner", "bayes", _bayes_as_introduced),)
 
 
-# Top-level sections added since whose defaults are the behaviour before them: the
-# section's text at its defaults is left out of the fingerprinted text.
-ADDED_SECTIONS = (("sensing", Sensing),)
+def _sensing_as_introduced() -> Sensing:
+    """sensing: as introduced, off (a frozen record, never edited)."""
+    return Sensing(enabled=False, encoder_counts=0, encoder_noise=0.0,
+                   rate_source="tachometer", rate_noise=0.0, rate_cutoff=200.0,
+                   gyro_noise=0.0, gyro_bias=0.0, gyro_bias_walk=0.0,
+                   star_tracker_noise=0.0, star_tracker_rate=0.0, latency=0, lhs_delay=0,
+                   rhs_delay=0, actuator_lag=0.0)
+
+
+# Top-level sections added since, at the behaviour before them: the section's text
+# as introduced is left out of the fingerprinted text (a later change of its defaults
+# leaves runs saved before it their fingerprints).
+ADDED_SECTIONS = (("sensing", _sensing_as_introduced),)
 
 
 def _without_default_sections(text: str) -> str:
-    """The YAML text without each ADDED_SECTIONS section that holds its defaults."""
-    for name, section in ADDED_SECTIONS:
-        block = "".join(f"  {line}\n" for line in yaml_dump_typed(section()).splitlines())
+    """The YAML text without each ADDED_SECTIONS section that holds its values as
+    introduced."""
+    for name, introduced in ADDED_SECTIONS:
+        block = "".join(f"  {line}\n" for line in
+                        yaml_dump_typed(introduced()).splitlines())
         text = text.replace(f"{name}:\n{block}", "")
     return text
 
