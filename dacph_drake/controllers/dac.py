@@ -7,7 +7,7 @@ from pydrake.systems.framework import LeafSystem, OutputPort
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                                  LhsRequest, assemble_closed_loop)
 from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
-from dacph_drake.learning import LearnerTrial, learner_kind, prior_set, published_model
+from dacph_drake.learning import LearnerTrial, learner_kind
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner
@@ -69,7 +69,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
     builder = controller.builder
-    regularized = learner_kind(settings).BandPassed(settings)
+    kind = learner_kind(settings)
+    regularized = kind.BandPassed(settings)
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         num_joints=model.num_joints, sample_period=periods.rhs,
         noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],
@@ -92,11 +93,11 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         builder.Connect(identifier.GetOutputPort("identification_log"),
                         learner.GetInputPort("identification_log"))
     rhs = builder.AddNamedSystem("rhs_integrator", RhsIntegrator(
-        trials=[RhsTrial(model=robot.model, network=published_model(settings, trial),
+        trials=[RhsTrial(model=robot.model, network=kind.Published(settings, trial),
                          Kd_max=Kd_max, lambda_min_M=lambda_min_M, B0=s.uncertainty.B0,
                          D0=s.uncertainty.D0,
-                         prior_set=prior_set(s.learner, s.uncertainty.B0,
-                                             s.uncertainty.D0))
+                         prior_set=kind.PriorSet(s.learner, s.uncertainty.B0,
+                                                 s.uncertainty.D0))
                 for robot, s, trial, (Kd_max, lambda_min_M)
                 in zip(loop.robots, loop.scenarios, trials, rates)],
         settings=rhs_settings, period=periods.rhs,

@@ -5,9 +5,7 @@ B_hat(x), D_hat(x) and, if it knows them, a credible set of B (adopted only if t
 certificate holds on all of it: gain_rule.CertifiedGains) and intervals; what the data do
 not determine, at the prior (B0, D0). LEARNERS, by ``learner.model``: "local_bayes" (the
 default), "network" (the paper's, also for ``mode: plain``); register_learner adds one."""
-from typing import Dict, Optional, Sequence, Type
-
-import numpy as np
+from typing import Dict, Sequence, Type
 
 from dacph_drake.learning.local_bayes import LocalBayesLearner
 from dacph_drake.learning.network_learner import NetworkLearner
@@ -51,23 +49,3 @@ def make_port_learner(settings: Learner, trials: Sequence[LearnerTrial],
         period: The training period [s] (periods.learner).
         sample_period: The sampling period [s] (periods.learner_sample)."""
     return learner_kind(settings)(settings, trials, period, sample_period)
-
-
-def published_model(settings: Learner, trial: LearnerTrial) -> PublishedModel:
-    """The PublishedModel of one trial's vector as make_port_learner's learner publishes it.
-
-    Args:
-        settings: The learner's settings.
-        trial: The trial."""
-    return learner_kind(settings).Published(settings, trial)
-
-
-def prior_set(settings: Learner, B0: Sequence[float], D0: Sequence[float]
-              ) -> Optional[np.ndarray]:
-    """The learner's credible set [lower, upper] of B (2 x n x n) before learning, or None.
-
-    Args:
-        settings: The learner's settings.
-        B0: The prior's B0 (its diagonal, n).
-        D0: The prior's D0 (its diagonal, n)."""
-    return learner_kind(settings).PriorSet(settings, B0, D0)

@@ -281,7 +281,7 @@ class LocalBayesLearner(PortLearner):
 
     @staticmethod
     def Published(settings: Learner, trial: LearnerTrial) -> LocalModel:
-        """The evaluator of a trial's published vector (learning.published_model).
+        """The evaluator of a trial's published vector (RhsIntegrator reads it).
 
         Args:
             settings: The learner's settings.

@@ -57,7 +57,7 @@ class NetworkLearner(PortLearner):
 
     @staticmethod
     def Published(settings: Learner, trial: LearnerTrial) -> ExportedNetwork:
-        """The evaluator of a trial's published weights (learning.published_model).
+        """The evaluator of a trial's published weights (RhsIntegrator reads it).
 
         Args:
             settings: The learner's settings.
