@@ -70,6 +70,16 @@ def integral_gains(B_hat: np.ndarray, c: Union[float, np.ndarray]
     return k, paired, (bool(dic_ok) if dic_ok.ndim == 0 else dic_ok)
 
 
+def lag_pole(period: float, lag: float) -> float:
+    """The pole a = exp(-h / lag) of a first-order actuator lag sampled every h under a
+    held command, s(k+1) = a s(k) + (1 - a) u(k); 0 without a lag.
+
+    Args:
+        period: The RHS period h [s].
+        lag: The actuators' time constant [s] (0: none)."""
+    return float(np.exp(-period / lag)) if lag > 0 else 0.0
+
+
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
     """The discrete RHS loop's matrix A = [[I, -h K], [B, 0]] (2n x 2n) on (u_I, tau_obs)
     (analysis.rhs_loop); per mode its polynomial is z^2 - z + h k_p lambda_p.

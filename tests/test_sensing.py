@@ -7,10 +7,13 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
-from dacph_drake.analysis.rhs_loop import delayed_loop_matrix, largest_tolerated_delay
+from dacph_drake.analysis.rhs_loop import (best_damped_gain, delayed_loop_matrix,
+                                           largest_tolerated_delay)
 from dacph_drake.assembly.scenario_files import load_scenario
 from dacph_drake.controllers.dac import build_dac_diagram
-from dacph_drake.gain_rule import loop_matrix
+from dacph_drake.gain_rule import lag_pole, loop_matrix
+from dacph_drake.kernels.certificate import (box_certificate, certified_gains, lag_weight,
+                                             mode_radius, roots_within)
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Sensing
 from dacph_drake.scenario.errors import ConfigError
@@ -32,6 +35,33 @@ def test_sensing_is_off_by_default_and_adds_no_system():
     on = build_dac_diagram(_tiny("short", Sensing(enabled=True, rhs_delay=2, lhs_delay=1,
                                                   actuator_lag=0.005)))
     assert {"sensors", "rhs_delay", "actuator_lag", "lhs_delay"} <= set(on.systems)
+
+
+def test_the_integrator_knows_the_modelled_delay_and_not_the_unmodelled_one():
+    """sensing.rhs_delay + latency is the delay the RHS integrator's certificate uses;
+    unmodelled_delay lengthens only the delay line the command goes through."""
+    loop = build_dac_diagram(_tiny("short", Sensing(enabled=True, rhs_delay=1, latency=1,
+                                                    unmodelled_delay=2,
+                                                    actuator_lag=0.002)))
+    integrator = loop.systems["rhs_integrator"]
+    assert (integrator._delay, integrator._pole) == (2, lag_pole(H, 0.002))
+    # DelayLine: 1 + 2 samples of delay are 2 steps of Drake's DiscreteTimeDelay,
+    # which holds 2 + 1 copies of the command (n = 2).
+    context = loop.systems["rhs_delay"].CreateDefaultContext()
+    assert context.get_discrete_state_vector().size() == (2 + 1) * 2
+
+
+def test_the_best_damped_gain_is_a_quarter_without_delay_and_smaller_with_it():
+    """best_damped_gain: 1/4 and radius 1/2 for z^2 - z + g; with a delay and a lag the
+    gain is smaller and no gain on a fine grid gives a smaller radius."""
+    gain, radius = best_damped_gain(H)
+    assert gain == pytest.approx(0.25, abs=1e-6) and radius == pytest.approx(0.5, abs=1e-3)
+    for delay, lag in ((1, 0.0), (1, 1e-3), (2, 5e-3)):
+        gain, radius = best_damped_gain(H, delay, lag)
+        assert gain < 0.25
+        grid = [mode_radius(complex(g), delay, lag_pole(H, lag))
+                for g in np.linspace(1e-3, 1.0, 2000)]
+        assert radius <= min(grid) + 1e-9
 
 
 @pytest.mark.parametrize("name", ["short", "satellite_3dof"])
@@ -114,22 +144,91 @@ def test_the_gyro_carries_the_attitude_between_star_tracker_fixes():
 def test_the_delayed_loop_matrix_is_the_recursion_it_models():
     """delayed_loop_matrix iterated equals the loop's recursion run step by step (the
     integrator, a delay line of d commands, the sampled first-order lag, tau_obs one
-    sample late), and with no delay or lag it is gain_rule.loop_matrix."""
+    sample late: the lag's output averaged over the sample, as the port observer's
+    momentum difference measures it), and with no delay or lag it is
+    gain_rule.loop_matrix."""
     rng = np.random.default_rng(0)
     B = np.eye(3) + 0.1 * rng.standard_normal((3, 3))
     K, d, lag = np.array([500.0, 700.0, 900.0]), 3, 0.002
     assert np.array_equal(delayed_loop_matrix(B, K, H), loop_matrix(B, K, H))
     A = delayed_loop_matrix(B, K, H, d, lag)
     a = np.exp(-H / lag)
+    b = (1 - a) / np.log(1 / a)
     u_I, line, s, tau = rng.standard_normal(3), [rng.standard_normal(3) for _ in range(d)], \
         rng.standard_normal(3), rng.standard_normal(3)
     x = np.concatenate([u_I, *line, s, tau])
     for _ in range(25):
         applied = line[-1]
         s_next = a * s + (1 - a) * applied
-        u_I, line, s, tau = u_I - H * K * tau, [u_I] + line[:-1], s_next, B @ s_next
+        u_I, line, s, tau = (u_I - H * K * tau, [u_I] + line[:-1], s_next,
+                             B @ ((1 - b) * applied + b * s))
         x = A @ x
         assert np.allclose(x, np.concatenate([u_I, *line, s, tau]))
+
+
+def test_the_lag_weight_is_the_lags_output_averaged_over_a_sample():
+    """Under a held command u from s(0), s(t) = u + (s(0) - u) e^(-t / lag); its mean over
+    [0, h] is (1 - b) u + b s(0), b = lag_weight(a) (a fine trapezoid quadrature)."""
+    for lag in (2e-4, 1e-3, 5e-3):
+        a = lag_pole(H, lag)
+        t = np.linspace(0.0, H, 20001)
+        response = 1.0 + (0.3 - 1.0) * np.exp(-t / lag)
+        mean = np.sum(0.5 * (response[1:] + response[:-1]) * np.diff(t)) / H
+        b = lag_weight(a)
+        assert abs(mean - ((1 - b) * 1.0 + b * 0.3)) < 1e-9
+
+
+def test_the_mode_polynomial_has_the_loop_matrix_eigenvalues_as_roots():
+    """The certificate's per-mode test (kernels.certificate.roots_within) agrees with
+    the delayed loop matrix's spectral radius on random loops with delays and lags."""
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        B = np.eye(3) + 0.2 * rng.standard_normal((3, 3))
+        K = rng.uniform(100.0, 1500.0, 3)
+        d, lag = int(rng.integers(0, 5)), float(rng.choice([0.0, 1e-3, 4e-3]))
+        radius = np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(B, K, H, d, lag))))
+        modes = np.linalg.eigvals(H * np.diag(K) @ B).astype(complex)
+        for bound in (radius - 1e-6, radius + 1e-6):
+            assert all(roots_within(mu, d, lag_pole(H, lag), bound) for mu in modes) \
+                == (bound > radius)
+
+
+def test_a_certificate_that_knows_the_delay_keeps_the_delayed_loop_within_bound():
+    """On a set of B, the rate certified without the delay and lag leaves the delayed,
+    lagged loop beyond the radius bound; certified with them (certified_gains' delay
+    and pole) the box certificate with them holds: what the integrator adopts."""
+    n, h, rate = 2, H, 100.0
+    lower = np.array([[0.8, -0.05], [-0.05, 0.8]])
+    upper = np.array([[1.3, 0.05], [0.05, 1.3]])
+    delay, pole = 2, lag_pole(h, 1e-3)
+    gains = {}
+    for known in (False, True):
+        out, K = np.empty((1, 4)), np.empty((1, n))
+        certified_gains(lower[None], upper[None], np.ones((1, n)), np.zeros((1, n)),
+                        np.array([0.25 / h]), np.array([rate]), np.array([rate]), h,
+                        0.25 / h, 0.95, out, K, delay if known else 0,
+                        pole if known else 0.0)
+        assert out[0, 1] == 1.0
+        gains[known] = K[0].copy()
+    assert box_certificate(lower, upper, gains[False], h, delay, pole)[1] > 0.95
+    slowest, radius = box_certificate(lower, upper, gains[True], h, delay, pole)
+    assert radius <= 0.95 and slowest >= rate * (1 - 1e-9)
+    assert np.all(gains[True] < gains[False])
+
+
+def test_the_tolerated_delay_counts_up_from_the_runs_own():
+    """A loop tuned for a delay of 2 samples may be worse without the delay (a delay
+    speeds the slow root): the tolerated delay scans from the run's delay up."""
+    B, K = np.eye(2), np.full(2, 0.05 / H)
+    at_zero = np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(B, K, H))))
+    at_two = np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(B, K, H, 2))))
+    assert at_two < at_zero
+    radius = 0.5 * (at_zero + at_two)
+    assert largest_tolerated_delay(B, K, H, radius=radius) == -1
+    tolerated = largest_tolerated_delay(B, K, H, radius=radius, start=2)
+    assert tolerated >= 2
+    assert np.max(np.abs(np.linalg.eigvals(
+        delayed_loop_matrix(B, K, H, tolerated + 1)))) >= radius
 
 
 def test_the_tolerated_delay_is_where_the_radius_crosses():
@@ -159,6 +258,7 @@ def test_the_tolerated_delay_is_where_the_radius_crosses():
     ("gyro_bias_walk", -1.0, r"sensing.gyro_bias_walk"),
     ("star_tracker_noise", -1.0, r"sensing.star_tracker_noise"),
     ("actuator_lag", -0.005, r"sensing.actuator_lag"),
+    ("unmodelled_delay", -1, r"sensing.unmodelled_delay = -1"),
 ])
 def test_a_bad_sensing_setting_is_named(setting, value, message):
     from dacph_drake.assembly.registry import validate_scenario

@@ -314,6 +314,49 @@ def test_an_output_directory_belongs_to_one_sweep(tmp_path):
     RowStore(tmp_path / "out", first, {}, "test").close()      # the same one resumes
 
 
+def test_a_sensing_sweep_samples_the_sensors_and_groups_its_batches(tmp_path,
+                                                                    monkeypatch):
+    """Sensing samples (noise scale, command delay, actuator lag) reach each trial's
+    sensing section; trials of different sensing share no diagram, those of equal
+    sensing do, and every row is the one the trial gets alone."""
+    from dacph_drake.montecarlo.definition import sample_trial
+    from dacph_drake.scenario.built_in import spacecraft_sensing
+    folder = tmp_path / "sensing"
+    write_sweep(folder, "")
+    scenario = load_scenario(folder / "tiny.yaml")
+    scenario.sensing = spacecraft_sensing()
+    save_scenario(scenario, folder / "tiny.yaml")
+    path = folder / "sweep.yaml"
+    path.write_text("scenario: tiny.yaml\ntrials: 4\nseed: 3\ncontrollers: [dac]\n"
+                    "distributions:\n"
+                    "  sensing_noise_scale: !UniformDiscrete {values: [0.0, 2.0]}\n"
+                    "  sensing_rhs_delay: !UniformDiscrete {values: [1, 2]}\n"
+                    "  sensing_actuator_lag: !Deterministic {value: 0.0005}\n")
+    definition = load_sweep(path)
+    for trial in range(4):
+        sample = sample_trial(definition, trial)
+        sensing = sample.scenario.sensing
+        assert sensing.rhs_delay == sample.sampled["sensing_rhs_delay"] in (1, 2)
+        assert sensing.actuator_lag == 0.0005
+        assert sensing.gyro_noise == (sample.sampled["sensing_noise_scale"]
+                                      * spacecraft_sensing().gyro_noise)
+    import dacph_drake.loop.simulate as simulate_module
+    diagrams, simulate_batch = [], simulate_module.simulate_batch
+
+    def counted(scenarios, *args, **kwargs):
+        diagrams.append(sorted((s.sensing.rhs_delay, s.sensing.gyro_noise)
+                               for s in scenarios))
+        return simulate_batch(scenarios, *args, **kwargs)
+    monkeypatch.setattr(simulate_module, "simulate_batch", counted)
+    batched = run_sweep(definition, folder / "batched", InProcessExecutor(), 1)
+    assert all(r["status"] == "ok" for r in batched), [r["reason"] for r in batched]
+    groups = {(sample_trial(definition, t).scenario.sensing.rhs_delay,
+               sample_trial(definition, t).scenario.sensing.gyro_noise) for t in range(4)}
+    assert len(diagrams) == len(groups) and all(len(set(d)) == 1 for d in diagrams)
+    alone = run_sweep(definition, folder / "alone", InProcessExecutor(), 1, batch_size=1)
+    assert comparable(alone) == comparable(batched)
+
+
 def test_shipped_sweep_loads():
     definition = load_sweep(SWEEPS / "short_sweep.yaml")
     assert definition.scenario == short_scenario()
@@ -344,6 +387,9 @@ def test_shipped_sweep_loads():
     ("batch_size: -1\n", r"batch_size = -1 is out of range; allowed: in \[0, 4096\]"),
     ("controllers: [dac, pid]\n", r"controllers: 'pid' is unknown; allowed: dac, dac-nominal, model-based"),
     ("scenario: missing.yaml\n", r"scenario = 'missing.yaml' is neither a built-in scenario"),
+    ("distributions: {sensing_noise_scale: 2.0}\n",
+     r"distributions.sensing_noise_scale samples the base scenario's sensing, which is "
+     r"off; allowed: a base scenario with sensing.enabled: true"),
 ])
 def test_malformed_sweep_is_named(tmp_path, setting, message):
     path = write_sweep(tmp_path, setting)

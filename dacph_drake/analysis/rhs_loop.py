@@ -8,12 +8,14 @@ tau_c^r - tau_obs(k), tau_obs(k+1) = B u_I(k) (one sample late); with x = (u_I, 
 and per mode p the polynomial z^2 - z + h k_p lambda_p; written in closed form, as
 ``Linearize`` needs AutoDiff, which the package's LeafSystems lack."""
 from dataclasses import asdict, dataclass
+from typing import Tuple
 
 import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
-from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, loop_matrix
+from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, lag_pole, loop_matrix
+from dacph_drake.kernels.certificate import lag_weight, mode_radius, roots_within
 
 
 
@@ -23,10 +25,12 @@ def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int 
     first-order actuator lag of time constant ``lag``, on (u_I, the delay line's d
     commands, the actuators' torque s (with a lag), tau_obs):
 
-        s(k+1) = a s(k) + (1 - a) u_I(k - d),   a = exp(-h / lag) (0: no lag, s = u_I(k - d))
-        tau_obs(k+1) = B s(k+1)
+        s(k+1) = a s(k) + (1 - a) u_I(k - d),             a = exp(-h / lag)
+        tau_obs(k+1) = B ((1 - b) u_I(k - d) + b s(k)),    b = (1 - a) / ln(1 / a)
 
-    (the exact sampling of the lag under a held command); delay 0 and no lag is
+    the lag sampled exactly under a held command, and the port observer's torque its
+    output averaged over the sample (a momentum difference; kernels.certificate.
+    lag_weight); no lag: tau_obs(k+1) = B u_I(k - d); delay 0 and no lag is
     gain_rule.loop_matrix.
 
     Args:
@@ -36,7 +40,8 @@ def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int 
         delay: The samples by which the command is late (computation and sensing).
         lag: The actuators' time constant [s] (0: none)."""
     n = B.shape[0]
-    a = float(np.exp(-period / lag)) if lag > 0 else 0.0
+    a = lag_pole(period, lag)
+    b = lag_weight(a)
     blocks = 1 + delay + (1 if lag > 0 else 0) + 1
     A = np.zeros((blocks * n, blocks * n))
     I = np.eye(n)
@@ -50,8 +55,8 @@ def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int 
     if lag > 0:
         at(blocks - 2, blocks - 2, a * I)
         at(blocks - 2, applied, (1 - a) * I)
-        at(blocks - 1, blocks - 2, a * B)
-        at(blocks - 1, applied, (1 - a) * B)
+        at(blocks - 1, blocks - 2, b * B)
+        at(blocks - 1, applied, (1 - b) * B)
     else:
         at(blocks - 1, applied, B)
     return A
@@ -59,10 +64,14 @@ def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int 
 
 def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
                             lag: float = 0.0, radius: float = 1.0 - STABILITY_MARGIN,
-                            limit: int = 400) -> int:
-    """The largest command delay [samples] at which the RHS loop's spectral radius stays
-    below ``radius`` (1 - STABILITY_MARGIN: the certificate; 1: stability), with the
-    actuators' lag; -1 if none does, ``limit`` if every delay up to it does.
+                            limit: int = 400, start: int = 0) -> int:
+    """The largest command delay D [samples] such that every delay from ``start`` to D
+    keeps the RHS loop's spectral radius below ``radius`` (1 - STABILITY_MARGIN: the
+    certificate; 1: stability), with the actuators' lag; start - 1 if ``start`` does
+    not, ``limit`` if every delay up to it does. Per mode mu of h K B the loop's
+    polynomial (kernels.certificate) has delayed_loop_matrix's eigenvalues as roots;
+    the radius need not grow with d (a delay speeds the slow root a little), hence the
+    scan from ``start`` up.
 
     Args:
         B: The port's input matrix (n x n).
@@ -70,27 +79,39 @@ def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
         period: The RHS period h [s].
         lag: The actuators' time constant [s] (0: none).
         radius: The spectral radius the loop must stay below.
-        limit: The largest delay tried."""
-    def certified(delay: int) -> bool:
-        return np.max(np.abs(np.linalg.eigvals(delayed_loop_matrix(
-            B, K, period, delay, lag)))) < radius
-    if not certified(0):
-        return -1
-    low, high = 0, 1                 # certified(low); search up by doubling, then bisect
-    while high <= limit and certified(high):
-        low, high = high, 2 * high
-    if high > limit:
-        return limit if certified(limit) else _bisect(certified, low, limit)
-    return _bisect(certified, low, high)
+        limit: The largest delay tried.
+        start: The delay the scan starts from (the run's own)."""
+    modes = np.linalg.eigvals(period * np.diag(K) @ B).astype(complex)
+    pole = lag_pole(period, lag)
+    for delay in range(start, limit + 1):
+        if not all(roots_within(mu, delay, pole, radius) for mu in modes):
+            return delay - 1
+    return limit
 
 
-def _bisect(certified, low: int, high: int) -> int:
-    """The largest delay in [low, high) with certified(delay), certified(low) true and
-    certified(high) false (the radius grows with the delay)."""
-    while high - low > 1:
-        middle = (low + high) // 2
-        low, high = (middle, high) if certified(middle) else (low, middle)
-    return low
+def best_damped_gain(period: float, delay: int = 0, lag: float = 0.0) -> Tuple[float, float]:
+    """(g*, the radius there): the loop gain mu = h k_p lambda_p that minimizes the mode's
+    largest root modulus with the command ``delay`` samples late and the actuators'
+    ``lag`` (kernels.certificate's polynomial; golden-section search on (0, 1]). Without
+    either, g* = 1/4 (gain_rule.WELL_DAMPED_LOOP_GAIN: z^2 - z + 1/4 = (z - 1/2)^2). The
+    fastest decay any gain gives the loop is -ln(radius) / h: a separation
+    Td lambda_LHS beyond it cannot be met with this delay and lag.
+
+    Args:
+        period: The RHS period h [s].
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    pole = lag_pole(period, lag)
+    low, high = 1e-6, 1.0
+    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
+    for _ in range(80):
+        a, b = high - ratio * (high - low), low + ratio * (high - low)
+        if mode_radius(complex(a), delay, pole) <= mode_radius(complex(b), delay, pole):
+            high = b
+        else:
+            low = a
+    gain = 0.5 * (low + high)
+    return gain, mode_radius(complex(gain), delay, pole)
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:

@@ -59,8 +59,10 @@ ADDED_TO_CURRENT_LAYOUT = (("learner", "prior_fallback", False),
                            ("inertia", "error_draws", 16))
 # Settings added since whose default is the behaviour before them, so neither an input
 # file nor a saved run needs a value for them: only their line at that default is left
-# out of the fingerprinted text (a robot kind's own settings: (kind, key, default)).
-ADDED_AT_THE_OLD_BEHAVIOUR = (("DescribedArm", "joint_friction", "zero"),)
+# out of the fingerprinted text ((section class, key, default); a robot kind's own
+# settings, and those of sections added after the current layout).
+ADDED_AT_THE_OLD_BEHAVIOUR = (("DescribedArm", "joint_friction", "zero"),
+                              ("Sensing", "unmodelled_delay", 0))
 
 
 def _bayes_as_introduced() -> LocalBayes:

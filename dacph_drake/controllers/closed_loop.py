@@ -194,17 +194,19 @@ def AddSensors(builder: DiagramBuilder, loop: ClosedLoop, splitter: System) -> S
 
 def AddActuation(builder: DiagramBuilder, loop: ClosedLoop, u: OutputPort) -> OutputPort:
     """The command as the actuators deliver it: u itself, or with sensing.enabled u
-    sensing.rhs_delay samples of periods.rhs late (a computation delay) through a
-    first-order lag of time constant sensing.actuator_lag (the actuators' bandwidth).
+    sensing.rhs_delay + sensing.unmodelled_delay samples of periods.rhs late (a
+    computation delay) through a first-order lag of time constant sensing.actuator_lag
+    (the actuators' bandwidth).
 
     Args:
         builder: The closed loop's builder.
         loop: The loop being built (its systems get ``rhs_delay``, ``actuator_lag``).
         u: The controller's command output."""
     sensing, size = loop.scenario.sensing, u.size()
-    if sensing.enabled and sensing.rhs_delay > 0:
+    samples = sensing.rhs_delay + sensing.unmodelled_delay
+    if sensing.enabled and samples > 0:
         delay = builder.AddNamedSystem("rhs_delay", DelayLine(
-            loop.scenario.periods.rhs, sensing.rhs_delay, size))
+            loop.scenario.periods.rhs, samples, size))
         builder.Connect(u, delay.get_input_port())
         u = delay.get_output_port()
         loop.systems["rhs_delay"] = delay
@@ -220,6 +222,17 @@ def AddActuation(builder: DiagramBuilder, loop: ClosedLoop, u: OutputPort) -> Ou
 # What the trials of one batch may each have of their own; every other setting
 # shapes the diagram (periods, gains, the simulator) and is shared.
 PER_TRIAL_SETTINGS = ("robot", "q0", "uncertainty", "disturbance", "seed")
+
+
+def DiagramSettings(scenario: Scenario) -> str:
+    """The settings that shape a scenario's diagram (all but PER_TRIAL_SETTINGS), as
+    YAML: trials with equal ones can share a batch's diagram.
+
+    Args:
+        scenario: The scenario."""
+    return "".join(f"{setting.name}:{yaml_dump_typed(getattr(scenario, setting.name))}"
+                   for setting in fields(scenario)
+                   if setting.name not in PER_TRIAL_SETTINGS)
 
 
 def RequireOneDiagram(scenarios: Sequence[Scenario]) -> None:

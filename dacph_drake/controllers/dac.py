@@ -102,7 +102,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
                 in zip(loop.robots, loop.scenarios, trials, rates)],
         settings=rhs_settings, period=periods.rhs,
         model_period=periods.learner_sample, stress=scenario.stress,
-        channels=learner.learner.channels if regularized else None))
+        channels=learner.learner.channels if regularized else None,
+        command_delay=scenario.sensing.KnownCommandDelay()))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):

@@ -10,7 +10,7 @@ when any fails.
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Dict, List, Optional, Union
 
 import matplotlib
 
@@ -21,8 +21,9 @@ import numpy as np  # noqa: E402
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
-from dacph_drake.analysis.rhs_loop import (STABILITY_MARGIN, check_rhs_loop,  # noqa: E402
-                                           largest_tolerated_delay)
+from dacph_drake.analysis.rhs_loop import (STABILITY_MARGIN, best_damped_gain,  # noqa: E402
+                                           check_rhs_loop, largest_tolerated_delay)
+from dacph_drake.gain_rule import lag_pole  # noqa: E402
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
 from dacph_drake.dynamics.model_error import realized_model_error  # noqa: E402
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
@@ -83,7 +84,8 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
         if learned and t[k] > scenario.stress.start:
             B = scenario.stress.B_hat_scale * B
         check = check_rhs_loop(B, rhs[k, R.K], scenario.periods.rhs,
-                               lambda_lhs, scenario.rhs.Td, *loop_delays(scenario))
+                               lambda_lhs, scenario.rhs.Td,
+                               *scenario.sensing.TrueCommandDelay())
         series.time.append(float(t[k]))
         series.margin.append(check.margin)
         series.separation.append(check.separation)
@@ -93,35 +95,26 @@ def _rhs_series(logs, scenario: Scenario, lambda_lhs: float, B_column: str,
     return series
 
 
-def loop_delays(scenario: Scenario) -> Tuple[int, float]:
-    """(the samples by which the RHS loop's command acts late: sensing.rhs_delay plus
-    the sensors' latency; the actuators' lag [s]) (0, 0.0 with sensing off).
-
-    Args:
-        scenario: The scenario."""
-    sensing = scenario.sensing
-    if not sensing.enabled:
-        return 0, 0.0
-    return sensing.rhs_delay + sensing.latency, sensing.actuator_lag
-
-
 def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robot,
-                    every: int = 1) -> Dict:
+                    lambda_lhs: float, every: int = 1) -> Dict:
     """The largest delay of the RHS loop's command (samples of periods.rhs, and
     seconds) that keeps it stable, and that keeps its certificate, with the run's
     actuator lag, at every ``every``-th logged sample: the least over the run, and when.
     The loop's gain there is the one the integrator meets, (I + E) B~ with the gains K
     in effect: the observer's tau_obs = M_hat qddot + ... is (I + E) times the port's
-    torque, E = M_hat M~^-1 - I the LHS model's realized inertia error.
+    torque, E = M_hat M~^-1 - I the LHS model's realized inertia error. Beside: the
+    fastest decay any loop gain gives with the run's delay and lag
+    (analysis.rhs_loop.best_damped_gain) against the separation's Td lambda_LHS.
 
     Args:
         logs: The run's logs.
         scenario: The scenario it ran.
         robot: Its Robot (the model's and the truth's plants).
+        lambda_lhs: lambda_LHS [1/s] (eq. 45).
         every: Every how many logged samples to evaluate."""
     n, h = len(scenario.q0), scenario.periods.rhs
     rhs, R = logs["rhs_log"], RhsLog(n)
-    delay, lag = loop_delays(scenario)
+    delay, lag = scenario.sensing.TrueCommandDelay()
     samples = np.array([k for k in range(0, len(logs["time"]), every)
                         if np.all(np.isfinite(rhs[k, R.K]))])
     pis = logs.get("inertial_parameters")
@@ -133,10 +126,14 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
     stable, certified = [], []
     for k, error in zip(samples, E):
         B = (np.eye(n) + error) @ logs["true_matrices"][k, :n * n].reshape(n, n)
-        stable.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, radius=1.0))
-        certified.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag))
+        stable.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, radius=1.0,
+                                              start=delay))
+        certified.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, start=delay))
     worst = int(np.argmin(stable))
+    gain, radius = best_damped_gain(h, delay, lag)
     return {"time": float(logs["time"][samples[worst]]), "in_the_run": delay,
+            "best_damped_gain": gain, "fastest_decay_rate": float(-np.log(radius) / h),
+            "separation_rate": scenario.rhs.Td * lambda_lhs,
             "actuator_lag": lag, "stable_samples": stable[worst],
             "stable_seconds": stable[worst] * h, "certified_samples": int(min(certified)),
             "certified_seconds": min(certified) * h}
@@ -164,6 +161,9 @@ def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
         return {"ok": True, "evaluated": 0,
                 "skipped": "the learner reports no credible set (a point estimate)"}
     adopted = np.flatnonzero(rhs[:, R.trusted] > 0.5)
+    h = scenario.periods.rhs
+    delay, lag = scenario.sensing.TrueCommandDelay()
+    pole = lag_pole(h, lag)
     rate = scenario.rhs.Td * lambda_lhs
     read = _refresh_reads(t, scenario.periods.learner_sample)
     failures, worst_separation, worst_radius = [], np.inf, 0.0
@@ -172,8 +172,7 @@ def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
         j = read[i]
         lower = scale * bounds[j, :n * n].reshape(n, n)
         upper = scale * bounds[j, k:k + n * n].reshape(n, n)
-        slowest, radius = box_certificate(lower, upper, rhs[i, R.K],
-                                          scenario.periods.rhs)
+        slowest, radius = box_certificate(lower, upper, rhs[i, R.K], h, delay, pole)
         worst_separation = min(worst_separation, slowest / lambda_lhs)
         worst_radius = max(worst_radius, radius)
         # 1e-6: the integrator and this check find inf lambda_min(M) of eq. (45)
@@ -233,7 +232,8 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     report = {"ok": all(c["ok"] for c in checks.values()), "checks": checks,
               "controller": run_meta.get("controller", "dac"),
               "learning": learning_report(logs, scenario),
-              "delay_tolerance": delay_tolerance(logs, scenario, robot, per_update),
+              "delay_tolerance": delay_tolerance(logs, scenario, robot, lhs.lambda_lhs,
+                                                 per_update),
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
                            "excitation_norm": excitation_norm,

@@ -66,7 +66,13 @@ class Distributions:
         actuator_gain_log10: x_j per joint: B~'s row j times 10^x_j (uncertainty.B_scale).
         fault_time: From it [s], fault_joint gives fault_gain times its torque (all/none).
         fault_joint: The fault's joint (1-based, rounded to an integer).
-        fault_gain: The fault's factor on the joint's torque."""
+        fault_gain: The fault's factor on the joint's torque.
+        sensing_noise_scale: Every noise of the base's sensing section (the encoders',
+            tachometers', gyro's noise, bias and bias walk, the star tracker's) times f.
+        sensing_rhs_delay: sensing.rhs_delay [samples] (rounded to an integer).
+        sensing_actuator_lag: sensing.actuator_lag [s].
+        (The sensing samples need the base's sensing.enabled; trials with equal ones
+        share a batch's diagram.)"""
     # Ground-truth robot (the controllers keep nominal_robot), one factor per link:
     link_mass_scale: Optional[VectorDistribution] = None     # mass and inertia
     link_length_scale: Optional[VectorDistribution] = None   # length, com, width by f,
@@ -95,6 +101,16 @@ class Distributions:
     fault_time: Optional[ScalarDistribution] = None
     fault_joint: Optional[ScalarDistribution] = None
     fault_gain: Optional[ScalarDistribution] = None
+    # Sensing (the base's sensing section, enabled): its noises times f, its command
+    # delay and actuator lag replaced.
+    sensing_noise_scale: Optional[ScalarDistribution] = None
+    sensing_rhs_delay: Optional[ScalarDistribution] = None
+    sensing_actuator_lag: Optional[ScalarDistribution] = None
+
+
+# The sensing section's noises (Distributions.sensing_noise_scale).
+SENSING_NOISES = ("encoder_noise", "rate_noise", "gyro_noise", "gyro_bias",
+                  "gyro_bias_walk", "star_tracker_noise")
 
 
 @dataclass
@@ -201,6 +217,12 @@ def load_sweep(path: Union[str, Path]) -> SweepDefinition:
                 f"than {', '.join(ROBOT_DISTRIBUTIONS)} (its robot has no such "
                 "parameters)")
     _check_distributions(sweep.distributions, len(scenario.q0))
+    sensing = [f.name for f in fields(Distributions) if f.name.startswith("sensing_")
+               and getattr(sweep.distributions, f.name) is not None]
+    if sensing and not scenario.sensing.enabled:
+        raise ConfigError(f"distributions.{sensing[0]} samples the base scenario's "
+                          "sensing, which is off; allowed: a base scenario with "
+                          "sensing.enabled: true")
     return SweepDefinition(sweep=sweep, scenario=scenario, source=path,
                            text=path.read_text())
 
@@ -368,7 +390,7 @@ def sample_trial(definition: SweepDefinition, trial: int) -> TrialSample:
             sampled[f.name] = _sample_vector(value, n, generator)
         else:
             sampled[f.name] = float(schema.ToDistribution(value).Sample(generator))
-    for name in ("learner_seed", "fault_joint"):
+    for name in ("learner_seed", "fault_joint", "sensing_rhs_delay"):
         if name in sampled:
             sampled[name] = int(round(sampled[name]))
     scenario = apply_sample(definition.scenario, sampled, seed)
@@ -422,7 +444,19 @@ def apply_sample(base: Scenario, sampled: Dict[str, object], seed: int) -> Scena
         s.q0 = list(sampled["q0"])
     s.seed = sampled.get("learner_seed", seed)
     _apply_model_error_sample(s, sampled)
+    _apply_sensing_sample(s.sensing, sampled)
     return s
+
+
+def _apply_sensing_sample(sensing, sampled: Dict[str, object]) -> None:
+    """The sensing section's sampled noise scale, command delay and actuator lag."""
+    if "sensing_noise_scale" in sampled:
+        for name in SENSING_NOISES:
+            setattr(sensing, name, sampled["sensing_noise_scale"] * getattr(sensing, name))
+    if "sensing_rhs_delay" in sampled:
+        sensing.rhs_delay = sampled["sensing_rhs_delay"]
+    if "sensing_actuator_lag" in sampled:
+        sensing.actuator_lag = sampled["sensing_actuator_lag"]
 
 
 def _apply_model_error_sample(s, sampled: Dict[str, object]) -> None:

@@ -59,16 +59,22 @@ def run_trials(tasks: List[Trial]) -> List[Dict]:
             valid.append(task)
         except ConfigError as e:
             rows[task.trial] = failed_row(task, f"invalid sample: {e}", 0.0)
+    from dacph_drake.controllers.closed_loop import DiagramSettings
     runs = {task.trial: {} for task in valid}
+    # Trials whose sampled settings shape the diagram (sensing) share it by groups.
+    groups: Dict[str, List[Trial]] = {}
+    for task in valid:
+        groups.setdefault(DiagramSettings(task.scenario), []).append(task)
     for controller in tasks[0].controllers if valid else []:
-        if len(valid) == 1:
-            _run_one(valid[0], controller, runs)
-            continue
-        try:
-            _run_batch(valid, controller, runs)
-        except Exception:   # noqa: BLE001 -- each trial alone says whose it was
-            for task in valid:
-                _run_one(task, controller, runs)
+        for group in groups.values():
+            if len(group) == 1:
+                _run_one(group[0], controller, runs)
+                continue
+            try:
+                _run_batch(group, controller, runs)
+            except Exception:   # noqa: BLE001 -- each trial alone says whose it was
+                for task in group:
+                    _run_one(task, controller, runs)
     share = (time.perf_counter() - start) / max(1, len(valid))
     for task in valid:
         failures = [f"{c} {r['status']}: {r['reason']}" for c, r in runs[task.trial].items()

@@ -119,6 +119,15 @@ def satellite_3dof_scenario() -> Scenario:
         learner=described_arm_learner())
 
 
+def with_spacecraft_sensing(scenario: Scenario) -> Scenario:
+    """``scenario`` measured through spacecraft_sensing() (the base of sensing sweeps).
+
+    Args:
+        scenario: The scenario (changed and returned)."""
+    scenario.sensing = spacecraft_sensing()
+    return scenario
+
+
 BUILT_IN_SCENARIOS = {"paper": paper_scenario, "short": short_scenario,
                       "satellite_6dof": satellite_6dof_scenario,
                       "satellite_3dof": satellite_3dof_scenario}

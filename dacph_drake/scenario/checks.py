@@ -135,7 +135,7 @@ def validate_sensing(sensing: Sensing, periods: Periods) -> None:
     require_positive("sensing.rate_cutoff", sensing.rate_cutoff, "Hz")
     require_in_range("sensing.star_tracker_rate", sensing.star_tracker_rate, 0.0,
                      1.0 / periods.rhs, "Hz (0: exact; at most 1 / periods.rhs)")
-    for name in ("latency", "lhs_delay", "rhs_delay"):
+    for name in ("latency", "lhs_delay", "rhs_delay", "unmodelled_delay"):
         require_in_range(f"sensing.{name}", getattr(sensing, name), 0, 1000, "samples")
 
 

@@ -1,7 +1,7 @@
 """Scenario: every setting of a closed-loop run as typed data (pydrake.common.yaml).
 Defaults: the paper's 1500 s scenario; why: the docs' page "Settings explained"."""
 from dataclasses import dataclass, field
-from typing import Dict, List, Union
+from typing import Dict, List, Tuple, Union
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
@@ -469,7 +469,9 @@ class Sensing:
         latency: Samples (of periods.rhs) by which every measurement is late, >= 0.
         lhs_delay: Samples (of periods.lhs) by which the LHS's request is late, >= 0.
         rhs_delay: Samples (of periods.rhs) by which the command u is late, >= 0.
-        actuator_lag: The actuators' first-order time constant [s] (0: none), >= 0."""
+        actuator_lag: The actuators' first-order time constant [s] (0: none), >= 0.
+        unmodelled_delay: Samples (of periods.rhs) by which u acts later still, which
+            the controllers do not know of (a test of verify's delay margin), >= 0."""
     enabled: bool = False
     encoder_counts: int = 0
     encoder_noise: float = 0.0
@@ -485,6 +487,20 @@ class Sensing:
     lhs_delay: int = 0
     rhs_delay: int = 0
     actuator_lag: float = 0.0
+    unmodelled_delay: int = 0
+
+    def KnownCommandDelay(self) -> Tuple[int, float]:
+        """(the samples of periods.rhs by which the controllers know the RHS loop's
+        command acts late, rhs_delay + latency; actuator_lag [s]); (0, 0.0) when not
+        enabled."""
+        if not self.enabled:
+            return 0, 0.0
+        return self.rhs_delay + self.latency, self.actuator_lag
+
+    def TrueCommandDelay(self) -> Tuple[int, float]:
+        """KnownCommandDelay with unmodelled_delay added: how late the command acts."""
+        delay, lag = self.KnownCommandDelay()
+        return delay + (self.unmodelled_delay if self.enabled else 0), lag
 
 
 @dataclass

@@ -1,13 +1,14 @@
 """RHS controller: decentralized integral control around the learned inverse
 feed-forward (paper section "RHS Control and Learning", docs/equations.md E36-E38, E48)."""
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.systems.framework import Context, LeafSystem
 
 from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
-                                   integral_gains, stays_stable_if_wrong, within_trust)
+                                   integral_gains, lag_pole, stays_stable_if_wrong,
+                                   within_trust)
 from dacph_drake.learning.identification import PortEvidence, PortSample
 from dacph_drake.kernels.certificate import certified_gains
 from dacph_drake.kernels.loop import integrator_samples
@@ -65,7 +66,8 @@ class RhsIntegrator(LeafSystem):
     range; c and K never fall below the loop's without learning (RhsTrial.prior_set).
 
     Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
-    ``port_sample`` and ``reduced_model`` (both optional). Outputs ``u``, ``chi`` and
+    ``port_sample`` and ``reduced_model`` (both optional). The certificate knows the
+    command's delay and the actuators' lag (``command_delay``; kernels.certificate). Outputs ``u``, ``chi`` and
     ``rhs_log`` (log_layout.RhsLog), each trial's stacked.
 
     Args:
@@ -74,11 +76,14 @@ class RhsIntegrator(LeafSystem):
         period: The integrator's period h [s].
         model_period: The model refresh's period [s].
         stress: Verification setting: B_hat scaled by B_hat_scale from stress.start on.
-        channels: The learner's channels in ``port_sample`` (default: PortSample)."""
+        channels: The learner's channels in ``port_sample`` (default: PortSample).
+        command_delay: (samples by which u acts late, the actuators' time constant [s])
+            (Sensing.KnownCommandDelay)."""
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
                  model_period: float, stress: Stress = Stress(),
-                 channels: Optional[Channels] = None):
+                 channels: Optional[Channels] = None,
+                 command_delay: Tuple[int, float] = (0, 0.0)):
         super().__init__()
         n = trials[0].model.num_joints
         count = len(trials)
@@ -95,6 +100,8 @@ class RhsIntegrator(LeafSystem):
                                     settings.chi_floor])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._period = period
+        delay, lag = command_delay
+        self._delay, self._pole = int(delay), lag_pole(period, lag)
         # lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45), and the largest
         # rate a certified set may ask: the fastest well-damped one.
         self._lambda_lhs = 2.0 * self._Kd_max / self._lambda_min_M
@@ -150,6 +157,12 @@ class RhsIntegrator(LeafSystem):
         models[:, layout.K] = integral_gains(np.array([np.diag(B0) for B0 in self._B0]),
                                              c0)[0]
         models[:, layout.c], models[:, layout.c_min] = c0, self._CBound(ones)
+        if self._delay or self._pole:
+            # c0's well-damped rate is the undelayed loop's: with a delay or a lag the
+            # loop starts at the prior set's certified rate and gains, where certified.
+            start = self._no_learning_c > 0
+            models[start, layout.c] = self._no_learning_c[start]
+            models[start, layout.K] = self._no_learning_gains[start]
         models[:, layout.dic_ok] = models[:, layout.trusted] = 1.0
         models[:, layout.set_slowest] = models[:, layout.set_fastest] = np.nan
         models[:, layout.mode_low], models[:, layout.mode_high] = 0.0, np.inf
@@ -235,7 +248,7 @@ class RhsIntegrator(LeafSystem):
         out, K = np.empty((len(eigenvalues), 4)), np.empty(eigenvalues.shape)
         certified_gains(lower, upper, eigenvalues, floor, target, c_min,
                         settings.Td * self._lambda_lhs, self._period, self._c_cap,
-                        1.0 - STABILITY_MARGIN, out, K)
+                        1.0 - STABILITY_MARGIN, out, K, self._delay, self._pole)
         return out, K, c_min, mode_low, mode_high
 
     def _Certify(self, gains, B_hat, D_hat, B_set, paired, dic_ok, beta):

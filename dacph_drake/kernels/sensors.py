@@ -1,0 +1,154 @@
+"""The sensors' sample and measurement (systems.sensors), compiled. Per trial the state
+row holds [n_q (n), n_r (n), n_g (axes), bias (axes), the attitude estimate (4: a
+quaternion (w, x, y, z); 1: a planar angle), q_m(k-1) (n), the differentiated rate (n),
+samples since the last star-tracker fix]; ``truth`` and the measurement stack
+[base_pose, q, base_velocity, qdot], each signal's trials in trial order.
+
+``layout`` (integers): [n, trials, base positions, base velocities, axes, spatial (1/0),
+differentiated (1/0), estimated (1/0), fix_every]; ``constants``: [encoder step (0:
+unquantized), the rate filter's alpha, encoder_noise, rate_noise, gyro_noise,
+gyro_bias_walk sqrt(h), h]."""
+import numpy as np
+from numba import njit
+
+N, TRIALS, BASE_Q, BASE_V, AXES, SPATIAL, DIFFERENTIATED, ESTIMATED, FIX_EVERY = range(9)
+STEP, ALPHA, ENCODER_NOISE, RATE_NOISE, GYRO_NOISE, WALK, PERIOD = range(7)
+
+
+@njit(cache=True)
+def _columns(layout):
+    """The state row's offsets: n_q, n_r, n_g, bias, attitude, previous, rate, since fix."""
+    n, axes = layout[N], layout[AXES]
+    attitude = 4 if layout[SPATIAL] else 1
+    offsets = np.empty(8, np.int64)
+    offsets[0] = 0
+    sizes = (n, n, axes, axes, attitude, n, n)
+    for k in range(7):
+        offsets[k + 1] = offsets[k] + sizes[k]
+    return offsets
+
+
+@njit(cache=True)
+def _encoder(value, step):
+    """An encoder's reading quantized to its counts (step 0: unquantized)."""
+    return step * np.round(value / step) if step > 0.0 else value
+
+
+@njit(cache=True)
+def _turned(quaternion, rotation_vector):
+    """exp([rotation_vector]) applied to a (w, x, y, z) quaternion, normalized."""
+    angle = np.sqrt(np.sum(rotation_vector**2))
+    w1 = np.cos(0.5 * angle)
+    v1 = (np.sin(0.5 * angle) / angle * rotation_vector if angle > 0.0
+          else np.zeros(3))
+    w2, v2 = quaternion[0], quaternion[1:]
+    out = np.empty(4)
+    out[0] = w1 * w2 - np.sum(v1 * v2)
+    out[1:] = w1 * v2 + w2 * v1 + np.cross(v1, v2)
+    return out / np.sqrt(np.sum(out**2))
+
+
+@njit(cache=True)
+def star_fix(pose_attitude, noise, spatial):
+    """A star-tracker fix of the attitude with per-axis noise [rad].
+
+    Args:
+        pose_attitude: The truth's attitude (a quaternion, or a planar angle (1)).
+        noise: The fix's noise per axis.
+        spatial: Whether the base is free (a quaternion)."""
+    if spatial:
+        return _turned(pose_attitude, noise)
+    return pose_attitude + noise
+
+
+@njit(cache=True)
+def sensor_measure(state, truth, layout, constants, out):
+    """The measurement of ``truth`` with the sensors' ``state`` (trials x width) into
+    ``out`` (systems.sensors' equations).
+
+    Args:
+        state: The sensors' state rows.
+        truth: The true [base_pose, q, base_velocity, qdot].
+        layout: The module's integers.
+        constants: The module's constants.
+        out: Written: the measured [base_pose, q, base_velocity, qdot]."""
+    n, trials, nb_q, nb_v, axes = (layout[N], layout[TRIALS], layout[BASE_Q],
+                                   layout[BASE_V], layout[AXES])
+    o = _columns(layout)
+    pose0, q0 = 0, trials * nb_q
+    velocity0 = q0 + trials * n
+    qdot0 = velocity0 + trials * nb_v
+    out[:] = truth
+    rate_column = 0 if layout[SPATIAL] else 2
+    attitude_column = 0 if layout[SPATIAL] else 2
+    for i in range(trials):
+        for j in range(n):
+            out[q0 + i * n + j] = _encoder(truth[q0 + i * n + j] + state[i, o[0] + j],
+                                           constants[STEP])
+            if layout[DIFFERENTIATED]:
+                out[qdot0 + i * n + j] = state[i, o[6] + j]
+            else:
+                out[qdot0 + i * n + j] = truth[qdot0 + i * n + j] + state[i, o[1] + j]
+        for a in range(axes):
+            out[velocity0 + i * nb_v + rate_column + a] += (state[i, o[3] + a]
+                                                            + state[i, o[2] + a])
+        if layout[ESTIMATED]:
+            for a in range(o[5] - o[4]):
+                out[pose0 + i * nb_q + attitude_column + a] = state[i, o[4] + a]
+
+
+@njit(cache=True)
+def sensor_sample(state, truth, draws, walk, star, layout, constants):
+    """One sample of the sensors' state (in place): the sample's noise from ``draws``
+    (trials x (2 n + axes), standard normal), the gyro bias' walk from ``walk`` (trials x
+    axes), the encoders' differentiated rate, and the attitude estimate propagated by
+    the gyro, or fixed from ``star`` (trials x axes, the fix's noise [rad]) when the
+    fix is due.
+
+    Args:
+        state: The sensors' state rows (trials x width).
+        truth: The true [base_pose, q, base_velocity, qdot].
+        draws: The sample's standard normal draws.
+        walk: The bias walk's standard normal draws.
+        star: The star tracker's noise [rad], used at a fix.
+        layout: The module's integers.
+        constants: The module's constants."""
+    n, trials, nb_q, nb_v, axes = (layout[N], layout[TRIALS], layout[BASE_Q],
+                                   layout[BASE_V], layout[AXES])
+    o = _columns(layout)
+    spatial = layout[SPATIAL] == 1
+    h = constants[PERIOD]
+    q0 = trials * nb_q
+    velocity0 = q0 + trials * n
+    rate_column = 0 if spatial else 2
+    attitude_column = 0 if spatial else 2
+    attitude_size = o[5] - o[4]
+    for i in range(trials):
+        for j in range(n):
+            state[i, o[0] + j] = constants[ENCODER_NOISE] * draws[i, j]
+            state[i, o[1] + j] = constants[RATE_NOISE] * draws[i, n + j]
+        for a in range(axes):
+            state[i, o[2] + a] = constants[GYRO_NOISE] * draws[i, 2 * n + a]
+            state[i, o[3] + a] += constants[WALK] * walk[i, a]
+        for j in range(n):
+            measured = _encoder(truth[q0 + i * n + j] + state[i, o[0] + j],
+                                constants[STEP])
+            state[i, o[6] + j] += constants[ALPHA] * (
+                (measured - state[i, o[5] + j]) / h - state[i, o[6] + j])
+            state[i, o[5] + j] = measured
+        if layout[ESTIMATED]:
+            state[i, o[7]] += 1
+            pose = truth[i * nb_q + attitude_column:i * nb_q + attitude_column
+                         + attitude_size]
+            if state[i, o[7]] >= layout[FIX_EVERY]:
+                state[i, o[4]:o[5]] = star_fix(pose, star[i], spatial)
+                state[i, o[7]] = 0
+            else:
+                omega = np.empty(axes)
+                for a in range(axes):
+                    omega[a] = (truth[velocity0 + i * nb_v + rate_column + a]
+                                + state[i, o[3] + a] + state[i, o[2] + a])
+                if spatial:
+                    state[i, o[4]:o[5]] = _turned(state[i, o[4]:o[5]].copy(), omega * h)
+                else:
+                    state[i, o[4]] += omega[0] * h
