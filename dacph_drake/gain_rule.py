@@ -4,6 +4,7 @@ from typing import Tuple, Union
 
 import numpy as np
 
+from dacph_drake.kernels.certificate import mode_radius
 from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.scenario import Periods
 
@@ -78,6 +79,46 @@ def lag_pole(period: float, lag: float) -> float:
         period: The RHS period h [s].
         lag: The actuators' time constant [s] (0: none)."""
     return float(np.exp(-period / lag)) if lag > 0 else 0.0
+
+
+def best_damped_gain(period: float, delay: int = 0, lag: float = 0.0) -> Tuple[float, float]:
+    """(g*, the radius there): the loop gain mu = h k_p lambda_p that minimizes the mode's
+    largest root modulus with the command ``delay`` samples late and the actuators'
+    ``lag`` (kernels.certificate's polynomial; golden-section search on (0, 1]). Without
+    either, g* = 1/4 (WELL_DAMPED_LOOP_GAIN: z^2 - z + 1/4 = (z - 1/2)^2). The
+    fastest decay any gain gives the loop is -ln(radius) / h: a separation
+    Td lambda_LHS beyond it cannot be met with this delay and lag.
+
+    Args:
+        period: The RHS period h [s].
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    pole = lag_pole(period, lag)
+    low, high = 1e-6, 1.0
+    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
+    for _ in range(80):
+        a, b = high - ratio * (high - low), low + ratio * (high - low)
+        if mode_radius(complex(a), delay, pole) <= mode_radius(complex(b), delay, pole):
+            high = b
+        else:
+            low = a
+    gain = 0.5 * (low + high)
+    return gain, mode_radius(complex(gain), delay, pole)
+
+
+def well_damped_loop_gain(period: float, delay: int = 0, lag: float = 0.0) -> float:
+    """The loop gain h c the RHS loop is best damped at: WELL_DAMPED_LOOP_GAIN without a
+    delay or lag, else best_damped_gain's g*. The integrator's rate stays at most g* / h
+    (stability first: with a delay or a lag the separation of eq. 45 may then be
+    missed, which verify reports).
+
+    Args:
+        period: The RHS period h [s].
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    if delay == 0 and lag == 0:
+        return WELL_DAMPED_LOOP_GAIN
+    return best_damped_gain(period, delay, lag)[0]
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:

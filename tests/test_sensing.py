@@ -7,11 +7,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
-from dacph_drake.analysis.rhs_loop import (best_damped_gain, delayed_loop_matrix,
-                                           largest_tolerated_delay)
+from dacph_drake.analysis.rhs_loop import delayed_loop_matrix, largest_tolerated_delay
 from dacph_drake.assembly.scenario_files import load_scenario
 from dacph_drake.controllers.dac import build_dac_diagram
-from dacph_drake.gain_rule import lag_pole, loop_matrix
+from dacph_drake.gain_rule import best_damped_gain, lag_pole, loop_matrix
 from dacph_drake.kernels.certificate import (box_certificate, certified_gains, lag_weight,
                                              mode_radius, roots_within)
 from dacph_drake.loop.simulate import simulate

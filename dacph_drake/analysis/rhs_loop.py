@@ -8,14 +8,13 @@ tau_c^r - tau_obs(k), tau_obs(k+1) = B u_I(k) (one sample late); with x = (u_I, 
 and per mode p the polynomial z^2 - z + h k_p lambda_p; written in closed form, as
 ``Linearize`` needs AutoDiff, which the package's LeafSystems lack."""
 from dataclasses import asdict, dataclass
-from typing import Tuple
 
 import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
 from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, lag_pole, loop_matrix
-from dacph_drake.kernels.certificate import lag_weight, mode_radius, roots_within
+from dacph_drake.kernels.certificate import lag_weight, roots_within
 
 
 
@@ -87,31 +86,6 @@ def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
         if not all(roots_within(mu, delay, pole, radius) for mu in modes):
             return delay - 1
     return limit
-
-
-def best_damped_gain(period: float, delay: int = 0, lag: float = 0.0) -> Tuple[float, float]:
-    """(g*, the radius there): the loop gain mu = h k_p lambda_p that minimizes the mode's
-    largest root modulus with the command ``delay`` samples late and the actuators'
-    ``lag`` (kernels.certificate's polynomial; golden-section search on (0, 1]). Without
-    either, g* = 1/4 (gain_rule.WELL_DAMPED_LOOP_GAIN: z^2 - z + 1/4 = (z - 1/2)^2). The
-    fastest decay any gain gives the loop is -ln(radius) / h: a separation
-    Td lambda_LHS beyond it cannot be met with this delay and lag.
-
-    Args:
-        period: The RHS period h [s].
-        delay: The samples by which the command is late.
-        lag: The actuators' time constant [s] (0: none)."""
-    pole = lag_pole(period, lag)
-    low, high = 1e-6, 1.0
-    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
-    for _ in range(80):
-        a, b = high - ratio * (high - low), low + ratio * (high - low)
-        if mode_radius(complex(a), delay, pole) <= mode_radius(complex(b), delay, pole):
-            high = b
-        else:
-            low = a
-    gain = 0.5 * (low + high)
-    return gain, mode_radius(complex(gain), delay, pole)
 
 
 def rhs_loop_system(B: np.ndarray, K: np.ndarray, period: float) -> LinearSystem:

@@ -1,12 +1,13 @@
 """DAC-pH (the paper's controller) and its learning ablation: the LHS controller (chi from
 the RHS loop), port observer, regression filter, learner and RHS integrator."""
+import logging
 from typing import Dict, Optional
 
 from pydrake.systems.framework import LeafSystem, OutputPort
 
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                                  LhsRequest, assemble_closed_loop)
-from dacph_drake.gain_rule import c_lower_bound, check_rhs_period
+from dacph_drake.gain_rule import c_lower_bound, check_rhs_period, well_damped_loop_gain
 from dacph_drake.learning import LearnerTrial, learner_kind
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
@@ -40,6 +41,26 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
     return build_dac_diagram(*scenarios, learning=False)
 
 
+def _WarnOfADelayedLoop(scenario: Scenario, rates) -> None:
+    """Warns when the command's known delay and lag leave the RHS loop best damped
+    below the gain rule's rate at beta_hat = 1: the integrator then runs at the
+    best-damped rate and the separation of eq. 45 is not met (verify reports it)."""
+    delay, lag = scenario.sensing.KnownCommandDelay()
+    if not (delay or lag):
+        return
+    rhs, h = scenario.rhs, scenario.periods.rhs
+    cap = well_damped_loop_gain(h, delay, lag) / h
+    wanted = max((1 + rhs.c_margin) * c_lower_bound(rhs.Td, Kd_max, lambda_min_M, 1.0)
+                 for Kd_max, lambda_min_M in rates)
+    if wanted > cap:
+        logging.getLogger(__name__).warning(
+            "with the command %d samples late and a %g s actuator lag the RHS loop is "
+            "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48): the "
+            "integrator runs at %.0f 1/s and the time-scale separation (eq. 45) is not "
+            "met; a shorter delay or lag, or a slower LHS (a smaller rhs.Td or damping), "
+            "meets it", delay, lag, cap, wanted, cap)
+
+
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
                 learning: bool, identifier: Optional[InertialIdentifier] = None,
                 request: Optional[OutputPort] = None) -> Dict[str, object]:
@@ -68,6 +89,7 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
                          (1 + rhs_settings.c_margin) * c_lower_bound(
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
+    _WarnOfADelayedLoop(scenario, rates)
     builder = controller.builder
     kind = learner_kind(settings)
     regularized = kind.BandPassed(settings)

@@ -21,9 +21,9 @@ import numpy as np  # noqa: E402
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
     EnvelopeConstants, check_envelope, envelope_bounds)
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
-from dacph_drake.analysis.rhs_loop import (STABILITY_MARGIN, best_damped_gain,  # noqa: E402
-                                           check_rhs_loop, largest_tolerated_delay)
-from dacph_drake.gain_rule import lag_pole  # noqa: E402
+from dacph_drake.analysis.rhs_loop import (STABILITY_MARGIN, check_rhs_loop,  # noqa: E402
+                                           largest_tolerated_delay)
+from dacph_drake.gain_rule import best_damped_gain, lag_pole  # noqa: E402
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
 from dacph_drake.dynamics.model_error import realized_model_error  # noqa: E402
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
@@ -104,7 +104,7 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
     in effect: the observer's tau_obs = M_hat qddot + ... is (I + E) times the port's
     torque, E = M_hat M~^-1 - I the LHS model's realized inertia error. Beside: the
     fastest decay any loop gain gives with the run's delay and lag
-    (analysis.rhs_loop.best_damped_gain) against the separation's Td lambda_LHS.
+    (gain_rule.best_damped_gain) against the separation's Td lambda_LHS.
 
     Args:
         logs: The run's logs.

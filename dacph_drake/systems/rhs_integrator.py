@@ -6,8 +6,8 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 from pydrake.systems.framework import Context, LeafSystem
 
-from dacph_drake.gain_rule import (STABILITY_MARGIN, WELL_DAMPED_LOOP_GAIN, c_lower_bound,
-                                   integral_gains, lag_pole, stays_stable_if_wrong,
+from dacph_drake.gain_rule import (STABILITY_MARGIN, c_lower_bound, integral_gains,
+                                   lag_pole, stays_stable_if_wrong, well_damped_loop_gain,
                                    within_trust)
 from dacph_drake.learning.identification import PortEvidence, PortSample
 from dacph_drake.kernels.certificate import certified_gains
@@ -56,7 +56,9 @@ class RhsIntegrator(LeafSystem):
     Every ``model_period`` it refreshes B_hat(x), D_hat(x) at x = (q, p = M qdot), the
     gains k_p = c / Re(lambda_hat_p) and c, filtered towards (1 + c_margin) c_min(beta)
     (eq. 48), beta = min(beta_hat, beta_max), never below c_min (gain_rule "well_damped":
-    c = 1 / (4 period)). An estimate failing DIC or leaving the trust band
+    c = 1 / (4 period)), never above the best-damped rate g* / h of the loop with the
+    command's known delay and lag (gain_rule.well_damped_loop_gain; 1 / (4 h) without
+    them, which no target exceeds: stability before separation). An estimate failing DIC or leaving the trust band
     (``trust_ratio`` around ``trust_anchor``) is not adopted, unless on evidence: its port
     residual at most ``evidence_ratio`` times the in-use one and the loop stable were the
     in-use estimate true. B_hat stays within trust_ratio^2 of B0. With ``adoption``
@@ -105,11 +107,11 @@ class RhsIntegrator(LeafSystem):
         # lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45), and the largest
         # rate a certified set may ask: the fastest well-damped one.
         self._lambda_lhs = 2.0 * self._Kd_max / self._lambda_min_M
-        self._c_cap = WELL_DAMPED_LOOP_GAIN / period
+        self._c_cap = well_damped_loop_gain(period, *command_delay) / period
         # c's target at beta: the paper's (1 + c_margin) c_min(beta), or at least the
-        # fastest well-damped rate (Rhs.gain_rule).
-        self._c_floor = WELL_DAMPED_LOOP_GAIN / period \
-            if settings.gain_rule == "well_damped" else 0.0
+        # fastest well-damped rate (Rhs.gain_rule); at most that rate (without a delay
+        # or a lag check_rhs_period keeps every target below it).
+        self._c_floor = self._c_cap if settings.gain_rule == "well_damped" else 0.0
         # The rate and gains the loop without learning settles at: the prior B0
         # certified on the prior's set (RhsTrial.prior_set) at the rule's c; no
         # floor without one.
@@ -186,8 +188,8 @@ class RhsIntegrator(LeafSystem):
         return c_lower_bound(self._settings.Td, self._Kd_max, self._lambda_min_M, beta)
 
     def _CTarget(self, beta: np.ndarray) -> np.ndarray:
-        return np.maximum((1 + self._settings.c_margin) * self._CBound(beta),
-                          self._c_floor)
+        return np.minimum(np.maximum((1 + self._settings.c_margin) * self._CBound(beta),
+                                     self._c_floor), self._c_cap)
 
     def GetModelGroup(self, context: Context) -> np.ndarray:
         """A copy of the trials' stacked model groups (log_layout.RhsState) in ``context``.
@@ -211,7 +213,8 @@ class RhsIntegrator(LeafSystem):
         beta = np.minimum(beta, self._settings.beta_max)
         c_min = self._CBound(beta)
         c = gains[:, L.c]
-        c = np.maximum(c + self._c_step * (self._CTarget(beta) - c), c_min)
+        c = np.minimum(np.maximum(c + self._c_step * (self._CTarget(beta) - c), c_min),
+                       self._c_cap)
         k, paired, dic_ok = integral_gains(B_hat, c)
         trusted = dic_ok & self._Accepts(gains, B_hat, D_hat, paired, k, dic_ok,
                                           evidence)

@@ -82,16 +82,15 @@ class SensorSamples(LeafSystem):
             self._trials, self._width)
 
     def _CalcMeasurement(self, context, output):
-        truth = self._truth.Eval(context)
         if context.get_discrete_state(self._ready).get_value()[0] == 0:
-            output.SetFromVector(truth)
+            output.SetFromVector(self._truth.Eval(context))
         elif self._queue is not None:
             output.SetFromVector(
                 context.get_discrete_state(self._queue).get_value()[:self._size])
         else:
-            kernel.sensor_measure(self._Rows(context), truth, self._layout,
-                                  self._constants, self._measured)
-            output.SetFromVector(self._measured)
+            kernel.sensor_measure(self._Rows(context), self._truth.Eval(context),
+                                  self._layout, self._constants,
+                                  output.get_mutable_value())
 
     def _AttitudeColumns(self, truth: np.ndarray) -> np.ndarray:
         """Each trial's true attitude (trials x 4 or 1)."""
@@ -126,7 +125,9 @@ class SensorSamples(LeafSystem):
 
     def _UpdateSample(self, context, discrete_state):
         truth = self._truth.Eval(context)
-        rows = self._Rows(context).copy()
+        # The update's state, pre-loaded with the current one: changed in place.
+        rows = discrete_state.get_mutable_vector(self._state).get_mutable_value().reshape(
+            self._trials, self._width)
         for rng, row in zip(self._rngs, self._draws):
             rng.standard_normal(out=row)
         if self._s.gyro_bias_walk > 0:
@@ -136,7 +137,6 @@ class SensorSamples(LeafSystem):
             self._DrawStar()            # every trial fixes at the same samples
         kernel.sensor_sample(rows, truth, self._draws, self._walk, self._star,
                              self._layout, self._constants)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(rows.reshape(-1))
         if self._queue is not None:
             kernel.sensor_measure(rows, truth, self._layout, self._constants,
                                   self._measured)
