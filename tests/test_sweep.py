@@ -318,7 +318,8 @@ def test_a_sensing_sweep_samples_the_sensors_and_groups_its_batches(tmp_path,
                                                                     monkeypatch):
     """Sensing samples (noise scale, command delay, actuator lag) reach each trial's
     sensing section; trials of different sensing share no diagram, those of equal
-    sensing do, and every row is the one the trial gets alone."""
+    sensing do, and every row is the one the trial gets alone; with verify: true each
+    DAC run carries verify's verdict."""
     from dacph_drake.montecarlo.definition import sample_trial
     from dacph_drake.scenario.built_in import spacecraft_sensing
     folder = tmp_path / "sensing"
@@ -327,7 +328,8 @@ def test_a_sensing_sweep_samples_the_sensors_and_groups_its_batches(tmp_path,
     scenario.sensing = spacecraft_sensing()
     save_scenario(scenario, folder / "tiny.yaml")
     path = folder / "sweep.yaml"
-    path.write_text("scenario: tiny.yaml\ntrials: 4\nseed: 3\ncontrollers: [dac]\n"
+    path.write_text("scenario: tiny.yaml\ntrials: 4\nseed: 3\n"
+                    "controllers: [dac, model-based]\nverify: true\n"
                     "distributions:\n"
                     "  sensing_noise_scale: !UniformDiscrete {values: [0.0, 2.0]}\n"
                     "  sensing_rhs_delay: !UniformDiscrete {values: [1, 2]}\n"
@@ -352,7 +354,14 @@ def test_a_sensing_sweep_samples_the_sensors_and_groups_its_batches(tmp_path,
     assert all(r["status"] == "ok" for r in batched), [r["reason"] for r in batched]
     groups = {(sample_trial(definition, t).scenario.sensing.rhs_delay,
                sample_trial(definition, t).scenario.sensing.gyro_noise) for t in range(4)}
-    assert len(diagrams) == len(groups) and all(len(set(d)) == 1 for d in diagrams)
+    assert len(diagrams) == 2 * len(groups) and all(len(set(d)) == 1 for d in diagrams)
+    # verify: true: each DAC run carries dacph verify's verdict and its delay margin,
+    # at least the delay it ran with; the baseline has no RHS loop to verify.
+    for row in batched:
+        verdict = row["runs"]["dac"]["verify"]
+        assert isinstance(verdict["ok"], bool) and "lhs_envelope" not in verdict["failed"]
+        assert verdict["delay_tolerance"]["in_the_run"] == row["sampled"]["sensing_rhs_delay"]
+        assert "verify" not in row["runs"]["model-based"]
     alone = run_sweep(definition, folder / "alone", InProcessExecutor(), 1, batch_size=1)
     assert comparable(alone) == comparable(batched)
 

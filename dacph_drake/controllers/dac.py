@@ -57,8 +57,9 @@ def _WarnOfADelayedLoop(scenario: Scenario, rates) -> None:
             "with the command %d samples late and a %g s actuator lag the RHS loop is "
             "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48): the "
             "integrator runs at %.0f 1/s and the time-scale separation (eq. 45) is not "
-            "met; a shorter delay or lag, or a slower LHS (a smaller rhs.Td or damping), "
-            "meets it", delay, lag, cap, wanted, cap)
+            "met; a shorter delay or lag, or a slower LHS meets it (its damping, which "
+            "c is proportional to, times %.2f or less)", delay, lag, cap, wanted, cap,
+            cap / wanted)
 
 
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,

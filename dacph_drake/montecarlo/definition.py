@@ -124,7 +124,9 @@ class Sweep:
         controllers: The controllers run on each sample (controllers.NAMES, each once).
         distributions: What each trial samples (Distributions).
         save_logs: Whether each run's logs are also written under OUT/logs/.
-        batch_size: Trials per diagram in [0, 4096] (0: runner.batch_size_for)."""
+        batch_size: Trials per diagram in [0, 4096] (0: runner.batch_size_for).
+        verify: Whether each run with the RHS integrator is also verified (dacph
+            verify's checks, the region of attraction skipped): its row's ``verify``."""
     scenario: str = "short"     # built-in name (paper, short) or YAML path, relative
     #                             to the sweep file
     trials: int = 10
@@ -134,6 +136,7 @@ class Sweep:
     save_logs: bool = False     # also write each run's logs under OUT/logs/
     batch_size: int = 0         # trials per diagram (runner.batch_size_for; 0: chosen
     #                             by measurement); no trial's row depends on it
+    verify: bool = False
 
 
 @dataclass
@@ -155,9 +158,11 @@ class SweepDefinition:
         return self.fingerprints()[0]
 
     def fingerprints(self) -> List[str]:
-        """fingerprint() and the older scenario layouts' (batch_size not included)."""
+        """fingerprint() and the older scenario layouts' (batch_size not included, nor
+        verify at its default, which came after)."""
         sweep = "".join(line for line in yaml_dump_typed(self.sweep).splitlines(True)
-                        if not line.startswith("batch_size:"))
+                        if not line.startswith("batch_size:")
+                        and line != "verify: false\n")
         return [hashlib.sha256((sweep + "\n---\n" + form).encode()).hexdigest()
                 for form in saved_forms(self.scenario)]
 

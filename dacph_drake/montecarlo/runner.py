@@ -75,7 +75,8 @@ def _task(definition: SweepDefinition, trial: int, out) -> Trial:
     sample = sample_trial(definition, trial)
     return Trial(trial=trial, seed=sample.seed, scenario=sample.scenario,
                  sampled=sample.sampled, controllers=list(definition.sweep.controllers),
-                 log_dir=str(out / "logs") if definition.sweep.save_logs else None)
+                 log_dir=str(out / "logs") if definition.sweep.save_logs else None,
+                 verify=definition.sweep.verify)
 
 
 def _run_on_local_pools(tasks: Iterator[List[Trial]], workers: int, record) -> None:

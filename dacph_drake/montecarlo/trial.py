@@ -20,13 +20,15 @@ class Trial:
         scenario: Its sampled scenario.
         sampled: The sampled values, by distribution name.
         controllers: The controllers to run.
-        log_dir: Save each run's logs under log_dir/trial_NNNNN (None: not saved)."""
+        log_dir: Save each run's logs under log_dir/trial_NNNNN (None: not saved).
+        verify: Verify each run with the RHS integrator (Sweep.verify)."""
     trial: int
     seed: int
     scenario: Scenario
     sampled: Dict[str, object]
     controllers: List[str]
     log_dir: Optional[str] = None
+    verify: bool = False
 
 
 def run_trial(task: Trial) -> Dict:
@@ -112,6 +114,19 @@ def _run_batch(tasks: List[Trial], controller: str, runs: Dict) -> None:
             "status": result.status, "reason": result.reason,
             "final_time": result.final_time, "wall_time": result.wall_time / len(tasks),
             "metrics": metrics}
+        if task.verify and result.status == "ok" and "rhs_log" in result.logs:
+            runs[task.trial][controller]["verify"] = _verdict(result.logs, task.scenario)
+
+
+def _verdict(logs, scenario: Scenario) -> Dict:
+    """dacph verify's verdict on a run (the region of attraction skipped): ok, the
+    failed checks, and the delay tolerance."""
+    from dacph_drake.loop.verify import verify_logs
+    report = verify_logs(logs, scenario, {"status": "ok"}, region_budget=0.0)
+    return {"ok": report["ok"],
+            "failed": [name for name, check in report["checks"].items()
+                       if not check["ok"]],
+            "delay_tolerance": report["delay_tolerance"]}
 
 
 def failed_row(task: Trial, reason: str, wall_time: Optional[float] = None) -> Dict:
