@@ -2,9 +2,10 @@
 first delay at which a simulated run diverges or fails verify (run:
 .venv/bin/python scripts/delay_margin.py --out results/delay_margin).
 
-For each robot: a run without delay gives verify's prediction (delay_tolerance: the
+For each robot: a run without delay gives verify's predictions (delay_tolerance: the
 largest delay keeping the loop stable at the truth's least-margin sample, so the
-first unstable delay is one more); then runs with sensing.unmodelled_delay = 1, 2, ...
+first unstable delay is one more; and the largest keeping it decaying at lambda_LHS,
+the first delay past it the first unseparated one); then runs with sensing.unmodelled_delay = 1, 2, ...
 (a delay the controller does not know of, so its gains stay those it designed without
 one) until one diverges or its Lyapunov envelope fails. Under DAC (learning) and
 dac-nominal (the learner off: the gains do not follow what the delayed run's data
@@ -56,6 +57,8 @@ def main() -> None:
             tolerance = verify_logs(run.logs, scenario, {"status": run.status},
                                     region_budget=0.0)["delay_tolerance"]
             predicted = tolerance["stable_samples"] + 1    # the first unstable delay
+            # The first delay at which the RHS loop decays slower than lambda_LHS.
+            unseparated = tolerance["separated_samples"] + 1
             first, why = None, ""
             for delay in range(1, 3 * predicted + 4):
                 why = fails(name, delay, args.lag, controller)
@@ -65,9 +68,12 @@ def main() -> None:
                     break
             row = {"robot": name, "controller": controller, "lag": args.lag,
                    "predicted_first_unstable": predicted,
+                   "predicted_first_unseparated": unseparated,
                    "simulated_first_failure": first, "why": why,
                    "relative_difference": (abs(first - predicted) / first
                                            if first else None),
+                   "relative_difference_unseparated": (abs(first - unseparated) / first
+                                                       if first else None),
                    "tolerance": tolerance}
             rows.append(row)
             print(json.dumps(row), flush=True)

@@ -103,8 +103,12 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
     The loop's gain there is the one the integrator meets, (I + E) B~ with the gains K
     in effect: the observer's tau_obs = M_hat qddot + ... is (I + E) times the port's
     torque, E = M_hat M~^-1 - I the LHS model's realized inertia error. Beside: the
-    fastest decay any loop gain gives with the run's delay and lag
-    (gain_rule.best_damped_gain) against the separation's Td lambda_LHS.
+    largest delay at which the loop still decays at least at lambda_LHS (-ln(radius) /
+    h >= lambda_LHS: the time-scale separation at factor 1; past it the LHS and the RHS
+    loop couple through chi, and runs diverge there before the RHS loop alone turns
+    unstable: docs/results/sensing.md), and the fastest decay any loop gain gives with
+    the run's delay and lag (gain_rule.best_damped_gain) against the separation's
+    Td lambda_LHS.
 
     Args:
         logs: The run's logs.
@@ -123,12 +127,15 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
     joints = ArmCoordinates.FromPlant(robot.model.plant).joint_q
     E = realized_model_error(robot.model.plant, robot.truth_plant, pis,
                              logs["state"][samples][:, joints])
-    stable, certified = [], []
+    stable, certified, separated = [], [], []
+    separated_radius = float(np.exp(-h * lambda_lhs))
     for k, error in zip(samples, E):
         B = (np.eye(n) + error) @ logs["true_matrices"][k, :n * n].reshape(n, n)
         stable.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, radius=1.0,
                                               start=delay))
         certified.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag, start=delay))
+        separated.append(largest_tolerated_delay(B, rhs[k, R.K], h, lag,
+                                                 radius=separated_radius, start=delay))
     worst = int(np.argmin(stable))
     gain, radius = best_damped_gain(h, delay, lag)
     return {"time": float(logs["time"][samples[worst]]), "in_the_run": delay,
@@ -136,7 +143,9 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
             "separation_rate": scenario.rhs.Td * lambda_lhs,
             "actuator_lag": lag, "stable_samples": stable[worst],
             "stable_seconds": stable[worst] * h, "certified_samples": int(min(certified)),
-            "certified_seconds": min(certified) * h}
+            "certified_seconds": min(certified) * h,
+            "separated_samples": int(min(separated)),
+            "separated_seconds": min(separated) * h}
 
 
 def _refresh_reads(t: np.ndarray, period: float) -> np.ndarray:
