@@ -14,28 +14,10 @@ from dacph_drake.scenario import Sensing
 SEED_OFFSET = 7919      # the sensors' noise streams apart from the observer's (seed)
 
 
-class SensorSamples(LeafSystem):
-    """The measured [base_pose, q, base_velocity, qdot] of a batch's trials (output
-    ``measurement``) from the true ones (input ``truth``, each signal's trials stacked),
-    every ``period`` (kernels.sensors):
-
-        q_m     = delta round((q + n_q) / delta),    delta = 2 pi / encoder_counts
-        qdot_m  = qdot + n_r (tachometer), or the low-passed difference
-                  (q_m(k) - q_m(k-1)) / h at rate_cutoff (differentiated)
-        omega_m = omega + b + n_g,   b(k+1) = b(k) + gyro_bias_walk sqrt(h) N(0, 1)
-        R_m     = exp([n_s]) R at each star-tracker fix, exp([omega_m] h) R_m between
-
-    omega and R in the world frame (a planar base: the angle theta0 and its rate); the
-    base's position and linear velocity pass exact (no navigation sensor is modelled).
-    Each noise is Gaussian, drawn per trial from its own seeded stream and held for the
-    sample. The measurement is ``latency`` samples late.
-
-    Args:
-        settings: The sensing section.
-        num_joints: n.
-        base_positions: The base joint's positions (3: planar; 7: free, quaternion first).
-        period: The sensors' sample period h [s] (periods.rhs).
-        seeds: Each trial's seed."""
+class _SensorSamples(LeafSystem):
+    """The sensors' samples and measurement (Sensors' equations; kernels.sensors) on
+    the stacked truth: input ``truth``, output ``measurement``, each [base_pose, q,
+    base_velocity, qdot] with each signal's trials stacked."""
 
     def __init__(self, *, settings: Sensing, num_joints: int, base_positions: int,
                  period: float, seeds: Sequence[int]):
@@ -158,10 +140,23 @@ def measures_nothing(settings: Sensing) -> bool:
 
 
 class Sensors(Diagram):
-    """The sensors with plant.STATE_SIGNALS in (the truth's) and out (measured): a
-    Multiplexer stacks the truth for SensorSamples, a Demultiplexer splits its
-    measurement (both compiled: one Python call per evaluation); when the settings
-    measure nothing (measures_nothing) the truth passes through.
+    """Measured ``base_pose``, ``q``, ``base_velocity`` and ``qdot`` of a batch's trials
+    (outputs) from the true ones (inputs of the same names, plant.STATE_SIGNALS), every
+    ``period``:
+
+        q_m     = delta round((q + n_q) / delta),    delta = 2 pi / encoder_counts
+        qdot_m  = qdot + n_r (tachometer), or the low-passed difference
+                  (q_m(k) - q_m(k-1)) / h at rate_cutoff (differentiated)
+        omega_m = omega + b + n_g,   b(k+1) = b(k) + gyro_bias_walk sqrt(h) N(0, 1)
+        R_m     = exp([n_s]) R at each star-tracker fix, exp([omega_m] h) R_m between
+
+    omega and R in the world frame (a planar base: the angle theta0 and its rate); the
+    base's position and linear velocity pass exact (no navigation sensor is modelled).
+    Each noise is Gaussian, drawn per trial from its own seeded stream and held for the
+    sample; the measurement is ``latency`` samples late. A Multiplexer stacks the truth
+    for one compiled sample-and-measure system, a Demultiplexer splits its measurement
+    (one Python call per evaluation); settings that measure nothing (measures_nothing)
+    pass the truth through.
 
     Args:
         settings: The sensing section.
@@ -182,7 +177,7 @@ class Sensors(Diagram):
         if measures_nothing(settings):
             builder.Connect(truth.get_output_port(), measured.get_input_port())
         else:
-            samples = builder.AddNamedSystem("samples", SensorSamples(
+            samples = builder.AddNamedSystem("samples", _SensorSamples(
                 settings=settings, num_joints=num_joints, base_positions=base_positions,
                 period=period, seeds=seeds))
             builder.Connect(truth.get_output_port(), samples.get_input_port())
