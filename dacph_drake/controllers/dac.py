@@ -15,6 +15,7 @@ from dacph_drake.systems.learner import RhsLearner
 from dacph_drake.systems.port_observer import PortObserver
 from dacph_drake.systems.regression_filter import RegressionFilter
 from dacph_drake.systems.rhs_integrator import RhsIntegrator, RhsTrial
+from dacph_drake.systems.sensors import measures_nothing
 
 
 def build_dac_diagram(*scenarios: Scenario, learning: bool = True) -> ClosedLoop:
@@ -62,6 +63,23 @@ def _WarnOfADelayedLoop(scenario: Scenario, rates) -> None:
             cap / wanted)
 
 
+def _WarnOfANoisyKinematicCheck(scenario: Scenario,
+                                identifier: Optional[InertialIdentifier]) -> None:
+    """Warns when the identifier's kinematic check (inertia.fit_tolerance) judges a
+    momentum misfit measured through noisy sensors: their noise alone leaves 1e-3 - 1e-2
+    with the spacecraft's set, far above what a link error of a few per cent leaves
+    (1e-6 - 1e-5), so a run reports a mismatch it does not have and its claims become
+    the prior's (docs/results/sensing.md)."""
+    if (identifier is None or scenario.inertia.fit_tolerance <= 0
+            or not scenario.sensing.enabled or measures_nothing(scenario.sensing)):
+        return
+    logging.getLogger(__name__).warning(
+        "inertia.fit_tolerance = %g judges a momentum misfit measured through noisy "
+        "sensors, whose noise alone can exceed it: a reported kinematic mismatch may be "
+        "the noise's (the claims then become the prior's); allowed: 0 (no check) or a "
+        "tolerance above the sensors' misfit", scenario.inertia.fit_tolerance)
+
+
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
                 learning: bool, identifier: Optional[InertialIdentifier] = None,
                 request: Optional[OutputPort] = None) -> Dict[str, object]:
@@ -91,6 +109,7 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
     _WarnOfADelayedLoop(scenario, rates)
+    _WarnOfANoisyKinematicCheck(scenario, identifier)
     builder = controller.builder
     kind = learner_kind(settings)
     regularized = kind.BandPassed(settings)
