@@ -49,7 +49,7 @@ def _turned(quaternion, rotation_vector):
 
 
 @njit(cache=True)
-def star_fix(pose_attitude, noise, spatial):
+def star_fix(pose_attitude: np.ndarray, noise: np.ndarray, spatial: bool) -> np.ndarray:
     """A star-tracker fix of the attitude with per-axis noise [rad].
 
     Args:
@@ -62,7 +62,8 @@ def star_fix(pose_attitude, noise, spatial):
 
 
 @njit(cache=True)
-def sensor_measure(state, truth, layout, constants, out):
+def sensor_measure(state: np.ndarray, truth: np.ndarray, layout: np.ndarray,
+                   constants: np.ndarray, out: np.ndarray) -> None:
     """The measurement of ``truth`` with the sensors' ``state`` (trials x width) into
     ``out`` (systems.sensors' equations).
 
@@ -98,7 +99,9 @@ def sensor_measure(state, truth, layout, constants, out):
 
 
 @njit(cache=True)
-def sensor_sample(state, truth, draws, walk, star, layout, constants):
+def sensor_sample(state: np.ndarray, truth: np.ndarray, draws: np.ndarray,
+                  walk: np.ndarray, star: np.ndarray, layout: np.ndarray,
+                  constants: np.ndarray) -> None:
     """One sample of the sensors' state (in place): the sample's noise from ``draws``
     (trials x (2 n + axes), standard normal), the gyro bias' walk from ``walk`` (trials x
     axes), the encoders' differentiated rate, and the attitude estimate propagated by

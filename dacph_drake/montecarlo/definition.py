@@ -68,11 +68,11 @@ class Distributions:
         fault_joint: The fault's joint (1-based, rounded to an integer).
         fault_gain: The fault's factor on the joint's torque.
         sensing_noise_scale: Every noise of the base's sensing section (the encoders',
-            tachometers', gyro's noise, bias and bias walk, the star tracker's) times f.
+            tachometers', gyro's noise, bias and bias walk, the star tracker's) times f
+            (the sensing samples need the base's sensing.enabled; trials with equal
+            ones share a batch's diagram).
         sensing_rhs_delay: sensing.rhs_delay [samples] (rounded to an integer).
-        sensing_actuator_lag: sensing.actuator_lag [s].
-        (The sensing samples need the base's sensing.enabled; trials with equal ones
-        share a batch's diagram.)"""
+        sensing_actuator_lag: sensing.actuator_lag [s]."""
     # Ground-truth robot (the controllers keep nominal_robot), one factor per link:
     link_mass_scale: Optional[VectorDistribution] = None     # mass and inertia
     link_length_scale: Optional[VectorDistribution] = None   # length, com, width by f,
