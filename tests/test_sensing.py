@@ -318,3 +318,18 @@ def test_a_run_saved_before_sensing_keeps_its_fingerprint():
     assert "sensing:" in yaml_dump_typed(scenario) and "sensing:" not in text
     scenario.sensing.enabled = True
     assert "sensing:" in saved_forms(scenario)[0]
+
+
+def test_the_learning_report_names_the_rate_noise_where_most_quantities_stay_at_the_prior():
+    """With tachometer noise above RATE_NOISE_LIMIT and most quantities at the prior the
+    report names the noise and its size on the observer's acceleration; not below the
+    limit, not with most quantities learned, not with sensing off."""
+    from dacph_drake.loop.metrics import RATE_NOISE_LIMIT, _rate_noise_note
+    scenario = _tiny("short", Sensing(enabled=True, rate_noise=1e-4))
+    note = _rate_noise_note(scenario, 0.97)
+    assert "97 %" in note and "0.0001 rad/s per sample" in note
+    assert f"{np.sqrt(2) * 1e-4 / H:.3g} rad/s^2" in note
+    assert _rate_noise_note(scenario, 0.5) == ""
+    scenario.sensing.rate_noise = 0.5 * RATE_NOISE_LIMIT
+    assert _rate_noise_note(scenario, 0.97) == ""
+    assert _rate_noise_note(_tiny("short", Sensing(rate_noise=1e-4)), 0.97) == ""

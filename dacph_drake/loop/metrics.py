@@ -274,6 +274,28 @@ def relative_half_width(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
     return rms(half / np.maximum(np.linalg.norm(estimate, axis=1), 1e-300))
 
 
+# The joint-rate noise [rad/s per sample] above which the paper's arm's learner leaves
+# most quantities at the prior (docs/results/sensing.md: 1e-5 leaves 0.54-0.60 of them,
+# as without sensors; 1e-4 leaves 0.99).
+RATE_NOISE_LIMIT = 1e-5
+
+
+def _rate_noise_note(scenario: Scenario, undetermined: float) -> str:
+    """Why most quantities may have stayed at the prior: the sensors' joint-rate noise,
+    which the port observer differentiates ("" when it is not the likely cause)."""
+    sensing = scenario.sensing
+    rate_noise = sensing.rate_noise
+    if not (sensing.enabled and sensing.rate_source == "tachometer"
+            and undetermined >= 0.9 and rate_noise > RATE_NOISE_LIMIT):
+        return ""
+    return (f"{100 * undetermined:.0f} % of the quantities stayed at the prior with the "
+            f"sensors' joint-rate noise {rate_noise:.2g} rad/s per sample, which the port "
+            f"observer differentiates (sqrt(2) sd / h = "
+            f"{np.sqrt(2) * rate_noise / scenario.periods.rhs:.3g} rad/s^2 of noise on "
+            f"its acceleration): above {RATE_NOISE_LIMIT:g} rad/s the noise, not the "
+            "excitation, is what keeps them undetermined (docs/results/sensing.md)")
+
+
 def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
     """What a real robot's user sees of the learning, without the truth, per phase:
     ``residual_ratio`` (sqrt of the median of the learner's loss over its nominal loss where
@@ -309,6 +331,9 @@ def learning_report(logs: Dict[str, np.ndarray], scenario: Scenario) -> Dict:
                            + scenario.learner.bayes.model_error ** 2)
         entry["model_error_sd"] = float(np.median(np.max(error_sd, axis=(1, 2))))
         phases[phase] = entry
+        noise = _rate_noise_note(scenario, undetermined)
+        if noise:
+            warnings.append(f"{phase}: {noise}")
         if not len(finite):
             warnings.append(f"{phase}: the data determined no quantity; the prior "
                             "(B0, D0) stood throughout")
