@@ -19,7 +19,7 @@ from dacph_drake.loop.simulate import simulate
 from dacph_drake.loop.verify import verify_logs
 from dacph_drake.scenario import Phases, Sensing
 
-ROBOTS = ("short", "satellite_3dof", "satellite_6dof", "ur5")
+ROBOTS = ("short", "satellite_3dof", "satellite_6dof", "scenarios/ur5.yaml")
 
 
 def scenario_of(name: str, delay: int, lag: float):
