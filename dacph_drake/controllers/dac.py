@@ -3,11 +3,16 @@ the RHS loop), port observer, regression filter, learner and RHS integrator."""
 import logging
 from typing import Dict, Optional
 
+import numpy as np
 from pydrake.systems.framework import LeafSystem, OutputPort
+from pydrake.systems.primitives import LinearSystem
 
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
-                                                 LhsRequest, assemble_closed_loop)
-from dacph_drake.gain_rule import c_lower_bound, check_rhs_period, well_damped_loop_gain
+                                                 DelayLine, LhsRequest,
+                                                 assemble_closed_loop)
+from dacph_drake.gain_rule import (c_lower_bound, check_rhs_period, lag_pole,
+                                   well_damped_loop_gain)
+from dacph_drake.kernels.certificate import lag_weight
 from dacph_drake.learning import LearnerTrial, learner_kind
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
@@ -78,6 +83,30 @@ def _WarnOfANoisyKinematicCheck(scenario: Scenario,
         "sensors, whose noise alone can exceed it: a reported kinematic mismatch may be "
         "the noise's (the claims then become the prior's); allowed: 0 (no check) or a "
         "tolerance above the sensors' misfit", scenario.inertia.fit_tolerance)
+
+
+def _ObservedCommand(builder, scenario: Scenario, u: OutputPort) -> OutputPort:
+    """The command as the port observer's torque saw it: u itself, or with a known delay
+    d (sensing.rhs_delay + latency) and lag, u d samples late through the lag averaged
+    over the sample, (1 - b) u_d + b s, s(k+1) = a s(k) + (1 - a) u_d
+    (kernels.certificate.lag_weight): so the learner pairs each torque with the command
+    that produced it (a discrete LinearSystem, compiled)."""
+    delay, lag = scenario.sensing.KnownCommandDelay()
+    h, size = scenario.periods.rhs, u.size()
+    if delay > 0:
+        line = builder.AddNamedSystem("observed_command_delay",
+                                      DelayLine(h, delay, size))
+        builder.Connect(u, line.get_input_port())
+        u = line.get_output_port()
+    if lag > 0:
+        a, identity = lag_pole(h, lag), np.eye(size)
+        b = lag_weight(a)
+        average = builder.AddNamedSystem("observed_command_lag", LinearSystem(
+            a * identity, (1 - a) * identity, b * identity, (1 - b) * identity,
+            time_period=h))
+        builder.Connect(u, average.get_input_port())
+        u = average.get_output_port()
+    return u
 
 
 def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem,
@@ -153,7 +182,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     for system in (observer, learner, rhs):      # M for p = M qdot, the observer's
         builder.Connect(lhs.GetOutputPort("reduced_model"),
                         system.GetInputPort("reduced_model"))
-    builder.Connect(rhs.GetOutputPort("u"), observer.GetInputPort("u"))
+    builder.Connect(_ObservedCommand(builder, scenario, rhs.GetOutputPort("u")),
+                    observer.GetInputPort("u"))
     port_sample = observer.GetOutputPort("port_sample")
     if prefilter is not None:
         builder.Connect(port_sample, prefilter.GetInputPort("port_sample"))
