@@ -333,3 +333,61 @@ def test_the_learning_report_names_the_rate_noise_where_most_quantities_stay_at_
     scenario.sensing.rate_noise = 0.5 * RATE_NOISE_LIMIT
     assert _rate_noise_note(scenario, 0.97) == ""
     assert _rate_noise_note(_tiny("short", Sensing(rate_noise=1e-4)), 0.97) == ""
+
+
+def test_the_observed_command_is_the_torque_the_actuators_delivered_over_the_sample():
+    """dac._ObservedCommand: what the port observer reads at t_(k+1) (before that
+    instant's updates) is the actuators' torque averaged over [t_k, t_(k+1)): a
+    command updated every h, delayed by DelayLine and lagged by Drake's
+    FirstOrderLowPassFilter (the actuation path), integrated exactly; to 1e-9."""
+    from pydrake.systems.framework import BasicVector, LeafSystem
+    from pydrake.systems.primitives import FirstOrderLowPassFilter, Integrator
+    from dacph_drake.controllers.closed_loop import DelayLine
+    from dacph_drake.controllers.dac import _ObservedCommand
+    from dacph_drake.scenario import Scenario
+
+    class Command(LeafSystem):
+        def __init__(self):
+            super().__init__()
+            self.rng = np.random.default_rng(5)
+            state = self.DeclareDiscreteState(2)
+            self.DeclareStateOutputPort("u", state)
+            self.DeclarePeriodicDiscreteUpdateEvent(H, 0.0, self.Update)
+
+        def Update(self, context, discrete_state):
+            discrete_state.get_mutable_vector().SetFromVector(self.rng.normal(size=2))
+
+    class Probe(LeafSystem):
+        def __init__(self):
+            super().__init__()
+            self.seen = []
+            self.integral = self.DeclareVectorInputPort("integral", 2)
+            self.observed = self.DeclareVectorInputPort("observed", 2)
+            self.DeclarePeriodicDiscreteUpdateEvent(H, 0.0, self.Update)
+            self.DeclareDiscreteState(1)
+
+        def Update(self, context, discrete_state):
+            self.seen.append((context.get_time(), self.integral.Eval(context).copy(),
+                              self.observed.Eval(context).copy()))
+
+    scenario = Scenario()
+    scenario.periods.rhs = H
+    scenario.sensing = Sensing(enabled=True, rhs_delay=2, latency=1, actuator_lag=0.001)
+    builder = DiagramBuilder()
+    command = builder.AddSystem(Command())
+    line = builder.AddSystem(DelayLine(H, 3, 2))
+    lag = builder.AddSystem(FirstOrderLowPassFilter(0.001, 2))
+    integral = builder.AddSystem(Integrator(2))
+    builder.Connect(command.get_output_port(), line.get_input_port())
+    builder.Connect(line.get_output_port(), lag.get_input_port())
+    builder.Connect(lag.get_output_port(), integral.get_input_port())
+    probe = builder.AddSystem(Probe())
+    builder.Connect(integral.get_output_port(), probe.GetInputPort("integral"))
+    builder.Connect(_ObservedCommand(builder, scenario, command.get_output_port()),
+                    probe.GetInputPort("observed"))
+    simulator = Simulator(builder.Build())
+    simulator.get_mutable_integrator().set_target_accuracy(1e-12)
+    simulator.AdvanceTo(60 * H)
+    times, integrals, observed = zip(*probe.seen)
+    delivered = np.diff(np.array(integrals), axis=0) / H
+    assert np.allclose(delivered[5:], np.array(observed)[6:], atol=1e-9)
