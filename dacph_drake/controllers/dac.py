@@ -47,17 +47,16 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
     return build_dac_diagram(*scenarios, learning=False)
 
 
-def _WarnOfADelayedLoop(scenario: Scenario, rates) -> None:
+def _WarnOfADelayedLoop(scenario: Scenario, wanted: float) -> None:
     """Warns when the command's known delay and lag leave the RHS loop best damped
-    below the gain rule's rate at beta_hat = 1: the integrator then runs at the
-    best-damped rate and the separation of eq. 45 is not met (verify reports it)."""
+    below ``wanted``, the gain rule's rate at beta_hat = 1 [1/s]: the integrator then
+    runs at the best-damped rate and the separation of eq. 45 is not met (verify
+    reports it)."""
     delay, lag = scenario.sensing.KnownCommandDelay()
     if not (delay or lag):
         return
-    rhs, h = scenario.rhs, scenario.periods.rhs
+    h = scenario.periods.rhs
     cap = well_damped_loop_gain(h, delay, lag) / h
-    wanted = max((1 + rhs.c_margin) * c_lower_bound(rhs.Td, Kd_max, lambda_min_M, 1.0)
-                 for Kd_max, lambda_min_M in rates)
     if wanted > cap:
         logging.getLogger(__name__).warning(
             "with the command %d samples late and a %g s actuator lag the RHS loop is "
@@ -131,13 +130,14 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     scenario, model = loop.scenario, loop.model
     rhs_settings, periods, settings = scenario.rhs, scenario.periods, scenario.learner
     rates = [robot.task.GainRuleRates(robot) for robot in loop.robots]
-    for Kd_max, lambda_min_M in rates:
-        check_rhs_period(periods, (1 + rhs_settings.c_margin) * c_lower_bound(
-                             rhs_settings.Td, Kd_max, lambda_min_M, 1.0),
-                         (1 + rhs_settings.c_margin) * c_lower_bound(
+    # The gain rule's rate at beta_hat = 1, where every run starts, per trial.
+    c_nominal = [(1 + rhs_settings.c_margin) * c_lower_bound(
+        rhs_settings.Td, Kd_max, lambda_min_M, 1.0) for Kd_max, lambda_min_M in rates]
+    for c, (Kd_max, lambda_min_M) in zip(c_nominal, rates):
+        check_rhs_period(periods, c, (1 + rhs_settings.c_margin) * c_lower_bound(
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
-    _WarnOfADelayedLoop(scenario, rates)
+    _WarnOfADelayedLoop(scenario, max(c_nominal))
     _WarnOfANoisyKinematicCheck(scenario, identifier)
     builder = controller.builder
     kind = learner_kind(settings)
