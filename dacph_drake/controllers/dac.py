@@ -70,10 +70,9 @@ def _WarnOfADelayedLoop(scenario: Scenario, wanted: float) -> None:
 def _WarnOfANoisyKinematicCheck(scenario: Scenario,
                                 identifier: Optional[InertialIdentifier]) -> None:
     """Warns when the identifier's kinematic check (inertia.fit_tolerance) judges a
-    momentum misfit measured through noisy sensors: their noise alone leaves 1e-3 - 1e-2
-    with the spacecraft's set, far above what a link error of a few per cent leaves
-    (1e-6 - 1e-5), so a run reports a mismatch it does not have and its claims become
-    the prior's (docs/results/sensing.md)."""
+    momentum misfit measured through noisy sensors: their noise alone can leave more
+    misfit than a link error of a few per cent, so a run reports a mismatch it does
+    not have and its claims become the prior's (docs/results/sensing.md)."""
     if (identifier is None or scenario.inertia.fit_tolerance <= 0
             or not scenario.sensing.enabled or measures_nothing(scenario.sensing)):
         return

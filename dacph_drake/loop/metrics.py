@@ -275,8 +275,7 @@ def relative_half_width(view: Tuple[np.ndarray, np.ndarray, np.ndarray],
 
 
 # The joint-rate noise [rad/s per sample] above which the paper's arm's learner leaves
-# most quantities at the prior (docs/results/sensing.md: 1e-5 leaves 0.54-0.60 of them,
-# as without sensors; 1e-4 leaves 0.99).
+# most quantities at the prior (measured: docs/results/sensing.md).
 RATE_NOISE_LIMIT = 1e-5
 
 
