@@ -320,6 +320,26 @@ def test_a_run_saved_before_sensing_keeps_its_fingerprint():
     assert "sensing:" in saved_forms(scenario)[0]
 
 
+
+def test_a_sensing_run_saved_before_unmodelled_delay_reads_it_at_zero(tmp_path):
+    """A saved run with the sensors on, written before sensing.unmodelled_delay existed
+    (its file has no such line), loads with the delay 0, the behaviour before it, and
+    keeps its fingerprinted text; a nonzero delay is in that text."""
+    from pydrake.common.yaml import yaml_dump_typed
+    from dacph_drake.assembly.scenario_files import saved_forms
+    from dacph_drake.scenario.built_in import spacecraft_sensing
+    scenario = load_scenario("short")
+    scenario.sensing = spacecraft_sensing()
+    text = yaml_dump_typed(scenario)
+    assert "  unmodelled_delay: 0\n" in text
+    (tmp_path / "saved.yaml").write_text(text.replace("  unmodelled_delay: 0\n", ""))
+    loaded = load_scenario(tmp_path / "saved.yaml")
+    assert loaded.sensing.unmodelled_delay == 0
+    assert saved_forms(loaded)[0] == saved_forms(scenario)[0]
+    assert "unmodelled_delay" not in saved_forms(scenario)[0]
+    scenario.sensing.unmodelled_delay = 2
+    assert "unmodelled_delay: 2" in saved_forms(scenario)[0]
+
 def test_the_learning_report_names_the_rate_noise_where_most_quantities_stay_at_the_prior():
     """With tachometer noise above RATE_NOISE_LIMIT and most quantities at the prior the
     report names the noise and its size on the observer's acceleration; not below the

@@ -697,7 +697,7 @@ def integrator_samples(trials: int, fast: np.ndarray, gains: np.ndarray,
         tau_request: The trials' tau_c^r [N m] (trials n).
         tau_observed: The trials' tau_obs(k) [N m] (trials n).
         qdot: The trials' joint rates [rad/s] (trials n).
-        constants: [h [s], chi_decay, chi_floor [N m]], every trial's."""
+        constants: integrator_sample's, every trial's."""
     n = qdot.shape[0] // trials
     fast_size, gains_size = fast.shape[0] // trials, gains.shape[0] // trials
     fast_out, u = np.empty(trials * fast_size), np.empty(trials * n)
@@ -724,14 +724,19 @@ def integrator_sample(fast: np.ndarray, gains: np.ndarray, tau_request: np.ndarr
         tau_request: tau_c^r(k) [N m] (n).
         tau_observed: tau_obs(k) [N m] (n).
         qdot: The joint rates [rad/s] (n).
-        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m]]."""
+        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m], noisy (1:
+            tau_obs carries measurement noise, and e_tau is its low-pass at c)]."""
     n = tau_request.shape[0]
     h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
     out = np.empty(4 * n + 2)
     e = fast[2 * n + 2:3 * n + 2] - tau_observed
     out[:n] = fast[:n] + h * gains[n * n + n:n * n + 2 * n] * e
-    out[n:2 * n] = e
-    out[2 * n] = np.sqrt(dot(e, e))
+    if constants[3] > 0.0:
+        a = 1.0 - np.exp(-gains[n * n + 2 * n] * h)
+        out[n:2 * n] = fast[n:2 * n] + a * (e - fast[n:2 * n])
+    else:
+        out[n:2 * n] = e
+    out[2 * n] = np.sqrt(dot(out[n:2 * n], out[n:2 * n]))
     out[2 * n + 1] = max(out[2 * n], fast[2 * n + 1] * chi_decay, chi_floor)
     out[2 * n + 2:3 * n + 2] = tau_request
     out[3 * n + 2:] = (matvec(gains[:n * n].reshape(n, n),

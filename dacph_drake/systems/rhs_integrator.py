@@ -52,6 +52,11 @@ class RhsIntegrator(LeafSystem):
 
     (tau_obs(k) was formed at sample k-1, so it is compared with that instant's request:
     against the current one the integrator would wind up on the request's increment).
+    With ``noisy_torque`` the logged e_tau, and the chi it sets, is that error low-passed
+    at the loop's rate, e_tau <- e_tau + (1 - e^(-c h)) (e - e_tau): the loop removes no
+    error faster than c, so what is faster is the observer's noise, and a chi that
+    followed the noise would raise the LHS's robust gain chi / phi with it (LHS eq.
+    "tau_c^r") until the two loops no longer separate.
 
     Every ``model_period`` it refreshes B_hat(x), D_hat(x) at x = (q, p = M qdot), the
     gains k_p = c / Re(lambda_hat_p) and c, filtered towards (1 + c_margin) c_min(beta)
@@ -80,12 +85,14 @@ class RhsIntegrator(LeafSystem):
         stress: Verification setting: B_hat scaled by B_hat_scale from stress.start on.
         channels: The learner's channels in ``port_sample`` (default: PortSample).
         command_delay: (samples by which u acts late, the actuators' time constant [s])
-            (Sensing.KnownCommandDelay)."""
+            (Sensing.KnownCommandDelay).
+        noisy_torque: tau_obs carries measurement noise (learning.observation_noise)."""
 
     def __init__(self, *, trials: Sequence[RhsTrial], settings: Rhs, period: float,
                  model_period: float, stress: Stress = Stress(),
                  channels: Optional[Channels] = None,
-                 command_delay: Tuple[int, float] = (0, 0.0)):
+                 command_delay: Tuple[int, float] = (0, 0.0),
+                 noisy_torque: bool = False):
         super().__init__()
         n = trials[0].model.num_joints
         count = len(trials)
@@ -99,7 +106,7 @@ class RhsIntegrator(LeafSystem):
         self._settings = settings
         self._stress = stress
         self._constants = np.array([period, np.exp(-period / settings.chi_window),
-                                    settings.chi_floor])
+                                    settings.chi_floor, float(noisy_torque)])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._period = period
         delay, lag = command_delay
