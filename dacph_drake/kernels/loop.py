@@ -724,14 +724,15 @@ def integrator_sample(fast: np.ndarray, gains: np.ndarray, tau_request: np.ndarr
         tau_request: tau_c^r(k) [N m] (n).
         tau_observed: tau_obs(k) [N m] (n).
         qdot: The joint rates [rad/s] (n).
-        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m], noisy (1:
-            tau_obs carries measurement noise, and e_tau is its low-pass at c)]."""
+        constants: [h [s], chi_decay = e^(-h / chi_window), chi_floor [N m]], then
+            optionally noisy (1: tau_obs carries measurement noise, and e_tau is its
+            low-pass at c; absent or 0: e_tau is the error itself)."""
     n = tau_request.shape[0]
     h, chi_decay, chi_floor = constants[0], constants[1], constants[2]
     out = np.empty(4 * n + 2)
     e = fast[2 * n + 2:3 * n + 2] - tau_observed
     out[:n] = fast[:n] + h * gains[n * n + n:n * n + 2 * n] * e
-    if constants[3] > 0.0:
+    if constants.shape[0] > 3 and constants[3] > 0.0:
         a = 1.0 - np.exp(-gains[n * n + 2 * n] * h)
         out[n:2 * n] = fast[n:2 * n] + a * (e - fast[n:2 * n])
     else:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dacph_drake.learning.identification import BandPassCascade
+from dacph_drake.scenario import Sensing
 
 # Impulse responses are kept until they decay to this fraction of their peak.
 _DECAYED = 1e-12
@@ -82,7 +83,7 @@ def band_noise_gain(response: np.ndarray, decimation: int,
     return float(np.sqrt(max(variance, 0.0)))
 
 
-def observation_noise(sensing, rhs_period: float, sample_period: float,
+def observation_noise(sensing: Sensing, rhs_period: float, sample_period: float,
                       anti_alias_cutoff: float, cascade: BandPassCascade,
                       observer_noise: float) -> ObservationNoise:
     """The ObservationNoise of a loop whose sensors are ``sensing`` (scenario.Sensing).
@@ -92,7 +93,7 @@ def observation_noise(sensing, rhs_period: float, sample_period: float,
     differenced at h and low-passed at rate_cutoff.
 
     Args:
-        sensing: The sensors (none: no rate noise).
+        sensing: The sensors (not enabled: no rate noise).
         rhs_period: The observer's period h [s].
         sample_period: The learner's sampling period [s], a multiple of h.
         anti_alias_cutoff: The observer's low-pass on its regression channels [Hz]
