@@ -14,8 +14,7 @@ from dacph_drake.gain_rule import (c_lower_bound, check_rhs_period, lag_pole,
                                    well_damped_loop_gain)
 from dacph_drake.kernels.certificate import lag_weight
 from dacph_drake.learning import LearnerTrial, learner_kind
-from dacph_drake.learning.identification import BandPassCascade
-from dacph_drake.learning.observation_noise import ObservationNoise, observation_noise
+from dacph_drake.learning.observation_noise import measured_rate_noise
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner
@@ -143,18 +142,14 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
     builder = controller.builder
     kind = learner_kind(settings)
     regularized = kind.BandPassed(settings)
-    anti_alias = settings.band[1] if regularized else 0.0
     observer = builder.AddNamedSystem("port_observer", PortObserver(
         num_joints=model.num_joints, sample_period=periods.rhs,
         noise_std=rhs_settings.observer_noise, seeds=[s.seed for s in loop.scenarios],
-        anti_alias_cutoff=anti_alias, joint_damping=model.joint_damping))
-    band = BandPassCascade(settings.band[0], settings.band[1], settings.band_sections[0],
-                           settings.band_sections[1], periods.learner_sample)
+        anti_alias_cutoff=settings.band[1] if regularized else 0.0,
+        joint_damping=model.joint_damping))
     trials = [LearnerTrial(model=robot.model, B0=s.uncertainty.B0, D0=s.uncertainty.D0,
                            seed=s.seed, q0=s.q0)
               for robot, s in zip(loop.robots, loop.scenarios)]
-    noise = [observation_noise(s.sensing, periods.rhs, periods.learner_sample, anti_alias,
-                               band, s.rhs.observer_noise) for s in loop.scenarios]
     learner = RhsLearner(trials=trials, settings=settings, period=periods.learner,
                          sample_period=periods.learner_sample, learning=learning,
                          watch_model=identifier is not None)
@@ -180,7 +175,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         model_period=periods.learner_sample, stress=scenario.stress,
         channels=learner.learner.channels if regularized else None,
         command_delay=scenario.sensing.KnownCommandDelay(),
-        noisy_torque=any(trial_noise != ObservationNoise() for trial_noise in noise)))
+        noisy_torque=any(measured_rate_noise(s.sensing, periods.rhs) > 0
+                         or s.rhs.observer_noise > 0 for s in loop.scenarios)))
     # The data path, in order: plant -> port observer -> (band-pass) -> learner ->
     # RHS integrator -> u (to the true RHS); the LHS's request and model feed in.
     for signal in ("q", "qdot"):

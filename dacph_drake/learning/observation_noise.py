@@ -14,9 +14,9 @@ the sampling every periods.learner_sample and the band-pass), g_o the same chain
 the observer's own noise (rhs.observer_noise, no difference). The terms (C' + b) qdot_mid
 and D qdot, through which the rate noise also enters undifferentiated, are left out: in
 the band they are (C' + b) / (2 pi f M) of the first, a few per cent on the arms here.
-A loop whose tau_obs carries any of it runs the RHS integrator's chi on a low-passed error
-(systems.rhs_integrator, ``noisy_torque``); docs/results/sensing.md compares nu with the
-port's in-band torque."""
+A loop whose tau_obs carries any of it (measured_rate_noise or rhs.observer_noise above
+0) runs the RHS integrator's chi on a low-passed error (systems.rhs_integrator,
+``noisy_torque``); docs/results/sensing.md compares nu with the port's in-band torque."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,14 +83,30 @@ def band_noise_gain(response: np.ndarray, decimation: int,
     return float(np.sqrt(max(variance, 0.0)))
 
 
+def measured_rate_noise(sensing: Sensing, rhs_period: float) -> float:
+    """The sd of the white noise behind the measured joint rates: the tachometers'
+    rate_noise [rad/s]; or, differentiated, the encoders' (encoder_noise and a uniform
+    quantization of one count, step^2 / 12) over h [rad/s], before their difference and
+    low-pass; 0 when the sensors are not enabled.
+
+    Args:
+        sensing: The sensors.
+        rhs_period: The sensors' and the observer's period h [s]."""
+    if not sensing.enabled:
+        return 0.0
+    if sensing.rate_source == "tachometer":
+        return sensing.rate_noise
+    step = 2 * np.pi / sensing.encoder_counts if sensing.encoder_counts else 0.0
+    return float(np.sqrt(sensing.encoder_noise ** 2 + step ** 2 / 12.0) / rhs_period)
+
+
 def observation_noise(sensing: Sensing, rhs_period: float, sample_period: float,
                       anti_alias_cutoff: float, cascade: BandPassCascade,
                       observer_noise: float) -> ObservationNoise:
     """The ObservationNoise of a loop whose sensors are ``sensing`` (scenario.Sensing).
 
-    The measured rate's noise: the tachometers' white rate_noise; or, differentiated,
-    the encoders' (encoder_noise and a uniform quantization of one count, step^2 / 12)
-    differenced at h and low-passed at rate_cutoff.
+    The measured rate's noise: measured_rate_noise, white for the tachometers, or
+    differenced at h and low-passed at rate_cutoff for the differentiated encoders.
 
     Args:
         sensing: The sensors (not enabled: no rate noise).
@@ -105,18 +121,13 @@ def observation_noise(sensing: Sensing, rhs_period: float, sample_period: float,
     anti_alias = (1.0 - np.exp(-2 * np.pi * anti_alias_cutoff * h)
                   if anti_alias_cutoff > 0 else 1.0)
     length = max(_decay_length(anti_alias), 2) + decimation
-    sd, rate_filter = 0.0, np.zeros(length)
+    sd, rate_filter = measured_rate_noise(sensing, h), np.zeros(length)
     rate_filter[0] = 1.0
-    if sensing.enabled:
-        if sensing.rate_source == "tachometer":
-            sd = sensing.rate_noise
-        else:
-            step = 2 * np.pi / sensing.encoder_counts if sensing.encoder_counts else 0.0
-            sd = np.sqrt(sensing.encoder_noise ** 2 + step ** 2 / 12.0) / h
-            cutoff = 1.0 - np.exp(-2 * np.pi * sensing.rate_cutoff * h)
-            length += _decay_length(cutoff)
-            rate_filter = np.convolve(np.r_[1.0, -1.0],
-                                      _low_pass_response(cutoff, length))[:length]
+    if sensing.enabled and sensing.rate_source != "tachometer":
+        cutoff = 1.0 - np.exp(-2 * np.pi * sensing.rate_cutoff * h)
+        length += _decay_length(cutoff)
+        rate_filter = np.convolve(np.r_[1.0, -1.0],
+                                  _low_pass_response(cutoff, length))[:length]
     low_pass = _low_pass_response(anti_alias, length)
     differenced = np.convolve(np.convolve(rate_filter[:length], [1.0, -1.0]) / h,
                               low_pass)[:length]
