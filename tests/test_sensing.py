@@ -320,7 +320,6 @@ def test_a_run_saved_before_sensing_keeps_its_fingerprint():
     assert "sensing:" in saved_forms(scenario)[0]
 
 
-
 def test_a_sensing_run_saved_before_unmodelled_delay_reads_it_at_zero(tmp_path):
     """A saved run with the sensors on, written before sensing.unmodelled_delay existed
     (its file has no such line), loads with the delay 0, the behaviour before it, and
@@ -339,6 +338,7 @@ def test_a_sensing_run_saved_before_unmodelled_delay_reads_it_at_zero(tmp_path):
     assert "unmodelled_delay" not in saved_forms(scenario)[0]
     scenario.sensing.unmodelled_delay = 2
     assert "unmodelled_delay: 2" in saved_forms(scenario)[0]
+
 
 def test_the_learning_report_names_the_rate_noise_where_most_quantities_stay_at_the_prior():
     """With tachometer noise above RATE_NOISE_LIMIT and most quantities at the prior the
