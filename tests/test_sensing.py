@@ -360,7 +360,7 @@ def test_the_observed_command_is_the_torque_the_actuators_delivered_over_the_sam
     instant's updates) is the actuators' torque averaged over [t_k, t_(k+1)): a
     command updated every h, delayed by DelayLine and lagged by Drake's
     FirstOrderLowPassFilter (the actuation path), integrated exactly; to 1e-9."""
-    from pydrake.systems.framework import BasicVector, LeafSystem
+    from pydrake.systems.framework import LeafSystem
     from pydrake.systems.primitives import FirstOrderLowPassFilter, Integrator
     from dacph_drake.controllers.closed_loop import DelayLine
     from dacph_drake.controllers.dac import _ObservedCommand
