@@ -122,6 +122,30 @@ def test_gyro_noise_and_bias_walk_have_their_sizes():
     assert np.std(final_bias) == pytest.approx(walk * np.sqrt(duration), rel=0.35)
 
 
+
+@pytest.mark.parametrize("rate_source", ["tachometer", "differentiated"])
+def test_state_noise_is_the_sd_of_each_reading(rate_source):
+    """dynamics.sensor_noise.state_noise, what the identifier's draws read (the encoders',
+    the measured joint rates' and the gyro's sd), is the Sensors' own within 5 %: the
+    tachometers' rate_noise, or the encoders' white noise differenced and low-passed."""
+    from dacph_drake.dynamics.sensor_noise import state_noise
+    settings = Sensing(enabled=True, encoder_noise=2e-6, rate_source=rate_source,
+                       rate_noise=1e-4, rate_cutoff=200.0, gyro_noise=3e-4)
+    seeds = tuple(range(10))
+    trials = len(seeds)
+    out = _sensors(settings, np.tile([0, 0, 0.1], trials), np.tile([0.3, 1.0], trials),
+                   np.tile([0, 0, 0.05], trials), np.zeros(2 * trials), seeds=seeds,
+                   duration=0.5)
+    noise = state_noise(settings, H)
+    settled = slice(100, None)
+    angles = out["q"][settled] - np.tile([0.3, 1.0], trials)
+    assert np.std(angles) == pytest.approx(noise.joint_angle, rel=0.05)
+    assert np.std(out["qdot"][settled]) == pytest.approx(noise.joint_rate, rel=0.05)
+    rates = out["base_velocity"][settled].reshape(-1, trials, 3)[:, :, 2]
+    assert np.std(rates) == pytest.approx(noise.base_rate, rel=0.05)
+    assert state_noise(Sensing(rate_noise=1e-4), H) == state_noise(Sensing(), H)
+
+
 def test_the_gyro_carries_the_attitude_between_star_tracker_fixes():
     """A spatial base turning at a constant world rate: with exact sensors the estimate
     propagated by the gyro is the truth's attitude at the last fix turned by omega t

@@ -10,11 +10,11 @@ from pydrake.systems.primitives import LinearSystem
 from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, ControllerBuilder,
                                                  DelayLine, LhsRequest,
                                                  assemble_closed_loop)
+from dacph_drake.dynamics.sensor_noise import measured_rate_noise
 from dacph_drake.gain_rule import (c_lower_bound, check_rhs_period, lag_pole,
                                    well_damped_loop_gain)
 from dacph_drake.kernels.certificate import lag_weight
 from dacph_drake.learning import LearnerTrial, learner_kind
-from dacph_drake.learning.observation_noise import measured_rate_noise
 from dacph_drake.scenario import Scenario
 from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.learner import RhsLearner

@@ -239,6 +239,52 @@ def identify_parameters(information: np.ndarray, pi0: np.ndarray, scales: np.nda
     return out
 
 
+# Eigenvalues of a compensated information below this fraction of its largest are the
+# whitening's round-off (compensated_information).
+ROUND_OFF = 1e-8
+
+
+def compensated_information(information: np.ndarray, noise_information: np.ndarray,
+                            readings: int) -> np.ndarray:
+    """The information of the noiseless momentum samples from the measured A and the
+    noise's expected share Sigma (TreeStack.AddNoiseInformation): the bias-compensated
+    least squares of errors in variables, A - Sigma, kept only in the directions where
+    the samples inform beyond the noise's own fluctuation.
+
+    Whitened by Sigma (W = Sigma^-1/2, C = W A W = I + the signal's share, noise and
+    signal-noise terms fluctuating), each eigendirection's excess e = lambda(C) - 1 of
+    ``readings`` samples has sd about sqrt((2 + 4 e) / readings) from the noise (a sum of
+    squares and of cross terms): a direction is kept, at e, where e exceeds three of
+    them, else set to 0 (it stays at the prior). Sigma's null directions (no noise) keep
+    A.
+
+    Args:
+        information: A (size x size), or a stack.
+        noise_information: Sigma, as A.
+        readings: The number of samples summed in A."""
+    A = np.asarray(information, float)
+    Sigma = np.asarray(noise_information, float)
+    size = A.shape[-1]
+    trace = np.trace(Sigma, axis1=-2, axis2=-1) + 1e-12 * np.trace(A, axis1=-2, axis2=-1)
+    floor = 1e-9 * np.maximum(trace, 1e-300) / size
+    values, vectors = np.linalg.eigh(Sigma + floor[..., None, None] * np.eye(size))
+    root = np.sqrt(np.maximum(values, floor[..., None]))
+    W = np.einsum("...ij,...j,...kj->...ik", vectors, 1.0 / root, vectors)
+    W_inverse = np.einsum("...ij,...j,...kj->...ik", vectors, root, vectors)
+    excess, directions = np.linalg.eigh(W @ A @ W)
+    excess = excess - 1.0
+    sd = np.sqrt((2.0 + 4.0 * np.maximum(excess, 0.0)) / max(readings, 1))
+    kept = np.where(excess > 3.0 * sd, excess, 0.0)
+    signal = np.einsum("...ij,...j,...kj->...ik", directions, kept, directions)
+    compensated = W_inverse @ signal @ W_inverse
+    # The whitening's round-off (its floor is 1e-9 of Sigma's scale) is set to 0, so a
+    # direction without information stays at the prior, whose weight is 1e-12 of A's.
+    values, vectors = np.linalg.eigh(0.5 * (compensated + np.swapaxes(compensated, -1, -2)))
+    largest = np.max(np.abs(values), axis=-1, keepdims=True)
+    values = np.where(values > ROUND_OFF * largest, values, 0.0)
+    return np.einsum("...ij,...j,...kj->...ik", vectors, values, vectors)
+
+
 def identify_draws(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,
                    prior_weight: float, anchor: np.ndarray, anchor_values: np.ndarray
                    ) -> np.ndarray:

@@ -14,7 +14,10 @@ from typing import Optional, Sequence
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
-from dacph_drake.dynamics.inertial_parameters import identify_draws, identify_parameters
+from dacph_drake.dynamics.inertial_parameters import (compensated_information, identify_draws,
+                                                      identify_parameters)
+from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.sensor_noise import StateNoise, base_rate_columns
 from dacph_drake.dynamics.tree_stack import TreeStack, positive_definite
 from dacph_drake.quantiles import student_quantile
 from dacph_drake.scenario import InertiaIdentification
@@ -39,8 +42,17 @@ class ModelErrorEnsemble:
     """``settings.error_draws`` plausible controller models per trial and E's sd. Draw k has
     its prior pi0 (1 + nominal_tolerance N(0, 1)) per parameter, its anchor's mass
     (1 + anchor_tolerance N(0, 1)) and its joint placements t (1 + kinematic_tolerance
-    N(0, 1)), seeded by the trial's seed; with exact kinematics every draw uses the
-    identifier's information, otherwise each accumulates its own (AddInformation).
+    N(0, 1)), seeded by the trial's seed; with exact kinematics and noiseless sensors every
+    draw uses the identifier's information, otherwise each accumulates its own
+    (AddInformation).
+
+    With noisy sensors (``noise``) each draw reads the measured state with noise of its
+    own added, of the sensors' statistics (a parametric bootstrap): the momentum is
+    linear in the rates, so white rate noise adds sigma^2 Y(q, e)^T Y(q, e) to the
+    information and pulls the identified parameters off the truth in the directions the
+    motion informs weakly. A draw that reads the noise twice lands about as far from the
+    identified model as that model lies from the truth, so E's sd covers the noise's
+    bias as well as its spread.
 
     Args:
         plants: Each trial's controller plant.
@@ -49,15 +61,22 @@ class ModelErrorEnsemble:
         scales: Each trial's prior scales S (trials, parameters).
         anchor: The anchor's constraint c (trials, parameters), or None (the prior's).
         anchor_values: Each trial's anchored mass [kg], or None.
-        seeds: Each trial's seed."""
+        seeds: Each trial's seed.
+        noise: The noise on each reading of the measured state (none: exact).
+        period: The readings' period [s] (the gyro bias' walk between them)."""
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, priors: np.ndarray, scales: np.ndarray,
                  anchor: Optional[np.ndarray], anchor_values: Optional[np.ndarray],
-                 seeds: Sequence[int]):
+                 seeds: Sequence[int], noise: StateNoise = StateNoise(),
+                 period: float = 0.0):
         K, count = settings.error_draws, len(plants)
         self.draws, self._settings = K, settings
-        self.own_information = settings.kinematic_tolerance > 0
+        self._noise, self._period = noise, period
+        self.own_information = settings.kinematic_tolerance > 0 or noise.Any()
+        self._rate_columns = base_rate_columns(
+            ArmCoordinates.FromPlant(plants[0]).base_v.size)
+        self._noise_rngs = [np.random.default_rng([int(seed), 0xE5, 1]) for seed in seeds]
         self._trees = TreeStack([plant for plant in plants for _ in range(K)])
         size = priors.shape[1]
         self._priors = np.repeat(priors, K, axis=0)
@@ -85,30 +104,64 @@ class ModelErrorEnsemble:
         return len(self._trees)
 
     def AddInformation(self, base_pose: np.ndarray, base_velocity: np.ndarray,
-                       q: np.ndarray, qdot: np.ndarray, information: np.ndarray) -> None:
-        """information[i K + k] += vec(Y^T Y) of draw k of trial i, in place.
+                       q: np.ndarray, qdot: np.ndarray, information: np.ndarray,
+                       bias: Optional[np.ndarray] = None) -> None:
+        """information[i K + k] += vec(Y^T Y) of draw k of trial i at the state as draw k
+        reads it (in place; with noisy sensors its own noise added and ``bias`` walked).
 
         Args:
             base_pose: Each trial's base pose (trials, base positions).
             base_velocity: Each trial's base velocity (trials, base velocities).
             q: Each trial's joint angles (trials, n) [rad].
             qdot: Each trial's joint rates (trials, n) [rad/s].
-            information: The draws' information (members, parameters^2)."""
+            information: The draws' information (members, parameters^2).
+            bias: The draws' gyro biases (members, gyro axes) [rad/s] (InitialBias),
+                with noisy sensors."""
         K = self.draws
-        self._trees.AddInformation(*(np.repeat(x, K, axis=0) for x in
-                                     (base_pose, base_velocity, q, qdot)), information)
+        base_pose, base_velocity, q, qdot = (np.repeat(x, K, axis=0) for x in
+                                             (base_pose, base_velocity, q, qdot))
+        if self._noise.Any():
+            self._AddNoise(base_velocity, q, qdot, bias)
+        self._trees.AddInformation(base_pose, base_velocity, q, qdot, information)
 
-    def ErrorSd(self, information: np.ndarray, M_hat: np.ndarray, q: np.ndarray
+    def InitialBias(self) -> np.ndarray:
+        """Each draw's own gyro bias at the start (members, gyro axes) [rad/s]: N(0,
+        gyro_bias^2) per axis, seeded by the trial's seed."""
+        axes = self._rate_columns.stop - self._rate_columns.start
+        return np.concatenate([rng.standard_normal((self.draws, axes))
+                               for rng in self._noise_rngs]) * self._noise.gyro_bias
+
+    def _AddNoise(self, base_velocity, q, qdot, bias) -> None:
+        """Each draw's reading noise on the repeated state (in place); its gyro bias walks
+        by gyro_bias_walk sqrt(period) (``bias`` in place)."""
+        noise, K = self._noise, self.draws
+        n, axes = q.shape[1], bias.shape[1]
+        draws = np.concatenate([rng.standard_normal((K, 2 * n + 2 * axes))
+                                for rng in self._noise_rngs])
+        q += noise.joint_angle * draws[:, :n]
+        qdot += noise.joint_rate * draws[:, n:2 * n]
+        bias += noise.gyro_bias_walk * np.sqrt(self._period) * draws[:, 2 * n:2 * n + axes]
+        base_velocity[:, self._rate_columns] += bias + noise.base_rate * draws[:, 2 * n + axes:]
+
+    def ErrorSd(self, information: np.ndarray, M_hat: np.ndarray, q: np.ndarray,
+                noise_information: Optional[np.ndarray] = None, readings: int = 1
                 ) -> np.ndarray:
         """E's sd per entry (trials, n, n) at q: the RMS of M_hat M_k^-1 - I over the PD
         draws times Student's factor; nominal_tolerance where there is none.
 
         Args:
             information: The draws' information (members, p, p), or with exact kinematics
-                the trials' own (trials, p, p).
+                and noiseless sensors the trials' own (trials, p, p).
             M_hat: Each trial's identified M(q) (trials, n, n).
-            q: Each trial's joint angles (trials, n) [rad]."""
+            q: Each trial's joint angles (trials, n) [rad].
+            noise_information: With noisy sensors, each trial's noise information
+                (trials, p, p): a draw, which reads the noise twice, is identified from
+                its information less twice it (compensated_information).
+            readings: The samples the information holds."""
         K, (count, n) = self.draws, q.shape
+        if noise_information is not None:
+            information = compensated_information(
+                information, 2.0 * np.repeat(noise_information, K, axis=0), readings)
         if not self.own_information and self._anchor is not None:
             size = self._priors.shape[1]
             pis = identify_draws(

@@ -55,6 +55,36 @@ class TreeStack:
             *self._topology, self.X_PF, self._axis, self._X_MC, self._below,
             self.nodes, base_pose, base_velocity, q, qdot, information)
 
+    def AddNoiseInformation(self, base_pose: np.ndarray, q: np.ndarray,
+                            base_velocities: int, rate_columns: slice,
+                            base_rate_variance: float, joint_rate_variance: float,
+                            information: np.ndarray) -> None:
+        """information[i] += sum_j sigma_j^2 vec(Y(q, e_j)^T Y(q, e_j)) (in place): what
+        white noise of variance sigma_j^2 on velocity j adds to the information in
+        expectation, the momentum being linear in the velocities (the base's rates in
+        ``rate_columns`` at base_rate_variance, every joint rate at joint_rate_variance).
+
+        Args:
+            base_pose: Each member's base pose (members, base positions).
+            q: Each member's joint angles (members, n) [rad].
+            base_velocities: The size of a base velocity.
+            rate_columns: The base velocity's noisy (gyro) columns.
+            base_rate_variance: Their noise's variance [rad^2/s^2].
+            joint_rate_variance: The joint rates' noise's variance [rad^2/s^2].
+            information: Each member's information (members, parameters^2)."""
+        members, n = q.shape
+        still_base, still_joints = np.zeros((members, base_velocities)), np.zeros((members, n))
+        if base_rate_variance > 0:
+            for column in range(rate_columns.start, rate_columns.stop):
+                unit = still_base.copy()
+                unit[:, column] = np.sqrt(base_rate_variance)
+                self.AddInformation(base_pose, unit, q, still_joints, information)
+        if joint_rate_variance > 0:
+            for joint in range(n):
+                unit = still_joints.copy()
+                unit[:, joint] = np.sqrt(joint_rate_variance)
+                self.AddInformation(base_pose, still_base, q, unit, information)
+
     def ReducedMassMatrices(self, pis: np.ndarray, q: np.ndarray) -> np.ndarray:
         """M(q_i) with member i's bodies at pis[i] (non-finite where H_bb is not PD).
 

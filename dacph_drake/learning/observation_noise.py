@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dacph_drake.dynamics.sensor_noise import measured_rate_noise
 from dacph_drake.learning.identification import BandPassCascade
 from dacph_drake.scenario import Sensing
 
@@ -81,23 +82,6 @@ def band_noise_gain(response: np.ndarray, decimation: int,
     lags = min(len(sampled), len(band))
     variance = sampled[0] * band[0] + 2.0 * np.dot(sampled[1:lags], band[1:lags])
     return float(np.sqrt(max(variance, 0.0)))
-
-
-def measured_rate_noise(sensing: Sensing, rhs_period: float) -> float:
-    """The sd of the white noise behind the measured joint rates: the tachometers'
-    rate_noise [rad/s]; or, differentiated, the encoders' (encoder_noise and a uniform
-    quantization of one count, step^2 / 12) over h [rad/s], before their difference and
-    low-pass; 0 when the sensors are not enabled.
-
-    Args:
-        sensing: The sensors.
-        rhs_period: The sensors' and the observer's period h [s]."""
-    if not sensing.enabled:
-        return 0.0
-    if sensing.rate_source == "tachometer":
-        return sensing.rate_noise
-    step = 2 * np.pi / sensing.encoder_counts if sensing.encoder_counts else 0.0
-    return float(np.sqrt(sensing.encoder_noise ** 2 + step ** 2 / 12.0) / rhs_period)
 
 
 def observation_noise(sensing: Sensing, rhs_period: float, sample_period: float,

@@ -1,7 +1,8 @@
 """``dacph verify``: the paper's Lyapunov claims checked on a DAC run; ``ok`` is False
 when any fails.
 
-1. LHS: V = s^T M s / 2 inside its envelope wherever ||e_tau|| <= chi (lyapunov_envelope).
+1. LHS: V = s^T M s / 2 inside its envelope wherever ||e_tau|| <= chi (lyapunov_envelope);
+   with noisy sensors (planar task) V at the true state, the noise a bounded input.
 2. RHS (rhs_loop): at every learner update, the discrete loop with B_hat, K, h and the
    observer's delay (spectral radius with margin, P > 0, DIC, time-scale separation),
    and with the truth's B~ at every logged sample; with credible intervals, every B of
@@ -212,10 +213,13 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
     t, rhs, R = logs["time"], logs["rhs_log"], RhsLog(n)
     e_norm, chi = rhs[:, R.e_norm], rhs[:, R.chi]
 
-    # The learner's excitation tau_pe enters the s dynamics as a known input.
+    # The learner's excitation tau_pe enters the s dynamics as a known input, and with
+    # noisy sensors the command's error as a bounded one (LhsSide.command_error; V
+    # then the true state's).
     excitation_norm = float(np.linalg.norm(scenario.excitation.Amplitudes(n)))
+    input_bound = excitation_norm + lhs.command_error
     envelope = check_envelope(t, lhs.V, e_norm, chi, lhs.constants,
-                              excitation_norm=excitation_norm)
+                              excitation_norm=input_bound)
     per_update = max(1, int(round(scenario.periods.learner / scenario.periods.log)))
     learned = _rhs_series(logs, scenario, lhs.lambda_lhs, "estimates", per_update)
     truth = _rhs_series(logs, scenario, lhs.lambda_lhs, "true_matrices", 1)
@@ -246,11 +250,12 @@ def verify_logs(logs: Dict[str, np.ndarray], scenario: Scenario, run_meta: Dict,
               "estimates_rejected_by_the_integrator": estimates,
               "settings": {"stability_margin": STABILITY_MARGIN, "Td": scenario.rhs.Td,
                            "excitation_norm": excitation_norm,
+                           "command_error": lhs.command_error,
                            "lambda_lhs": lhs.lambda_lhs,
                            "rhs_period": scenario.periods.rhs, **lhs.settings}}
     if out_dir is not None:
         _write(report, out_dir, t, lhs.V, e_norm, chi, learned, truth,
-               lhs.constants, excitation_norm)
+               lhs.constants, input_bound)
     return report
 
 
@@ -276,18 +281,16 @@ def verify_run(run_dir: Union[str, Path], out_dir: Optional[Union[str, Path]] = 
                        region_budget)
 
 
-def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants,
-           excitation_norm):
+def _write(report, out_dir, t, V, e_norm, chi, learned, truth, constants, input_bound):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "verification.json").write_text(json.dumps(report, indent=2))
-    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants,
-                                   excitation_norm)
+    lower, upper = envelope_bounds(V, np.diff(t), e_norm, chi, constants, input_bound)
     fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     axes[0].semilogy(t, np.maximum(V, 1e-30), "k-", lw=0.8, label="V = s^T M s / 2")
     axes[0].semilogy(t[1:], np.maximum(upper, 1e-30), "C3--", lw=0.6,
                      label=f"upper bound (rate {constants.rate_slow:.3g} 1/s, "
-                           "halved with excitation)")
+                           "halved with an input)")
     axes[0].set_ylabel("V [J]")
     axes[0].legend(fontsize=7)
     for series, label, style in [(learned, "loop with learned B_hat", "C0."),

@@ -14,6 +14,7 @@ from dacph_drake.dynamics.floating_model import FloatingBaseModel, arm_joints
 from dacph_drake.dynamics.inertial_parameters import PER_BODY, InertialParameters
 from dacph_drake.dynamics.kinematic_tree import KinematicTree
 from dacph_drake.dynamics.plant import AddClonedArms
+from dacph_drake.dynamics.sensor_noise import state_noise
 from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_one_of, require_positive)
 from dacph_drake.robots.clearance_potential import BaseClearancePotential
@@ -361,7 +362,8 @@ class DescribedRobot:
             settings=first.inertia, period=first.periods.learner_sample,
             error_period=first.periods.learner,
             seeds=[trial.scenario.seed for trial in trials],
-            measured_masses=[trial.MeasuredMasses() for trial in trials])
+            measured_masses=[trial.MeasuredMasses() for trial in trials],
+            noise=state_noise(first.sensing, first.periods.rhs))
 
     def BasePotential(self) -> Optional[BaseClearancePotential]:
         """The link-base clearance potential of the model (None with a zero gain)."""

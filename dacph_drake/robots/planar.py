@@ -10,6 +10,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from dacph_drake.dynamics.plant import AddFreeFloatingArms, MakeArmPlant
 from dacph_drake.dynamics.reduced_model import ReducedOrderModel, mass_matrix_bounds
+from dacph_drake.dynamics.sensor_noise import state_noise
 from dacph_drake.scenario.errors import ConfigError, require_in_range, require_positive
 from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.robots.robot import require_clear_start
@@ -193,7 +194,8 @@ class PlanarRobot:
             plants=[t.model.plant for t in trials], settings=scenario.inertia,
             period=scenario.periods.learner_sample,
             error_period=scenario.periods.learner, seeds=[t.scenario.seed for t in trials],
-            measured_masses=[t.MeasuredMasses() for t in trials])
+            measured_masses=[t.MeasuredMasses() for t in trials],
+            noise=state_noise(scenario.sensing, scenario.periods.rhs))
 
     def LimitViolation(self) -> Optional[Callable[[np.ndarray], Optional[str]]]:
         """The check of the robot's position limits: None (the joints turn freely)."""

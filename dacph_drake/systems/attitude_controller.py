@@ -195,6 +195,28 @@ class AttitudeController(LeafSystem):
         discrete_state.set_value(self._model_index, np.concatenate(models))
         discrete_state.set_value(self._log_index, np.concatenate(logs))
 
+    def Control(self, t: float, base_pose: np.ndarray, base_velocity: np.ndarray,
+                q: np.ndarray, qdot: np.ndarray, chi: float, trial: int = 0,
+                inertial_parameters: Optional[np.ndarray] = None
+                ) -> Tuple[np.ndarray, np.ndarray]:
+        """(tau_c^r [N m] (n), the log) of one trial at one state, as an update computes
+        them (with ``inertial_parameters``, the trial's model takes them first).
+
+        Args:
+            t: The time [s].
+            base_pose: The base's pose (quaternion w, x, y, z; position) (7).
+            base_velocity: The base's twist (omega_W, v_W) (6).
+            q: The joint angles [rad] (n).
+            qdot: The joint rates [rad/s] (n).
+            chi: The RHS loop's bound chi [N m].
+            trial: The trial's index in the batch.
+            inertial_parameters: The model's inertias (None: as they are)."""
+        if inertial_parameters is not None:
+            self._trials[trial].model.SetInertialParameters(inertial_parameters)
+        tau, _, _, log = self._Update(self._trials[trial], trial, t, base_pose,
+                                      base_velocity, q, qdot, chi)
+        return tau, log
+
     def _Update(self, trial: AttitudeTrial, i: int, t, base_pose, base_velocity, q,
                 qdot, chi):
         """One trial's (tau, M, C', attitude log) (class docstring)."""

@@ -8,10 +8,11 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.dynamics.inertial_parameters import (
-    MASS, PER_BODY, InertialParameters, identify_parameters, mass_anchor, momentum_misfit,
-    prior_scales)
+    MASS, PER_BODY, InertialParameters, compensated_information, identify_parameters,
+    mass_anchor, momentum_misfit, prior_scales)
 from dacph_drake.dynamics.model_error import ModelErrorEnsemble
 from dacph_drake.dynamics.plant import ArmCoordinates
+from dacph_drake.dynamics.sensor_noise import StateNoise, base_rate_columns
 from dacph_drake.dynamics.tree_stack import TreeStack, positive_definite
 from dacph_drake.scenario import InertiaIdentification
 
@@ -48,13 +49,16 @@ class InertialIdentifier(LeafSystem):
         seeds: Each trial's seed (its draws of plausible models).
         priors: Each trial's prior pi0, or None for the plant's own inertias.
         measured_masses: Each trial's measured (total, base) mass [kg] of its ground truth
-            (the anchor when settings.anchor_mass is 0)."""
+            (the anchor when settings.anchor_mass is 0).
+        noise: The noise on each reading of the measured state (the draws that measure E
+            read it too; ModelErrorEnsemble)."""
 
     def __init__(self, *, plants: Sequence[MultibodyPlant],
                  settings: InertiaIdentification, period: float,
                  error_period: float, seeds: Sequence[int],
                  priors: Optional[Sequence[np.ndarray]] = None,
-                 measured_masses: Optional[Sequence[Sequence[float]]] = None):
+                 measured_masses: Optional[Sequence[Sequence[float]]] = None,
+                 noise: StateNoise = StateNoise()):
         super().__init__()
         priors = [None] * len(plants) if priors is None else priors
         self._trees = TreeStack(plants)
@@ -65,7 +69,7 @@ class InertialIdentifier(LeafSystem):
                                                                   strict=True)])
         self._scales = np.array([prior_scales(self.parameters, prior)
                                  for prior in self._priors])
-        self._settings = settings
+        self._settings, self._period = settings, period
         count, size = len(plants), self.parameters.size
         self._anchor, self._anchor_value = self._Anchor(settings, measured_masses, count)
         c = ArmCoordinates.FromPlant(plants[0])
@@ -75,6 +79,16 @@ class InertialIdentifier(LeafSystem):
         self._q = self.DeclareVectorInputPort("q", c.num_joints * count)
         self._qdot = self.DeclareVectorInputPort("qdot", c.num_joints * count)
         self._information = self.DeclareDiscreteState(size * size * count)
+        self._noise, self._rate_columns = noise, base_rate_columns(len(c.base_v))
+        # The noise's expected share of the information (TreeStack.AddNoiseInformation).
+        self._noise_information = (self.DeclareDiscreteState(size * size * count)
+                                   if noise.Any() else None)
+        # With noisy sensors: each trial's latest identified parameters, and those the
+        # draws last put within the nominal's error (else the nominal): the candidates.
+        self._identified = (self.DeclareDiscreteState(self._priors.reshape(-1))
+                            if noise.Any() else None)
+        self._approved = (self.DeclareDiscreteState(self._priors.reshape(-1))
+                          if noise.Any() else None)
         self._estimate = self.DeclareDiscreteState(self._priors.reshape(-1))
         # Per trial [number of the model, the estimate that began it].
         self._epoch = self.DeclareDiscreteState(np.concatenate(
@@ -92,10 +106,13 @@ class InertialIdentifier(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateEstimate)
         self._ensemble = ModelErrorEnsemble(
             plants=plants, settings=settings, priors=self._priors, scales=self._scales,
-            anchor=self._anchor, anchor_values=self._anchor_value, seeds=seeds)
+            anchor=self._anchor, anchor_values=self._anchor_value, seeds=seeds,
+            noise=noise, period=period)
         self._ensemble_information = (self.DeclareDiscreteState(
             size * size * self._ensemble.members) if self._ensemble.own_information
             else None)
+        self._ensemble_bias = (self.DeclareDiscreteState(
+            self._ensemble.InitialBias().reshape(-1)) if noise.Any() else None)
         n = c.num_joints
         self._model_error = self.DeclareDiscreteState(
             np.full(count * n * n, settings.nominal_tolerance))
@@ -115,10 +132,19 @@ class InertialIdentifier(LeafSystem):
         self._trees.AddInformation(base_pose, base_velocity, q, qdot, information)
         discrete_state.get_mutable_vector(self._information).SetFromVector(
             information.reshape(-1))
+        noise_information = self._AddNoiseInformation(context, discrete_state, t,
+                                                      base_pose, q)
         if self._ensemble_information is not None:
             drawn = context.get_discrete_state(self._ensemble_information).get_value(
                 ).reshape(self._ensemble.members, -1).copy()
-            self._ensemble.AddInformation(base_pose, base_velocity, q, qdot, drawn)
+            bias = None
+            if self._ensemble_bias is not None:
+                bias = context.get_discrete_state(self._ensemble_bias).get_value(
+                    ).reshape(self._ensemble.members, -1).copy()
+            self._ensemble.AddInformation(base_pose, base_velocity, q, qdot, drawn, bias)
+            if bias is not None:
+                discrete_state.get_mutable_vector(self._ensemble_bias).SetFromVector(
+                    bias.reshape(-1))
             discrete_state.get_mutable_vector(self._ensemble_information).SetFromVector(
                 drawn.reshape(-1))
         if t < settings.start:
@@ -128,6 +154,9 @@ class InertialIdentifier(LeafSystem):
         epochs = context.get_discrete_state(self._epoch).get_value().reshape(
             count, -1).copy()
         information = information.reshape(count, size, size)
+        if noise_information is not None:
+            information = compensated_information(information, noise_information,
+                                                  self._Readings(t))
         candidates = identify_parameters(information, self._priors, self._scales,
                                          settings.prior_weight, self._anchor,
                                          self._anchor_value)
@@ -139,6 +168,11 @@ class InertialIdentifier(LeafSystem):
             status[:, 2] = np.maximum(status[:, 2], status[:, 1] > settings.fit_tolerance)
         if settings.on_mismatch == "nominal":
             candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
+        if self._identified is not None:
+            discrete_state.get_mutable_vector(self._identified).SetFromVector(
+                candidates.reshape(-1))
+            candidates = context.get_discrete_state(self._approved).get_value().reshape(
+                count, -1)
         M = self._trees.ReducedMassMatrices(candidates, q)
         usable = positive_definite(M) & np.all(candidates[:, MASS::PER_BODY] > 0, axis=1)
         estimates[usable] = candidates[usable]
@@ -157,18 +191,60 @@ class InertialIdentifier(LeafSystem):
             estimates.reshape(-1))
         discrete_state.get_mutable_vector(self._epoch).SetFromVector(epochs.reshape(-1))
 
+    def _AddNoiseInformation(self, context, discrete_state, t, base_pose, q
+                             ) -> Optional[np.ndarray]:
+        """Adds this reading's noise information (state in place); the trials' sums
+        (trials, p, p), or None with noiseless sensors. The gyro's bias counts as noise
+        of its variance, gyro_bias^2 + gyro_bias_walk^2 t."""
+        if self._noise_information is None:
+            return None
+        count, size, noise = len(self._priors), self.parameters.size, self._noise
+        sums = context.get_discrete_state(self._noise_information).get_value().reshape(
+            count, -1).copy()
+        self._trees.AddNoiseInformation(
+            base_pose, q, self._base_velocity.size() // count, self._rate_columns,
+            noise.base_rate ** 2 + noise.gyro_bias ** 2 + noise.gyro_bias_walk ** 2 * t,
+            noise.joint_rate ** 2, sums)
+        discrete_state.get_mutable_vector(self._noise_information).SetFromVector(
+            sums.reshape(-1))
+        return sums.reshape(count, size, size)
+
+    def _Readings(self, t: float) -> int:
+        """The samples the information holds after the update at t [s] (one per period
+        from t = 0)."""
+        return int(round(t / self._period)) + 1
+
     def _UpdateModelError(self, context, discrete_state):
         count, size = len(self._priors), self.parameters.size
+        stop = self._settings.start + self._settings.duration
         q = self._q.Eval(context).reshape(count, -1)
         state = (self._ensemble_information if self._ensemble_information is not None
                  else self._information)
         information = context.get_discrete_state(state).get_value().reshape(
             -1, size, size)
-        estimates = context.get_discrete_state(self._estimate).get_value().reshape(
+        if self._noise_information is None:
+            estimates = context.get_discrete_state(self._estimate).get_value().reshape(
+                count, -1)
+            sd = self._ensemble.ErrorSd(information,
+                                        self._trees.ReducedMassMatrices(estimates, q), q)
+            discrete_state.get_mutable_vector(self._model_error).SetFromVector(
+                sd.reshape(-1))
+            return
+        # Noisy sensors: the latest identified parameters' error; they are approved (the
+        # estimate's candidates until the next check) where it is within the nominal's
+        # stated tolerance (nominal_tolerance) in every entry, else the nominal is.
+        identified = context.get_discrete_state(self._identified).get_value().reshape(
             count, -1)
-        sd = self._ensemble.ErrorSd(information,
-                                    self._trees.ReducedMassMatrices(estimates, q), q)
-        discrete_state.get_mutable_vector(self._model_error).SetFromVector(sd.reshape(-1))
+        sd = self._ensemble.ErrorSd(
+            information, self._trees.ReducedMassMatrices(identified, q), q,
+            context.get_discrete_state(self._noise_information).get_value().reshape(
+                count, size, size),
+            self._Readings(min(context.get_time(), stop)))
+        trusted = np.all(sd <= self._settings.nominal_tolerance, axis=(1, 2))
+        discrete_state.get_mutable_vector(self._approved).SetFromVector(np.where(
+            trusted[:, None], identified, self._priors).reshape(-1))
+        discrete_state.get_mutable_vector(self._model_error).SetFromVector(np.where(
+            trusted[:, None, None], sd, self._settings.nominal_tolerance).reshape(-1))
 
     def _Anchor(self, settings, measured_masses, count):
         """Each trial's anchor (constraint vector, value); (None, None): the model's."""

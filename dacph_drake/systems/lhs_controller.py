@@ -1,7 +1,7 @@
 """LHS model-based controller: Slotine-Li sliding mode with a null-space potential
 field (paper section "LHS Model-Based Control", docs/equations.md E20-E25, E41)."""
 from dataclasses import dataclass
-from typing import Sequence, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 from pydrake.systems.framework import LeafSystem
@@ -108,7 +108,9 @@ class LhsController(LeafSystem):
         self.DeclareInitializationDiscreteUpdateEvent(self._UpdateControl)
 
     def Control(self, t: float, theta0: float, q: np.ndarray, qdot: np.ndarray,
-                chi: float, trial: int = 0) -> Tuple[np.ndarray, np.ndarray]:
+                chi: float, trial: int = 0,
+                inertial_parameters: Optional[np.ndarray] = None
+                ) -> Tuple[np.ndarray, np.ndarray]:
         """(tau_c^r [N m] (n), lhs_log (log_layout.LhsLog)) of one trial at one state.
 
         Args:
@@ -117,10 +119,15 @@ class LhsController(LeafSystem):
             q: The joint angles [rad] (n).
             qdot: The joint rates [rad/s] (n).
             chi: The RHS loop's bound chi [N m].
-            trial: The trial's index in the batch."""
+            trial: The trial's index in the batch.
+            inertial_parameters: The model's inertias (built with ``identify``; None:
+                the nominal model's)."""
+        coefficients = self._coefficients[trial:trial + 1]
+        if inertial_parameters is not None:
+            coefficients = np.einsum("p,per->er", inertial_parameters,
+                                     self._coefficient_bases[trial])[None]
         tau, log, model = lhs_samples(
-            t, np.array([theta0]), q, qdot, np.array([chi]),
-            self._coefficients[trial:trial + 1],
+            t, np.array([theta0]), q, qdot, np.array([chi]), coefficients,
             self._packs[self._offsets[trial]:self._offsets[trial + 1]],
             np.array([0, self._offsets[trial + 1] - self._offsets[trial]]))
         return tau, self._Log(log, model)

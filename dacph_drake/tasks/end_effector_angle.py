@@ -9,12 +9,13 @@ from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
 from dacph_drake.scenario.errors import (ConfigError, require_in_range, require_nonnegative,
                                 require_positive)
-from dacph_drake.log_layout import LhsLog
+from dacph_drake.log_layout import LhsLog, RhsLog
 from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.scenario import EndEffectorAngle, Excitation, Periods
 from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
                                                 boundary_layer_per_chi)
+from dacph_drake.systems.sensors import measures_nothing
 from dacph_drake.dynamics.reference import OrientationReference
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.task import LhsSide, TaskSignals
@@ -87,11 +88,21 @@ class EndEffectorAngleTask:
 
         Returns:
             System name -> system."""
-        scenario, builder = trials[0].scenario, controller.builder
+        builder = controller.builder
         systems = ({"inertial_identifier": builder.AddNamedSystem(
             "inertial_identifier", type(trials[0]).MakeInertialIdentifier(trials))}
             if identify else {})
-        lhs = builder.AddNamedSystem(self.lhs_name, LhsController(
+        lhs = builder.AddNamedSystem(self.lhs_name, self._LhsController(
+            trials, excitation, identify))
+        for signal in ("base_pose", "q", "qdot"):
+            controller.Input(lhs.GetInputPort(signal), signal)
+        return {self.lhs_name: lhs, **systems}
+
+    def _LhsController(self, trials: Sequence[Robot], excitation: Excitation,
+                       identify: bool) -> LhsController:
+        """The trials' LhsController (each trial's potential and reference)."""
+        scenario = trials[0].scenario
+        return LhsController(
             trials=[LhsTrial(
                 model=t.model, potential=BaseRepulsionPotential(
                     t.scenario.robot.nominal, t.scenario.robot.potential),
@@ -99,10 +110,27 @@ class EndEffectorAngleTask:
                                                float(np.sum(t.scenario.q0))),
                 lambda_min_M=self.GainRuleRates(t)[1]) for t in trials],
             gains=scenario.task.gains, period=scenario.periods.lhs,
-            excitation=excitation, identify=identify))
-        for signal in ("base_pose", "q", "qdot"):
-            controller.Input(lhs.GetInputPort(signal), signal)
-        return {self.lhs_name: lhs, **systems}
+            excitation=excitation, identify=identify)
+
+    def _AtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
+                    ) -> Tuple[np.ndarray, float]:
+        """(V at the true state at every logged sample [J], LhsSide.command_error [N m]):
+        the LHS recomputed at the ground truth's logged state with the run's chi and
+        identified inertias, against the request it holds, computed from its
+        measurements up to one LHS period earlier."""
+        scenario, n = robot.scenario, robot.num_joints
+        identified = "inertial_parameters" in logs
+        lhs = self._LhsController([robot], scenario.excitation, identified)
+        base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
+        chi = logs["rhs_log"][:, RhsLog(n).chi]
+        V, noise = np.empty(len(q)), np.empty(len(q))
+        for k, t in enumerate(logs["time"]):
+            tau, log = lhs.Control(t, base_pose[k, 2], q[k], qdot[k], chi[k],
+                                   inertial_parameters=(logs["inertial_parameters"][k]
+                                                        if identified else None))
+            V[k] = log[LhsLog(n).lyapunov_V]
+            noise[k] = np.linalg.norm(logs["tau_request"][k] - tau)
+        return V, float(np.max(noise))
 
     def Signals(self, robot: Robot, logs: Dict[str, np.ndarray]) -> TaskSignals:
         """(alpha~ [rad], s, the truth's kinematic clearance [m], theta0 - theta0(0)).
@@ -128,7 +156,9 @@ class EndEffectorAngleTask:
 
     def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
                   ) -> LhsSide:
-        """The envelope and eq. (45) on the nominal and identified models' inertia bounds.
+        """The envelope and eq. (45) on the nominal and identified models' inertia bounds;
+        with sensors that measure anything, on V at the true state with their noise a
+        bounded input (_AtTheTruth).
 
         Args:
             robot: The trial's PlanarRobot.
@@ -148,8 +178,11 @@ class EndEffectorAngleTask:
         # The boundary layer as the controller built it, from the nominal robot's bound.
         layer_per_chi = boundary_layer_per_chi(gains, bounds[0, 0])
         L = LhsLog(n)
+        V, command_error = logs[self.log_name][:, L.lyapunov_V], 0.0
+        if scenario.sensing.enabled and not measures_nothing(scenario.sensing):
+            V, command_error = self._AtTheTruth(robot, logs)
         return LhsSide(
-            V=logs[self.log_name][:, L.lyapunov_V],
+            V=V, command_error=command_error,
             s0_norm=float(np.linalg.norm(logs[self.log_name][0, L.s])),
             constants=EnvelopeConstants.ForConstantDamping(
                 Kd, Kd, lambda_min_M, lambda_max_M, epsilon, n, layer_per_chi),

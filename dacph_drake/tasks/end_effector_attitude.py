@@ -7,12 +7,13 @@ import numpy as np
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
-from dacph_drake.log_layout import AttitudeLog
+from dacph_drake.log_layout import AttitudeLog, RhsLog
 from dacph_drake.robots.described import DescribedRobot
 from dacph_drake.robots.start_pose import ATTITUDE_ROWS, task_singularity
 from dacph_drake.scenario import (AttitudeGains, AttitudeReference, EndEffectorAttitude,
                                   Excitation, Periods)
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
+from dacph_drake.systems.sensors import measures_nothing
 from dacph_drake.robots.robot import Robot
 from dacph_drake.tasks.task import LhsSide, TaskSignals
 
@@ -201,9 +202,34 @@ class EndEffectorAttitudeTask:
                                                             axis=1)))
                                        if "saturated" in logs and len(t) else nan)}
 
+    def _AtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
+                    ) -> Tuple[np.ndarray, float]:
+        """(V at the true state at every logged sample [J], LhsSide.command_error [N m]):
+        the LHS recomputed (on a fresh model) at the ground truth's logged state with
+        the run's chi and identified inertias, against the request it holds, computed
+        from its measurements up to one LHS period earlier."""
+        scenario, n = robot.scenario, robot.num_joints
+        identified = "inertial_parameters" in logs
+        lhs = self.Controller([type(robot)(scenario, self)], scenario.excitation,
+                              identified)
+        base_pose, q, base_velocity, qdot = ArmCoordinates.FromPlant(
+            robot.model.plant).Split(logs["state"])
+        chi = logs["rhs_log"][:, RhsLog(n).chi]
+        V, error = np.empty(len(q)), np.empty(len(q))
+        for k, t in enumerate(logs["time"]):
+            tau, log = lhs.Control(t, base_pose[k], base_velocity[k], q[k], qdot[k],
+                                   chi[k], inertial_parameters=(
+                                       logs["inertial_parameters"][k] if identified
+                                       else None))
+            V[k] = log[AttitudeLog().lyapunov_V]
+            error[k] = np.linalg.norm(logs["tau_request"][k] - tau)
+        return V, float(np.max(error))
+
     def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
                   ) -> LhsSide:
-        """The inertia-scaled envelope (ForInertiaScaled), the moving-configuration region.
+        """The inertia-scaled envelope (ForInertiaScaled), the moving-configuration region;
+        with sensors that measure anything, on V at the true state with their noise a
+        bounded input (_AtTheTruth).
 
         Args:
             robot: The trial's DescribedRobot.
@@ -224,8 +250,11 @@ class EndEffectorAttitudeTask:
         max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
             float(np.max(np.diag(m.MassMatrix(q)))) for q in samples for m in models)
         L, log = AttitudeLog(), logs[self.log_name]
+        V, command_error = log[:, L.lyapunov_V], 0.0
+        if scenario.sensing.enabled and not measures_nothing(scenario.sensing):
+            V, command_error = self._AtTheTruth(robot, logs)
         return LhsSide(
-            V=log[:, L.lyapunov_V], s0_norm=float(log[0, L.s_norm]),
+            V=V, command_error=command_error, s0_norm=float(log[0, L.s_norm]),
             constants=EnvelopeConstants.ForInertiaScaled(
                 gains.damping_rate, lambda_min_M, max_diagonal_M, gains.epsilon,
                 gains.boundary_rate, n),

@@ -34,13 +34,18 @@ class LhsSide:
         constants: The envelope's lyapunov_envelope.EnvelopeConstants.
         lambda_lhs: lambda_LHS of eq. (45) [1/s].
         region: The region-of-attraction certificate at q0.
-        settings: The LHS's settings, for the report."""
+        settings: The LHS's settings, for the report.
+        command_error: The largest ||tau_c^r as commanded - tau_c^r at the true state||
+            over the logged samples [N m]: what the sensors' noise and the command's
+            hold over an LHS period put on the true s dynamics, the envelope's bounded
+            input with V at the true state (0: V as the LHS measured it)."""
     V: np.ndarray
     s0_norm: float
     constants: object
     lambda_lhs: float
     region: object
     settings: Dict
+    command_error: float = 0.0
 
 
 class Task(Protocol):
