@@ -195,23 +195,33 @@ def test_a_region_beyond_its_budget_is_skipped_with_the_reason(quick_reproductio
     assert main(["verify", str(run_dir), "--region-budget", "0"]) == 2
 
 
-def test_with_noisy_sensors_the_envelope_holds_at_the_true_state():
-    """The planar LHS recomputed at the ground truth's logged state: at t = 0, where the
-    LHS initialized on the truth (the sensors pass it until they have sampled), it is the
-    LHS's own logged V to round-off; after, V at the true state differs from the measured
-    one, and the command's error (the sensors' noise and the hold) bounds the envelope's
-    input, inside which V stays. With the sensors off V is the LHS's own log."""
+@pytest.mark.parametrize("name", ["short", "sweeps/satellite_3dof_spacecraft.yaml"])
+def test_with_noisy_sensors_the_envelope_holds_at_the_true_state(name):
+    """The LHS recomputed at the ground truth's logged state (the planar and the spatial
+    task): at t = 0, where the LHS initialized on the truth (the sensors pass it until
+    they have sampled), it is the LHS's own logged V to round-off; after, V at the true
+    state differs from the measured one, and the command's error (the sensors' noise and
+    the hold) bounds the envelope's input, inside which V stays. With the sensors off V
+    is the LHS's own log."""
     from dacph_drake.assembly.registry import robot_of
-    from dacph_drake.log_layout import LhsLog
+    from dacph_drake.assembly.scenario_files import load_scenario
+    from dacph_drake.log_layout import AttitudeLog, LhsLog
+    from dacph_drake.scenario import Sensing
     from dacph_drake.scenario.built_in import spacecraft_sensing
-    scenario = short_scenario()
-    scenario.phases = Phases(warmup=0.2, linear=0.4, nonlinear=0.4, disturbance=0.4)
-    plain = simulate(scenario, "dac")
-    scenario.sensing = spacecraft_sensing()
-    run = simulate(scenario, "dac")
+    scenarios = []
+    for sensing in (Sensing(), spacecraft_sensing()):
+        scenario = load_scenario(name)
+        scenario.phases = Phases(warmup=0.3, linear=0.4, nonlinear=0.4, disturbance=0.4)
+        scenario.inertia.fit_tolerance = 0.0
+        scenario.sensing = sensing
+        scenarios.append(scenario)
+    plain, run = (simulate(scenario, "dac") for scenario in scenarios)
+    assert run.status == "ok"
     robot = robot_of(scenario)
+    column = (LhsLog(robot.num_joints) if robot.task.log_name == "lhs_log"
+              else AttitudeLog()).lyapunov_V
     side = robot.task.VerifyLhs(robot, run.logs, 0.0)
-    logged = run.logs["lhs_log"][:, LhsLog(2).lyapunov_V]
+    logged = run.logs[robot.task.log_name][:, column]
     assert side.V[0] == pytest.approx(logged[0], rel=1e-9)
     assert not np.allclose(side.V[1:], logged[1:], rtol=1e-3)
     assert side.command_error > 0
@@ -219,7 +229,6 @@ def test_with_noisy_sensors_the_envelope_holds_at_the_true_state():
                          region_budget=0.0)
     assert report["checks"]["lhs_envelope"]["ok"]
     assert report["settings"]["command_error"] == side.command_error
-    off = robot_of(short_scenario()).task.VerifyLhs(robot_of(short_scenario()),
-                                                    plain.logs, 0.0)
+    off = robot.task.VerifyLhs(robot_of(scenarios[0]), plain.logs, 0.0)
     assert off.command_error == 0.0
-    np.testing.assert_array_equal(off.V, plain.logs["lhs_log"][:, LhsLog(2).lyapunov_V])
+    np.testing.assert_array_equal(off.V, plain.logs[robot.task.log_name][:, column])
