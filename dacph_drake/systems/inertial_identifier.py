@@ -231,7 +231,7 @@ class InertialIdentifier(LeafSystem):
                 sd.reshape(-1))
             return
         # Noisy sensors: the latest identified parameters' error; they are approved (the
-        # estimate's candidates until the next check) where it is within the nominal's
+        # estimate's candidates until the next check) where it is below the nominal's
         # stated tolerance (nominal_tolerance) in every entry, else the nominal is.
         identified = context.get_discrete_state(self._identified).get_value().reshape(
             count, -1)
@@ -240,7 +240,8 @@ class InertialIdentifier(LeafSystem):
             context.get_discrete_state(self._noise_information).get_value().reshape(
                 count, size, size),
             self._Readings(min(context.get_time(), stop)))
-        trusted = np.all(sd <= self._settings.nominal_tolerance, axis=(1, 2))
+        # Strictly below: where no draw is usable ErrorSd gives the tolerance itself.
+        trusted = np.all(sd < self._settings.nominal_tolerance, axis=(1, 2))
         discrete_state.get_mutable_vector(self._approved).SetFromVector(np.where(
             trusted[:, None], identified, self._priors).reshape(-1))
         discrete_state.get_mutable_vector(self._model_error).SetFromVector(np.where(
