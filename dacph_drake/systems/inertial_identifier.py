@@ -34,6 +34,13 @@ class InertialIdentifier(LeafSystem):
     Every ``error_period`` it measures the LHS model's inertia error E = M_hat M~^-1 - I
     (dynamics.model_error.ModelErrorEnsemble): output ``model_error``, E's sd per entry.
 
+    With noisy sensors (``noise``, dynamics.sensor_noise) the noise's expected share of
+    A, Sigma = sum_k sum_j sigma_j^2 Y(x_k, e_j)^T Y(x_k, e_j) over the noisy rates j,
+    accumulates beside it, pi_hat is identified from compensated_information(A, Sigma),
+    and it replaces the nominal only where the draws (which read the noise again) put
+    E's sd below ``settings.nominal_tolerance`` in every entry, checked every
+    ``error_period``; elsewhere the LHS keeps the nominal and E's sd is that tolerance.
+
     Outputs ``identification_log`` = [total mass [kg], momentum misfit, mismatch (0/1)],
     ``inertial_parameters`` (pi0 until ``settings.start``, then pi_hat until
     ``settings.duration``; an estimate with mass <= 0 or an indefinite M is not used) and
