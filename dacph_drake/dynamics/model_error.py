@@ -14,8 +14,8 @@ from typing import Optional, Sequence
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 
-from dacph_drake.dynamics.inertial_parameters import (compensated_information, identify_draws,
-                                                      identify_parameters)
+from dacph_drake.dynamics.inertial_parameters import (
+    compensated_information, identify_draws, identify_parameters)
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.dynamics.sensor_noise import StateNoise, base_rate_columns
 from dacph_drake.dynamics.tree_stack import TreeStack, positive_definite
@@ -141,7 +141,8 @@ class ModelErrorEnsemble:
         q += noise.joint_angle * draws[:, :n]
         qdot += noise.joint_rate * draws[:, n:2 * n]
         bias += noise.gyro_bias_walk * np.sqrt(self._period) * draws[:, 2 * n:2 * n + axes]
-        base_velocity[:, self._rate_columns] += bias + noise.base_rate * draws[:, 2 * n + axes:]
+        base_velocity[:, self._rate_columns] += (bias
+                                                 + noise.base_rate * draws[:, 2 * n + axes:])
 
     def ErrorSd(self, information: np.ndarray, M_hat: np.ndarray, q: np.ndarray,
                 noise_information: Optional[np.ndarray] = None, readings: int = 1

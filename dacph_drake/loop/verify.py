@@ -2,7 +2,7 @@
 when any fails.
 
 1. LHS: V = s^T M s / 2 inside its envelope wherever ||e_tau|| <= chi (lyapunov_envelope);
-   with noisy sensors (planar task) V at the true state, the noise a bounded input.
+   with noisy sensors V at the true state, the command's error a bounded input.
 2. RHS (rhs_loop): at every learner update, the discrete loop with B_hat, K, h and the
    observer's delay (spectral radius with margin, P > 0, DIC, time-scale separation),
    and with the truth's B~ at every logged sample; with credible intervals, every B of

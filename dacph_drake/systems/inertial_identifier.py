@@ -223,7 +223,6 @@ class InertialIdentifier(LeafSystem):
 
     def _UpdateModelError(self, context, discrete_state):
         count, size = len(self._priors), self.parameters.size
-        stop = self._settings.start + self._settings.duration
         q = self._q.Eval(context).reshape(count, -1)
         state = (self._ensemble_information if self._ensemble_information is not None
                  else self._information)
@@ -246,7 +245,8 @@ class InertialIdentifier(LeafSystem):
             information, self._trees.ReducedMassMatrices(identified, q), q,
             context.get_discrete_state(self._noise_information).get_value().reshape(
                 count, size, size),
-            self._Readings(min(context.get_time(), stop)))
+            self._Readings(min(context.get_time(),
+                               self._settings.start + self._settings.duration)))
         # Strictly below: where no draw is usable ErrorSd gives the tolerance itself.
         trusted = np.all(sd < self._settings.nominal_tolerance, axis=(1, 2))
         discrete_state.get_mutable_vector(self._approved).SetFromVector(np.where(

@@ -9,16 +9,16 @@ from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.dynamics.reduced_model import mass_matrix_bounds
 from dacph_drake.scenario.errors import (ConfigError, require_in_range, require_nonnegative,
                                 require_positive)
-from dacph_drake.log_layout import LhsLog, RhsLog
+from dacph_drake.log_layout import LhsLog
 from dacph_drake.dynamics.base_repulsion import BaseRepulsionPotential
 from dacph_drake.robots.planar import PlanarRobot
 from dacph_drake.scenario import EndEffectorAngle, Excitation, Periods
 from dacph_drake.systems.lhs_controller import (LhsController, LhsTrial,
                                                 boundary_layer_per_chi)
-from dacph_drake.systems.sensors import measures_nothing
 from dacph_drake.dynamics.reference import OrientationReference
 from dacph_drake.robots.robot import Robot
-from dacph_drake.tasks.task import LhsSide, TaskSignals
+from dacph_drake.tasks.task import (ControlAtTheTruth, LhsSide, TaskSignals,
+                                    lyapunov_at_the_truth)
 
 
 class EndEffectorAngleTask:
@@ -112,25 +112,16 @@ class EndEffectorAngleTask:
             gains=scenario.task.gains, period=scenario.periods.lhs,
             excitation=excitation, identify=identify)
 
-    def _AtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
-                    ) -> Tuple[np.ndarray, float]:
-        """(V at the true state at every logged sample [J], LhsSide.command_error [N m]):
-        the LHS recomputed at the ground truth's logged state with the run's chi and
-        identified inertias, against the request it holds, computed from its
-        measurements up to one LHS period earlier."""
-        scenario, n = robot.scenario, robot.num_joints
-        identified = "inertial_parameters" in logs
-        lhs = self._LhsController([robot], scenario.excitation, identified)
-        base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(n).Split(logs["state"])
-        chi = logs["rhs_log"][:, RhsLog(n).chi]
-        V, noise = np.empty(len(q)), np.empty(len(q))
-        for k, t in enumerate(logs["time"]):
-            tau, log = lhs.Control(t, base_pose[k, 2], q[k], qdot[k], chi[k],
-                                   inertial_parameters=(logs["inertial_parameters"][k]
-                                                        if identified else None))
-            V[k] = log[LhsLog(n).lyapunov_V]
-            noise[k] = np.linalg.norm(logs["tau_request"][k] - tau)
-        return V, float(np.max(noise))
+    def _ControlAtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
+                           ) -> ControlAtTheTruth:
+        """The trial's LhsController at the ground truth's logged states."""
+        lhs = self._LhsController([robot], robot.scenario.excitation,
+                                  "inertial_parameters" in logs)
+        base_pose, q, _, qdot = ArmCoordinates.ForPlanarArm(robot.num_joints).Split(
+            logs["state"])
+        t = logs["time"]
+        return lambda k, chi, inertias: lhs.Control(
+            t[k], base_pose[k, 2], q[k], qdot[k], chi, inertial_parameters=inertias)
 
     def Signals(self, robot: Robot, logs: Dict[str, np.ndarray]) -> TaskSignals:
         """(alpha~ [rad], s, the truth's kinematic clearance [m], theta0 - theta0(0)).
@@ -158,7 +149,7 @@ class EndEffectorAngleTask:
                   ) -> LhsSide:
         """The envelope and eq. (45) on the nominal and identified models' inertia bounds;
         with sensors that measure anything, on V at the true state with their noise a
-        bounded input (_AtTheTruth).
+        bounded input (tasks.task.lyapunov_at_the_truth).
 
         Args:
             robot: The trial's PlanarRobot.
@@ -178,9 +169,9 @@ class EndEffectorAngleTask:
         # The boundary layer as the controller built it, from the nominal robot's bound.
         layer_per_chi = boundary_layer_per_chi(gains, bounds[0, 0])
         L = LhsLog(n)
-        V, command_error = logs[self.log_name][:, L.lyapunov_V], 0.0
-        if scenario.sensing.enabled and not measures_nothing(scenario.sensing):
-            V, command_error = self._AtTheTruth(robot, logs)
+        V, command_error = lyapunov_at_the_truth(
+            scenario, logs, L.lyapunov_V, logs[self.log_name][:, L.lyapunov_V],
+            lambda: self._ControlAtTheTruth(robot, logs))
         return LhsSide(
             V=V, command_error=command_error,
             s0_norm=float(np.linalg.norm(logs[self.log_name][0, L.s])),

@@ -7,15 +7,15 @@ import numpy as np
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.scenario.errors import (ConfigError, require_finite_numbers, require_in_range,
                                 require_nonnegative, require_positive)
-from dacph_drake.log_layout import AttitudeLog, RhsLog
+from dacph_drake.log_layout import AttitudeLog
 from dacph_drake.robots.described import DescribedRobot
 from dacph_drake.robots.start_pose import ATTITUDE_ROWS, task_singularity
 from dacph_drake.scenario import (AttitudeGains, AttitudeReference, EndEffectorAttitude,
                                   Excitation, Periods)
 from dacph_drake.systems.attitude_controller import AttitudeController, AttitudeTrial
-from dacph_drake.systems.sensors import measures_nothing
 from dacph_drake.robots.robot import Robot
-from dacph_drake.tasks.task import LhsSide, TaskSignals
+from dacph_drake.tasks.task import (ControlAtTheTruth, LhsSide, TaskSignals,
+                                    lyapunov_at_the_truth)
 
 SETTLING_TIME = 1.0             # [s] left out of the steady-state error metrics
 # Configurations sampled for sup_q max_i M_ii in VerifyLhs, and the margin on the
@@ -202,34 +202,24 @@ class EndEffectorAttitudeTask:
                                                             axis=1)))
                                        if "saturated" in logs and len(t) else nan)}
 
-    def _AtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
-                    ) -> Tuple[np.ndarray, float]:
-        """(V at the true state at every logged sample [J], LhsSide.command_error [N m]):
-        the LHS recomputed (on a fresh model) at the ground truth's logged state with
-        the run's chi and identified inertias, against the request it holds, computed
-        from its measurements up to one LHS period earlier."""
-        scenario, n = robot.scenario, robot.num_joints
-        identified = "inertial_parameters" in logs
+    def _ControlAtTheTruth(self, robot: Robot, logs: Dict[str, np.ndarray]
+                           ) -> ControlAtTheTruth:
+        """The trial's controller, on a fresh model, at the ground truth's logged states."""
+        scenario = robot.scenario
         lhs = self.Controller([type(robot)(scenario, self)], scenario.excitation,
-                              identified)
+                              "inertial_parameters" in logs)
         base_pose, q, base_velocity, qdot = ArmCoordinates.FromPlant(
             robot.model.plant).Split(logs["state"])
-        chi = logs["rhs_log"][:, RhsLog(n).chi]
-        V, error = np.empty(len(q)), np.empty(len(q))
-        for k, t in enumerate(logs["time"]):
-            tau, log = lhs.Control(t, base_pose[k], base_velocity[k], q[k], qdot[k],
-                                   chi[k], inertial_parameters=(
-                                       logs["inertial_parameters"][k] if identified
-                                       else None))
-            V[k] = log[AttitudeLog().lyapunov_V]
-            error[k] = np.linalg.norm(logs["tau_request"][k] - tau)
-        return V, float(np.max(error))
+        t = logs["time"]
+        return lambda k, chi, inertias: lhs.Control(
+            t[k], base_pose[k], base_velocity[k], q[k], qdot[k], chi,
+            inertial_parameters=inertias)
 
     def VerifyLhs(self, robot: Robot, logs: Dict[str, np.ndarray], region_budget: float
                   ) -> LhsSide:
         """The inertia-scaled envelope (ForInertiaScaled), the moving-configuration region;
         with sensors that measure anything, on V at the true state with their noise a
-        bounded input (_AtTheTruth).
+        bounded input (tasks.task.lyapunov_at_the_truth).
 
         Args:
             robot: The trial's DescribedRobot.
@@ -250,9 +240,9 @@ class EndEffectorAttitudeTask:
         max_diagonal_M = (1 + DIAGONAL_MARGIN) * max(
             float(np.max(np.diag(m.MassMatrix(q)))) for q in samples for m in models)
         L, log = AttitudeLog(), logs[self.log_name]
-        V, command_error = log[:, L.lyapunov_V], 0.0
-        if scenario.sensing.enabled and not measures_nothing(scenario.sensing):
-            V, command_error = self._AtTheTruth(robot, logs)
+        V, command_error = lyapunov_at_the_truth(
+            scenario, logs, L.lyapunov_V, log[:, L.lyapunov_V],
+            lambda: self._ControlAtTheTruth(robot, logs))
         return LhsSide(
             V=V, command_error=command_error, s0_norm=float(log[0, L.s_norm]),
             constants=EnvelopeConstants.ForInertiaScaled(

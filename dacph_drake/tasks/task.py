@@ -1,13 +1,19 @@
 """The Task protocol: what an LHS controller tracks, beside the robot: its section, LHS
 system, log, panels, signals, metrics, part of the certificate and the robots it serves."""
 from dataclasses import dataclass
-from typing import Dict, NamedTuple, Protocol, Sequence, Tuple
+from typing import Callable, Dict, NamedTuple, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
-from dacph_drake.log_layout import LogColumns
+from dacph_drake.log_layout import LogColumns, RhsLog
 from dacph_drake.robots.robot import Robot
-from dacph_drake.scenario import Excitation, Periods
+from dacph_drake.scenario import Excitation, Periods, Scenario
+from dacph_drake.systems.sensors import measures_nothing
+
+# The LHS recomputed at the ground truth's k-th logged state with the run's chi [N m]
+# and identified inertias (None: the model's): (tau_c^r [N m], its log).
+ControlAtTheTruth = Callable[[int, float, Optional[np.ndarray]],
+                            Tuple[np.ndarray, np.ndarray]]
 
 
 class TaskSignals(NamedTuple):
@@ -46,6 +52,36 @@ class LhsSide:
     region: object
     settings: Dict
     command_error: float = 0.0
+
+
+def lyapunov_at_the_truth(scenario: Scenario, logs: Dict[str, np.ndarray],
+                          lyapunov_column: int, logged: np.ndarray,
+                          make_control: Callable[[], ControlAtTheTruth]
+                          ) -> Tuple[np.ndarray, float]:
+    """(V [J] at every logged sample, LhsSide.command_error [N m]) for the envelope:
+    ``logged`` (the LHS's own V) and 0 unless the sensors measure anything; then V of
+    the LHS recomputed at the ground truth's logged state (``make_control()``; its log's
+    ``lyapunov_column``) and the largest ||tau_c^r held - tau_c^r at the truth||, the
+    request it holds having been computed from its measurements up to one LHS period
+    earlier.
+
+    Args:
+        scenario: The run's scenario.
+        logs: The run's logs.
+        lyapunov_column: V's column in the recomputed log.
+        logged: The LHS's own V at every logged sample [J].
+        make_control: Builds the LHS at the truth (called only with noisy sensors)."""
+    if not scenario.sensing.enabled or measures_nothing(scenario.sensing):
+        return logged, 0.0
+    control = make_control()
+    chi = logs["rhs_log"][:, RhsLog(len(scenario.q0)).chi]
+    inertias = logs.get("inertial_parameters")
+    V, error = np.empty(len(chi)), np.empty(len(chi))
+    for k in range(len(chi)):
+        tau, log = control(k, chi[k], None if inertias is None else inertias[k])
+        V[k] = log[lyapunov_column]
+        error[k] = np.linalg.norm(logs["tau_request"][k] - tau)
+    return V, float(np.max(error))
 
 
 class Task(Protocol):
