@@ -1,5 +1,6 @@
 """The RHS gain rule (paper eqs. 45-48, docs/equations.md E45-E48) and its discrete-time
 realizability check."""
+from functools import lru_cache
 from typing import Tuple, Union
 
 import numpy as np
@@ -11,8 +12,8 @@ from dacph_drake.scenario import Periods
 # With the observer's one-sample delay the discrete RHS loop per mode is
 # z^2 - z + g = 0, g = h k_p lambda_p; its roots are real (well damped) for g <= 1/4.
 WELL_DAMPED_LOOP_GAIN = 0.25
-# A certified loop keeps its spectral radius at most 1 - STABILITY_MARGIN
-# (analysis.rhs_loop).
+# A certified loop without a delay or lag keeps its spectral radius at most
+# 1 - STABILITY_MARGIN (certified_radius; analysis.rhs_loop).
 STABILITY_MARGIN = 0.05
 
 
@@ -119,6 +120,41 @@ def well_damped_loop_gain(period: float, delay: int = 0, lag: float = 0.0) -> fl
     if delay == 0 and lag == 0:
         return WELL_DAMPED_LOOP_GAIN
     return best_damped_gain(period, delay, lag)[0]
+
+
+@lru_cache(maxsize=64)
+def certified_radius(period: float, delay: int = 0, lag: float = 0.0) -> float:
+    """The largest spectral radius the RHS loop's certificate allows, 1 - m: the margin
+    m is the share STABILITY_MARGIN / (1 - 1/2) of the best margin any loop gain gives,
+    1 - r* (best_damped_gain), so 1 - STABILITY_MARGIN without a delay or lag (r* = 1/2,
+    z^2 - z + 1/4) and the same tenth of the best with them. A margin per sample is not
+    the loop's to keep whatever the delay and lag: a first-order lag's own pole,
+    exp(-h / lag), is above 0.95 for a lag above 20 h, and no gain brings the loop's
+    radius below it; the rate the loop must keep is eq. 45's separation, checked beside.
+
+    Args:
+        period: The RHS period h [s].
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    if delay == 0 and lag == 0:
+        return 1.0 - STABILITY_MARGIN
+    best = best_damped_gain(period, delay, lag)[1]
+    return 1.0 - STABILITY_MARGIN / (1.0 - 0.5) * (1.0 - best)
+
+
+def separates_by_decay(delay: int = 0, lag: float = 0.0) -> bool:
+    """Whether the time-scale separation of eq. 45 is judged on the RHS loop's decay
+    rate, -ln(rho) / h >= Td lambda_LHS, rather than on sigma_RHS = min_p k_p
+    Re(lambda_p): with a delay or a lag. Eq. 45's sigma_RHS is the decay rate of the
+    continuous loop without them, and a lower bound of the discrete loop's there; with
+    a lag it is not the loop's rate (beyond the best-damped gain a larger k lambda
+    decays slower, the loop's roots turning complex), so the rate the separation asks
+    is asked of the loop itself.
+
+    Args:
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    return bool(delay or lag)
 
 
 def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:

@@ -7,16 +7,18 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
-from dacph_drake.analysis.rhs_loop import delayed_loop_matrix, largest_tolerated_delay
+from dacph_drake.analysis.rhs_loop import (check_rhs_loop, delayed_loop_matrix,
+                                           largest_tolerated_delay)
 from dacph_drake.assembly.scenario_files import load_scenario
 from dacph_drake.controllers.dac import build_dac_diagram
-from dacph_drake.gain_rule import best_damped_gain, lag_pole, loop_matrix
+from dacph_drake.gain_rule import (STABILITY_MARGIN, best_damped_gain, certified_radius,
+                                   lag_pole, loop_matrix, separates_by_decay)
 from dacph_drake.kernels.certificate import (box_certificate, certified_gains, lag_weight,
                                              mode_radius, roots_within)
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Sensing
 from dacph_drake.scenario.errors import ConfigError
-from dacph_drake.systems.sensors import Sensors
+from dacph_drake.systems.sensors import SEED_OFFSET, Sensors
 
 H = 2.5e-4
 
@@ -63,6 +65,87 @@ def test_the_best_damped_gain_is_a_quarter_without_delay_and_smaller_with_it():
         assert radius <= min(grid) + 1e-9
 
 
+def test_the_certified_radius_is_the_margin_per_sample_without_delay_or_lag():
+    """Without a delay or a lag the certificate's radius is 1 - STABILITY_MARGIN exactly
+    (every run without sensing keeps its certificate), a tenth of the best margin 1/2."""
+    for h in (H, 2 * H, 1e-3):
+        assert certified_radius(h) == 1.0 - STABILITY_MARGIN
+    for delay, lag in ((1, 0.0), (1, 1e-3), (2, 5e-3)):
+        best = best_damped_gain(H, delay, lag)[1]
+        assert 1.0 - certified_radius(H, delay, lag) == pytest.approx(
+            0.1 * (1.0 - best), rel=1e-12)
+
+
+def test_a_lag_slower_than_the_margin_per_sample_is_certified_at_the_best_gain():
+    """A 5 ms lag at 4 kHz has its own pole at 0.951, beyond 1 - STABILITY_MARGIN: no
+    gain meets a margin of 0.05 per sample (the best radius is 0.976), and the
+    certificate asks a tenth of the best margin instead. At the best-damped gain the
+    loop is certified; slower than it by 20 and the radius passes the bound and
+    the certificate fails, naming it."""
+    delay, lag = 2, 5e-3
+    assert lag_pole(H, lag) > 1.0 - STABILITY_MARGIN
+    gain, best = best_damped_gain(H, delay, lag)
+    assert best > 1.0 - STABILITY_MARGIN
+    B = np.array([[1.0, 0.1], [0.05, 0.9]])
+    modes = np.linalg.eigvals(B).real
+    K = gain / H / modes.max() * np.ones(2)
+    check = check_rhs_loop(B, K, H, lambda_lhs=1.0, Td=1.0, delay=delay, lag=lag)
+    assert check.ok, check.reason
+    assert check.spectral_radius <= certified_radius(H, delay, lag) < 1.0
+    slow = check_rhs_loop(B, K / 20, H, lambda_lhs=1.0, Td=1.0, delay=delay, lag=lag)
+    assert slow.spectral_radius < 1.0 and not slow.ok
+    assert "spectral radius" in slow.reason
+
+
+def test_with_a_lag_the_separation_is_the_loops_decay_rate():
+    """Eq. 45's sigma_RHS = k lambda is the loop's rate without a lag; with the 6-DOF
+    satellite's 5 ms lag, 2 samples late at 2 kHz (lambda_LHS = 40 1/s, Td = 2) the
+    best-damped c = 42 1/s decays at 91 1/s and meets the separation's 80 1/s, though
+    its k lambda does not, while c = 150 1/s has k lambda beyond 80 and decays slower
+    (71 1/s): the check asks the decay (gain_rule.separates_by_decay), and without a
+    delay or lag it asks sigma_RHS as before."""
+    h, lambda_lhs, Td = 5e-4, 40.0, 2.0
+    assert separates_by_decay(2, 5e-3) and not separates_by_decay(0, 0.0)
+    cap = best_damped_gain(h, 2, 5e-3)[0] / h
+    best = check_rhs_loop(np.eye(2), np.full(2, cap), h, lambda_lhs, Td, 2, 5e-3)
+    assert best.sigma_rhs < Td * lambda_lhs <= best.decay_rate and best.ok
+    fast = check_rhs_loop(np.eye(2), np.full(2, 150.0), h, lambda_lhs, Td, 2, 5e-3)
+    assert fast.sigma_rhs > Td * lambda_lhs > fast.decay_rate and not fast.ok
+    assert "decay rate" in fast.reason
+    slow = check_rhs_loop(np.eye(2), np.full(2, 79.0), 2.5e-4, lambda_lhs, Td)
+    assert slow.decay_rate > Td * lambda_lhs > slow.sigma_rhs and not slow.ok
+
+
+def test_a_certificate_with_a_lag_certifies_by_the_loops_decay():
+    """certified_gains with the satellite's lag: by k lambda no rate up to the
+    best-damped one meets 80 1/s (not certified); by the decay the rate at which the
+    set's slowest mode is best damped is, and the box's radius is within exp(-h 80)
+    and the certified radius."""
+    h, delay, lag, rate = 5e-4, 2, 5e-3, 80.0
+    pole, cap = lag_pole(h, lag), best_damped_gain(h, delay, lag)[0] / h
+    lower = np.array([[0.97, -0.01], [-0.01, 0.97]])
+    upper = np.array([[1.03, 0.01], [0.01, 1.03]])
+    results = {}
+    for by_decay in (False, True):
+        out, K = np.empty((1, 4)), np.empty((1, 2))
+        certified_gains(lower[None], upper[None], np.ones((1, 2)), np.zeros((1, 2)),
+                        np.array([176.0]), np.zeros(1), np.array([rate]), h, cap,
+                        certified_radius(h, delay, lag), out, K, delay, pole, by_decay)
+        results[by_decay] = out[0].copy(), K[0].copy()
+    assert results[False][0][1] == 0.0
+    out, K = results[True]
+    assert out[1] == 1.0 and cap <= out[0] <= cap / 0.96 * (1 + 1e-12)
+    radius = box_certificate(lower, upper, K, h, delay, pole)[1]
+    assert radius <= min(np.exp(-h * rate), certified_radius(h, delay, lag))
+
+
+def test_the_certified_margin_is_a_rate_where_the_lag_is_slow():
+    """With a lag of many samples the margin the certificate asks is a decay rate,
+    -ln(radius) / h, nearly the same at 4 and 8 kHz (the margin per sample is not)."""
+    rates = [-np.log(certified_radius(h, 0, 5e-3)) / h for h in (H, H / 2)]
+    assert rates[1] == pytest.approx(rates[0], rel=0.05)
+
+
 @pytest.mark.parametrize("name", ["short", "satellite_3dof"])
 def test_noiseless_sensors_without_delays_change_no_log(name):
     """The sensors wired in with no noise, quantization, latency or lag: every log of
@@ -100,6 +183,32 @@ def test_encoders_quantize_to_their_counts():
     step = 2 * np.pi / counts
     assert np.allclose(out / step, np.round(out / step), atol=1e-9)
     assert np.all(np.abs(out - q) <= step / 2 + 1e-15)
+
+
+def test_the_sensors_noise_is_each_trials_stream_in_order_across_blocks():
+    """The sensors draw each trial's standard normals NORMALS_BLOCK at a time and read
+    them in the order one draw each would: at the start the star tracker's fix (axes),
+    then per sample the encoders', the rates' and the gyro's noise (2 n + axes) and the
+    bias walk's (axes). The rate noise read back from the tachometers' measurement is
+    that stream's, past a block's end (1200 samples of 6 normals > 4096)."""
+    noise, seeds, n = 1e-3, (3, 11), 2
+    qdot = np.array([0.2, -0.4, 0.1, 0.3])
+    out = _sensors(Sensing(enabled=True, rate_noise=noise, gyro_noise=1e-4,
+                           gyro_bias_walk=1e-5), np.tile([0, 0, 0.1], 2),
+                   np.tile([0.3, 1.0], 2), np.zeros(6), qdot, seeds=seeds,
+                   duration=1200 * H)["qdot"]
+    read = (out - qdot).reshape(len(out), 2, n) / noise
+    per_sample = 2 * n + 1 + 1
+    for i, seed in enumerate(seeds):
+        stream = np.random.default_rng(seed + SEED_OFFSET).standard_normal(
+            1 + per_sample * 1300)
+        drawn = np.array([stream[1 + per_sample * k + n:1 + per_sample * k + 2 * n]
+                          for k in range(1300)])
+        moved = [shift for shift in range(-2, 3)
+                 if np.allclose(read[4:, i], drawn[4 + shift:4 + shift + len(read) - 4],
+                                rtol=0, atol=1e-9)]
+        assert len(moved) == 1, seed
+        assert len(read) - 4 + 4 + moved[0] > 4096 // per_sample
 
 
 def test_gyro_noise_and_bias_walk_have_their_sizes():

@@ -8,12 +8,14 @@ tau_c^r - tau_obs(k), tau_obs(k+1) = B u_I(k) (one sample late); with x = (u_I, 
 and per mode p the polynomial z^2 - z + h k_p lambda_p; written in closed form, as
 ``Linearize`` needs AutoDiff, which the package's LeafSystems lack."""
 from dataclasses import asdict, dataclass
+from typing import Optional
 
 import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
-from dacph_drake.gain_rule import STABILITY_MARGIN, integral_gains, lag_pole, loop_matrix
+from dacph_drake.gain_rule import (certified_radius, integral_gains, lag_pole, loop_matrix,
+                                   separates_by_decay)
 from dacph_drake.kernels.certificate import lag_weight, roots_within
 
 
@@ -62,11 +64,11 @@ def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int 
 
 
 def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
-                            lag: float = 0.0, radius: float = 1.0 - STABILITY_MARGIN,
+                            lag: float = 0.0, radius: Optional[float] = None,
                             limit: int = 400, start: int = 0) -> int:
     """The largest command delay D [samples] such that every delay from ``start`` to D
-    keeps the RHS loop's spectral radius below ``radius`` (1 - STABILITY_MARGIN: the
-    certificate; 1: stability), with the actuators' lag; start - 1 if ``start`` does
+    keeps the RHS loop's spectral radius below ``radius`` (the certificate's by
+    default; 1: stability), with the actuators' lag; start - 1 if ``start`` does
     not, ``limit`` if every delay up to it does. Per mode mu of h K B the loop's
     polynomial (kernels.certificate) has delayed_loop_matrix's eigenvalues as roots;
     the radius need not grow with d (a delay speeds the slow root a little), hence the
@@ -77,11 +79,14 @@ def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,
         K: The integrator's gains (n).
         period: The RHS period h [s].
         lag: The actuators' time constant [s] (0: none).
-        radius: The spectral radius the loop must stay below.
+        radius: The spectral radius the loop must stay below (None: the certificate's
+            with the run's own delay, certified_radius(period, start, lag)).
         limit: The largest delay tried.
         start: The delay the scan starts from (the run's own)."""
     modes = np.linalg.eigvals(period * np.diag(K) @ B).astype(complex)
     pole = lag_pole(period, lag)
+    if radius is None:
+        radius = certified_radius(period, start, lag)
     for delay in range(start, limit + 1):
         if not all(roots_within(mu, delay, pole, radius) for mu in modes):
             return delay - 1
@@ -114,7 +119,8 @@ class RhsLoopCheck:
         lyapunov_residual: ||A^T P A - P + I|| / ||P||.
         dic_ok: det B != 0 and Re(lambda_p) > 0.
         sigma_rhs: min_p k_p Re(lambda_p) [1/s].
-        separation: sigma_rhs / lambda_LHS (eq. 45).
+        separation: sigma_rhs / lambda_LHS (eq. 45); with a delay or lag decay_rate /
+            lambda_LHS.
         ok: Whether every check passed.
         reason: Why not ("; "-separated; "" when ok)."""
     spectral_radius: float
@@ -124,7 +130,7 @@ class RhsLoopCheck:
     lyapunov_residual: float       # ||A^T P A - P + I|| / ||P||
     dic_ok: bool                   # det B != 0 and Re(lambda_p) > 0
     sigma_rhs: float               # min_p k_p Re(lambda_p) [1/s]
-    separation: float              # sigma_rhs / lambda_LHS (eq. 45)
+    separation: float              # the separation / lambda_LHS (eq. 45)
     ok: bool
     reason: str
 
@@ -135,9 +141,11 @@ class RhsLoopCheck:
 
 def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: float,
                    Td: float, delay: int = 0, lag: float = 0.0) -> RhsLoopCheck:
-    """The RHS loop's certificate at one operating point: spectral radius <= 1 -
-    STABILITY_MARGIN and P > 0 from RealDiscreteLyapunovEquation(A, I); DIC; and
-    sigma_RHS = min_p k_p Re(lambda_p) >= Td lambda_LHS (eq. 45).
+    """The RHS loop's certificate at one operating point: spectral radius <=
+    certified_radius (1 - STABILITY_MARGIN without a delay or lag) and P > 0 from
+    RealDiscreteLyapunovEquation(A, I); DIC; and sigma_RHS = min_p k_p Re(lambda_p) >=
+    Td lambda_LHS (eq. 45), with a delay or lag the loop's decay rate -ln(rho) / h
+    instead of sigma_RHS (gain_rule.separates_by_decay).
 
     Args:
         B: The port's input matrix (n x n): the learner's B_hat or the truth's B~.
@@ -151,8 +159,9 @@ def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: floa
     A = (delayed_loop_matrix(B, K, period, delay, lag) if delay or lag
          else rhs_loop_system(B, K, period).A())
     radius = float(np.max(np.abs(np.linalg.eigvals(A))))
+    allowed = certified_radius(period, delay, lag)
     reasons = []
-    if radius <= 1.0 - STABILITY_MARGIN:
+    if radius <= allowed:
         P = RealDiscreteLyapunovEquation(A, np.eye(A.shape[0]))
         P_min = float(np.min(np.linalg.eigvalsh(0.5 * (P + P.T))))
         residual = float(np.linalg.norm(A.T @ P @ A - P + np.eye(A.shape[0]))
@@ -163,17 +172,19 @@ def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: floa
     else:
         P_min, residual = float("nan"), float("nan")
         reasons.append(f"discrete RHS loop spectral radius {radius:.4f} > "
-                       f"{1 - STABILITY_MARGIN:.2f} (period {period:g} s)")
+                       f"{allowed:.4f} (period {period:g} s)")
     if not dic_ok:
         reasons.append("DIC violated: det(B_hat) = 0 or Re(lambda_hat_p) <= 0")
     sigma = float(np.min(np.asarray(K) * paired.real))
-    separation = sigma / lambda_lhs
+    decay = float(-np.log(radius) / period) if radius > 0 else float("inf")
+    by_decay = separates_by_decay(delay, lag)
+    separation = (decay if by_decay else sigma) / lambda_lhs
     if not separation >= Td:
-        reasons.append(f"time-scale separation sigma_RHS / lambda_LHS = "
+        rate = "the loop's decay rate" if by_decay else "sigma_RHS"
+        reasons.append(f"time-scale separation {rate} / lambda_LHS = "
                        f"{separation:.3g} < T_d = {Td:g}")
     return RhsLoopCheck(
-        spectral_radius=radius, margin=1.0 - radius,
-        decay_rate=float(-np.log(radius) / period) if radius > 0 else float("inf"),
+        spectral_radius=radius, margin=1.0 - radius, decay_rate=decay,
         lyapunov_P_min_eigenvalue=P_min, lyapunov_residual=residual,
         dic_ok=dic_ok, sigma_rhs=sigma, separation=separation,
         ok=not reasons, reason="; ".join(reasons))

@@ -11,8 +11,8 @@ from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, Control
                                                  DelayLine, LhsRequest,
                                                  assemble_closed_loop)
 from dacph_drake.dynamics.sensor_noise import measured_rate_noise
-from dacph_drake.gain_rule import (c_lower_bound, check_rhs_period, lag_pole,
-                                   well_damped_loop_gain)
+from dacph_drake.gain_rule import (best_damped_gain, c_lower_bound, check_rhs_period,
+                                   lag_pole)
 from dacph_drake.kernels.certificate import lag_weight
 from dacph_drake.learning import LearnerTrial, learner_kind
 from dacph_drake.scenario import Scenario
@@ -48,24 +48,37 @@ def build_dac_nominal_diagram(*scenarios: Scenario) -> ClosedLoop:
     return build_dac_diagram(*scenarios, learning=False)
 
 
-def _WarnOfADelayedLoop(scenario: Scenario, wanted: float) -> None:
+def _WarnOfADelayedLoop(scenario: Scenario, wanted: float, separation: float) -> None:
     """Warns when the command's known delay and lag leave the RHS loop best damped
     below ``wanted``, the gain rule's rate at beta_hat = 1 [1/s]: the integrator then
-    runs at the best-damped rate and the separation of eq. 45 is not met (verify
-    reports it)."""
+    runs at the best-damped rate, and whether its loop decays at the time-scale
+    separation's ``separation`` = Td lambda_LHS [1/s] (eq. 45, judged on the loop's decay
+    rate: gain_rule.separates_by_decay) is said; verify reports both."""
     delay, lag = scenario.sensing.KnownCommandDelay()
     if not (delay or lag):
         return
     h = scenario.periods.rhs
-    cap = well_damped_loop_gain(h, delay, lag) / h
-    if wanted > cap:
-        logging.getLogger(__name__).warning(
+    gain, radius = best_damped_gain(h, delay, lag)
+    cap, fastest = gain / h, -np.log(radius) / h
+    if wanted <= cap:
+        return
+    log = logging.getLogger(__name__)
+    if fastest >= separation:
+        log.warning(
             "with the command %d samples late and a %g s actuator lag the RHS loop is "
             "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48): the "
-            "integrator runs at %.0f 1/s and the time-scale separation (eq. 45) is not "
-            "met; a shorter delay or lag, or a slower LHS meets it (its damping, which "
-            "c is proportional to, times %.2f or less)", delay, lag, cap, wanted, cap,
-            cap / wanted)
+            "integrator runs at %.0f 1/s, where the loop decays at %.0f 1/s and meets "
+            "the time-scale separation's %.0f 1/s (eq. 45)", delay, lag, cap, wanted,
+            cap, fastest, separation)
+    else:
+        log.warning(
+            "with the command %d samples late and a %g s actuator lag the RHS loop is "
+            "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48), and "
+            "decays there at %.0f 1/s, the fastest any gain gives it: the time-scale "
+            "separation (eq. 45) asks %.0f 1/s and is not met; a shorter delay or lag, "
+            "or a slower LHS meets it (its damping, which the separation's rate is "
+            "proportional to, times %.2f or less)", delay, lag, cap, wanted, fastest,
+            separation, fastest / separation)
 
 
 def _WarnOfANoisyKinematicCheck(scenario: Scenario,
@@ -137,7 +150,8 @@ def AddRhsChain(loop: ClosedLoop, controller: ControllerBuilder, lhs: LeafSystem
         check_rhs_period(periods, c, (1 + rhs_settings.c_margin) * c_lower_bound(
                              rhs_settings.Td, Kd_max, lambda_min_M, rhs_settings.beta_max),
                          rhs_settings.beta_max)
-    _WarnOfADelayedLoop(scenario, max(c_nominal))
+    _WarnOfADelayedLoop(scenario, max(c_nominal), rhs_settings.Td * max(
+        2.0 * Kd_max / lambda_min_M for Kd_max, lambda_min_M in rates))
     _WarnOfANoisyKinematicCheck(scenario, identifier)
     builder = controller.builder
     kind = learner_kind(settings)

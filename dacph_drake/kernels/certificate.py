@@ -202,10 +202,17 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
                     floor: np.ndarray, c_target: np.ndarray, c_floor: np.ndarray,
                     rate: np.ndarray, period: float, c_cap: float, radius_bound: float,
                     out: np.ndarray, gains: np.ndarray, delay: int = 0,
-                    pole: float = 0.0) -> None:
+                    pole: float = 0.0, by_decay: bool = False) -> None:
     """Every trial's certified rate c (c_target moved into the certified interval within
     [max(c_floor, rate / slowest), c_cap]) and gains k_p = c / lambda_p, raised to ``floor``
-    where the set certifies it (box_certificate).
+    where the set certifies it (box_certificate). ``by_decay``: the separation is the
+    loop's decay rate instead, -ln(radius) / h >= rate (a radius bound exp(-h rate)
+    beside ``radius_bound``), searched from a quarter of rate / slowest (at gains up to
+    the best-damped one a mode decays at most 4 ln 2 = 2.8 times as fast as its
+    k lambda without a delay or lag, and less with those tried; a rate below is not
+    tried, which is conservative) up to c_cap / slowest, where the set's slowest mode
+    is best damped (with a lag the radius rises steeply below the best-damped gain and
+    slowly above it, so the set's modes are best kept at or above it).
 
     Args:
         lower: Each trial's set's lower bounds (trials, n, n).
@@ -222,7 +229,8 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
             fastest max_p (upper_pp + R_p) / lambda_p] (trials, 4).
         gains: Written per certified trial: k_p [1/s per unit of B] (trials, n).
         delay: The samples by which the command is late.
-        pole: a = exp(-h / lag) of the actuators' lag (0: none)."""
+        pole: a = exp(-h / lag) of the actuators' lag (0: none).
+        by_decay: Judge the separation by the loop's decay rate (with a delay or lag)."""
     trials, n = lower.shape[0], lower.shape[1]
     low, high, radius = np.empty(n), np.empty(n), np.empty(n)
     for i in range(trials):
@@ -241,11 +249,17 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
         out[i, 0], out[i, 1] = c_target[i], 0.0
         if not slowest > 0.0:
             continue
-        c_low = max(c_floor[i], rate[i] / slowest)
-        if c_low > c_cap:
+        bound, cap = radius_bound, c_cap
+        if by_decay:
+            c_low = max(c_floor[i], 0.25 * rate[i] / slowest)
+            bound = min(radius_bound, np.exp(-period * rate[i]))
+            cap = c_cap / min(slowest, 1.0)
+        else:
+            c_low = max(c_floor[i], rate[i] / slowest)
+        if c_low > cap:
             continue
-        c = _certified_rate(low, high, radius, period, min(max(c_target[i], c_low), c_cap),
-                            c_low, c_cap, radius_bound, delay, pole)
+        c = _certified_rate(low, high, radius, period, min(max(c_target[i], c_low), cap),
+                            c_low, cap, bound, delay, pole)
         if c < 0.0:
             continue
         out[i, 0], out[i, 1] = c, 1.0
@@ -257,7 +271,7 @@ def certified_gains(lower: np.ndarray, upper: np.ndarray, eigenvalues: np.ndarra
         if raised:
             slowest_rate, largest = box_certificate(lower[i], upper[i], gains[i], period,
                                                     delay, pole)
-            if not (slowest_rate >= rate[i] and largest <= radius_bound):
+            if not ((by_decay or slowest_rate >= rate[i]) and largest <= bound):
                 for p in range(n):
                     gains[i, p] = c / eigenvalues[i, p]
 

@@ -29,6 +29,13 @@ def _columns(layout):
 
 
 @njit(cache=True)
+def _rows(flat_state, layout):
+    """The state's rows (trials x width), a view of the flat state."""
+    width = _columns(layout)[7] + 1
+    return flat_state[:layout[TRIALS] * width].reshape((layout[TRIALS], width))
+
+
+@njit(cache=True)
 def _encoder(value, step):
     """An encoder's reading quantized to its counts (step 0: unquantized)."""
     return step * np.round(value / step) if step > 0.0 else value
@@ -62,13 +69,14 @@ def star_fix(pose_attitude: np.ndarray, noise: np.ndarray, spatial: bool) -> np.
 
 
 @njit(cache=True)
-def sensor_measure(state: np.ndarray, truth: np.ndarray, layout: np.ndarray,
+def sensor_measure(flat_state: np.ndarray, truth: np.ndarray, layout: np.ndarray,
                    constants: np.ndarray, out: np.ndarray) -> None:
-    """The measurement of ``truth`` with the sensors' ``state`` (trials x width) into
-    ``out`` (systems.sensors' equations).
+    """The measurement of ``truth`` with the sensors' state into ``out``
+    (systems.sensors' equations).
 
     Args:
-        state: The sensors' state rows.
+        flat_state: The sensors' state rows, one after the other (anything after them
+            is not read).
         truth: The true [base_pose, q, base_velocity, qdot].
         layout: The module's integers.
         constants: The module's constants.
@@ -76,6 +84,7 @@ def sensor_measure(state: np.ndarray, truth: np.ndarray, layout: np.ndarray,
     n, trials, nb_q, nb_v, axes = (layout[N], layout[TRIALS], layout[BASE_Q],
                                    layout[BASE_V], layout[AXES])
     o = _columns(layout)
+    state = _rows(flat_state, layout)
     pose0, q0 = 0, trials * nb_q
     velocity0 = q0 + trials * n
     qdot0 = velocity0 + trials * nb_v
@@ -99,26 +108,32 @@ def sensor_measure(state: np.ndarray, truth: np.ndarray, layout: np.ndarray,
 
 
 @njit(cache=True)
-def sensor_sample(state: np.ndarray, truth: np.ndarray, draws: np.ndarray,
-                  walk: np.ndarray, star: np.ndarray, layout: np.ndarray,
-                  constants: np.ndarray) -> None:
-    """One sample of the sensors' state (in place): the sample's noise from ``draws``
-    (trials x (2 n + axes), standard normal), the gyro bias' walk from ``walk`` (trials x
-    axes), the encoders' differentiated rate, and the attitude estimate propagated by
-    the gyro, or fixed from ``star`` (trials x axes, the fix's noise [rad]) when the
-    fix is due.
+def sensor_sample(flat_state: np.ndarray, truth: np.ndarray, normals: np.ndarray,
+                  cursor: int, layout: np.ndarray, constants: np.ndarray,
+                  star_noise: float) -> int:
+    """One sample of the sensors' state (in place): the sample's noise, the gyro bias'
+    walk, the encoders' differentiated rate, and the attitude estimate propagated by
+    the gyro, or fixed by the star tracker when the fix is due. Each trial's standard
+    normals are read from its row of ``normals`` at ``cursor``: the sample's noise (2 n
+    + axes), then the walk's (axes, if it walks), then the fix's (axes, if due).
 
     Args:
-        state: The sensors' state rows (trials x width).
+        flat_state: The sensors' state rows, one after the other (anything after them
+            is not read).
         truth: The true [base_pose, q, base_velocity, qdot].
-        draws: The sample's standard normal draws.
-        walk: The bias walk's standard normal draws.
-        star: The star tracker's noise [rad], used at a fix.
+        normals: Each trial's standard normals (trials x at least cursor +
+            sample_normals(layout, constants)).
+        cursor: The first unread column of ``normals``.
         layout: The module's integers.
-        constants: The module's constants."""
+        constants: The module's constants.
+        star_noise: The star tracker's noise per axis [rad].
+
+    Returns:
+        The first column left unread."""
     n, trials, nb_q, nb_v, axes = (layout[N], layout[TRIALS], layout[BASE_Q],
                                    layout[BASE_V], layout[AXES])
     o = _columns(layout)
+    state = _rows(flat_state, layout)
     spatial = layout[SPATIAL] == 1
     h = constants[PERIOD]
     q0 = trials * nb_q
@@ -126,13 +141,18 @@ def sensor_sample(state: np.ndarray, truth: np.ndarray, draws: np.ndarray,
     rate_column = 0 if spatial else 2
     attitude_column = 0 if spatial else 2
     attitude_size = o[5] - o[4]
+    walk = cursor + 2 * n + axes
+    fix = walk + (axes if constants[WALK] > 0.0 else 0)
+    due = layout[ESTIMATED] == 1 and state[0, o[7]] + 1 >= layout[FIX_EVERY]
     for i in range(trials):
+        draws = normals[i]
         for j in range(n):
-            state[i, o[0] + j] = constants[ENCODER_NOISE] * draws[i, j]
-            state[i, o[1] + j] = constants[RATE_NOISE] * draws[i, n + j]
+            state[i, o[0] + j] = constants[ENCODER_NOISE] * draws[cursor + j]
+            state[i, o[1] + j] = constants[RATE_NOISE] * draws[cursor + n + j]
         for a in range(axes):
-            state[i, o[2] + a] = constants[GYRO_NOISE] * draws[i, 2 * n + a]
-            state[i, o[3] + a] += constants[WALK] * walk[i, a]
+            state[i, o[2] + a] = constants[GYRO_NOISE] * draws[cursor + 2 * n + a]
+            if constants[WALK] > 0.0:
+                state[i, o[3] + a] += constants[WALK] * draws[walk + a]
         for j in range(n):
             measured = _encoder(truth[q0 + i * n + j] + state[i, o[0] + j],
                                 constants[STEP])
@@ -143,8 +163,9 @@ def sensor_sample(state: np.ndarray, truth: np.ndarray, draws: np.ndarray,
             state[i, o[7]] += 1
             pose = truth[i * nb_q + attitude_column:i * nb_q + attitude_column
                          + attitude_size]
-            if state[i, o[7]] >= layout[FIX_EVERY]:
-                state[i, o[4]:o[5]] = star_fix(pose, star[i], spatial)
+            if due:
+                state[i, o[4]:o[5]] = star_fix(pose, star_noise * draws[fix:fix + axes],
+                                               spatial)
                 state[i, o[7]] = 0
             else:
                 omega = np.empty(axes)
@@ -155,3 +176,4 @@ def sensor_sample(state: np.ndarray, truth: np.ndarray, draws: np.ndarray,
                     state[i, o[4]:o[5]] = _turned(state[i, o[4]:o[5]].copy(), omega * h)
                 else:
                     state[i, o[4]] += omega[0] * h
+    return fix + (axes if due else 0)

@@ -40,6 +40,8 @@ class InertialIdentifier(LeafSystem):
     and it replaces the nominal only where the draws (which read the noise again) put
     E's sd below ``settings.nominal_tolerance`` in every entry, checked every
     ``error_period``; elsewhere the LHS keeps the nominal and E's sd is that tolerance.
+    pi_hat (and the misfit logged) is then computed at the update before each check,
+    its only reader, and at the window's last.
 
     Outputs ``identification_log`` = [total mass [kg], momentum misfit, mismatch (0/1)],
     ``inertial_parameters`` (pi0 until ``settings.start``, then pi_hat until
@@ -77,6 +79,7 @@ class InertialIdentifier(LeafSystem):
         self._scales = np.array([prior_scales(self.parameters, prior)
                                  for prior in self._priors])
         self._settings, self._period = settings, period
+        self._error_period = error_period
         count, size = len(plants), self.parameters.size
         self._anchor, self._anchor_value = self._Anchor(settings, measured_masses, count)
         c = ArmCoordinates.FromPlant(plants[0])
@@ -160,24 +163,19 @@ class InertialIdentifier(LeafSystem):
             count, -1).copy()
         epochs = context.get_discrete_state(self._epoch).get_value().reshape(
             count, -1).copy()
-        information = information.reshape(count, size, size)
-        if noise_information is not None:
-            information = compensated_information(information, noise_information,
-                                                  self._Readings(t))
-        candidates = identify_parameters(information, self._priors, self._scales,
-                                         settings.prior_weight, self._anchor,
-                                         self._anchor_value)
         status = context.get_discrete_state(self._status).get_value().reshape(
             count, -1).copy()
-        misfit = momentum_misfit(information, candidates)
-        status[:, 1] = np.where(np.isfinite(misfit), misfit, status[:, 1])
-        if settings.fit_tolerance > 0:
-            status[:, 2] = np.maximum(status[:, 2], status[:, 1] > settings.fit_tolerance)
-        if settings.on_mismatch == "nominal":
-            candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
-        if self._identified is not None:
-            discrete_state.get_mutable_vector(self._identified).SetFromVector(
-                candidates.reshape(-1))
+        if self._identified is None:
+            candidates = self._Identify(information.reshape(count, size, size), None, t,
+                                        status)
+        else:
+            # With noisy sensors the identified parameters are read only by the next
+            # check (_UpdateModelError), so they are identified at the update before it
+            # and at the window's last.
+            if self._ChecksNext(t):
+                discrete_state.get_mutable_vector(self._identified).SetFromVector(
+                    self._Identify(information.reshape(count, size, size),
+                                   noise_information, t, status).reshape(-1))
             candidates = context.get_discrete_state(self._approved).get_value().reshape(
                 count, -1)
         M = self._trees.ReducedMassMatrices(candidates, q)
@@ -197,6 +195,34 @@ class InertialIdentifier(LeafSystem):
         discrete_state.get_mutable_vector(self._estimate).SetFromVector(
             estimates.reshape(-1))
         discrete_state.get_mutable_vector(self._epoch).SetFromVector(epochs.reshape(-1))
+
+    def _Identify(self, information: np.ndarray, noise_information: Optional[np.ndarray],
+                  t: float, status: np.ndarray) -> np.ndarray:
+        """The trials' identified parameters from their information (compensated for
+        the noise's, if any) and the samples' momentum misfit and mismatch (``status``
+        in place); the prior where a mismatch returns the LHS to it."""
+        settings = self._settings
+        if noise_information is not None:
+            information = compensated_information(information, noise_information,
+                                                  self._Readings(t))
+        candidates = identify_parameters(information, self._priors, self._scales,
+                                         settings.prior_weight, self._anchor,
+                                         self._anchor_value)
+        misfit = momentum_misfit(information, candidates)
+        status[:, 1] = np.where(np.isfinite(misfit), misfit, status[:, 1])
+        if settings.fit_tolerance > 0:
+            status[:, 2] = np.maximum(status[:, 2], status[:, 1] > settings.fit_tolerance)
+        if settings.on_mismatch == "nominal":
+            candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
+        return candidates
+
+    def _ChecksNext(self, t: float) -> bool:
+        """Whether the update at t [s] is the last before a check of E (every
+        error_period) or the window's last: the next update is no earlier than either,
+        at the instants Drake schedules them."""
+        following = _next_sample(t, self._period)
+        return (following > self._settings.start + self._settings.duration
+                or following >= _next_sample(t, self._error_period))
 
     def _AddNoiseInformation(self, context, discrete_state, t, base_pose, q
                              ) -> Optional[np.ndarray]:
@@ -268,3 +294,10 @@ class InertialIdentifier(LeafSystem):
             values = np.array([masses[which] for masses in measured_masses]) * (
                 1.0 + settings.anchor_error)
         return np.tile(c, (count, 1)), values
+
+
+def _next_sample(t: float, period: float) -> float:
+    """The first instant k period strictly after t [s], as Drake computes a periodic
+    event's (offset 0)."""
+    k = np.ceil(t / period)
+    return k * period if k * period > t else (k + 1) * period

@@ -6,8 +6,9 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 from pydrake.systems.framework import Context, LeafSystem
 
-from dacph_drake.gain_rule import (STABILITY_MARGIN, c_lower_bound, integral_gains,
-                                   lag_pole, stays_stable_if_wrong, well_damped_loop_gain,
+from dacph_drake.gain_rule import (STABILITY_MARGIN, c_lower_bound, certified_radius,
+                                   integral_gains, lag_pole, separates_by_decay,
+                                   stays_stable_if_wrong, well_damped_loop_gain,
                                    within_trust)
 from dacph_drake.learning.identification import PortEvidence, PortSample
 from dacph_drake.kernels.certificate import certified_gains
@@ -74,7 +75,9 @@ class RhsIntegrator(LeafSystem):
 
     Inputs ``tau_request``, ``tau_observed``, ``q``, ``qdot``, ``weights``, ``beta_hat``,
     ``port_sample`` and ``reduced_model`` (both optional). The certificate knows the
-    command's delay and the actuators' lag (``command_delay``; kernels.certificate). Outputs ``u``, ``chi`` and
+    command's delay and the actuators' lag (``command_delay``; kernels.certificate):
+    its radius is gain_rule.certified_radius, and with either the separation is the
+    loop's decay rate (gain_rule.separates_by_decay). Outputs ``u``, ``chi`` and
     ``rhs_log`` (log_layout.RhsLog), each trial's stacked.
 
     Args:
@@ -115,6 +118,9 @@ class RhsIntegrator(LeafSystem):
         # rate a certified set may ask: the fastest well-damped one.
         self._lambda_lhs = 2.0 * self._Kd_max / self._lambda_min_M
         self._c_cap = well_damped_loop_gain(period, *command_delay) / period
+        # The certificate with the delay and lag: its radius and how it separates.
+        self._certified_radius = certified_radius(period, *command_delay)
+        self._by_decay = separates_by_decay(*command_delay)
         # c's target at beta: the paper's (1 + c_margin) c_min(beta), or at least the
         # fastest well-damped rate (Rhs.gain_rule); at most that rate (without a delay
         # or a lag check_rhs_period keeps every target below it).
@@ -258,7 +264,8 @@ class RhsIntegrator(LeafSystem):
         out, K = np.empty((len(eigenvalues), 4)), np.empty(eigenvalues.shape)
         certified_gains(lower, upper, eigenvalues, floor, target, c_min,
                         settings.Td * self._lambda_lhs, self._period, self._c_cap,
-                        1.0 - STABILITY_MARGIN, out, K, self._delay, self._pole)
+                        self._certified_radius, out, K, self._delay, self._pole,
+                        self._by_decay)
         return out, K, c_min, mode_low, mode_high
 
     def _Certify(self, gains, B_hat, D_hat, B_set, paired, dic_ok, beta):

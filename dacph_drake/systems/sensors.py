@@ -12,6 +12,7 @@ from dacph_drake.kernels import sensors as kernel
 from dacph_drake.scenario import Sensing
 
 SEED_OFFSET = 7919      # the sensors' noise streams apart from the observer's (seed)
+NORMALS_BLOCK = 4096    # standard normals drawn at once per trial (_SensorSamples._Ahead)
 
 
 class _SensorSamples(LeafSystem):
@@ -40,17 +41,19 @@ class _SensorSamples(LeafSystem):
             s.rate_noise, s.gyro_noise, s.gyro_bias_walk * np.sqrt(period), period])
         self._width = 4 * n + 2 * axes + (4 if spatial else 1) + 1
         self._attitude = slice(2 * n + 2 * axes, 2 * n + 2 * axes + (4 if spatial else 1))
-        self._draws = np.empty((trials, 2 * n + axes))
-        self._walk, self._star = np.zeros((trials, axes)), np.zeros((trials, axes))
+        self._walk = np.zeros((trials, axes))
         self._fix_every = fix_every
-        self._state = self.DeclareDiscreteState(self._width * trials)
+        # Each trial's stream drawn ahead in blocks (_Ahead), the next unread, and
+        # the most a sample reads (its noise, the bias walk's and a fix's).
+        self._normals, self._cursor = np.empty((trials, 0)), 0
+        self._most = 2 * n + 3 * axes
+        # The trials' rows, then 0 until the initialization event has run: the output
+        # is then the truth (what other systems' initialization reads).
+        self._state = self.DeclareDiscreteState(self._width * trials + 1)
         self._size = sum(self._sizes) * trials
         # The measurements of the last ``latency`` samples, oldest first.
         self._queue = (self.DeclareDiscreteState(self._size * s.latency)
                        if s.latency > 0 else None)
-        # 0 until the initialization event has run: the output is then the truth
-        # (what other systems' initialization reads).
-        self._ready = self.DeclareDiscreteState(1)
         self._truth = self.DeclareVectorInputPort("truth", self._size)
         self._measured = np.empty(self._size)
         self.DeclareVectorOutputPort(
@@ -59,48 +62,54 @@ class _SensorSamples(LeafSystem):
         self.DeclareInitializationDiscreteUpdateEvent(self._Initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._UpdateSample)
 
-    def _Rows(self, context) -> np.ndarray:
-        return context.get_discrete_state(self._state).get_value().reshape(
-            self._trials, self._width)
-
     def _CalcMeasurement(self, context, output):
-        if context.get_discrete_state(self._ready).get_value()[0] == 0:
+        state = context.get_discrete_state(self._state).get_value()
+        if state[-1] == 0:
             output.SetFromVector(self._truth.Eval(context))
         elif self._queue is not None:
             output.SetFromVector(
                 context.get_discrete_state(self._queue).get_value()[:self._size])
         else:
-            kernel.sensor_measure(self._Rows(context), self._truth.Eval(context),
-                                  self._layout, self._constants,
-                                  output.get_mutable_value())
+            kernel.sensor_measure(state, self._truth.Eval(context), self._layout,
+                                  self._constants, output.get_mutable_value())
+
+    def _Ahead(self) -> np.ndarray:
+        """Each trial's standard normals (a row each), at least a sample's most unread
+        from ``self._cursor``: drawn NORMALS_BLOCK at a time, the numbers one draw each
+        would give."""
+        if self._cursor + self._most > self._normals.shape[1]:
+            self._normals = np.concatenate(
+                [self._normals[:, self._cursor:],
+                 np.stack([rng.standard_normal(NORMALS_BLOCK) for rng in self._rngs])],
+                axis=1)
+            self._cursor = 0
+        return self._normals
 
     def _AttitudeColumns(self, truth: np.ndarray) -> np.ndarray:
         """Each trial's true attitude (trials x 4 or 1)."""
         pose = truth[:self._sizes[0] * self._trials].reshape(self._trials, -1)
         return pose[:, 0:4] if self._spatial else pose[:, 2:3]
 
-    def _DrawStar(self) -> None:
-        for rng, row in zip(self._rngs, self._star):
-            row[:] = self._s.star_tracker_noise * rng.standard_normal(self._axes)
-
     def _Initialize(self, context, discrete_state):
         truth = self._truth.Eval(context)
         rows = np.zeros((self._trials, self._width))
         n = self._sizes[1]
         rows[:, 2 * n + self._axes:2 * n + 2 * self._axes] = self._s.gyro_bias
-        self._DrawStar()
+        normals, first = self._Ahead(), self._cursor
+        star = self._s.star_tracker_noise * normals[:, first:first + self._axes]
+        self._cursor += self._axes
         rows[:, self._attitude] = [
-            kernel.star_fix(attitude, star, self._spatial)
-            for attitude, star in zip(self._AttitudeColumns(truth), self._star)]
+            kernel.star_fix(attitude, noise, self._spatial)
+            for attitude, noise in zip(self._AttitudeColumns(truth), star)]
         q = truth[self._sizes[0] * self._trials:][:n * self._trials].reshape(
             self._trials, n)
         step = self._constants[kernel.STEP]
         rows[:, self._attitude.stop:self._attitude.stop + n] = (
             step * np.round(q / step) if step else q)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(rows.reshape(-1))
-        discrete_state.get_mutable_vector(self._ready).SetFromVector([1.0])
+        discrete_state.get_mutable_vector(self._state).SetFromVector(
+            np.append(rows.reshape(-1), 1.0))
         if self._queue is not None:
-            kernel.sensor_measure(rows, truth, self._layout, self._constants,
+            kernel.sensor_measure(rows.reshape(-1), truth, self._layout, self._constants,
                                   self._measured)
             discrete_state.get_mutable_vector(self._queue).SetFromVector(
                 np.tile(self._measured, self._s.latency))
@@ -108,19 +117,12 @@ class _SensorSamples(LeafSystem):
     def _UpdateSample(self, context, discrete_state):
         truth = self._truth.Eval(context)
         # The update's state, pre-loaded with the current one: changed in place.
-        rows = discrete_state.get_mutable_vector(self._state).get_mutable_value().reshape(
-            self._trials, self._width)
-        for rng, row in zip(self._rngs, self._draws):
-            rng.standard_normal(out=row)
-        if self._s.gyro_bias_walk > 0:
-            for rng, row in zip(self._rngs, self._walk):
-                rng.standard_normal(out=row)
-        if self._layout[kernel.ESTIMATED] and rows[0, -1] + 1 >= self._fix_every:
-            self._DrawStar()            # every trial fixes at the same samples
-        kernel.sensor_sample(rows, truth, self._draws, self._walk, self._star,
-                             self._layout, self._constants)
+        state = discrete_state.get_mutable_value(self._state)
+        self._cursor = kernel.sensor_sample(state, truth, self._Ahead(), self._cursor,
+                                            self._layout, self._constants,
+                                            self._s.star_tracker_noise)
         if self._queue is not None:
-            kernel.sensor_measure(rows, truth, self._layout, self._constants,
+            kernel.sensor_measure(state, truth, self._layout, self._constants,
                                   self._measured)
             queue = context.get_discrete_state(self._queue).get_value()
             discrete_state.get_mutable_vector(self._queue).SetFromVector(
