@@ -41,8 +41,6 @@ class _SensorSamples(LeafSystem):
             s.rate_noise, s.gyro_noise, s.gyro_bias_walk * np.sqrt(period), period])
         self._width = 4 * n + 2 * axes + (4 if spatial else 1) + 1
         self._attitude = slice(2 * n + 2 * axes, 2 * n + 2 * axes + (4 if spatial else 1))
-        self._walk = np.zeros((trials, axes))
-        self._fix_every = fix_every
         # Each trial's stream drawn ahead in blocks (_Ahead), the next unread, and
         # the most a sample reads (its noise, the bias walk's and a fix's).
         self._normals, self._cursor = np.empty((trials, 0)), 0
