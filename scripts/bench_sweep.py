@@ -7,7 +7,11 @@ size in a fresh process, with its peak memory; the trials the short scenario wit
 sampled link masses and q0, phases compressed to --batch-duration), beside the
 ground-truth plant of one arm alone (same step), and the trials per hour of one
 worker. Then the satellite_6dof DAC loop in batches (--spatial-batch-sizes,
-default 1 4 16), against its batch of 1 (a single run).
+default 1 4 16), against its batch of 1 (a single run). Then the sensors' cost in
+batches (--sensing-batch-sizes, default 1 16 64): the planar DAC batch with sensing
+off, with the sensors at work reading the truth (a star tracker without noise) and
+with the spacecraft's sensors (scenario.built_in.spacecraft_sensing without its delays
+and lag), per trial; one diagram's sensors serve every trial of its batch.
 
 Then, on the same trials, in one run (the machines are shared, so only ratios
 measured together mean something), with one trial per diagram:
@@ -57,13 +61,20 @@ BATCH = """\
 import resource, sys
 import numpy as np
 from dacph_drake.loop.simulate import simulate_batch
-from dacph_drake.scenario import Phases
-from dacph_drake.scenario.built_in import short_scenario
+import dataclasses
+from dacph_drake.scenario import Phases, Sensing
+from dacph_drake.scenario.built_in import short_scenario, spacecraft_sensing
 controller, size, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+sensing = {"off": Sensing(),
+           "at_work": Sensing(enabled=True, star_tracker_rate=10.0),
+           "sensors": dataclasses.replace(spacecraft_sensing(), lhs_delay=0, rhs_delay=0,
+                                          actuator_lag=0.0)}[
+    sys.argv[4] if len(sys.argv) > 4 else "off"]
 rng = np.random.default_rng(1)
 trials = []
 for i in range(size):
     s = short_scenario()
+    s.sensing = sensing
     s.phases = Phases(duration / 8, duration / 4, duration / 4, 3 * duration / 8)
     for link in s.robot.truth.links:
         link.mass *= rng.uniform(0.9, 1.1)
@@ -121,21 +132,37 @@ print((time.perf_counter() - start) / duration)
 def batch_scaling(sizes, duration: float) -> None:
     """Per-trial wall per simulated second and peak memory of batches of each size
     (a fresh process each), beside the plant alone."""
-    def run(script, *arguments):
-        return [float(x) for x in subprocess.run(
-            [sys.executable, "-c", script, *map(str, arguments)], check=True,
-            capture_output=True, text=True).stdout.split()]
-    plant = run(PLANT, duration)[0]
+    plant = _run(PLANT, duration)[0]
     print(f"batches ({duration:g} s simulated, every phase; the planar plant alone: "
           f"{plant:.4f} s wall per simulated s)")
     for controller in ("dac", "model-based"):
         for size in sizes:
-            per_trial, memory, stopped = run(BATCH, controller, size, duration)
+            per_trial, memory, stopped = _run(BATCH, controller, size, duration)
             print(f"  {controller:11s} batch {size:3d}: {per_trial:.4f} s per trial per "
                   f"simulated s = {per_trial / plant:5.2f}x the plant alone; "
                   f"{3600 / (per_trial * 26.0):7.0f} trials of 26 s per hour per worker; "
                   f"peak memory {memory / 1024:.2f} GiB"
                   + (f"; {stopped:.0f} trials stopped early" if stopped else ""))
+
+
+def sensing_batches(sizes, duration: float) -> None:
+    """Per-trial wall per simulated second of planar DAC batches with sensing off, the
+    sensors at work reading the truth, and the spacecraft's sensors, and their ratios
+    to off at each size (a fresh process each; target: the sensors <= 1.10x)."""
+    print(f"sensing in batches ({duration:g} s simulated, DAC)")
+    for size in sizes:
+        walls = {label: _run(BATCH, "dac", size, duration, label)[0]
+                 for label in ("off", "at_work", "sensors")}
+        print(f"  batch {size:3d}: off {walls['off']:.4f} s per trial per simulated s; "
+              f"sensors at work {walls['at_work'] / walls['off']:5.3f}x, the spacecraft's "
+              f"{walls['sensors'] / walls['off']:5.3f}x")
+
+
+def _run(script, *arguments):
+    """A script's printed numbers, run in a fresh process."""
+    return [float(x) for x in subprocess.run(
+        [sys.executable, "-c", script, *map(str, arguments)], check=True,
+        capture_output=True, text=True).stdout.split()]
 
 
 def spatial_batch_scaling(name: str, sizes, duration: float) -> None:
@@ -145,9 +172,7 @@ def spatial_batch_scaling(name: str, sizes, duration: float) -> None:
     print(f"{name} DAC batches ({duration:g} s simulated)")
     single = None
     for size in sizes:
-        per_trial, memory, stopped = [float(x) for x in subprocess.run(
-            [sys.executable, "-c", SPATIAL_BATCH, name, str(size), str(duration)],
-            check=True, capture_output=True, text=True).stdout.split()]
+        per_trial, memory, stopped = _run(SPATIAL_BATCH, name, size, duration)
         single = per_trial if single is None else single
         print(f"  batch {size:3d}: {per_trial:.4f} s per trial per simulated s = "
               f"{per_trial / single:4.2f}x the batch of {sizes[0]}; peak memory "
@@ -218,12 +243,16 @@ def main():
                              "the reference)")
     parser.add_argument("--spatial-duration", type=float, default=3.0,
                         help="[s] simulated by each spatial batch")
+    parser.add_argument("--sensing-batch-sizes", type=int, nargs="*", default=[1, 16, 64],
+                        help="batch sizes of the sensors' cost")
     args = parser.parse_args()
     if args.batch_sizes:
         batch_scaling(args.batch_sizes, args.batch_duration)
     if args.spatial_batch_sizes:
         spatial_batch_scaling("satellite_6dof", args.spatial_batch_sizes,
                               args.spatial_duration)
+    if args.sensing_batch_sizes:
+        sensing_batches(args.sensing_batch_sizes, args.batch_duration)
     if args.trials <= 0:
         return
     with tempfile.TemporaryDirectory() as folder:
