@@ -1,6 +1,8 @@
 """Sensors, delays and lags between the ground truth and the controllers
 (scenario.Sensing, systems.sensors, controllers.closed_loop.AddSensors/AddActuation) and
 the RHS loop's certificate that knows them (analysis.rhs_loop.delayed_loop_matrix)."""
+import dataclasses
+
 import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
@@ -17,7 +19,9 @@ from dacph_drake.kernels.certificate import (box_certificate, certified_gains, l
                                              mode_radius, roots_within)
 from dacph_drake.loop.simulate import simulate
 from dacph_drake.scenario import Phases, Sensing
+from dacph_drake.scenario.built_in import spacecraft_sensing
 from dacph_drake.scenario.errors import ConfigError
+from dacph_drake.systems.inertial_identifier import InertialIdentifier
 from dacph_drake.systems.sensors import SEED_OFFSET, Sensors
 
 H = 2.5e-4
@@ -459,7 +463,6 @@ def test_a_sensing_run_saved_before_unmodelled_delay_reads_it_at_zero(tmp_path):
     keeps its fingerprinted text; a nonzero delay is in that text."""
     from pydrake.common.yaml import yaml_dump_typed
     from dacph_drake.assembly.scenario_files import saved_forms
-    from dacph_drake.scenario.built_in import spacecraft_sensing
     scenario = load_scenario("short")
     scenario.sensing = spacecraft_sensing()
     text = yaml_dump_typed(scenario)
@@ -544,3 +547,24 @@ def test_the_observed_command_is_the_torque_the_actuators_delivered_over_the_sam
     times, integrals, observed = zip(*probe.seen)
     delivered = np.diff(np.array(integrals), axis=0) / H
     assert np.allclose(delivered[5:], np.array(observed)[6:], atol=1e-9)
+
+
+def test_through_noise_the_identifier_identifies_only_where_it_is_read(monkeypatch):
+    """With noisy sensors the identified parameters are read only by the check of E
+    (every periods.learner), so the identifier identifies at the update before each
+    check: every log is bit for bit the one of identifying at every update, but the
+    logged misfit, which is held between checks."""
+    scenario = _tiny("short", dataclasses.replace(spacecraft_sensing(), rhs_delay=0,
+                                                  lhs_delay=0, actuator_lag=0.0))
+    scenario.inertia.fit_tolerance = 0.0
+    checked = simulate(scenario, "dac").logs
+    monkeypatch.setattr(InertialIdentifier, "_ChecksNext", lambda self, t: True)
+    every = simulate(scenario, "dac").logs
+    assert not np.array_equal(every["inertial_parameters"][0],
+                              every["inertial_parameters"][-1])
+    for log in every:
+        if log == "identification_log":
+            assert np.array_equal(every[log][:, [0, 2]], checked[log][:, [0, 2]])
+            assert not np.array_equal(every[log][:, 1], checked[log][:, 1])
+        else:
+            assert np.array_equal(every[log], checked[log], equal_nan=True), log
