@@ -122,6 +122,16 @@ def well_damped_loop_gain(period: float, delay: int = 0, lag: float = 0.0) -> fl
     return best_damped_gain(period, delay, lag)[0]
 
 
+def decay_rate(radius: float, period: float) -> float:
+    """The decay rate -ln(rho) / h [1/s] of a discrete loop of spectral radius rho
+    sampled every h [s] (inf for rho = 0).
+
+    Args:
+        radius: The spectral radius rho.
+        period: The sample period h [s]."""
+    return float(-np.log(radius) / period) if radius > 0 else float("inf")
+
+
 @lru_cache(maxsize=64)
 def certified_radius(period: float, delay: int = 0, lag: float = 0.0) -> float:
     """The largest spectral radius the RHS loop's certificate allows, 1 - m: the margin

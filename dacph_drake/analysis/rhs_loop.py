@@ -14,8 +14,8 @@ import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
-from dacph_drake.gain_rule import (certified_radius, integral_gains, lag_pole, loop_matrix,
-                                   separates_by_decay)
+from dacph_drake.gain_rule import (certified_radius, decay_rate, integral_gains, lag_pole,
+                                   loop_matrix, separates_by_decay)
 from dacph_drake.kernels.certificate import lag_weight, roots_within
 
 
@@ -176,7 +176,7 @@ def check_rhs_loop(B: np.ndarray, K: np.ndarray, period: float, lambda_lhs: floa
     if not dic_ok:
         reasons.append("DIC violated: det(B_hat) = 0 or Re(lambda_hat_p) <= 0")
     sigma = float(np.min(np.asarray(K) * paired.real))
-    decay = float(-np.log(radius) / period) if radius > 0 else float("inf")
+    decay = decay_rate(radius, period)
     by_decay = separates_by_decay(delay, lag)
     separation = (decay if by_decay else sigma) / lambda_lhs
     if not separation >= Td:

@@ -12,7 +12,7 @@ from dacph_drake.controllers.closed_loop import (AddLhsSide, ClosedLoop, Control
                                                  assemble_closed_loop)
 from dacph_drake.dynamics.sensor_noise import measured_rate_noise
 from dacph_drake.gain_rule import (best_damped_gain, c_lower_bound, check_rhs_period,
-                                   lag_pole)
+                                   decay_rate, lag_pole)
 from dacph_drake.kernels.certificate import lag_weight
 from dacph_drake.learning import LearnerTrial, learner_kind
 from dacph_drake.scenario import Scenario
@@ -59,26 +59,23 @@ def _WarnOfADelayedLoop(scenario: Scenario, wanted: float, separation: float) ->
         return
     h = scenario.periods.rhs
     gain, radius = best_damped_gain(h, delay, lag)
-    cap, fastest = gain / h, -np.log(radius) / h
+    cap, fastest = gain / h, decay_rate(radius, h)
     if wanted <= cap:
         return
+    capped = ("with the command %d samples late and a %g s actuator lag the RHS loop is "
+              "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48)"
+              % (delay, lag, cap, wanted))
     log = logging.getLogger(__name__)
     if fastest >= separation:
-        log.warning(
-            "with the command %d samples late and a %g s actuator lag the RHS loop is "
-            "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48): the "
-            "integrator runs at %.0f 1/s, where the loop decays at %.0f 1/s and meets "
-            "the time-scale separation's %.0f 1/s (eq. 45)", delay, lag, cap, wanted,
-            cap, fastest, separation)
+        log.warning("%s: the integrator runs at %.0f 1/s, where the loop decays at %.0f "
+                    "1/s and meets the time-scale separation's %.0f 1/s (eq. 45)",
+                    capped, cap, fastest, separation)
     else:
-        log.warning(
-            "with the command %d samples late and a %g s actuator lag the RHS loop is "
-            "best damped at c = %.0f 1/s, below the gain rule's %.0f 1/s (eq. 48), and "
-            "decays there at %.0f 1/s, the fastest any gain gives it: the time-scale "
-            "separation (eq. 45) asks %.0f 1/s and is not met; a shorter delay or lag, "
-            "or a slower LHS meets it (its damping, which the separation's rate is "
-            "proportional to, times %.2f or less)", delay, lag, cap, wanted, fastest,
-            separation, fastest / separation)
+        log.warning("%s, and decays there at %.0f 1/s, the fastest any gain gives it: "
+                    "the time-scale separation (eq. 45) asks %.0f 1/s and is not met; a "
+                    "shorter delay or lag, or a slower LHS meets it (its damping, which "
+                    "the separation's rate is proportional to, times %.2f or less)",
+                    capped, fastest, separation, fastest / separation)
 
 
 def _WarnOfANoisyKinematicCheck(scenario: Scenario,

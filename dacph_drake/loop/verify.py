@@ -20,12 +20,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from dacph_drake.analysis.lyapunov_envelope import (  # noqa: E402
-    EnvelopeConstants, check_envelope, envelope_bounds)
+    check_envelope, envelope_bounds)
 from dacph_drake.analysis.region_of_attraction import REGION_BUDGET  # noqa: E402
 from dacph_drake.analysis.rhs_loop import (check_rhs_loop,  # noqa: E402
                                            largest_tolerated_delay)
 from dacph_drake.gain_rule import (STABILITY_MARGIN, best_damped_gain,  # noqa: E402
-                                   certified_radius, lag_pole, separates_by_decay)
+                                   certified_radius, decay_rate, lag_pole,
+                                   separates_by_decay)
 from dacph_drake.kernels.certificate import box_certificate  # noqa: E402
 from dacph_drake.dynamics.model_error import realized_model_error  # noqa: E402
 from dacph_drake.dynamics.plant import ArmCoordinates  # noqa: E402
@@ -141,7 +142,7 @@ def delay_tolerance(logs: Dict[str, np.ndarray], scenario: Scenario, robot: Robo
     worst = int(np.argmin(stable))
     gain, radius = best_damped_gain(h, delay, lag)
     return {"time": float(logs["time"][samples[worst]]), "in_the_run": delay,
-            "best_damped_gain": gain, "fastest_decay_rate": float(-np.log(radius) / h),
+            "best_damped_gain": gain, "fastest_decay_rate": decay_rate(radius, h),
             "separation_rate": scenario.rhs.Td * lambda_lhs,
             "actuator_lag": lag, "stable_samples": stable[worst],
             "stable_seconds": stable[worst] * h, "certified_samples": int(min(certified)),
@@ -187,7 +188,7 @@ def _set_series(logs, scenario: Scenario, lambda_lhs: float) -> Dict:
         upper = scale * bounds[j, k:k + n * n].reshape(n, n)
         slowest, radius = box_certificate(lower, upper, rhs[i, R.K], h, delay, pole)
         if by_decay:
-            slowest = -np.log(radius) / h if radius > 0 else np.inf
+            slowest = decay_rate(radius, h)
         worst_separation = min(worst_separation, slowest / lambda_lhs)
         worst_radius = max(worst_radius, radius)
         # 1e-6: the integrator and this check find inf lambda_min(M) of eq. (45)

@@ -8,8 +8,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import LeafSystem
 
 from dacph_drake.dynamics.inertial_parameters import (
-    MASS, PER_BODY, InertialParameters, compensated_information, identify_parameters,
-    mass_anchor, momentum_misfit, prior_scales)
+    MASS, PER_BODY, compensated_information, identify_parameters, mass_anchor,
+    momentum_misfit, prior_scales)
 from dacph_drake.dynamics.model_error import ModelErrorEnsemble
 from dacph_drake.dynamics.plant import ArmCoordinates
 from dacph_drake.dynamics.sensor_noise import StateNoise, base_rate_columns
@@ -131,7 +131,7 @@ class InertialIdentifier(LeafSystem):
 
     def _UpdateEstimate(self, context, discrete_state):
         t, settings = context.get_time(), self._settings
-        if t > settings.start + settings.duration:
+        if t > self._WindowEnd():
             return              # the estimate is kept (settings.duration)
         count, size = len(self._priors), self.parameters.size
         base_pose, base_velocity, q, qdot = (
@@ -216,12 +216,16 @@ class InertialIdentifier(LeafSystem):
             candidates = np.where(status[:, 2:3] > 0.5, self._priors, candidates)
         return candidates
 
+    def _WindowEnd(self) -> float:
+        """When the estimate is kept (settings.start + settings.duration) [s]."""
+        return self._settings.start + self._settings.duration
+
     def _ChecksNext(self, t: float) -> bool:
         """Whether the update at t [s] is the last before a check of E (every
         error_period) or the window's last: the next update is no earlier than either,
         at the instants Drake schedules them."""
         following = _next_sample(t, self._period)
-        return (following > self._settings.start + self._settings.duration
+        return (following > self._WindowEnd()
                 or following >= _next_sample(t, self._error_period))
 
     def _AddNoiseInformation(self, context, discrete_state, t, base_pose, q
@@ -271,8 +275,7 @@ class InertialIdentifier(LeafSystem):
             information, self._trees.ReducedMassMatrices(identified, q), q,
             context.get_discrete_state(self._noise_information).get_value().reshape(
                 count, size, size),
-            self._Readings(min(context.get_time(),
-                               self._settings.start + self._settings.duration)))
+            self._Readings(min(context.get_time(), self._WindowEnd())))
         # Strictly below: where no draw is usable ErrorSd gives the tolerance itself.
         trusted = np.all(sd < self._settings.nominal_tolerance, axis=(1, 2))
         discrete_state.get_mutable_vector(self._approved).SetFromVector(np.where(
