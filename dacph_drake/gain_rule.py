@@ -5,7 +5,7 @@ from typing import Tuple, Union
 
 import numpy as np
 
-from dacph_drake.kernels.certificate import mode_radius
+from dacph_drake.kernels.certificate import lag_weight, mode_radius
 from dacph_drake.scenario.errors import ConfigError
 from dacph_drake.scenario import Periods
 
@@ -179,8 +179,51 @@ def loop_matrix(B: np.ndarray, K: np.ndarray, period: float) -> np.ndarray:
     return np.block([[np.eye(n), -period * np.diag(K)], [B, np.zeros((n, n))]])
 
 
+def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int = 0,
+                        lag: float = 0.0) -> np.ndarray:
+    """The discrete RHS loop's matrix with the command ``delay`` samples late and a
+    first-order actuator lag of time constant ``lag``, on (u_I, the delay line's d
+    commands, the actuators' torque s (with a lag), tau_obs):
+
+        s(k+1) = a s(k) + (1 - a) u_I(k - d),             a = exp(-h / lag)
+        tau_obs(k+1) = B ((1 - b) u_I(k - d) + b s(k)),    b = (1 - a) / ln(1 / a)
+
+    the lag sampled exactly under a held command, and the port observer's torque its
+    output averaged over the sample (a momentum difference; kernels.certificate.
+    lag_weight); no lag: tau_obs(k+1) = B u_I(k - d); delay 0 and no lag is
+    gain_rule.loop_matrix.
+
+    Args:
+        B: The port's input matrix (n x n).
+        K: The integrator's gains (n).
+        period: The RHS period h [s].
+        delay: The samples by which the command is late (computation and sensing).
+        lag: The actuators' time constant [s] (0: none)."""
+    n = B.shape[0]
+    a = lag_pole(period, lag)
+    b = lag_weight(a)
+    blocks = 1 + delay + (1 if lag > 0 else 0) + 1
+    A = np.zeros((blocks * n, blocks * n))
+    I = np.eye(n)
+    def at(row, column, value):
+        A[row * n:(row + 1) * n, column * n:(column + 1) * n] = value
+    at(0, 0, I)
+    at(0, blocks - 1, -period * np.diag(K))
+    for j in range(1, delay + 1):
+        at(j, j - 1, I)                       # the delay line
+    applied = delay                           # u_I(k - d)'s block
+    if lag > 0:
+        at(blocks - 2, blocks - 2, a * I)
+        at(blocks - 2, applied, (1 - a) * I)
+        at(blocks - 1, blocks - 2, b * B)
+        at(blocks - 1, applied, (1 - b) * B)
+    else:
+        at(blocks - 1, applied, B)
+    return A
+
+
 def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
-                          radius: float) -> bool:
+                          radius: float, delay: int = 0, lag: float = 0.0) -> bool:
     """Whether the loop's spectral radius stays within ``radius`` with a new estimate's
     gains if the estimate in use is the truth: the evidence for a far jump (RhsIntegrator)
     may be wrong, so a jump that would then destabilize the loop is refused.
@@ -189,9 +232,11 @@ def stays_stable_if_wrong(B_in_use: np.ndarray, K: np.ndarray, period: float,
         B_in_use: The estimate in use, taken as the truth.
         K: The new estimate's gains.
         period: The RHS period h [s].
-        radius: The largest spectral radius allowed."""
-    return bool(np.max(np.abs(np.linalg.eigvals(loop_matrix(B_in_use, K, period))))
-                <= radius)
+        radius: The largest spectral radius allowed (certified_radius).
+        delay: The samples by which the command is late.
+        lag: The actuators' time constant [s] (0: none)."""
+    A = delayed_loop_matrix(B_in_use, K, period, delay, lag)
+    return bool(np.max(np.abs(np.linalg.eigvals(A))) <= radius)
 
 
 def within_trust(paired: np.ndarray, nominal: np.ndarray, trust_ratio: float

@@ -282,6 +282,28 @@ def test_noisy_rates_bias_the_identified_inertias_and_the_compensation_removes_i
     assert errors["compensated"] < errors["noisy"] / 2
 
 
+def test_draws_sharing_one_noise_information_are_compensated_as_with_their_own_copy():
+    """ModelErrorEnsemble.ErrorSd whitens each trial's Sigma once for all its draws
+    ((trials, 1, p, p) against (trials, draws, p, p)): the same compensated information
+    as each draw with its own copy of Sigma, to round-off, with a direction kept in one
+    draw and not in another. The round-off is the whitening's: Sigma has null directions
+    (its floor is 1e-9 of its scale), and Sigma changed by 1e-15 of itself moves the
+    result by 2e-9 of its largest entry; the shared whitening moves it by 1.3e-9."""
+    from dacph_drake.dynamics.inertial_parameters import compensated_information
+    _, _, _, A, noise = _noisy_momentum_information(3e-3)
+    rng = np.random.default_rng(4)
+    size = len(A)
+    draws = np.stack([A, 0.5 * A, A + 40 * noise]
+                     + [A + np.diag(rng.uniform(0, 1e-3, size)) * np.trace(A) / size
+                        for _ in range(3)]).reshape(2, 3, size, size)
+    sigmas = np.stack([noise, 2.0 * noise])
+    shared = compensated_information(draws, sigmas[:, None], 500)
+    own = compensated_information(draws, np.repeat(sigmas[:, None], 3, axis=1), 500)
+    kept = np.linalg.matrix_rank(own.reshape(-1, size, size), tol=1e-8 * np.max(own))
+    assert len(set(kept)) > 1
+    assert np.max(np.abs(shared - own)) <= 1e-8 * np.max(np.abs(own))
+
+
 
 @pytest.mark.parametrize("sweep, trial, identified", [
     ("sweeps/sensing_short.yaml", 27, True),

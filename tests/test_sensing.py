@@ -14,7 +14,8 @@ from dacph_drake.analysis.rhs_loop import (check_rhs_loop, delayed_loop_matrix,
 from dacph_drake.assembly.scenario_files import load_scenario
 from dacph_drake.controllers.dac import build_dac_diagram
 from dacph_drake.gain_rule import (STABILITY_MARGIN, best_damped_gain, certified_radius,
-                                   lag_pole, loop_matrix, separates_by_decay)
+                                   lag_pole, loop_matrix, separates_by_decay,
+                                   stays_stable_if_wrong)
 from dacph_drake.kernels.certificate import (box_certificate, certified_gains, lag_weight,
                                              mode_radius, roots_within)
 from dacph_drake.loop.simulate import simulate
@@ -99,6 +100,25 @@ def test_a_lag_slower_than_the_margin_per_sample_is_certified_at_the_best_gain()
     slow = check_rhs_loop(B, K / 20, H, lambda_lhs=1.0, Td=1.0, delay=delay, lag=lag)
     assert slow.spectral_radius < 1.0 and not slow.ok
     assert "spectral radius" in slow.reason
+
+
+def test_a_jump_on_evidence_is_judged_on_the_loop_with_its_delay_and_lag():
+    """stays_stable_if_wrong with the command a sample late and a 5 ms lag at 4 kHz
+    judges the lagged loop at its certified radius: at the best-damped gain the loop
+    without them (radius 0.990, beyond 0.95) would refuse a jump the lagged loop takes
+    (0.986 <= 0.9976), and at 40 times it would take one that leaves the lagged loop
+    unstable (1.003)."""
+    delay, lag = 1, 5e-3
+    radius = certified_radius(H, delay, lag)
+    B = np.array([[1.0, 0.1], [0.05, 0.9]])
+    best = best_damped_gain(H, delay, lag)[0] / H / np.linalg.eigvals(B).real.max()
+    K = np.full(2, best)
+    assert not stays_stable_if_wrong(B, K, H, 1.0 - STABILITY_MARGIN)
+    assert stays_stable_if_wrong(B, K, H, radius, delay, lag)
+    assert stays_stable_if_wrong(B, 40 * K, H, 1.0 - STABILITY_MARGIN)
+    assert not stays_stable_if_wrong(B, 40 * K, H, radius, delay, lag)
+    assert np.max(np.abs(np.linalg.eigvals(
+        delayed_loop_matrix(B, 40 * K, H, delay, lag)))) > 1.0
 
 
 def test_with_a_lag_the_separation_is_the_loops_decay_rate():

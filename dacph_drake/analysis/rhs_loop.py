@@ -14,53 +14,11 @@ import numpy as np
 from pydrake.math import RealDiscreteLyapunovEquation
 from pydrake.systems.primitives import LinearSystem
 
-from dacph_drake.gain_rule import (certified_radius, decay_rate, integral_gains, lag_pole,
-                                   loop_matrix, separates_by_decay)
-from dacph_drake.kernels.certificate import lag_weight, roots_within
+from dacph_drake.gain_rule import (certified_radius, decay_rate, delayed_loop_matrix,
+                                   integral_gains, lag_pole, loop_matrix,
+                                   separates_by_decay)
+from dacph_drake.kernels.certificate import roots_within
 
-
-
-def delayed_loop_matrix(B: np.ndarray, K: np.ndarray, period: float, delay: int = 0,
-                        lag: float = 0.0) -> np.ndarray:
-    """The discrete RHS loop's matrix with the command ``delay`` samples late and a
-    first-order actuator lag of time constant ``lag``, on (u_I, the delay line's d
-    commands, the actuators' torque s (with a lag), tau_obs):
-
-        s(k+1) = a s(k) + (1 - a) u_I(k - d),             a = exp(-h / lag)
-        tau_obs(k+1) = B ((1 - b) u_I(k - d) + b s(k)),    b = (1 - a) / ln(1 / a)
-
-    the lag sampled exactly under a held command, and the port observer's torque its
-    output averaged over the sample (a momentum difference; kernels.certificate.
-    lag_weight); no lag: tau_obs(k+1) = B u_I(k - d); delay 0 and no lag is
-    gain_rule.loop_matrix.
-
-    Args:
-        B: The port's input matrix (n x n).
-        K: The integrator's gains (n).
-        period: The RHS period h [s].
-        delay: The samples by which the command is late (computation and sensing).
-        lag: The actuators' time constant [s] (0: none)."""
-    n = B.shape[0]
-    a = lag_pole(period, lag)
-    b = lag_weight(a)
-    blocks = 1 + delay + (1 if lag > 0 else 0) + 1
-    A = np.zeros((blocks * n, blocks * n))
-    I = np.eye(n)
-    def at(row, column, value):
-        A[row * n:(row + 1) * n, column * n:(column + 1) * n] = value
-    at(0, 0, I)
-    at(0, blocks - 1, -period * np.diag(K))
-    for j in range(1, delay + 1):
-        at(j, j - 1, I)                       # the delay line
-    applied = delay                           # u_I(k - d)'s block
-    if lag > 0:
-        at(blocks - 2, blocks - 2, a * I)
-        at(blocks - 2, applied, (1 - a) * I)
-        at(blocks - 1, blocks - 2, b * B)
-        at(blocks - 1, applied, (1 - b) * B)
-    else:
-        at(blocks - 1, applied, B)
-    return A
 
 
 def largest_tolerated_delay(B: np.ndarray, K: np.ndarray, period: float,

@@ -260,29 +260,39 @@ def compensated_information(information: np.ndarray, noise_information: np.ndarr
 
     Args:
         information: A (size x size), or a stack.
-        noise_information: Sigma, as A.
+        noise_information: Sigma, as A, or a stack that broadcasts against A's with
+            ones where several A share one Sigma (its whitening is computed once).
         readings: The number of samples summed in A."""
     A = np.asarray(information, float)
     Sigma = np.asarray(noise_information, float)
     size = A.shape[-1]
-    trace = np.trace(Sigma, axis1=-2, axis2=-1) + 1e-12 * np.trace(A, axis1=-2, axis2=-1)
+    # W's floor, 1e-9 of Sigma's scale (of 1e-12 of A's where Sigma vanishes): where
+    # A's share one Sigma, of the largest A's.
+    trace_A = np.trace(A, axis1=-2, axis2=-1)
+    shared = tuple(axis for axis, length in enumerate(Sigma.shape[:-2])
+                   if length == 1 and trace_A.shape[axis] > 1)
+    trace = (np.trace(Sigma, axis1=-2, axis2=-1)
+             + 1e-12 * np.max(trace_A, axis=shared, keepdims=True))
     floor = 1e-9 * np.maximum(trace, 1e-300) / size
     values, vectors = np.linalg.eigh(Sigma + floor[..., None, None] * np.eye(size))
     root = np.sqrt(np.maximum(values, floor[..., None]))
-    W = np.einsum("...ij,...j,...kj->...ik", vectors, 1.0 / root, vectors)
-    W_inverse = np.einsum("...ij,...j,...kj->...ik", vectors, root, vectors)
+    W = _spectral(vectors, 1.0 / root)
+    W_inverse = _spectral(vectors, root)
     excess, directions = np.linalg.eigh(W @ A @ W)
     excess = excess - 1.0
     sd = np.sqrt((2.0 + 4.0 * np.maximum(excess, 0.0)) / max(readings, 1))
     kept = np.where(excess > 3.0 * sd, excess, 0.0)
-    signal = np.einsum("...ij,...j,...kj->...ik", directions, kept, directions)
-    compensated = W_inverse @ signal @ W_inverse
+    compensated = W_inverse @ _spectral(directions, kept) @ W_inverse
     # The whitening's round-off (its floor is 1e-9 of Sigma's scale) is set to 0, so a
     # direction without information stays at the prior, whose weight is 1e-12 of A's.
     values, vectors = np.linalg.eigh(0.5 * (compensated + np.swapaxes(compensated, -1, -2)))
     largest = np.max(np.abs(values), axis=-1, keepdims=True)
-    values = np.where(values > ROUND_OFF * largest, values, 0.0)
-    return np.einsum("...ij,...j,...kj->...ik", vectors, values, vectors)
+    return _spectral(vectors, np.where(values > ROUND_OFF * largest, values, 0.0))
+
+
+def _spectral(vectors: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """V diag(values) V^T of a stack of eigenvectors (columns) and values."""
+    return (vectors * values[..., None, :]) @ np.swapaxes(vectors, -1, -2)
 
 
 def identify_draws(information: np.ndarray, pi0: np.ndarray, scales: np.ndarray,

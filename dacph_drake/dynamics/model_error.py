@@ -70,7 +70,7 @@ class ModelErrorEnsemble:
                  anchor: Optional[np.ndarray], anchor_values: Optional[np.ndarray],
                  seeds: Sequence[int], noise: StateNoise = StateNoise(),
                  period: float = 0.0):
-        K, count = settings.error_draws, len(plants)
+        K = settings.error_draws
         self.draws, self._settings = K, settings
         self._noise, self._period = noise, period
         self.own_information = settings.kinematic_tolerance > 0 or noise.Any()
@@ -161,8 +161,10 @@ class ModelErrorEnsemble:
             readings: The samples the information holds."""
         K, (count, n) = self.draws, q.shape
         if noise_information is not None:
+            size = information.shape[-1]
             information = compensated_information(
-                information, 2.0 * np.repeat(noise_information, K, axis=0), readings)
+                information.reshape(count, K, size, size),
+                2.0 * noise_information[:, None], readings).reshape(count * K, size, size)
         if not self.own_information and self._anchor is not None:
             size = self._priors.shape[1]
             pis = identify_draws(

@@ -6,7 +6,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 from pydrake.systems.framework import Context, LeafSystem
 
-from dacph_drake.gain_rule import (STABILITY_MARGIN, c_lower_bound, certified_radius,
+from dacph_drake.gain_rule import (c_lower_bound, certified_radius,
                                    integral_gains, lag_pole, separates_by_decay,
                                    stays_stable_if_wrong, well_damped_loop_gain,
                                    within_trust)
@@ -112,8 +112,8 @@ class RhsIntegrator(LeafSystem):
                                     settings.chi_floor, float(noisy_torque)])
         self._c_step = min(1.0, model_period / settings.c_time_constant)
         self._period = period
-        delay, lag = command_delay
-        self._delay, self._pole = int(delay), lag_pole(period, lag)
+        self._command_delay = (int(command_delay[0]), float(command_delay[1]))
+        self._delay, self._pole = self._command_delay[0], lag_pole(period, command_delay[1])
         # lambda_LHS = 2 lambda_max(K_d) / inf lambda_min(M) (eq. 45), and the largest
         # rate a certified set may ask: the fastest well-damped one.
         self._lambda_lhs = 2.0 * self._Kd_max / self._lambda_min_M
@@ -320,7 +320,8 @@ class RhsIntegrator(LeafSystem):
                            * self._evidence.Residual(evidence[i], in_use,
                                                      gains[i, L.D_hat])
                            and stays_stable_if_wrong(in_use, k[i], self._period,
-                                                     1.0 - STABILITY_MARGIN))
+                                                     self._certified_radius,
+                                                     *self._command_delay))
         return accepted
 
     def _UpdateModel(self, context, discrete_state):
