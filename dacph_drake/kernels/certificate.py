@@ -1,7 +1,7 @@
 """The discrete RHS loop's certificate on a credible set of B. Per mode the polynomial is
 z^2 - z + mu, mu an eigenvalue of h K B; with the command d samples late it is
 (z - 1) z^(d+1) + mu, and with a first-order actuator lag of pole a = exp(-h / lag) too
-(analysis.rhs_loop.delayed_loop_matrix: the observer measures the lag's output averaged
+(gain_rule.delayed_loop_matrix: the observer measures the lag's output averaged
 over the sample, (1 - b) u + b s, b = (1 - a) / ln(1 / a))
 
     (z - 1)(z - a) z^(d+1) + mu ((1 - b) z + b - a).
