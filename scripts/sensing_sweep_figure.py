@@ -16,7 +16,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-MARKERS = {0.0005: "o", 0.001: "s", 0.002: "^", 0.005: "D"}
+MARKERS = {0.0005: "o", 0.001: "s", 0.002: "^", 0.003: "v", 0.004: "P", 0.005: "D",
+           0.006: "*"}
 
 
 def points(rows_path: Path):
