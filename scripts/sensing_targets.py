@@ -26,8 +26,9 @@ from dacph_drake.scenario.built_in import spacecraft_sensing
 SPACECRAFT = spacecraft_sensing()
 # The set: a 5 ms actuator lag and one sample of sensor latency beside.
 SLOW_ACTUATORS = spacecraft_sensing(actuator_lag=0.005, latency=1)
-# The share of the LHS damping kept with the 5 ms lag: the truth's loop decays at
-# 0.44-0.94 of the separation's rate at the full damping on the five arms.
+# The share of the LHS damping kept with the 5 ms lag: below the share of the
+# separation's rate that the truth's loop gives at the full damping (the results
+# page, docs/results/sensing.md).
 LHS_DAMPING_FOR_SLOW_ACTUATORS = 0.4
 ROBOTS = ("short", "satellite_6dof", "scenarios/ur5.yaml", "scenarios/panda.yaml")
 
